@@ -1,0 +1,18 @@
+"""map2map: move robot maps between CAD floor plans and SLAM occupancy maps.
+
+The public API re-exports the library functions behind every command line tool.
+"""
+
+from ._version import __version__
+from .errors import InputError
+from .maps import FREE, OCCUPIED, UNKNOWN, OccupancyMap, ternarize
+
+__all__ = [
+    "__version__",
+    "InputError",
+    "FREE",
+    "OCCUPIED",
+    "UNKNOWN",
+    "OccupancyMap",
+    "ternarize",
+]

@@ -1,0 +1,1 @@
+"""The ``map2map`` command line: thin argument parsing over the library."""
