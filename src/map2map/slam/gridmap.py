@@ -1,0 +1,516 @@
+"""Counting occupancy grids, GMapping's scan score and likelihood fields (numba kernels).
+
+Occupancy follows GMapping's ``PointAccumulator`` (Grisetti et al. 2007, and the
+``gmapping`` ROS package): every cell counts how often a beam *visited* it and how
+often a beam *ended* in it (a hit). Its occupancy is ``hits / visits``; a cell is
+occupied above ``occ_thresh`` (0.25, slam_gmapping's default), free below it, and
+unknown while never visited. Each cell also accumulates the world position of the
+hits that fell in it, so the scan matcher compares an endpoint with the *mean hit*
+of a cell (sub-cell accuracy), as GMapping does.
+
+Grid layout: arrays are indexed ``[iy, ix]`` where ``ix = floor((x - x0) / delta)``
+and ``iy = floor((y - y0) / delta)``; ``(x0, y0)`` is the world corner of cell
+``(0, 0)``. :meth:`CountGrid.to_occupancy_map` flips the rows into the package's
+image order (row 0 at the top, see :mod:`map2map.maps.grid`).
+
+Two scan scores are provided:
+
+* :func:`gmapping_score` / :func:`hill_climb` -- GMapping's ``ScanMatcher::score``
+  and ``ScanMatcher::optimize``: each endpoint looks in a ``(2k+1)^2`` kernel for
+  the nearest occupied cell whose predecessor along the beam is not occupied.
+* :func:`likelihood_field` -- a distance-transform likelihood field
+  (``exp(-d^2 / 2 sigma^2)``, Thrun et al. "Probabilistic Robotics" 6.4) used by
+  the correlative scan matcher of :mod:`map2map.slam.graph`.
+
+Examples
+--------
+>>> import numpy as np
+>>> g = CountGrid.around(0.0, 0.0, half_size=2.0, delta=0.05)
+>>> angles = np.deg2rad(np.arange(0, 360, 1.0))
+>>> ranges = np.full(360, 1.0)
+>>> g.register_scan((0.0, 0.0, 0.0), ranges, angles, usable_range=3.0)
+>>> m = g.to_occupancy_map()
+>>> int((m.data == 0).sum()) > 100        # a ring of occupied cells
+True
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numba as nb
+import numpy as np
+
+from ..maps.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+
+__all__ = [
+    "CountGrid",
+    "register_scan",
+    "gmapping_score",
+    "hill_climb",
+    "sample_likelihood",
+    "likelihood_field",
+    "occupancy_from_counts",
+]
+
+#: GMapping's ``ScanMatcher::m_fullnessThreshold``: a cell counts as a hit above it.
+FULLNESS_THRESHOLD = 0.1
+#: GMapping's ``nullLikelihood``: log-likelihood of a beam whose endpoint matched nothing.
+NULL_LIKELIHOOD = -0.5
+
+
+# ----------------------------------------------------------------------------- kernels
+@nb.njit(cache=True)
+def _bresenham_update(hits, visits, sx, sy, x0, y0, x1, y1, hit, hx, hy):
+    """Walk the Bresenham line (x0,y0)->(x1,y1); visit every cell but the last.
+
+    The last cell gets a hit (with the world endpoint ``hx, hy``) when ``hit``.
+    Cells outside the arrays are ignored.
+    """
+    ny, nx = visits.shape
+    dx = abs(x1 - x0)
+    dy = -abs(y1 - y0)
+    stx = 1 if x0 < x1 else -1
+    sty = 1 if y0 < y1 else -1
+    err = dx + dy
+    x, y = x0, y0
+    while True:
+        if x == x1 and y == y1:
+            break
+        if 0 <= x < nx and 0 <= y < ny:
+            visits[y, x] += 1
+        e2 = 2 * err
+        if e2 >= dy:
+            err += dy
+            x += stx
+        if e2 <= dx:
+            err += dx
+            y += sty
+    if hit and 0 <= x1 < nx and 0 <= y1 < ny:
+        visits[y1, x1] += 1
+        hits[y1, x1] += 1
+        sx[y1, x1] += hx
+        sy[y1, x1] += hy
+
+
+@nb.njit(cache=True)
+def register_scan(
+    hits, visits, sx, sy, gx0, gy0, delta, lx, ly, lt, ranges, angles, usable_range, max_range
+):
+    """Integrate one scan taken from laser pose ``(lx, ly, lt)`` (GMapping ``registerScan``).
+
+    Beams longer than ``max_range`` (no return) are skipped; beams longer than
+    ``usable_range`` are cropped to it and mark only free space; the others mark
+    free space up to the endpoint cell and a hit in it.
+    """
+    cx0 = int(math.floor((lx - gx0) / delta))
+    cy0 = int(math.floor((ly - gy0) / delta))
+    for i in range(ranges.shape[0]):
+        r = ranges[i]
+        if not (r > 0.0) or r > max_range:
+            continue
+        hit = True
+        if r >= usable_range:
+            r = usable_range
+            hit = False
+        a = lt + angles[i]
+        hx = lx + r * math.cos(a)
+        hy = ly + r * math.sin(a)
+        cx1 = int(math.floor((hx - gx0) / delta))
+        cy1 = int(math.floor((hy - gy0) / delta))
+        _bresenham_update(hits, visits, sx, sy, cx0, cy0, cx1, cy1, hit, hx, hy)
+
+
+@nb.njit(cache=True)
+def _score_core(
+    hits, visits, sx, sy, gx0, gy0, delta, px, py, pt, off, ranges, angles, kernel, sigma, lsigma
+):
+    """GMapping ``ScanMatcher::likelihoodAndScore`` at robot pose ``(px, py, pt)``.
+
+    Returns ``(score, loglik, n_matched)``. ``ranges`` holds only usable beams.
+    """
+    ny, nx = visits.shape
+    ct, st = math.cos(pt), math.sin(pt)
+    lx = px + ct * off[0] - st * off[1]
+    ly = py + st * off[0] + ct * off[1]
+    lt = pt + off[2]
+    free_back = delta * math.sqrt(2.0)  # GMapping: freeDelta = delta * freeCellRatio
+    no_hit = NULL_LIKELIHOOD / lsigma
+    s = 0.0
+    lik = 0.0
+    n = 0
+    for i in range(ranges.shape[0]):
+        r = ranges[i]
+        a = lt + angles[i]
+        ca, sa = math.cos(a), math.sin(a)
+        hx = lx + r * ca
+        hy = ly + r * sa
+        ix = int(math.floor((hx - gx0) / delta))
+        iy = int(math.floor((hy - gy0) / delta))
+        fx = int(math.floor((hx - free_back * ca - gx0) / delta)) - ix
+        fy = int(math.floor((hy - free_back * sa - gy0) / delta)) - iy
+        best = 1e30
+        for yy in range(-kernel, kernel + 1):
+            cy = iy + yy
+            cfy = cy + fy
+            if cy < 0 or cy >= ny or cfy < 0 or cfy >= ny:
+                continue
+            for xx in range(-kernel, kernel + 1):
+                cx = ix + xx
+                cfx = cx + fx
+                if cx < 0 or cx >= nx or cfx < 0 or cfx >= nx:
+                    continue
+                v = visits[cy, cx]
+                if v == 0 or hits[cy, cx] <= FULLNESS_THRESHOLD * v:
+                    continue
+                fv = visits[cfy, cfx]
+                if fv > 0 and hits[cfy, cfx] >= FULLNESS_THRESHOLD * fv:
+                    continue
+                h = hits[cy, cx]
+                mx = hx - sx[cy, cx] / h
+                my = hy - sy[cy, cx] / h
+                d2 = mx * mx + my * my
+                if d2 < best:
+                    best = d2
+        if best < 1e29:
+            s += math.exp(-best / sigma)
+            lik += -best / lsigma
+            n += 1
+        else:
+            lik += no_hit
+    return s, lik, n
+
+
+@nb.njit(cache=True)
+def gmapping_score(
+    hits, visits, sx, sy, gx0, gy0, delta, px, py, pt, off, ranges, angles, kernel, sigma, lsigma
+):
+    """GMapping's scan score and log-likelihood at one pose; see :func:`_score_core`."""
+    return _score_core(
+        hits,
+        visits,
+        sx,
+        sy,
+        gx0,
+        gy0,
+        delta,
+        px,
+        py,
+        pt,
+        off,
+        ranges,
+        angles,
+        kernel,
+        sigma,
+        lsigma,
+    )
+
+
+@nb.njit(cache=True)
+def hill_climb(
+    hits,
+    visits,
+    sx,
+    sy,
+    gx0,
+    gy0,
+    delta,
+    px,
+    py,
+    pt,
+    off,
+    ranges,
+    angles,
+    kernel,
+    sigma,
+    lstep,
+    astep,
+    iterations,
+):
+    """GMapping's ``ScanMatcher::optimize``: greedy hill climbing with step halving.
+
+    From ``(px, py, pt)`` try the six moves (x +- lstep, y +- lstep, theta +- astep),
+    keep the best; when no move improves, halve the steps (a *refinement*); stop
+    after ``iterations`` refinements without improvement. Returns ``(x, y, theta,
+    score)`` -- the score of the best pose found.
+    """
+    cx, cy, ct = px, py, pt
+    cur = _score_core(
+        hits, visits, sx, sy, gx0, gy0, delta, cx, cy, ct, off, ranges, angles, kernel, sigma, 1.0
+    )[0]
+    best_score = -1.0
+    ld, ad = lstep, astep
+    refinement = 0
+    while True:
+        if best_score >= cur:
+            refinement += 1
+            ld *= 0.5
+            ad *= 0.5
+        best_score = cur
+        bx, by, bt = cx, cy, ct
+        for move in range(6):
+            tx, ty, tt = cx, cy, ct
+            if move == 0:
+                tx += ld
+            elif move == 1:
+                tx -= ld
+            elif move == 2:
+                ty -= ld
+            elif move == 3:
+                ty += ld
+            elif move == 4:
+                tt += ad
+            else:
+                tt -= ad
+            sc = _score_core(
+                hits,
+                visits,
+                sx,
+                sy,
+                gx0,
+                gy0,
+                delta,
+                tx,
+                ty,
+                tt,
+                off,
+                ranges,
+                angles,
+                kernel,
+                sigma,
+                1.0,
+            )[0]
+            if sc > cur:
+                cur = sc
+                bx, by, bt = tx, ty, tt
+        cx, cy, ct = bx, by, bt
+        if not (cur > best_score or refinement < iterations):
+            break
+    return cx, cy, ct, best_score
+
+
+@nb.njit(cache=True)
+def sample_likelihood(
+    hits,
+    visits,
+    sx,
+    sy,
+    gx0,
+    gy0,
+    delta,
+    px,
+    py,
+    pt,
+    off,
+    ranges,
+    angles,
+    kernel,
+    sigma,
+    lsigma,
+    lrange,
+    lstep_,
+    arange_,
+    astep_,
+):
+    """Gaussian approximation of the proposal around a matched pose (Grisetti 2007, eq. 9-12).
+
+    Evaluates the scan log-likelihood on the grid ``[-lrange, lrange]`` (step ``lstep_``)
+    in x and y and ``[-arange_, arange_]`` (step ``astep_``) in theta around
+    ``(px, py, pt)`` -- GMapping's ``llsamplerange``/``lasamplerange`` -- and returns
+    ``(log_eta, mean (3,), cov (3, 3))`` where ``log_eta = log sum_j p(z | m, x_j)``
+    is the importance-weight increment of the improved proposal.
+    """
+    nl = int(round(lrange / lstep_)) if lstep_ > 0 else 0
+    na = int(round(arange_ / astep_)) if astep_ > 0 else 0
+    m = (2 * nl + 1) * (2 * nl + 1) * (2 * na + 1)
+    ls = np.empty(m)
+    ps = np.empty((m, 3))
+    k = 0
+    for i in range(-nl, nl + 1):
+        for j in range(-nl, nl + 1):
+            for q in range(-na, na + 1):
+                x = px + i * lstep_
+                y = py + j * lstep_
+                t = pt + q * astep_
+                ls[k] = _score_core(
+                    hits,
+                    visits,
+                    sx,
+                    sy,
+                    gx0,
+                    gy0,
+                    delta,
+                    x,
+                    y,
+                    t,
+                    off,
+                    ranges,
+                    angles,
+                    kernel,
+                    sigma,
+                    lsigma,
+                )[1]
+                ps[k, 0] = x
+                ps[k, 1] = y
+                ps[k, 2] = t
+                k += 1
+    lmax = ls.max()
+    w = np.exp(ls - lmax)
+    tot = w.sum()
+    w /= tot
+    mean = np.zeros(3)
+    for k in range(m):
+        mean += w[k] * ps[k]
+    cov = np.zeros((3, 3))
+    for k in range(m):
+        d = ps[k] - mean
+        cov += w[k] * np.outer(d, d)
+    return lmax + math.log(tot), mean, cov
+
+
+@nb.njit(cache=True)
+def occupancy_from_counts(hits, visits, occ_thresh):
+    """Image-order (row 0 = top = largest y) uint8 map: 0 occupied, 255 free, 127 unknown."""
+    ny, nx = visits.shape
+    out = np.empty((ny, nx), np.uint8)
+    for iy in range(ny):
+        r = ny - 1 - iy
+        for ix in range(nx):
+            v = visits[iy, ix]
+            if v == 0:
+                out[r, ix] = 127
+            elif hits[iy, ix] > occ_thresh * v:
+                out[r, ix] = 0
+            else:
+                out[r, ix] = 255
+    return out
+
+
+# ------------------------------------------------------------------------ containers
+class CountGrid:
+    """One GMapping occupancy grid (hits, visits, accumulated hit positions) that grows.
+
+    Parameters
+    ----------
+    shape : (ny, nx)
+    x0, y0 : float
+        World corner of cell ``(0, 0)``.
+    delta : float
+        Cell size in metres (GMapping's ``delta``).
+    """
+
+    __slots__ = ("hits", "visits", "sx", "sy", "x0", "y0", "delta")
+
+    def __init__(self, shape: tuple[int, int], x0: float, y0: float, delta: float):
+        self.hits = np.zeros(shape, np.int32)
+        self.visits = np.zeros(shape, np.int32)
+        self.sx = np.zeros(shape, np.float32)
+        self.sy = np.zeros(shape, np.float32)
+        self.x0 = float(x0)
+        self.y0 = float(y0)
+        self.delta = float(delta)
+
+    @classmethod
+    def around(cls, x: float, y: float, half_size: float, delta: float) -> CountGrid:
+        """A square grid of side ``2 * half_size`` metres centred on ``(x, y)``."""
+        n = int(math.ceil(2 * half_size / delta))
+        return cls((n, n), x - n * delta / 2, y - n * delta / 2, delta)
+
+    def copy(self) -> CountGrid:
+        new = CountGrid.__new__(CountGrid)
+        new.hits = self.hits.copy()
+        new.visits = self.visits.copy()
+        new.sx = self.sx.copy()
+        new.sy = self.sy.copy()
+        new.x0, new.y0, new.delta = self.x0, self.y0, self.delta
+        return new
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.visits.shape  # type: ignore[return-value]
+
+    def arrays(self):
+        """``(hits, visits, sx, sy, x0, y0, delta)`` -- the leading kernel arguments."""
+        return self.hits, self.visits, self.sx, self.sy, self.x0, self.y0, self.delta
+
+    def extent(self) -> tuple[float, float, float, float]:
+        """World ``(xmin, xmax, ymin, ymax)`` covered by the grid."""
+        ny, nx = self.shape
+        return self.x0, self.x0 + nx * self.delta, self.y0, self.y0 + ny * self.delta
+
+    def padding_for(self, xmin: float, xmax: float, ymin: float, ymax: float, margin: float):
+        """Cells to add ``(left, right, bottom, top)`` so the box plus ``margin`` fits, or None.
+
+        A side that must grow grows by at least a quarter of the grid's size, so
+        growth (a copy of every array) stays rare.
+        """
+        gx0, gx1, gy0, gy1 = self.extent()
+        need = (
+            gx0 - (xmin - margin),
+            xmax + margin - gx1,
+            gy0 - (ymin - margin),
+            ymax + margin - gy1,
+        )
+        if max(need) <= 0:
+            return None
+        step = max(2 * margin, 0.25 * max(gx1 - gx0, gy1 - gy0))
+        return tuple(int(math.ceil(max(n, step) / self.delta)) if n > 0 else 0 for n in need)
+
+    def pad(self, left: int, right: int, bottom: int, top: int) -> None:
+        """Grow in place by whole cells (rows ``iy`` grow upwards with y)."""
+        widths = ((bottom, top), (left, right))
+        self.hits = np.pad(self.hits, widths)
+        self.visits = np.pad(self.visits, widths)
+        self.sx = np.pad(self.sx, widths)
+        self.sy = np.pad(self.sy, widths)
+        self.x0 -= left * self.delta
+        self.y0 -= bottom * self.delta
+
+    def register_scan(
+        self,
+        laser_pose,
+        ranges: np.ndarray,
+        angles: np.ndarray,
+        usable_range: float,
+        max_range: float = np.inf,
+    ) -> None:
+        """Integrate a scan from the world laser pose ``(x, y, theta)`` (grows if needed)."""
+        lx, ly, lt = (float(v) for v in laser_pose)
+        r = np.asarray(ranges, np.float64)
+        a = np.asarray(angles, np.float64)
+        reach = min(usable_range, float(np.nanmax(np.where(np.isfinite(r), r, 0.0), initial=0.0)))
+        pad = self.padding_for(lx, lx, ly, ly, reach + 2 * self.delta)
+        if pad is not None:
+            self.pad(*pad)
+        register_scan(*self.arrays(), lx, ly, lt, r, a, float(usable_range), float(max_range))
+
+    def to_occupancy_map(self, occ_thresh: float = 0.25, meta: dict | None = None) -> OccupancyMap:
+        """The ternary map (GMapping/slam_gmapping rule: occupied when hits/visits > occ_thresh)."""
+        data = occupancy_from_counts(self.hits, self.visits, float(occ_thresh))
+        return OccupancyMap(data, self.delta, (self.x0, self.y0, 0.0), dict(meta or {}))
+
+
+def likelihood_field(occupied: np.ndarray, delta: float, sigma: float) -> np.ndarray:
+    """Likelihood field ``exp(-d^2 / (2 sigma^2))`` of the distance ``d`` (m) to the nearest hit.
+
+    ``occupied`` is a boolean grid; the distance transform is OpenCV's exact
+    Euclidean one (``cv2.DIST_L2``, ``DIST_MASK_PRECISE``). Returns float32 in
+    ``[0, 1]``, 1 on occupied cells.
+
+    Examples
+    --------
+    >>> occ = np.zeros((5, 5), bool); occ[2, 2] = True
+    >>> f = likelihood_field(occ, 0.1, 0.1)
+    >>> float(f[2, 2]), round(float(f[2, 3]), 3)
+    (1.0, 0.607)
+    """
+    src = np.where(np.asarray(occupied, bool), 0, 255).astype(np.uint8)
+    if not (src == 0).any():
+        return np.zeros(src.shape, np.float32)
+    d = cv2.distanceTransform(src, cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * float(delta)
+    return np.exp(-(d * d) / (2.0 * sigma * sigma)).astype(np.float32)
+
+
+#: The three cell values, re-exported for backends.
+CELL_VALUES = (OCCUPIED, UNKNOWN, FREE)

@@ -1,0 +1,70 @@
+"""How good is a SLAM run: trajectory error (ATE) and map error against the plan.
+
+These use ground truth and are for *evaluation only* -- no mapper imports them.
+
+* :func:`ate_rmse` -- absolute trajectory error (Sturm et al. 2012): RMSE of the
+  position differences after the least-squares rigid alignment (Umeyama 1991,
+  no scale) of the estimated to the true positions.
+* :func:`wall_error` -- the mean distance (metres) from each occupied cell of the
+  SLAM map to the nearest wall of the plan, with the SLAM map placed in the plan
+  by the robot's true start pose (the map frame starts there).
+
+Examples
+--------
+>>> import numpy as np
+>>> t = np.array([[0, 0], [1, 0], [1, 1.0]])
+>>> round(ate_rmse(t + 5.0, t), 9)
+0.0
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+
+from ..maps.grid import OccupancyMap
+
+__all__ = ["ate_rmse", "rigid_align_2d", "wall_error", "map_to_plan_points"]
+
+
+def rigid_align_2d(src: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rotation ``R`` (2x2) and translation ``t`` minimising ``|R src + t - dst|^2`` (Umeyama)."""
+    src = np.asarray(src, float)[:, :2]
+    dst = np.asarray(dst, float)[:, :2]
+    ms, md = src.mean(0), dst.mean(0)
+    h = (src - ms).T @ (dst - md)
+    u, _, vt = np.linalg.svd(h)
+    d = np.sign(np.linalg.det(vt.T @ u.T)) or 1.0
+    r = vt.T @ np.diag([1.0, d]) @ u.T
+    return r, md - r @ ms
+
+
+def ate_rmse(est: np.ndarray, true: np.ndarray, align: bool = True) -> float:
+    """RMSE (m) of matched positions ``est[:, :2]`` vs ``true[:, :2]``, rigidly aligned first."""
+    est = np.asarray(est, float)[:, :2]
+    true = np.asarray(true, float)[:, :2]
+    if align and len(est) >= 2:
+        r, t = rigid_align_2d(est, true)
+        est = est @ r.T + t
+    return float(np.sqrt(np.mean(np.sum((est - true) ** 2, axis=1))))
+
+
+def map_to_plan_points(slam_map: OccupancyMap, start_pose) -> np.ndarray:
+    """World (plan-frame) coordinates ``(K, 2)`` of the occupied cells of a SLAM map."""
+    rows, cols = np.nonzero(slam_map.occupied)
+    x, y = slam_map.pixel_to_world(rows, cols)
+    x0, y0, th = (float(v) for v in start_pose)
+    c, s = np.cos(th), np.sin(th)
+    return np.stack([x0 + c * x - s * y, y0 + s * x + c * y], axis=1)
+
+
+def wall_error(slam_map: OccupancyMap, plan: OccupancyMap, start_pose) -> float:
+    """Mean distance (m) of mapped wall cells to the nearest plan wall (``nan`` if none)."""
+    pts = map_to_plan_points(slam_map, start_pose)
+    if len(pts) == 0:
+        return float("nan")
+    dist = ndimage.distance_transform_edt(~plan.occupied) * plan.resolution
+    r, c = plan.world_to_pixel_float(pts[:, 0], pts[:, 1])
+    # bilinear lookup; outside the plan counts as the distance at the nearest border
+    vals = ndimage.map_coordinates(dist, [r, c], order=1, mode="nearest")
+    return float(np.mean(vals))
