@@ -62,7 +62,7 @@ NULL_LIKELIHOOD = -0.5
 
 # ----------------------------------------------------------------------------- kernels
 @nb.njit(cache=True)
-def _bresenham_update(hits, visits, sx, sy, x0, y0, x1, y1, hit, hx, hy):
+def _bresenham_update(hits, visits, sx, sy, mean, x0, y0, x1, y1, hit, hx, hy):
     """Walk the Bresenham line (x0,y0)->(x1,y1); visit every cell but the last.
 
     The last cell gets a hit (with the world endpoint ``hx, hy``) when ``hit``.
@@ -80,6 +80,8 @@ def _bresenham_update(hits, visits, sx, sy, x0, y0, x1, y1, hit, hx, hy):
             break
         if 0 <= x < nx and 0 <= y < ny:
             visits[y, x] += 1
+            if hits[y, x] <= FULLNESS_THRESHOLD * visits[y, x]:
+                mean[y, x, 0] = np.nan
         e2 = 2 * err
         if e2 >= dy:
             err += dy
@@ -92,11 +94,17 @@ def _bresenham_update(hits, visits, sx, sy, x0, y0, x1, y1, hit, hx, hy):
         hits[y1, x1] += 1
         sx[y1, x1] += hx
         sy[y1, x1] += hy
+        h = hits[y1, x1]
+        if h > FULLNESS_THRESHOLD * visits[y1, x1]:
+            mean[y1, x1, 0] = sx[y1, x1] / h
+            mean[y1, x1, 1] = sy[y1, x1] / h
+        else:
+            mean[y1, x1, 0] = np.nan
 
 
 @nb.njit(cache=True)
 def register_scan(
-    hits, visits, sx, sy, gx0, gy0, delta, lx, ly, lt, ranges, angles, usable_range, max_range
+    hits, visits, sx, sy, mean, gx0, gy0, delta, lx, ly, lt, ranges, angles, usable_range, max_range
 ):
     """Integrate one scan taken from laser pose ``(lx, ly, lt)`` (GMapping ``registerScan``).
 
@@ -119,37 +127,54 @@ def register_scan(
         hy = ly + r * math.sin(a)
         cx1 = int(math.floor((hx - gx0) / delta))
         cy1 = int(math.floor((hy - gy0) / delta))
-        _bresenham_update(hits, visits, sx, sy, cx0, cy0, cx1, cy1, hit, hx, hy)
+        _bresenham_update(hits, visits, sx, sy, mean, cx0, cy0, cx1, cy1, hit, hx, hy)
 
 
 @nb.njit(cache=True)
-def _score_core(
-    hits, visits, sx, sy, gx0, gy0, delta, px, py, pt, off, ranges, angles, kernel, sigma, lsigma
-):
+def _beam_vectors(ranges, angles, off):
+    """Endpoints ``(ex, ey)`` and unit directions ``(ux, uy)`` of the beams in the robot frame."""
+    n = ranges.shape[0]
+    out = np.empty((4, n))
+    for i in range(n):
+        a = off[2] + angles[i]
+        c, s = math.cos(a), math.sin(a)
+        out[0, i] = off[0] + ranges[i] * c
+        out[1, i] = off[1] + ranges[i] * s
+        out[2, i] = c
+        out[3, i] = s
+    return out
+
+
+@nb.njit(cache=True)
+def _score_core(mean, gx0, gy0, delta, px, py, pt, beams, kernel, sigma, lsigma):
     """GMapping ``ScanMatcher::likelihoodAndScore`` at robot pose ``(px, py, pt)``.
 
-    Returns ``(score, loglik, n_matched)``. ``ranges`` holds only usable beams.
+    ``beams`` comes from :func:`_beam_vectors` (usable beams only). For every
+    endpoint, the kernel of ``(2 kernel + 1)^2`` cells around it is searched for the
+    occupied cell whose mean hit is nearest, provided the cell one step back along
+    the beam (``delta * sqrt(2)``, GMapping's ``freeCellRatio``) is not occupied.
+    The score adds ``exp(-d^2 / sigma)``, the log-likelihood adds ``-d^2 / lsigma``
+    or ``nullLikelihood / lsigma`` when nothing matched. Returns
+    ``(score, loglik, n_matched)``.
     """
-    ny, nx = visits.shape
+    ny, nx = mean.shape[0], mean.shape[1]
     ct, st = math.cos(pt), math.sin(pt)
-    lx = px + ct * off[0] - st * off[1]
-    ly = py + st * off[0] + ct * off[1]
-    lt = pt + off[2]
-    free_back = delta * math.sqrt(2.0)  # GMapping: freeDelta = delta * freeCellRatio
+    free_back = delta * math.sqrt(2.0)
     no_hit = NULL_LIKELIHOOD / lsigma
+    inv = 1.0 / delta
     s = 0.0
     lik = 0.0
     n = 0
-    for i in range(ranges.shape[0]):
-        r = ranges[i]
-        a = lt + angles[i]
-        ca, sa = math.cos(a), math.sin(a)
-        hx = lx + r * ca
-        hy = ly + r * sa
-        ix = int(math.floor((hx - gx0) / delta))
-        iy = int(math.floor((hy - gy0) / delta))
-        fx = int(math.floor((hx - free_back * ca - gx0) / delta)) - ix
-        fy = int(math.floor((hy - free_back * sa - gy0) / delta)) - iy
+    for i in range(beams.shape[1]):
+        ex, ey, ux, uy = beams[0, i], beams[1, i], beams[2, i], beams[3, i]
+        hx = px + ct * ex - st * ey
+        hy = py + st * ex + ct * ey
+        ca = ct * ux - st * uy
+        sa = st * ux + ct * uy
+        ix = int(math.floor((hx - gx0) * inv))
+        iy = int(math.floor((hy - gy0) * inv))
+        fx = int(math.floor((hx - free_back * ca - gx0) * inv)) - ix
+        fy = int(math.floor((hy - free_back * sa - gy0) * inv)) - iy
         best = 1e30
         for yy in range(-kernel, kernel + 1):
             cy = iy + yy
@@ -161,15 +186,13 @@ def _score_core(
                 cfx = cx + fx
                 if cx < 0 or cx >= nx or cfx < 0 or cfx >= nx:
                     continue
-                v = visits[cy, cx]
-                if v == 0 or hits[cy, cx] <= FULLNESS_THRESHOLD * v:
+                mux = mean[cy, cx, 0]
+                if mux != mux:  # NaN: not occupied
                     continue
-                fv = visits[cfy, cfx]
-                if fv > 0 and hits[cfy, cfx] >= FULLNESS_THRESHOLD * fv:
+                if mean[cfy, cfx, 0] == mean[cfy, cfx, 0]:  # predecessor occupied
                     continue
-                h = hits[cy, cx]
-                mx = hx - sx[cy, cx] / h
-                my = hy - sy[cy, cx] / h
+                mx = hx - mux
+                my = hy - mean[cy, cx, 1]
                 d2 = mx * mx + my * my
                 if d2 < best:
                     best = d2
@@ -183,24 +206,18 @@ def _score_core(
 
 
 @nb.njit(cache=True)
-def gmapping_score(
-    hits, visits, sx, sy, gx0, gy0, delta, px, py, pt, off, ranges, angles, kernel, sigma, lsigma
-):
+def gmapping_score(mean, gx0, gy0, delta, px, py, pt, off, ranges, angles, kernel, sigma, lsigma):
     """GMapping's scan score and log-likelihood at one pose; see :func:`_score_core`."""
+    beams = _beam_vectors(ranges, angles, off)
     return _score_core(
-        hits,
-        visits,
-        sx,
-        sy,
+        mean,
         gx0,
         gy0,
         delta,
         px,
         py,
         pt,
-        off,
-        ranges,
-        angles,
+        beams,
         kernel,
         sigma,
         lsigma,
@@ -209,10 +226,7 @@ def gmapping_score(
 
 @nb.njit(cache=True)
 def hill_climb(
-    hits,
-    visits,
-    sx,
-    sy,
+    mean,
     gx0,
     gy0,
     delta,
@@ -235,10 +249,9 @@ def hill_climb(
     after ``iterations`` refinements without improvement. Returns ``(x, y, theta,
     score)`` -- the score of the best pose found.
     """
+    beams = _beam_vectors(ranges, angles, off)
     cx, cy, ct = px, py, pt
-    cur = _score_core(
-        hits, visits, sx, sy, gx0, gy0, delta, cx, cy, ct, off, ranges, angles, kernel, sigma, 1.0
-    )[0]
+    cur = _score_core(mean, gx0, gy0, delta, cx, cy, ct, beams, kernel, sigma, 1.0)[0]
     best_score = -1.0
     ld, ad = lstep, astep
     refinement = 0
@@ -264,19 +277,14 @@ def hill_climb(
             else:
                 tt -= ad
             sc = _score_core(
-                hits,
-                visits,
-                sx,
-                sy,
+                mean,
                 gx0,
                 gy0,
                 delta,
                 tx,
                 ty,
                 tt,
-                off,
-                ranges,
-                angles,
+                beams,
                 kernel,
                 sigma,
                 1.0,
@@ -292,10 +300,7 @@ def hill_climb(
 
 @nb.njit(cache=True)
 def sample_likelihood(
-    hits,
-    visits,
-    sx,
-    sy,
+    mean,
     gx0,
     gy0,
     delta,
@@ -321,6 +326,7 @@ def sample_likelihood(
     ``(log_eta, mean (3,), cov (3, 3))`` where ``log_eta = log sum_j p(z | m, x_j)``
     is the importance-weight increment of the improved proposal.
     """
+    beams = _beam_vectors(ranges, angles, off)
     nl = int(round(lrange / lstep_)) if lstep_ > 0 else 0
     na = int(round(arange_ / astep_)) if astep_ > 0 else 0
     m = (2 * nl + 1) * (2 * nl + 1) * (2 * na + 1)
@@ -334,19 +340,14 @@ def sample_likelihood(
                 y = py + j * lstep_
                 t = pt + q * astep_
                 ls[k] = _score_core(
-                    hits,
-                    visits,
-                    sx,
-                    sy,
+                    mean,
                     gx0,
                     gy0,
                     delta,
                     x,
                     y,
                     t,
-                    off,
-                    ranges,
-                    angles,
+                    beams,
                     kernel,
                     sigma,
                     lsigma,
@@ -359,14 +360,14 @@ def sample_likelihood(
     w = np.exp(ls - lmax)
     tot = w.sum()
     w /= tot
-    mean = np.zeros(3)
+    mu = np.zeros(3)
     for k in range(m):
-        mean += w[k] * ps[k]
+        mu += w[k] * ps[k]
     cov = np.zeros((3, 3))
     for k in range(m):
-        d = ps[k] - mean
+        d = ps[k] - mu
         cov += w[k] * np.outer(d, d)
-    return lmax + math.log(tot), mean, cov
+    return lmax + math.log(tot), mu, cov
 
 
 @nb.njit(cache=True)
@@ -400,13 +401,14 @@ class CountGrid:
         Cell size in metres (GMapping's ``delta``).
     """
 
-    __slots__ = ("hits", "visits", "sx", "sy", "x0", "y0", "delta")
+    __slots__ = ("hits", "visits", "sx", "sy", "mean", "x0", "y0", "delta")
 
     def __init__(self, shape: tuple[int, int], x0: float, y0: float, delta: float):
         self.hits = np.zeros(shape, np.int32)
         self.visits = np.zeros(shape, np.int32)
         self.sx = np.zeros(shape, np.float32)
         self.sy = np.zeros(shape, np.float32)
+        self.mean = np.full((*shape, 2), np.nan, np.float32)
         self.x0 = float(x0)
         self.y0 = float(y0)
         self.delta = float(delta)
@@ -423,6 +425,7 @@ class CountGrid:
         new.visits = self.visits.copy()
         new.sx = self.sx.copy()
         new.sy = self.sy.copy()
+        new.mean = self.mean.copy()
         new.x0, new.y0, new.delta = self.x0, self.y0, self.delta
         return new
 
@@ -431,8 +434,17 @@ class CountGrid:
         return self.visits.shape  # type: ignore[return-value]
 
     def arrays(self):
-        """``(hits, visits, sx, sy, x0, y0, delta)`` -- the leading kernel arguments."""
-        return self.hits, self.visits, self.sx, self.sy, self.x0, self.y0, self.delta
+        """``(hits, visits, sx, sy, mean, x0, y0, delta)``: leading arguments of the update."""
+        return self.hits, self.visits, self.sx, self.sy, self.mean, self.x0, self.y0, self.delta
+
+    def match_arrays(self):
+        """``(mean, x0, y0, delta)``: leading arguments of the scan-score kernels.
+
+        ``mean[iy, ix]`` is the mean hit position of an occupied cell (hits/visits
+        above GMapping's fullness threshold 0.1) and NaN elsewhere; it is kept up to
+        date by the map update, so the matcher reads one compact array.
+        """
+        return self.mean, self.x0, self.y0, self.delta
 
     def extent(self) -> tuple[float, float, float, float]:
         """World ``(xmin, xmax, ymin, ymax)`` covered by the grid."""
@@ -464,6 +476,7 @@ class CountGrid:
         self.visits = np.pad(self.visits, widths)
         self.sx = np.pad(self.sx, widths)
         self.sy = np.pad(self.sy, widths)
+        self.mean = np.pad(self.mean, (*widths, (0, 0)), constant_values=np.nan)
         self.x0 -= left * self.delta
         self.y0 -= bottom * self.delta
 

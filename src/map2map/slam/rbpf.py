@@ -422,7 +422,7 @@ class GMappingRBPF:
             if mr.size == 0:
                 continue
             mx, my, mt, score = hill_climb(
-                *g.arrays(),
+                *g.match_arrays(),
                 x,
                 y,
                 t,
@@ -441,7 +441,7 @@ class GMappingRBPF:
                 cx, cy, ct = x, y, t
                 self.n_match_failures += 1
             log_eta, mean, cov = sample_likelihood(
-                *g.arrays(),
+                *g.match_arrays(),
                 cx,
                 cy,
                 ct,
