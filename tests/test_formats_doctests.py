@@ -5,7 +5,7 @@ import importlib
 
 import pytest
 
-MODULES = ["map2map.maps.raster", "map2map.maps.ros"]
+MODULES = ["map2map.maps.raster", "map2map.maps.ros", "map2map.maps.image"]
 
 
 @pytest.mark.parametrize("name", MODULES)
