@@ -5,7 +5,12 @@ import importlib
 
 import pytest
 
-MODULES = ["map2map.maps.raster", "map2map.maps.ros", "map2map.maps.image"]
+MODULES = [
+    "map2map.maps.raster",
+    "map2map.maps.ros",
+    "map2map.maps.image",
+    "map2map.maps.houseexpo",
+]
 
 
 @pytest.mark.parametrize("name", MODULES)
