@@ -275,36 +275,24 @@ class _Builder:
                 ends.append(_Room(lx - e, 0, lx, ly, "Meeting_Room"))
                 xe = lx - e
         rooms: list[_Room] = []
-        if ly >= px(15.0):
-            # two corridors around a core band, joined by cross corridors
-            d1 = self.uniform_px(4.0, 6.0)
-            d2 = self.uniform_px(4.0, 6.0)
+        if ly >= 2 * px(4.0) + 2 * cw + px(3.0) and xe - xs >= px(10.0):
+            # two corridors around a core band, joined by cross corridors at its ends
+            dmax = min(6.0, (ly * self.res - 2 * cw * self.res - 3.0) / 2)
+            d1 = self.uniform_px(4.0, dmax)
+            d2 = self.uniform_px(4.0, dmax)
             ya, yb = d1, ly - d2 - cw  # corridor tops
             rooms += [_Room(xs, ya, xe, ya + cw, "Hallway", _CORRIDOR)]
             rooms += [_Room(xs, yb, xe, yb + cw, "Hallway", _CORRIDOR)]
             rooms += self.band_rooms(xs, xe, 0, ya, 2.8, 5.0)
             rooms += self.band_rooms(xs, xe, yb + cw, ly, 2.8, 5.0)
-            # core: cross corridors near both ends (or one in the middle) and core rooms
-            core = self.band_rooms(xs, xe, ya + cw, yb, 2.0, 6.0)
-            picks = {0, len(core) - 1} if len(core) >= 4 else {len(core) // 2}
-            for i, r in enumerate(core):
-                if i in picks:
-                    mid = (r.x0 + r.x1) // 2
-                    half = min(cw, r.w) // 2
-                    cross = _Room(mid - half, r.y0, mid - half + min(cw, r.w), r.y1)
-                    cross.label, cross.kind = "Hallway", _CORRIDOR
-                    parts = [cross]
-                    if cross.x0 - r.x0 >= px(1.5):
-                        parts.append(_Room(r.x0, r.y0, cross.x0, r.y1))
-                    else:
-                        cross.x0 = r.x0
-                    if r.x1 - cross.x1 >= px(1.5):
-                        parts.append(_Room(cross.x1, r.y0, r.x1, r.y1))
-                    else:
-                        cross.x1 = r.x1
-                    rooms += parts
-                else:
-                    rooms.append(r)
+            cy0, cy1 = ya + cw, yb
+            crosses = [xs, xe - cw]
+            if xe - xs >= px(24.0):
+                crosses.insert(1, (xs + xe - cw) // 2)
+            for k, cx in enumerate(crosses):
+                rooms.append(_Room(cx, cy0, cx + cw, cy1, "Hallway", _CORRIDOR))
+                if k + 1 < len(crosses):
+                    rooms += self.band_rooms(cx + cw, crosses[k + 1], cy0, cy1, 2.5, 6.0)
         elif ly >= 2 * depth_min + cw:
             yc = int(rng.integers(depth_min, ly - depth_min - cw + 1))
             rooms.append(_Room(xs, yc, xe, yc + cw, "Hallway", _CORRIDOR))
@@ -390,20 +378,25 @@ class _Builder:
         n = int(np.clip(round(lx * ly * m2 / rng.uniform(10.0, 16.0)), 3, 9))
         rooms = self.bsp(_Room(0, 0, lx, ly), n, 2.0)
         by_area = sorted(rooms, key=lambda r: -r.area)
-        by_area[0].label = "Living_Room"
+        compact = [r for r in by_area if max(r.w, r.h) < 2.5 * min(r.w, r.h)]
+        living = compact[0] if compact else by_area[0]
+        by_area.remove(living)
+        by_area.insert(0, living)
+        living.label = "Living_Room"
         rest = by_area[1:]
         for r in rest:
             r.label = "Bedroom"
-        if rest:
-            rest[-1].label = "Bathroom"
-        if len(rest) >= 3:
-            rest[len(rest) // 2].label = "Kitchen"
-        for r in rest[:-1]:
-            thin = min(r.w, r.h) <= px(1.8) and max(r.w, r.h) >= 2.5 * min(r.w, r.h)
-            if thin:
+        rest[-1].label = "Bathroom"
+        if len(rest) >= 5 and rest[-2].area * m2 < 6.0:
+            rest[-2].label = str(rng.choice(["Toilet", "Storage", "Bathroom"]))
+        # the kitchen opens onto the living room: its neighbour closest to 10 m2
+        near = [r for r in rest if r.label == "Bedroom" and self.shared(living, r)]
+        if len(rest) >= 3 and near:
+            min(near, key=lambda r: abs(r.area * m2 - 10.0)).label = "Kitchen"
+        for r in rest:
+            thin = min(r.w, r.h) <= px(2.2) and max(r.w, r.h) >= 2.5 * min(r.w, r.h)
+            if thin and r.label == "Bedroom":
                 r.label, r.kind = "Hallway", _CORRIDOR
-            elif r.label == "Bedroom" and r.area * m2 < 5.0:
-                r.label = str(rng.choice(["Storage", "Toilet"]))
         return rooms
 
     def living_zone(self, x0: int, x1: int, ly: int) -> list[_Room]:
@@ -458,7 +451,7 @@ class _Builder:
         # a room whose whole side is the shared segment (a corridor end): open it fully
         full = any(room_span(r) == (o0, o1) for r in (a, b))
         usable = (o1 - o0) - 2 * self.clear
-        if (want_open or (corridor and usable < self.door_min)) and full:
+        if corridor and full and (want_open or usable < self.door_min):
             return _Link(i, j, vertical, pos, o0 + self.hi, o1 - self.lo, door=False)
         if want_open and usable >= px_ceil(1.2, self.res):
             width = int(
