@@ -6,6 +6,8 @@ The public API re-exports the library functions behind every command line tool.
 from ._version import __version__
 from .errors import InputError
 from .maps import FREE, OCCUPIED, UNKNOWN, OccupancyMap, ternarize
+from .maps.floorplan import generate_floorplan
+from .maps.preprocess import crop_to_content, harmonise, preprocess, square_resize, thicken
 
 __all__ = [
     "__version__",
@@ -15,4 +17,10 @@ __all__ = [
     "UNKNOWN",
     "OccupancyMap",
     "ternarize",
+    "generate_floorplan",
+    "square_resize",
+    "harmonise",
+    "thicken",
+    "crop_to_content",
+    "preprocess",
 ]

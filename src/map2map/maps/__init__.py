@@ -1,5 +1,19 @@
 """Maps: the occupancy-grid model, file formats, floor plans and preprocessing."""
 
+from .floorplan import generate_floorplan
 from .grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap, ternarize
+from .preprocess import crop_to_content, harmonise, preprocess, square_resize, thicken
 
-__all__ = ["FREE", "OCCUPIED", "UNKNOWN", "OccupancyMap", "ternarize"]
+__all__ = [
+    "FREE",
+    "OCCUPIED",
+    "UNKNOWN",
+    "OccupancyMap",
+    "ternarize",
+    "generate_floorplan",
+    "square_resize",
+    "harmonise",
+    "thicken",
+    "crop_to_content",
+    "preprocess",
+]
