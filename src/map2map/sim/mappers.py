@@ -25,9 +25,11 @@ from ..slam.base import Mapper
 
 __all__ = ["MAPPERS", "make_mapper", "register_mapper", "available_mappers"]
 
-#: name -> "module:factory". The slam branch adds "rbpf" and "graph" here.
+#: name -> "module:factory": the oracle, the GMapping-style particle filter, graph SLAM.
 MAPPERS: dict[str, str | Callable[..., Mapper]] = {
     "oracle": "map2map.sim.mapping:OracleMapper",
+    "rbpf": "map2map.slam.rbpf:make_rbpf",
+    "graph": "map2map.slam.graph:make_graph",
 }
 
 

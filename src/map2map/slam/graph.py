@@ -70,6 +70,7 @@ __all__ = [
     "LookupTable",
     "correlative_match",
     "optimize_pose_graph",
+    "make_graph",
 ]
 
 
@@ -560,3 +561,17 @@ class GraphSLAM:
             lp = absolute_sum(kf.pose, kf.offset)
             self._grid.register_scan(lp, kf.ranges, kf.angles, p.max_range, kf.range_max)
         self._rendered = len(self.keyframes)
+
+
+def make_graph(resolution: float = 0.05, seed: int | None = 0, **options) -> GraphSLAM:
+    """Registry factory (``map2map simulate --mapper graph``); graph SLAM is deterministic,
+    ``seed`` is accepted for a uniform interface. Keyword options are
+    :class:`GraphSLAMParams` fields (``None`` keeps the default); ``particles`` is ignored.
+
+    Examples
+    --------
+    >>> make_graph(0.1).params.resolution
+    0.1
+    """
+    opts = {k: v for k, v in options.items() if v is not None and k != "particles"}
+    return GraphSLAM(GraphSLAMParams(resolution=float(resolution), **opts))

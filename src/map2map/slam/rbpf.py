@@ -69,6 +69,7 @@ __all__ = [
     "absolute_difference",
     "absolute_sum",
     "prepare_scan",
+    "make_rbpf",
 ]
 
 
@@ -485,3 +486,19 @@ class GMappingRBPF:
         self.log_w_sum = self.log_w_sum[idx].copy()
         self.log_w = np.zeros_like(self.log_w)
         self.n_resamples += 1
+
+
+def make_rbpf(
+    resolution: float = 0.05, seed: int | np.random.Generator | None = 0, **options
+) -> GMappingRBPF:
+    """Registry factory (``map2map simulate --mapper rbpf``): ``resolution`` is GMapping's
+    ``delta``; other keyword options are :class:`GMappingParams` fields (``None`` keeps the
+    default).
+
+    Examples
+    --------
+    >>> make_rbpf(0.05, seed=1, particles=8).params.particles
+    8
+    """
+    opts = {k: v for k, v in options.items() if v is not None}
+    return GMappingRBPF(GMappingParams(delta=float(resolution), **opts), seed=seed)
