@@ -58,6 +58,8 @@ __all__ = [
 FULLNESS_THRESHOLD = 0.1
 #: GMapping's ``nullLikelihood``: log-likelihood of a beam whose endpoint matched nothing.
 NULL_LIKELIHOOD = -0.5
+#: fastmath flags for the scoring kernel: everything but "no NaNs" (NaN marks free cells).
+_FAST = {"nsz", "arcp", "contract", "afn", "reassoc"}
 
 
 # ----------------------------------------------------------------------------- kernels
@@ -145,19 +147,56 @@ def _beam_vectors(ranges, angles, off):
     return out
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, fastmath=_FAST, inline="always")
+def _nearest_hit(mean, gx0, gy0, inv, free_back, hx, hy, ca, sa, kernel):
+    """GMapping's kernel search for one endpoint ``(hx, hy)`` of a beam along ``(ca, sa)``.
+
+    Among the ``(2 kernel + 1)^2`` cells around the endpoint, the occupied cell whose
+    mean hit is nearest, provided the cell one step back along the beam
+    (``delta * sqrt(2)``, GMapping's ``freeCellRatio``) is not occupied. Returns
+    ``(d^2, mean_x, mean_y)``, ``d^2 = 1e30`` when nothing matched.
+    """
+    ny, nx = mean.shape[0], mean.shape[1]
+    ix = int(math.floor((hx - gx0) * inv))
+    iy = int(math.floor((hy - gy0) * inv))
+    fx = int(math.floor((hx - free_back * ca - gx0) * inv)) - ix
+    fy = int(math.floor((hy - free_back * sa - gy0) * inv)) - iy
+    best = 1e30
+    bx = 0.0
+    by = 0.0
+    for yy in range(-kernel, kernel + 1):
+        cy = iy + yy
+        cfy = cy + fy
+        if cy < 0 or cy >= ny or cfy < 0 or cfy >= ny:
+            continue
+        for xx in range(-kernel, kernel + 1):
+            cx = ix + xx
+            cfx = cx + fx
+            if cx < 0 or cx >= nx or cfx < 0 or cfx >= nx:
+                continue
+            mux = mean[cy, cx, 0]
+            if mux != mux:  # NaN: not occupied
+                continue
+            if mean[cfy, cfx, 0] == mean[cfy, cfx, 0]:  # predecessor occupied
+                continue
+            muy = mean[cy, cx, 1]
+            d2 = (hx - mux) * (hx - mux) + (hy - muy) * (hy - muy)
+            if d2 < best:
+                best = d2
+                bx = mux
+                by = muy
+    return best, bx, by
+
+
+@nb.njit(cache=True, fastmath=_FAST)
 def _score_core(mean, gx0, gy0, delta, px, py, pt, beams, kernel, sigma, lsigma):
     """GMapping ``ScanMatcher::likelihoodAndScore`` at robot pose ``(px, py, pt)``.
 
-    ``beams`` comes from :func:`_beam_vectors` (usable beams only). For every
-    endpoint, the kernel of ``(2 kernel + 1)^2`` cells around it is searched for the
-    occupied cell whose mean hit is nearest, provided the cell one step back along
-    the beam (``delta * sqrt(2)``, GMapping's ``freeCellRatio``) is not occupied.
-    The score adds ``exp(-d^2 / sigma)``, the log-likelihood adds ``-d^2 / lsigma``
-    or ``nullLikelihood / lsigma`` when nothing matched. Returns
-    ``(score, loglik, n_matched)``.
+    ``beams`` comes from :func:`_beam_vectors` (usable beams only). Each endpoint is
+    matched by :func:`_nearest_hit`; the score adds ``exp(-d^2 / sigma)``, the
+    log-likelihood adds ``-d^2 / lsigma``, or ``nullLikelihood / lsigma`` when
+    nothing matched. Returns ``(score, loglik, n_matched)``.
     """
-    ny, nx = mean.shape[0], mean.shape[1]
     ct, st = math.cos(pt), math.sin(pt)
     free_back = delta * math.sqrt(2.0)
     no_hit = NULL_LIKELIHOOD / lsigma
@@ -171,31 +210,7 @@ def _score_core(mean, gx0, gy0, delta, px, py, pt, beams, kernel, sigma, lsigma)
         hy = py + st * ex + ct * ey
         ca = ct * ux - st * uy
         sa = st * ux + ct * uy
-        ix = int(math.floor((hx - gx0) * inv))
-        iy = int(math.floor((hy - gy0) * inv))
-        fx = int(math.floor((hx - free_back * ca - gx0) * inv)) - ix
-        fy = int(math.floor((hy - free_back * sa - gy0) * inv)) - iy
-        best = 1e30
-        for yy in range(-kernel, kernel + 1):
-            cy = iy + yy
-            cfy = cy + fy
-            if cy < 0 or cy >= ny or cfy < 0 or cfy >= ny:
-                continue
-            for xx in range(-kernel, kernel + 1):
-                cx = ix + xx
-                cfx = cx + fx
-                if cx < 0 or cx >= nx or cfx < 0 or cfx >= nx:
-                    continue
-                mux = mean[cy, cx, 0]
-                if mux != mux:  # NaN: not occupied
-                    continue
-                if mean[cfy, cfx, 0] == mean[cfy, cfx, 0]:  # predecessor occupied
-                    continue
-                mx = hx - mux
-                my = hy - mean[cy, cx, 1]
-                d2 = mx * mx + my * my
-                if d2 < best:
-                    best = d2
+        best = _nearest_hit(mean, gx0, gy0, inv, free_back, hx, hy, ca, sa, kernel)[0]
         if best < 1e29:
             s += math.exp(-best / sigma)
             lik += -best / lsigma
@@ -324,9 +339,28 @@ def sample_likelihood(
     in x and y and ``[-arange_, arange_]`` (step ``astep_``) in theta around
     ``(px, py, pt)`` -- GMapping's ``llsamplerange``/``lasamplerange`` -- and returns
     ``(log_eta, mean (3,), cov (3, 3))`` where ``log_eta = log sum_j p(z | m, x_j)``
-    is the importance-weight increment of the improved proposal.
+    is the importance-weight increment of the improved proposal. Each beam is
+    matched (:func:`_nearest_hit`) once at the centre pose and keeps that match for
+    all samples (they lie within ``lrange`` of it, well inside one cell).
     """
     beams = _beam_vectors(ranges, angles, off)
+    nb_ = beams.shape[1]
+    # nearest mean hits at the centre pose; the samples lie within a centimetre of it,
+    # so each beam keeps its match and only the distance to it is re-evaluated
+    ct, st = math.cos(pt), math.sin(pt)
+    inv = 1.0 / delta
+    free_back = delta * math.sqrt(2.0)
+    mx = np.empty(nb_)
+    my = np.empty(nb_)
+    ok = np.zeros(nb_, np.bool_)
+    for b in range(nb_):
+        hx = px + ct * beams[0, b] - st * beams[1, b]
+        hy = py + st * beams[0, b] + ct * beams[1, b]
+        ca = ct * beams[2, b] - st * beams[3, b]
+        sa = st * beams[2, b] + ct * beams[3, b]
+        d2, mx[b], my[b] = _nearest_hit(mean, gx0, gy0, inv, free_back, hx, hy, ca, sa, kernel)
+        ok[b] = d2 < 1e29
+    no_hit = NULL_LIKELIHOOD / lsigma
     nl = int(round(lrange / lstep_)) if lstep_ > 0 else 0
     na = int(round(arange_ / astep_)) if astep_ > 0 else 0
     m = (2 * nl + 1) * (2 * nl + 1) * (2 * na + 1)
@@ -339,19 +373,16 @@ def sample_likelihood(
                 x = px + i * lstep_
                 y = py + j * lstep_
                 t = pt + q * astep_
-                ls[k] = _score_core(
-                    mean,
-                    gx0,
-                    gy0,
-                    delta,
-                    x,
-                    y,
-                    t,
-                    beams,
-                    kernel,
-                    sigma,
-                    lsigma,
-                )[1]
+                c, s_ = math.cos(t), math.sin(t)
+                lik = 0.0
+                for b in range(nb_):
+                    if ok[b]:
+                        hx = x + c * beams[0, b] - s_ * beams[1, b] - mx[b]
+                        hy = y + s_ * beams[0, b] + c * beams[1, b] - my[b]
+                        lik -= (hx * hx + hy * hy) / lsigma
+                    else:
+                        lik += no_hit
+                ls[k] = lik
                 ps[k, 0] = x
                 ps[k, 1] = y
                 ps[k, 2] = t
