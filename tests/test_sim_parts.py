@@ -44,7 +44,7 @@ def wrap(a):
 
 def test_zero_error_odometry_reproduces_true_path():
     world = World.build(box_plan(), start=(2.0, 1.0, 0.0), rng=np.random.default_rng(0))
-    robot = DiffDriveRobot(RobotParams(), (2.0, 1.0, 0.0), world.clearance_at, 0.025)
+    robot = DiffDriveRobot(RobotParams(), (2.0, 1.0, 0.0), world)
     odo = WheelOdometry(
         OdometryErrors.none(ticks_per_rev=0), rng=np.random.default_rng(0), pose=robot.pose
     )
@@ -54,7 +54,7 @@ def test_zero_error_odometry_reproduces_true_path():
     np.testing.assert_allclose(est[:, :2], true[:, :2], atol=1e-9)
     np.testing.assert_allclose(wrap(est[:, 2] - true[:, 2]), 0, atol=1e-9)
     # encoder quantisation alone stays below a millimetre
-    robot = DiffDriveRobot(RobotParams(), (2.0, 1.0, 0.0), world.clearance_at, 0.025)
+    robot = DiffDriveRobot(RobotParams(), (2.0, 1.0, 0.0), world)
     odo = WheelOdometry(OdometryErrors.none(), rng=np.random.default_rng(0), pose=robot.pose)
     true, est = drive(robot, odo, cmds)
     assert np.abs(est[:, :2] - true[:, :2]).max() < 1e-3
@@ -62,12 +62,12 @@ def test_zero_error_odometry_reproduces_true_path():
 
 def test_systematic_errors_bend_a_straight_line_and_turns():
     world = World.build(box_plan(200, 200), start=(2.0, 1.0, 0.0), rng=np.random.default_rng(0))
-    robot = DiffDriveRobot(RobotParams(), (2.0, 1.0, 0.0), world.clearance_at, 0.025)
+    robot = DiffDriveRobot(RobotParams(), (2.0, 1.0, 0.0), world)
     err = OdometryErrors(wheel_diameter_ratio=1.01, wheelbase_ratio=1.0, slip_sigma=0.0)
     odo = WheelOdometry(err, rng=np.random.default_rng(0), pose=robot.pose)
     true, est = drive(robot, odo, [(0.2, 0.0)] * 100)
     assert abs(true[-1, 2]) < 1e-12 and abs(est[-1, 2]) > 0.01  # right wheel bigger
-    robot = DiffDriveRobot(RobotParams(), (5.0, 5.0, 0.0), world.clearance_at, 0.025)
+    robot = DiffDriveRobot(RobotParams(), (5.0, 5.0, 0.0), world)
     err = OdometryErrors(wheel_diameter_ratio=1.0, wheelbase_ratio=1.05, slip_sigma=0.0)
     odo = WheelOdometry(err, rng=np.random.default_rng(0), pose=robot.pose)
     true, est = drive(robot, odo, [(0.0, 1.0)] * 30)
@@ -79,7 +79,7 @@ def test_systematic_errors_bend_a_straight_line_and_turns():
 def test_collision_stops_robot_never_tunnels():
     plan = box_plan()
     world = World.build(plan, start=(2.0, 1.0, 0.0), rng=np.random.default_rng(0))
-    robot = DiffDriveRobot(RobotParams(), (2.0, 1.0, 0.0), world.clearance_at, 0.025)
+    robot = DiffDriveRobot(RobotParams(), (2.0, 1.0, 0.0), world)
     collided = False
     for _ in range(400):  # drive west into the outer wall at full speed
         r = robot.step(0.26, 0.0, 0.5)
@@ -91,7 +91,7 @@ def test_collision_stops_robot_never_tunnels():
     assert robot.pose[0] < x_wall
     assert world.clearance_at([robot.pose[0]], [robot.pose[1]])[0] >= 0.2
     # the dividing wall (col 60) with the robot in the left room, away from the door
-    robot = DiffDriveRobot(RobotParams(), (2.0, 2.0, 0.0), world.clearance_at, 0.025)
+    robot = DiffDriveRobot(RobotParams(), (2.0, 2.0, 0.0), world)
     wall_x = float(plan.pixel_to_world([0], [60])[0][0])
     for _ in range(100):
         robot.step(0.26, 0.0, 1.0)  # big steps must not jump the 5 cm wall

@@ -5,7 +5,16 @@ The public API re-exports the library functions behind every command line tool.
 
 from ._version import __version__
 from .errors import InputError
-from .maps import FREE, OCCUPIED, UNKNOWN, OccupancyMap, ternarize
+from .maps import (
+    FREE,
+    OCCUPIED,
+    UNKNOWN,
+    OccupancyMap,
+    load_map,
+    save_map,
+    save_map_figure,
+    ternarize,
+)
 from .maps.floorplan import generate_floorplan
 from .maps.preprocess import crop_to_content, harmonise, preprocess, square_resize, thicken
 
@@ -23,4 +32,7 @@ __all__ = [
     "thicken",
     "crop_to_content",
     "preprocess",
+    "load_map",
+    "save_map",
+    "save_map_figure",
 ]

@@ -111,23 +111,31 @@ class WheelOdometry:
         self.r_left = d_a / (e.wheel_diameter_ratio + 1)
         self.r_right = d_a * e.wheel_diameter_ratio / (e.wheel_diameter_ratio + 1)
         self.b_true = params.wheelbase * e.wheelbase_ratio
-        self._phi = np.zeros(2)  # accumulated true wheel angles (rad), left/right
-        self._ticks = np.zeros(2, np.int64)
+        self._phi_l = self._phi_r = 0.0  # accumulated true wheel angles (rad)
+        self._ticks_l = self._ticks_r = 0
 
     def step(self, ds: float, dth: float) -> None:
         """The true robot moved ``ds`` metres while turning ``dth`` rad; update the pose."""
         e, p = self.errors, self.params
-        roll = np.array([ds - dth * self.b_true / 2, ds + dth * self.b_true / 2])
+        roll_l = ds - dth * self.b_true / 2
+        roll_r = ds + dth * self.b_true / 2
         if e.slip_sigma > 0 and (ds != 0.0 or dth != 0.0):
-            roll = roll + e.slip_sigma * np.sqrt(np.abs(roll)) * self.rng.standard_normal(2)
-        dphi = roll / np.array([self.r_left, self.r_right])
+            n_l, n_r = self.rng.standard_normal(2)
+            roll_l += e.slip_sigma * math.sqrt(abs(roll_l)) * float(n_l)
+            roll_r += e.slip_sigma * math.sqrt(abs(roll_r)) * float(n_r)
+        dphi_l = roll_l / self.r_left
+        dphi_r = roll_r / self.r_right
         if e.ticks_per_rev > 0:
-            self._phi += dphi
-            ticks = np.floor(self._phi / (2 * math.pi) * e.ticks_per_rev).astype(np.int64)
-            dticks = ticks - self._ticks
-            self._ticks = ticks
-            wheel = dticks * (2 * math.pi / e.ticks_per_rev) * p.wheel_radius
+            self._phi_l += dphi_l
+            self._phi_r += dphi_r
+            k = e.ticks_per_rev / (2 * math.pi)
+            tl = math.floor(self._phi_l * k)
+            tr = math.floor(self._phi_r * k)
+            per_tick = 2 * math.pi / e.ticks_per_rev * p.wheel_radius
+            d_left = (tl - self._ticks_l) * per_tick
+            d_right = (tr - self._ticks_r) * per_tick
+            self._ticks_l, self._ticks_r = tl, tr
         else:
-            wheel = dphi * p.wheel_radius
-        d_left, d_right = float(wheel[0]), float(wheel[1])
+            d_left = dphi_l * p.wheel_radius
+            d_right = dphi_r * p.wheel_radius
         self.pose = arc_step(self.pose, (d_left + d_right) / 2, (d_right - d_left) / p.wheelbase)

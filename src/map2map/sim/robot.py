@@ -6,11 +6,11 @@ maximum speeds, by each wheel's speed (``|v +- w b / 2| <= v_max``, keeping the
 curvature) and by the acceleration limits; the pose then follows the exact arc of
 constant ``(v, w)`` over the step.
 
-Collisions are checked on the swept path: the arc is sampled at most half a cell
-apart and every sample must keep the body clear of all blocked cells (walls,
-furniture, everything outside the free space of the plan), using the clearance
-map of :class:`~map2map.sim.world.World` (Euclidean distance from each cell centre
-to the nearest blocked cell centre, accurate to half a cell). On contact the
+Collisions are checked on the swept path (numba): the arc is sampled at most half
+a cell apart and every sample must keep the body clear of all blocked cells
+(walls, furniture, everything outside the free space of the plan), using the
+clearance map of :class:`~map2map.sim.world.World` (distance from each cell
+centre to the nearest blocked cell, conservative by half a cell). On contact the
 robot stops at the last clear sample, its speed drops to zero and the step
 reports the collision: it never tunnels through a wall.
 
@@ -30,6 +30,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 __all__ = ["RobotParams", "WAFFLE_PI", "DiffDriveRobot", "StepResult", "arc_step"]
 
@@ -106,20 +107,20 @@ class DiffDriveRobot:
     params : RobotParams
     pose : (x, y, theta)
         True start pose in the plan frame.
-    clearance : callable
-        ``clearance(xs, ys) -> distances`` (metres from each point to the nearest
-        blocked cell), e.g. :meth:`map2map.sim.world.World.clearance_at`.
-    sample_step : float
-        Maximum spacing of the collision samples along the path (metres).
+    world : World
+        Gives ``clearance`` (metres from each cell to the nearest blocked cell)
+        and its frame ``plan`` (:class:`map2map.sim.world.World`).
     """
 
-    def __init__(self, params: RobotParams, pose, clearance, sample_step: float):
+    def __init__(self, params: RobotParams, pose, world):
         self.params = params
         self.pose = tuple(float(v) for v in pose)
         self.v = 0.0
         self.w = 0.0
-        self._clearance = clearance
-        self._sample_step = float(sample_step)
+        self._clear = world.clearance
+        m = world.plan
+        self._frame = (m.origin[0], m.origin[1], m.origin[2], m.resolution, m.height)
+        self._sample_step = m.resolution / 2
 
     def step(self, v_cmd: float, w_cmd: float, dt: float, people=None) -> StepResult:
         """Apply a velocity command for ``dt`` seconds; returns what was executed.
@@ -129,47 +130,74 @@ class DiffDriveRobot:
         """
         p = self.params
         v_cmd, w_cmd = p.wheel_speed_limit(v_cmd, w_cmd)
-        v = float(np.clip(v_cmd, self.v - p.max_acc * dt, self.v + p.max_acc * dt))
-        w = float(np.clip(w_cmd, self.w - p.max_alpha * dt, self.w + p.max_alpha * dt))
+        v = min(max(v_cmd, self.v - p.max_acc * dt), self.v + p.max_acc * dt)
+        w = min(max(w_cmd, self.w - p.max_alpha * dt), self.w + p.max_alpha * dt)
         v, w = p.wheel_speed_limit(v, w)
         ds, dth = v * dt, w * dt
         if ds == 0.0 and dth == 0.0:
             self.v = self.w = 0.0
             return StepResult(0.0, 0.0, False, False)
         n = max(1, int(math.ceil(abs(ds) / self._sample_step)))
-        fr = np.arange(1, n + 1) / n
-        xs, ys, ths = _arc_samples(self.pose, ds, dth, fr)
-        clear = self._clearance(xs, ys) >= p.radius
-        blocked = np.zeros(n, bool)
-        if people is not None and len(people):
-            d = np.hypot(xs[:, None] - people[None, :, 0], ys[:, None] - people[None, :, 1])
-            near = (d < p.radius + people[None, :, 2]).any(axis=1)
-            # only block motion that gets closer to a person
-            d0 = np.hypot(self.pose[0] - people[:, 0], self.pose[1] - people[:, 1])
-            closer = (d < d0[None, :]).any(axis=1)
-            blocked = near & closer
-        ok = clear & ~blocked
-        if ok.all():
-            self.pose = (float(xs[-1]), float(ys[-1]), _wrap(float(ths[-1])))
+        x, y, th = self.pose
+        k, is_person = _sweep(
+            self._clear,
+            *self._frame,
+            x,
+            y,
+            th,
+            ds,
+            dth,
+            n,
+            p.radius,
+            people if people is not None else _NO_PEOPLE,
+        )
+        if k == n:
+            self.pose = _wrap_pose(arc_step(self.pose, ds, dth))
             self.v, self.w = v, w
             return StepResult(ds, dth, False, False)
-        k = int(np.argmin(ok))  # first bad sample
-        f = fr[k - 1] if k > 0 else 0.0
-        if k > 0:
-            self.pose = (float(xs[k - 1]), float(ys[k - 1]), _wrap(float(ths[k - 1])))
+        f = k / n  # the last clear sample
+        self.pose = _wrap_pose(arc_step(self.pose, ds * f, dth * f))
         self.v = self.w = 0.0
-        return StepResult(ds * f, dth * f, not clear[k], bool(blocked[k] and clear[k]))
+        return StepResult(ds * f, dth * f, not is_person, is_person)
 
 
-def _arc_samples(pose, ds, dth, fractions):
-    x, y, th = pose
-    d = ds * fractions
-    a = dth * fractions
-    if abs(dth) < 1e-9:
-        mid = th + a / 2
-        return x + d * np.cos(mid), y + d * np.sin(mid), th + a
-    r = ds / dth
-    return x + r * (np.sin(th + a) - math.sin(th)), y - r * (np.cos(th + a) - math.cos(th)), th + a
+_NO_PEOPLE = np.zeros((0, 3))
+
+
+def _wrap_pose(p):
+    return (p[0], p[1], _wrap(p[2]))
+
+
+@njit(cache=True)
+def _sweep(clear, ox, oy, yaw, res, height, x, y, th, ds, dth, n, radius, people):
+    """Index (0..n) of the first sample along the arc that is not clear, and whether
+    a person (rather than a wall) stopped it; ``n`` when the whole arc is clear."""
+    h, w = clear.shape
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    for i in range(1, n + 1):
+        f = i / n
+        a = dth * f
+        d = ds * f
+        if abs(dth) < 1e-9:
+            px = x + d * math.cos(th + a / 2)
+            py = y + d * math.sin(th + a / 2)
+        else:
+            rr = ds / dth
+            px = x + rr * (math.sin(th + a) - math.sin(th))
+            py = y - rr * (math.cos(th + a) - math.cos(th))
+        lx = cy * (px - ox) + sy * (py - oy)
+        ly = -sy * (px - ox) + cy * (py - oy)
+        col = int(math.floor(lx / res))
+        row = int(math.floor(height - ly / res))
+        if row < 0 or col < 0 or row >= h or col >= w or clear[row, col] < radius:
+            return i - 1, False
+        for k in range(people.shape[0]):
+            dd = math.hypot(px - people[k, 0], py - people[k, 1])
+            if dd < radius + people[k, 2]:
+                d0 = math.hypot(x - people[k, 0], y - people[k, 1])
+                if dd < d0:  # only motion towards a person is blocked
+                    return i - 1, True
+    return n, False
 
 
 def _wrap(a: float) -> float:

@@ -1,0 +1,646 @@
+"""Frontier exploration like ROS ``explore_lite``, and following a given route.
+
+Exploration (Yamauchi 1997; the ``explore_lite`` package of ROS that the thesis
+ran, section 4.1) works only on the robot's **own current map** and pose
+estimate, in the mapper's frame, never on the plan:
+
+1. **Costmap** (:func:`make_costmap`): the map's occupied cells are inflated. A
+   cell is *lethal* when its distance to the nearest occupied cell is below the
+   robot radius (plus ``safety``); beyond that the cost decays exponentially up to
+   ``inflation_radius`` (like ``costmap_2d``'s inflation layer), so paths keep
+   clear of walls. Unknown cells are not traversable.
+2. **Global planning**: Dijkstra over the 8-connected costmap from the robot
+   (:func:`dijkstra`, numba, binary heap) gives the path cost to every cell.
+3. **Frontiers** (:func:`find_frontiers`): free cells next to unknown ones,
+   grouped 8-connected; groups shorter than ``min_frontier_size`` metres are
+   ignored. A frontier's goal is its reachable cell (within ``goal_reach`` of it)
+   with the least path cost; its cost is ``potential_scale * path_length -
+   gain_scale * size`` (explore_lite's ranking with the path length as distance).
+   Unreachable frontiers are skipped; goals where the robot made no progress for
+   ``progress_timeout`` seconds are **blacklisted**.
+4. **Path following**: pure pursuit on the planned path with a look-ahead
+   distance, turning on the spot when the heading error is large, slowing down
+   near obstacles seen in the latest scan and stopping before them.
+
+Replanning happens every ``replan_period`` seconds (and at once when the goal is
+reached or the path is blocked). Exploration ends when no frontier is left.
+
+:class:`RouteFollower` instead drives through given waypoints (a list of
+``(x, y)`` or ``(x, y, theta)``, a recorded trajectory or a PRM route) with the
+same controller.
+
+Examples
+--------
+>>> import numpy as np
+>>> from map2map.maps.grid import OccupancyMap
+>>> data = np.full((40, 60), 127, np.uint8); data[5:35, 5:40] = 255
+>>> data[5:35, 5] = 0                                   # a wall on the left
+>>> m = OccupancyMap(data, 0.05)
+>>> cm = make_costmap(m, robot_radius=0.2)
+>>> fr = find_frontiers(m, min_size_cells=5)
+>>> len(fr.sizes), int(fr.sizes[0]) > 20                # the open right/top/bottom edges
+(1, True)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+from numba import njit
+
+from ..maps.grid import OccupancyMap
+from ..slam.base import LaserScan
+
+__all__ = [
+    "ExploreConfig",
+    "Costmap",
+    "make_costmap",
+    "dijkstra",
+    "Frontiers",
+    "find_frontiers",
+    "Explorer",
+    "RouteFollower",
+    "PathController",
+]
+
+
+@dataclass(frozen=True)
+class ExploreConfig:
+    """Exploration and control parameters (explore_lite / TurtleBot3 navigation defaults).
+
+    Parameters
+    ----------
+    robot_radius : float
+        Body radius used for the lethal zone (m).
+    safety : float
+        Extra lethal margin beyond the radius (m).
+    inflation_radius : float
+        Distance up to which costs are raised near obstacles (m).
+    cost_scaling : float
+        Exponential decay rate of the inflation cost (1/m).
+    inflation_weight : float
+        Cost added right at the lethal boundary (a free cell costs 1).
+    min_frontier_size : float
+        Smallest frontier considered, metres of frontier cells (explore_lite: 0.75).
+    potential_scale, gain_scale : float
+        Ranking weights of path length and frontier size (explore_lite: 3 and 1).
+    goal_reach : float
+        Goals may be up to this far from their frontier (m).
+    progress_timeout : float
+        Seconds without getting 0.1 m closer to the goal before it is blacklisted.
+    blacklist_radius : float
+        Frontier goals this close to a blacklisted goal are skipped (m).
+    replan_period : float
+        Seconds between replans (explore_lite's planner_frequency is 0.33 Hz).
+    plan_resolution : float
+        Cell size of the global planning grid (m); the costmap is min-pooled onto it.
+    switch_margin : float
+        A new frontier replaces the current goal only if it scores this much better.
+    lookahead : float
+        Pure-pursuit look-ahead distance (m).
+    goal_tolerance : float
+        Distance at which a goal counts as reached (m).
+    stop_distance : float
+        The robot stops when an obstacle in front is closer than this (m, from
+        the centre) and slows down below ``2 * stop_distance``.
+    """
+
+    robot_radius: float = 0.2
+    safety: float = 0.03
+    inflation_radius: float = 0.6
+    cost_scaling: float = 6.0
+    inflation_weight: float = 8.0
+    min_frontier_size: float = 0.5
+    potential_scale: float = 3.0
+    gain_scale: float = 1.0
+    goal_reach: float = 0.4
+    progress_timeout: float = 15.0
+    blacklist_radius: float = 0.3
+    replan_period: float = 2.0
+    plan_resolution: float = 0.1
+    switch_margin: float = 1.0
+    lookahead: float = 0.35
+    goal_tolerance: float = 0.25
+    stop_distance: float = 0.3
+
+
+# --------------------------------------------------------------------- costmap
+@dataclass
+class Costmap:
+    """Traversal costs of a map: ``cost`` (float32, ``inf`` where not traversable)."""
+
+    map: OccupancyMap
+    cost: np.ndarray
+    clearance: np.ndarray  # metres from each cell centre to the nearest occupied cell
+
+
+def make_costmap(
+    m: OccupancyMap,
+    *,
+    robot_radius: float = 0.2,
+    safety: float = 0.03,
+    inflation_radius: float = 0.6,
+    cost_scaling: float = 6.0,
+    inflation_weight: float = 8.0,
+) -> Costmap:
+    """Inflated costmap of ``m`` (see module docstring)."""
+    src = np.where(m.occupied, 0, 255).astype(np.uint8)
+    d = cv2.distanceTransform(src, cv2.DIST_L2, cv2.DIST_MASK_5)
+    clear = (d - np.float32(0.5)) * np.float32(m.resolution)  # to the nearest occupied face
+    cost = _inflate(
+        clear,
+        m.free,
+        robot_radius + safety,
+        inflation_radius,
+        cost_scaling,
+        inflation_weight,
+    )
+    return Costmap(m, cost, clear)
+
+
+@njit(cache=True)
+def _inflate(clear, free, lethal_r, inflation_radius, scaling, weight):
+    h, w = clear.shape
+    out = np.empty((h, w), np.float32)
+    for r in range(h):
+        for c in range(w):
+            d = clear[r, c]
+            if not free[r, c] or d < lethal_r:
+                out[r, c] = np.inf
+            elif d > inflation_radius:
+                out[r, c] = 1.0
+            else:
+                out[r, c] = 1.0 + weight * math.exp(-scaling * (d - lethal_r))
+    return out
+
+
+@njit(cache=True)
+def _heap_push(hk, hv, n, key, val):
+    i = n
+    hk[i] = key
+    hv[i] = val
+    while i > 0:
+        p = (i - 1) >> 1
+        if hk[p] <= hk[i]:
+            break
+        hk[p], hk[i] = hk[i], hk[p]
+        hv[p], hv[i] = hv[i], hv[p]
+        i = p
+    return n + 1
+
+
+@njit(cache=True)
+def _heap_pop(hk, hv, n):
+    key = hk[0]
+    val = hv[0]
+    n -= 1
+    hk[0] = hk[n]
+    hv[0] = hv[n]
+    i = 0
+    while True:
+        lft = 2 * i + 1
+        if lft >= n:
+            break
+        s = lft
+        if lft + 1 < n and hk[lft + 1] < hk[lft]:
+            s = lft + 1
+        if hk[i] <= hk[s]:
+            break
+        hk[s], hk[i] = hk[i], hk[s]
+        hv[s], hv[i] = hv[i], hv[s]
+        i = s
+    return key, val, n
+
+
+@njit(cache=True)
+def dijkstra(cost, start_r, start_c):
+    """Path cost (cells x cost) from one cell to every cell, 8-connected, and parents.
+
+    The edge cost between neighbours is the step length (1 or sqrt 2) times the
+    mean of the two cells' costs. Cells with infinite cost are never entered
+    (the start cell is always expanded). Returns ``(dist, parent)`` with
+    ``parent`` the flat index of the previous cell (-1 at the start / unreached).
+    """
+    h, w = cost.shape
+    n_cells = h * w
+    dist = np.full(n_cells, np.inf, np.float32)
+    parent = np.full(n_cells, -1, np.int32)
+    cap = 8 * n_cells + 1
+    hk = np.empty(min(cap, 4 * n_cells + 16), np.float32)
+    hv = np.empty(hk.shape[0], np.int32)
+    s = start_r * w + start_c
+    dist[s] = 0.0
+    n = _heap_push(hk, hv, 0, np.float32(0.0), s)
+    dr = (-1, -1, -1, 0, 0, 1, 1, 1)
+    dc = (-1, 0, 1, -1, 1, -1, 0, 1)
+    diag = math.sqrt(2.0)
+    flat = cost.ravel()
+    while n > 0:
+        d, u, n = _heap_pop(hk, hv, n)
+        if d > dist[u]:
+            continue
+        ur = u // w
+        uc = u - ur * w
+        cu = flat[u]
+        if not np.isfinite(cu):
+            cu = 1.0  # leaving a lethal start cell
+        for k in range(8):
+            vr = ur + dr[k]
+            vc = uc + dc[k]
+            if vr < 0 or vc < 0 or vr >= h or vc >= w:
+                continue
+            v = vr * w + vc
+            cv = flat[v]
+            if not np.isfinite(cv):
+                continue
+            step = diag if (dr[k] != 0 and dc[k] != 0) else 1.0
+            nd = d + np.float32(step * 0.5 * (cu + cv))
+            if nd < dist[v]:
+                dist[v] = nd
+                parent[v] = u
+                if n >= hk.shape[0]:  # grow the heap (rare)
+                    hk2 = np.empty(hk.shape[0] * 2, np.float32)
+                    hv2 = np.empty(hk.shape[0] * 2, np.int32)
+                    hk2[:n] = hk[:n]
+                    hv2[:n] = hv[:n]
+                    hk, hv = hk2, hv2
+                n = _heap_push(hk, hv, n, nd, v)
+    return dist.reshape(h, w), parent
+
+
+def backtrack(parent: np.ndarray, goal_flat: int, width: int) -> np.ndarray:
+    """Cells ``(row, col)`` from the start to ``goal_flat`` following ``parent``."""
+    cells = []
+    u = int(goal_flat)
+    while u >= 0:
+        cells.append(u)
+        u = int(parent[u])
+    cells.reverse()
+    a = np.array(cells, np.int64)
+    return np.column_stack([a // width, a % width])
+
+
+# -------------------------------------------------------------------- frontiers
+@dataclass
+class Frontiers:
+    """Frontier groups of a map: ``labels`` image (0 = none) and per-group ``sizes``."""
+
+    labels: np.ndarray
+    sizes: np.ndarray  # cells per group (index k -> label k + 1)
+
+
+def find_frontiers(m: OccupancyMap, min_size_cells: int = 10) -> Frontiers:
+    """Free cells with an unknown 4-neighbour, grouped 8-connected, small groups dropped.
+
+    Isolated unknown cells inside seen space (gaps between beams) are ignored.
+    """
+    free = m.free
+    # unknown cells between diverging beams far from the robot are not frontiers:
+    # close the free region over such one-cell gaps first
+    closed = cv2.morphologyEx(free.astype(np.uint8), cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8))
+    unk = m.unknown & (closed == 0)
+    nb = np.zeros_like(unk)
+    nb[1:, :] |= unk[:-1, :]
+    nb[:-1, :] |= unk[1:, :]
+    nb[:, 1:] |= unk[:, :-1]
+    nb[:, :-1] |= unk[:, 1:]
+    front = (free & nb).astype(np.uint8)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(front, connectivity=8)
+    sizes = stats[1:, cv2.CC_STAT_AREA].astype(np.int64)
+    keep = np.flatnonzero(sizes >= min_size_cells)
+    remap = np.zeros(n, np.int32)
+    remap[keep + 1] = np.arange(1, len(keep) + 1)
+    return Frontiers(remap[labels], sizes[keep])
+
+
+@njit(cache=True)
+def frontier_goals(labels, n_groups, dist, reach):
+    """For each frontier group, the reachable cell within ``reach`` cells of it with least cost.
+
+    Returns ``(goal_flat, goal_cost)`` per group (-1 / inf if none).
+    """
+    h, w = labels.shape
+    best = np.full(n_groups, np.inf, np.float32)
+    cell = np.full(n_groups, -1, np.int64)
+    r2 = reach * reach
+    for r in range(h):
+        for c in range(w):
+            g = labels[r, c]
+            if g == 0:
+                continue
+            g -= 1
+            for ddr in range(-reach, reach + 1):
+                rr = r + ddr
+                if rr < 0 or rr >= h:
+                    continue
+                for ddc in range(-reach, reach + 1):
+                    if ddr * ddr + ddc * ddc > r2:
+                        continue
+                    cc = c + ddc
+                    if cc < 0 or cc >= w:
+                        continue
+                    d = dist[rr, cc]
+                    if d < best[g]:
+                        best[g] = d
+                        cell[g] = rr * w + cc
+    return cell, best
+
+
+# ------------------------------------------------------------------ controller
+class PathController:
+    """Pure pursuit along a polyline (map frame) with turn-on-the-spot and obstacle slowdown."""
+
+    def __init__(self, config: ExploreConfig, max_v: float, max_w: float):
+        self.cfg = config
+        self.max_v = max_v
+        self.max_w = max_w
+        self.path = np.zeros((0, 2))
+        self._i = 0
+
+    def set_path(self, path: np.ndarray) -> None:
+        self.path = np.asarray(path, float).reshape(-1, 2)
+        self._i = 0
+
+    def remaining(self, pose) -> float:
+        if not len(self.path):
+            return 0.0
+        p = self.path[self._i :]
+        d0 = math.hypot(p[0, 0] - pose[0], p[0, 1] - pose[1])
+        return d0 + float(np.hypot(*np.diff(p, axis=0).T).sum()) if len(p) > 1 else d0
+
+    def command(self, pose, scan: LaserScan | None) -> tuple[float, float, bool]:
+        """``(v, w, blocked)`` to follow the path from ``pose``; ``(0, 0, False)`` at the end."""
+        if not len(self.path):
+            return 0.0, 0.0, False
+        x, y, th = pose
+        # advance the closest index (never backwards), look a little ahead
+        win = self.path[self._i : self._i + 40]
+        d = np.hypot(win[:, 0] - x, win[:, 1] - y)
+        self._i += int(np.argmin(d))
+        seg = self.path[self._i :]
+        dd = np.hypot(seg[:, 0] - x, seg[:, 1] - y)
+        ahead = np.flatnonzero(dd >= self.cfg.lookahead)
+        tx, ty = seg[ahead[0]] if len(ahead) else seg[-1]
+        alpha = _wrap(math.atan2(ty - y, tx - x) - th)
+        w = float(np.clip(2.5 * alpha, -self.max_w, self.max_w))
+        if abs(alpha) > math.radians(50):
+            return 0.0, w, False
+        v = self.max_v * max(0.0, 1.0 - abs(alpha) / math.radians(60))
+        front = _front_distance(scan, alpha) if scan is not None else np.inf
+        stop = self.cfg.stop_distance
+        if front < stop:
+            return 0.0, w, True
+        if front < 2 * stop:
+            v *= (front - stop) / stop
+        end = math.hypot(seg[-1, 0] - x, seg[-1, 1] - y)
+        v = min(v, max(0.05, end))  # ease into the goal
+        return v, w, False
+
+
+def _front_distance(scan: LaserScan, alpha: float) -> float:
+    """Closest valid return within +-30 degrees of the driving direction (sensor frame)."""
+    r = np.asarray(scan.ranges, float)
+    a = _wrap_arr(scan.angles + scan.sensor_offset[2])
+    cone = np.abs(_wrap_arr(a - 0.5 * alpha)) < math.radians(30)
+    ok = cone & np.isfinite(r) & (r >= scan.range_min)
+    return float(r[ok].min()) + scan.sensor_offset[0] if ok.any() else np.inf
+
+
+def _wrap(a: float) -> float:
+    return (a + math.pi) % (2 * math.pi) - math.pi
+
+
+def _wrap_arr(a):
+    return (a + np.pi) % (2 * np.pi) - np.pi
+
+
+# ------------------------------------------------------------------- explorer
+@dataclass
+class _Goal:
+    xy: tuple[float, float]
+    best_dist: float
+    since: float
+    cost: float
+
+
+@dataclass
+class ExploreStats:
+    replans: int = 0
+    blacklisted: list[tuple[float, float]] = field(default_factory=list)
+    goals: int = 0
+
+
+class Explorer:
+    """explore_lite-style frontier exploration driving one robot (see module docstring).
+
+    Call :meth:`command` at every control step with the current time, the pose
+    estimate and map source (the mapper) and the latest scan; it returns
+    ``(v, w)``. :attr:`done` becomes True when no frontier is left.
+    """
+
+    def __init__(self, config: ExploreConfig, max_v: float, max_w: float, spin_first: bool):
+        self.cfg = config
+        self.ctrl = PathController(config, max_v, max_w)
+        self.max_w = max_w
+        self.done = False
+        self.stats = ExploreStats()
+        self._goal: _Goal | None = None
+        self._next_plan = 0.0
+        self._spin_left = 2 * math.pi if spin_first else 0.0
+        self._last_t: float | None = None
+        self._blocked_since: float | None = None
+
+    # -- planning ----------------------------------------------------------
+    def _plan(self, t: float, pose, m: OccupancyMap) -> None:
+        cfg = self.cfg
+        self.stats.replans += 1
+        bbox = m.content_bbox()
+        if bbox is not None:  # plan on the known part only (plus a frontier margin)
+            r0, r1, c0, c1 = bbox
+            m = m.crop(r0 - 2, r1 + 2, c0 - 2, c1 + 2)
+        cm = make_costmap(
+            m,
+            robot_radius=cfg.robot_radius,
+            safety=cfg.safety,
+            inflation_radius=cfg.inflation_radius,
+            cost_scaling=cfg.cost_scaling,
+            inflation_weight=cfg.inflation_weight,
+        )
+        fr = find_frontiers(m, max(1, int(round(cfg.min_frontier_size / m.resolution))))
+        n = len(fr.sizes)
+        sizes_m = fr.sizes * m.resolution
+        # plan on a coarser grid (min-pooled costs keep narrow doors open)
+        f = max(1, int(round(cfg.plan_resolution / m.resolution)))
+        cost, labels, frame = _coarsen(cm.cost, fr.labels, m, f)
+        r, c = (int(v) for v in frame.world_to_pixel(pose[0], pose[1]))
+        if not frame.contains(r, c):
+            self.ctrl.set_path(np.zeros((0, 2)))
+            return
+        dist, parent = dijkstra(cost, r, c)
+        reach = max(1, int(round(cfg.goal_reach / frame.resolution)))
+        cells, costs = frontier_goals(labels, n, dist, reach)
+        m = frame
+        res = m.resolution
+        best = None
+        candidates = []
+        for k in range(n):
+            if cells[k] < 0 or not np.isfinite(costs[k]):
+                continue
+            gr, gc = divmod(int(cells[k]), m.width)
+            gx, gy = (float(v[0]) for v in m.pixel_to_world([gr], [gc]))
+            if any(
+                math.hypot(gx - bx, gy - by) < cfg.blacklist_radius
+                for bx, by in self.stats.blacklisted
+            ):
+                continue
+            score = cfg.potential_scale * float(costs[k]) * res - cfg.gain_scale * sizes_m[k]
+            candidates.append((score, int(cells[k]), (gx, gy)))
+            if best is None or score < best[0]:
+                best = (score, int(cells[k]), (gx, gy))
+        if best is None:
+            self.done = True
+            self.ctrl.set_path(np.zeros((0, 2)))
+            return
+        score, goal_flat, gxy = best
+        g = self._goal
+        if g is not None and g.cost - score < cfg.switch_margin:
+            # keep the current goal while it is still a valid candidate (hysteresis)
+            for cand_score, cand_flat, cand_xy in candidates:
+                if math.hypot(cand_xy[0] - g.xy[0], cand_xy[1] - g.xy[1]) < 0.3:
+                    score, goal_flat, gxy = cand_score, cand_flat, cand_xy
+                    break
+        same = g is not None and math.hypot(gxy[0] - g.xy[0], gxy[1] - g.xy[1]) < 0.3
+        if not same:
+            self._goal = _Goal(gxy, np.inf, t, score)
+            self.stats.goals += 1
+        else:
+            g.cost = score
+        cells_rc = backtrack(parent, goal_flat, m.width)
+        wx, wy = m.pixel_to_world(cells_rc[:, 0], cells_rc[:, 1])
+        self.ctrl.set_path(np.column_stack([wx, wy]))
+
+    # -- control -------------------------------------------------------------
+    def command(self, t: float, pose, mapper, scan: LaserScan | None) -> tuple[float, float]:
+        """Velocity command at time ``t`` from the mapper's pose estimate ``pose``."""
+        cfg = self.cfg
+        dt = 0.0 if self._last_t is None else t - self._last_t
+        self._last_t = t
+        if self.done:
+            return 0.0, 0.0
+        if self._spin_left > 0:  # narrow field of view: look around once first
+            self._spin_left -= self.max_w * dt
+            return 0.0, self.max_w
+        g = self._goal
+        if g is not None:
+            d = self.ctrl.remaining(pose)
+            if d < g.best_dist - 0.1:
+                g.best_dist = d
+                g.since = t
+            elif t - g.since > cfg.progress_timeout:
+                self.stats.blacklisted.append(g.xy)
+                self._goal = None
+                self._next_plan = t
+            elif math.hypot(pose[0] - g.xy[0], pose[1] - g.xy[1]) < cfg.goal_tolerance:
+                self._goal = None
+                self._next_plan = t
+        if t >= self._next_plan or not len(self.ctrl.path):
+            self._plan(t, pose, mapper.get_map())
+            self._next_plan = t + cfg.replan_period
+            if self.done:
+                return 0.0, 0.0
+        v, w, blocked = self.ctrl.command(pose, scan)
+        if blocked:
+            if self._blocked_since is None:
+                self._blocked_since = t
+            elif t - self._blocked_since > 1.0:
+                self._next_plan = t  # something in the way: replan now
+                self._blocked_since = None
+        else:
+            self._blocked_since = None
+        if v == 0.0 and w == 0.0 and self._goal is not None:
+            self._goal = None  # end of a path short of the goal: plan again
+            self._next_plan = t
+        return v, w
+
+
+@njit(cache=True)
+def _pool(cost, labels, f, pad_top):
+    """Min-pool ``cost`` and max-pool ``labels`` by ``f`` (grid padded at the top/right)."""
+    h, w = cost.shape
+    h2 = (h + pad_top) // f
+    w2 = (w + f - 1) // f
+    out_c = np.full((h2, w2), np.inf, np.float32)
+    out_l = np.zeros((h2, w2), labels.dtype)
+    for r in range(h):
+        rr = (r + pad_top) // f
+        for c in range(w):
+            cc = c // f
+            v = cost[r, c]
+            if v < out_c[rr, cc]:
+                out_c[rr, cc] = v
+            lab = labels[r, c]
+            if lab > out_l[rr, cc]:
+                out_l[rr, cc] = lab
+    return out_c, out_l
+
+
+def _coarsen(cost, labels, m: OccupancyMap, f: int):
+    """Min-pool costs and max-pool frontier labels by ``f``; the coarse grid's frame."""
+    if f == 1:
+        return cost, labels, m
+    h, w = cost.shape
+    # pad at the top and the right: the lower-left corner (the origin) stays put
+    pad_top = (-h) % f
+    cost, labels = _pool(cost, labels, f, pad_top)
+    frame = OccupancyMap(np.zeros(cost.shape, np.uint8), m.resolution * f, m.origin)
+    return cost, labels, frame
+
+
+class RouteFollower:
+    """Drive through waypoints ``(x, y[, theta])`` given in the mapper's frame.
+
+    Consecutive waypoints are joined by straight segments, resampled every 5 cm,
+    and followed with :class:`PathController`. If the robot is blocked for
+    ``skip_after`` seconds it gives up the current stretch and heads for the next
+    waypoint. :attr:`done` is set at the last waypoint.
+    """
+
+    def __init__(
+        self, waypoints, config: ExploreConfig, max_v: float, max_w: float, skip_after=10.0
+    ):
+        wp = np.asarray(waypoints, float)[:, :2]
+        seg = [wp[:1]]
+        for a, b in zip(wp[:-1], wp[1:], strict=True):
+            n = max(1, int(math.ceil(math.hypot(*(b - a)) / 0.05)))
+            seg.append(a + (b - a) * (np.arange(1, n + 1) / n)[:, None])
+        self.path = np.concatenate(seg)
+        self.ctrl = PathController(config, max_v, max_w)
+        self.ctrl.set_path(self.path)
+        self.cfg = config
+        self.done = False
+        self.skip_after = skip_after
+        self._blocked_since: float | None = None
+        self.stats = ExploreStats()
+
+    def command(self, t: float, pose, mapper, scan: LaserScan | None) -> tuple[float, float]:
+        if self.done:
+            return 0.0, 0.0
+        end = self.path[-1]
+        if math.hypot(pose[0] - end[0], pose[1] - end[1]) < self.cfg.goal_tolerance * 0.5:
+            self.done = True
+            return 0.0, 0.0
+        v, w, blocked = self.ctrl.command(pose, scan)
+        if blocked:
+            self._blocked_since = t if self._blocked_since is None else self._blocked_since
+            if t - self._blocked_since > self.skip_after:  # skip ahead one metre
+                i = min(self.ctrl._i + 20, len(self.ctrl.path) - 1)
+                self.ctrl.set_path(self.ctrl.path[i:])
+                self._blocked_since = None
+        else:
+            self._blocked_since = None
+        if v == 0.0 and w == 0.0 and not blocked:
+            self.done = True
+        return v, w
