@@ -64,7 +64,7 @@ def test_breezyslam_parsing_integrates_ticks(tmp_path):
     assert o[2].theta == pytest.approx(circ / (2 * rob.half_axle))
     s = log.scans[0]
     assert s.n_beams == 682 and s.sensor_offset == (0.145, 0.0, 0.0)
-    assert np.isinf(s.ranges[:10]).all() and s.ranges[10] == pytest.approx(1.5)
+    assert np.isnan(s.ranges[:10]).all() and s.ranges[10] == pytest.approx(1.5)
     assert math.degrees(s.angles[0]) == pytest.approx(-120)
     assert math.degrees(s.angles[-1]) == pytest.approx(120)
 

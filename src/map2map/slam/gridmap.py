@@ -106,20 +106,42 @@ def _bresenham_update(hits, visits, sx, sy, mean, x0, y0, x1, y1, hit, hx, hy):
 
 @nb.njit(cache=True)
 def register_scan(
-    hits, visits, sx, sy, mean, gx0, gy0, delta, lx, ly, lt, ranges, angles, usable_range, max_range
+    hits,
+    visits,
+    sx,
+    sy,
+    mean,
+    gx0,
+    gy0,
+    delta,
+    lx,
+    ly,
+    lt,
+    ranges,
+    angles,
+    usable_range,
+    max_range,
+    no_return_free,
 ):
     """Integrate one scan taken from laser pose ``(lx, ly, lt)`` (GMapping ``registerScan``).
 
-    Beams longer than ``max_range`` (no return) are skipped; beams longer than
-    ``usable_range`` are cropped to it and mark only free space; the others mark
-    free space up to the endpoint cell and a hit in it.
+    NaN or non-positive readings are skipped. Beams longer than ``max_range`` (no
+    return) are skipped too, unless ``no_return_free``: then they clear free space up
+    to ``usable_range`` -- GMapping's documented set-up "maxUrange < sensor range <=
+    maxRange" for drivers that report a no-return at the sensor's maximum range.
+    Beams longer than ``usable_range`` are cropped to it and mark only free space;
+    the others mark free space up to the endpoint cell and a hit in it.
     """
     cx0 = int(math.floor((lx - gx0) / delta))
     cy0 = int(math.floor((ly - gy0) / delta))
     for i in range(ranges.shape[0]):
         r = ranges[i]
-        if not (r > 0.0) or r > max_range:
+        if not (r > 0.0):
             continue
+        if r > max_range:
+            if not no_return_free:
+                continue
+            r = usable_range
         hit = True
         if r >= usable_range:
             r = usable_range
@@ -518,16 +540,28 @@ class CountGrid:
         angles: np.ndarray,
         usable_range: float,
         max_range: float = np.inf,
+        no_return_free: bool = False,
     ) -> None:
         """Integrate a scan from the world laser pose ``(x, y, theta)`` (grows if needed)."""
         lx, ly, lt = (float(v) for v in laser_pose)
         r = np.asarray(ranges, np.float64)
         a = np.asarray(angles, np.float64)
-        reach = min(usable_range, float(np.nanmax(np.where(np.isfinite(r), r, 0.0), initial=0.0)))
+        fin = np.where(np.isfinite(r), r, usable_range if no_return_free else 0.0)
+        reach = min(usable_range, float(np.max(fin, initial=0.0)))
         pad = self.padding_for(lx, lx, ly, ly, reach + 2 * self.delta)
         if pad is not None:
             self.pad(*pad)
-        register_scan(*self.arrays(), lx, ly, lt, r, a, float(usable_range), float(max_range))
+        register_scan(
+            *self.arrays(),
+            lx,
+            ly,
+            lt,
+            r,
+            a,
+            float(usable_range),
+            float(max_range),
+            bool(no_return_free),
+        )
 
     def to_occupancy_map(self, occ_thresh: float = 0.25, meta: dict | None = None) -> OccupancyMap:
         """The ternary map (GMapping/slam_gmapping rule: occupied when hits/visits > occ_thresh)."""

@@ -84,7 +84,8 @@ def read_breezyslam(path: str | os.PathLike, robot: BreezyRobot = BreezyRobot())
         ds = (dl + dr) / 2,  dtheta = (dr - dl) / (2 * half_axle)
 
     along an arc (midpoint heading). Beam ``i`` points at ``-120 + i * 240 / 681``
-    degrees (counter-clockwise, 0 = ahead).
+    degrees (counter-clockwise, 0 = ahead). A 0 reading (no echo or an error code)
+    becomes NaN: unusable, it neither hits nor clears.
 
     Raises
     ------
@@ -133,7 +134,7 @@ def read_breezyslam(path: str | os.PathLike, robot: BreezyRobot = BreezyRobot())
     inc = math.radians(robot.fov_deg) / (robot.n_beams - 1)
     a0 = -math.radians(robot.fov_deg) / 2
     r = np.asarray(ranges) * 1e-3
-    r[r <= 0] = np.inf
+    r[r <= 0] = np.nan  # the URG-04LX reports 0 for an error or no echo: unusable
     r = r.astype(np.float32)
     off = (robot.laser_offset, 0.0, 0.0)
     odometry = [

@@ -30,8 +30,9 @@ accumulated weight (GMapping's ``getBestParticleIndex``). No ground truth is use
 anywhere: the filter sees only :class:`OdometryReading` and :class:`LaserScan`.
 
 Defaults are TurtleBot3's ``turtlebot3_slam/config/gmapping_params.yaml`` except
-``particles`` (30 instead of 100, for speed; ``benchmarks/bench_slam.py`` measures
-the effect on map error) -- see :class:`GMappingParams`.
+``particles`` (10 instead of 100) and ``lskip`` (1 instead of 0: every second beam
+of the 360-beam LDS-01), both for speed; ``benchmarks/bench_slam.py`` and
+``benchmarks/slam_quality.py`` measure their effect -- see :class:`GMappingParams`.
 
 Examples
 --------
@@ -84,12 +85,21 @@ class GMappingParams:
     delta 0.05, llsamplerange 0.01, llsamplestep 0.01, lasamplerange 0.005,
     lasamplestep 0.005. ``occ_thresh`` 0.25 is slam_gmapping's default.
 
-    Deviation: ``particles`` defaults to 30 (not 100) so that a 7-minute simulated
-    run stays within a few seconds; ``benchmarks/bench_slam.py`` reports map and
-    trajectory error for 10/30/100 particles.
+    Deviations, for speed (a 7-minute simulated run should take a few seconds):
+    ``particles`` 10 (not 100) and ``lskip`` 1 (not 0; the matcher uses every second
+    of the LDS-01's 360 beams). ``benchmarks/bench_slam.py`` (time) and
+    ``benchmarks/slam_quality.py`` (map and trajectory error) report 5/10/30/100
+    particles.
+
+    Two switches that are not GMapping parameters: ``sample_proposal`` draws each
+    particle's new pose from the Gaussian fitted around its scan match (Grisetti
+    2007, eq. 12; GMapping's code keeps the matched pose itself, ``False``), and
+    ``no_return_free`` clears free space along beams without a return up to
+    ``max_urange`` (GMapping's documented set-up for drivers reporting no-returns at
+    the maximum range; the simulator's LDS-01 reports ``inf``).
     """
 
-    particles: int = 30
+    particles: int = 10
     max_urange: float = 3.0
     sigma: float = 0.05
     kernel_size: int = 1
@@ -98,7 +108,7 @@ class GMappingParams:
     iterations: int = 5
     lsigma: float = 0.075
     ogain: float = 3.0
-    lskip: int = 0
+    lskip: int = 1
     minimum_score: float = 50.0
     srr: float = 0.1
     srt: float = 0.2
@@ -115,6 +125,8 @@ class GMappingParams:
     lasamplestep: float = 0.005
     occ_thresh: float = 0.25
     initial_size: float = 20.0
+    sample_proposal: bool = True
+    no_return_free: bool = True
 
     def __post_init__(self) -> None:
         if self.particles < 1:
@@ -264,10 +276,11 @@ def low_variance_resample(weights: np.ndarray, rng: np.random.Generator) -> np.n
 
 # ----------------------------------------------------------------------------- scans
 def prepare_scan(scan: LaserScan) -> tuple[np.ndarray, np.ndarray]:
-    """``(ranges, angles)`` as float64 with every non-return set to ``inf``."""
+    """``(ranges, angles)`` as float64: no return (``>= range_max``, ``inf``) becomes ``inf``,
+    an invalid reading (``nan``, below ``range_min``) becomes ``nan``."""
     r = np.asarray(scan.ranges, np.float64).copy()
-    bad = ~np.isfinite(r) | (r < scan.range_min) | (r >= scan.range_max)
-    r[bad] = np.inf
+    r[np.isnan(r) | (r < scan.range_min)] = np.nan
+    r[r >= scan.range_max] = np.inf
     return r, scan.angles.astype(np.float64)
 
 
@@ -403,7 +416,14 @@ class GMappingRBPF:
         off = self._laser_offset(scan)
         lp = absolute_sum(self.poses, np.broadcast_to(off, self.poses.shape))
         for g, q in zip(self.grids, lp, strict=True):
-            g.register_scan(q, ranges, angles, self.params.max_urange, scan.range_max)
+            g.register_scan(
+                q,
+                ranges,
+                angles,
+                self.params.max_urange,
+                scan.range_max,
+                self.params.no_return_free,
+            )
 
     def _add_nodes(self, t: float) -> None:
         base = sum(len(a) for a in self._node_pose)
@@ -458,9 +478,12 @@ class GMappingRBPF:
                 p.lasamplestep,
             )
             if score > p.minimum_score:
-                # draw from the Gaussian proposal fitted around the match (eq. 12)
-                chol = np.linalg.cholesky(cov + np.diag([1e-10, 1e-10, 1e-12]))
-                new = mean + chol @ self.rng.standard_normal(3)
+                if p.sample_proposal:
+                    # draw from the Gaussian proposal fitted around the match (eq. 12)
+                    chol = np.linalg.cholesky(cov + np.diag([1e-10, 1e-10, 1e-12]))
+                    new = mean + chol @ self.rng.standard_normal(3)
+                else:
+                    new = np.array([cx, cy, ct])
                 self.poses[i] = (new[0], new[1], _wrap(new[2]))
             self.log_w[i] += log_eta
             self.log_w_sum[i] += log_eta
