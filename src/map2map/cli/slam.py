@@ -33,6 +33,13 @@ def register(subparsers) -> None:
     p.add_argument(
         "--resolution", type=float, default=0.05, help="map resolution in m/px (default 0.05)"
     )
+    p.add_argument(
+        "--max-range",
+        type=float,
+        default=None,
+        help="usable laser range in m (rbpf: GMapping's maxUrange, default min(3.0, sensor "
+        "maximum); graph: default the sensor maximum)",
+    )
     p.add_argument("--seed", type=int, default=0, help="random seed of rbpf (default 0)")
     p.add_argument(
         "--format",
@@ -53,6 +60,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--particles", f"must be >= 1, got {args.particles}")
     if not args.resolution > 0:
         raise InputError("--resolution", f"must be > 0, got {args.resolution}")
+    if args.max_range is not None and not args.max_range > 0:
+        raise InputError("--max-range", f"must be > 0, got {args.max_range}")
     if args.out.exists() and not args.out.is_dir():
         raise InputError(args.out, "output path exists and is not a directory")
     log = load_log(args.log, args.format)  # every format problem is raised here, before output
@@ -62,6 +71,7 @@ def run(args: argparse.Namespace) -> int:
         particles=args.particles,
         resolution=args.resolution,
         seed=args.seed,
+        max_range=args.max_range,
         progress=not args.quiet,
     )
     paths = write_slam_outputs(res, args.out, title=f"{args.log.name}: {args.backend}")

@@ -64,11 +64,12 @@ _FAST = {"nsz", "arcp", "contract", "afn", "reassoc"}
 
 # ----------------------------------------------------------------------------- kernels
 @nb.njit(cache=True)
-def _bresenham_update(hits, visits, sx, sy, mean, x0, y0, x1, y1, hit, hx, hy):
+def _bresenham_update(hits, visits, sx, sy, mean, x0, y0, x1, y1, hit, hx, hy, stop_at_wall):
     """Walk the Bresenham line (x0,y0)->(x1,y1); visit every cell but the last.
 
     The last cell gets a hit (with the world endpoint ``hx, hy``) when ``hit``.
-    Cells outside the arrays are ignored.
+    Cells outside the arrays are ignored. With ``stop_at_wall`` the walk ends at
+    the first occupied cell (a beam without a return cannot have passed a wall).
     """
     ny, nx = visits.shape
     dx = abs(x1 - x0)
@@ -81,6 +82,8 @@ def _bresenham_update(hits, visits, sx, sy, mean, x0, y0, x1, y1, hit, hx, hy):
         if x == x1 and y == y1:
             break
         if 0 <= x < nx and 0 <= y < ny:
+            if stop_at_wall and mean[y, x, 0] == mean[y, x, 0]:
+                return
             visits[y, x] += 1
             if hits[y, x] <= FULLNESS_THRESHOLD * visits[y, x]:
                 mean[y, x, 0] = np.nan
@@ -138,7 +141,8 @@ def register_scan(
         r = ranges[i]
         if not (r > 0.0):
             continue
-        if r > max_range:
+        no_return = r > max_range
+        if no_return:
             if not no_return_free:
                 continue
             r = usable_range
@@ -151,7 +155,7 @@ def register_scan(
         hy = ly + r * math.sin(a)
         cx1 = int(math.floor((hx - gx0) / delta))
         cy1 = int(math.floor((hy - gy0) / delta))
-        _bresenham_update(hits, visits, sx, sy, mean, cx0, cy0, cx1, cy1, hit, hx, hy)
+        _bresenham_update(hits, visits, sx, sy, mean, cx0, cy0, cx1, cy1, hit, hx, hy, no_return)
 
 
 @nb.njit(cache=True)

@@ -71,10 +71,17 @@ def run_slam(
     particles: int | None = None,
     resolution: float = 0.05,
     seed: int = 0,
+    max_range: float | None = None,
     progress: bool = False,
     **options,
 ) -> SlamResult:
-    """Replay ``log`` through the backend registered as ``backend``; no ground truth is used."""
+    """Replay ``log`` through the backend registered as ``backend``; no ground truth is used.
+
+    ``max_range`` is the usable laser range (GMapping's ``maxUrange`` for ``rbpf``,
+    default ``min(3.0, sensor maximum)`` as TurtleBot3's configuration; the graph
+    backend's ``max_range``, default the sensor maximum). Other keyword options go
+    to the backend's parameters.
+    """
     from tqdm.auto import tqdm
 
     from ..sim.mappers import make_mapper
@@ -87,12 +94,12 @@ def run_slam(
         raise InputError("--resolution", f"must be > 0, got {resolution}")
     if len(log) == 0:
         raise InputError(None, "log holds no scans")
+    sensor_max = float(log.scans[0].range_max)
     if backend == "rbpf":
         options.setdefault("particles", particles)
-        # use the sensor's range like GMapping does when maxUrange exceeds it
-        options.setdefault("max_urange", min(3.0, float(log.scans[0].range_max)))
+        options.setdefault("max_urange", max_range or min(3.0, sensor_max))
     elif backend == "graph":
-        options.setdefault("max_range", float(log.scans[0].range_max))
+        options.setdefault("max_range", max_range or sensor_max)
     mapper = make_mapper(backend, resolution=resolution, seed=seed, **options)
     for odo, scan in tqdm(
         log, total=len(log), desc=f"slam ({backend})", unit="scan", disable=not progress
