@@ -47,6 +47,7 @@ from .mappers import make_mapper
 from .mapping import compose, relative, resample_to_frame
 from .odometry import OdometryErrors, WheelOdometry
 from .robot import WAFFLE_PI, DiffDriveRobot, RobotParams
+from .routes import as_waypoints
 from .world import World, check_start
 
 __all__ = ["SimResult", "simulate", "save_run", "choose_start", "validate_route"]
@@ -84,7 +85,8 @@ class SimResult:
     path_length : float
         Metres driven (true).
     collisions : int
-        Contact events with walls or furniture.
+        Contact events with walls or furniture (times and poses in
+        ``info["collision_events"]``).
     sim_seconds, wall_seconds : float
     stop_reason : str
         ``"explored"``, ``"route done"`` or ``"time budget"``.
@@ -206,6 +208,7 @@ def simulate(
     frame_every: float = 0.0,
     progress: bool = True,
     source: str | os.PathLike | None = None,
+    route_source: str | os.PathLike | None = None,
 ) -> SimResult:
     """Simulate one run of a TurtleBot3 exploring ``plan`` (or following ``route``).
 
@@ -221,8 +224,9 @@ def simulate(
         Lidar field of view in degrees (360 for the LDS-01, 180 in the thesis).
     mapper : str or Mapper
         A registered mapper name (:mod:`map2map.sim.mappers`) or an instance.
-    route : array-like, optional
-        Waypoints ``(x, y[, theta])`` in the plan frame to drive instead of exploring.
+    route : array-like or trajectory, optional
+        Waypoints ``(x, y[, theta])`` in the plan frame to drive instead of exploring
+        (anything :func:`map2map.sim.routes.as_waypoints` accepts, e.g. a PRM route).
     obstacles, people : int
         Random furniture boxes and walking people (seeded).
     start : (x, y, theta), optional
@@ -238,8 +242,8 @@ def simulate(
         Simulated seconds between animation frames (0: none).
     progress : bool
         Show a tqdm progress bar (simulated seconds).
-    source : path, optional
-        Name used in error messages (the plan file).
+    source, route_source : path, optional
+        Names used in error messages (the plan file, the route file).
 
     Raises
     ------
@@ -266,7 +270,7 @@ def simulate(
         raise InputError(src, "plan too small for the robot: no place with enough clearance")
     wp = None
     if route is not None:
-        wp = validate_route(base, route, robot.radius, "route")
+        wp = validate_route(base, as_waypoints(route), robot.radius, route_source or "route")
         if start is None:
             th = float(wp[0, 2]) if wp.shape[1] == 3 else 0.0
             if wp.shape[1] == 2 and len(wp) > 1:
@@ -309,6 +313,7 @@ def simulate(
     readings: list[OdometryReading] = []
     frames = []
     collisions = 0
+    contacts: list[tuple[float, float, float, float]] = []
     in_contact = False
     path_len = 0.0
     last_scan = None
@@ -352,6 +357,7 @@ def simulate(
         path_len += abs(res.ds)
         if res.collided and not in_contact:
             collisions += 1
+            contacts.append((t, *bot.pose))
         in_contact = res.collided
     bar.close()
 
@@ -370,6 +376,7 @@ def simulate(
         "mode": "route" if wp is not None else "explore",
         "replans": driver.stats.replans,
         "blacklisted_goals": len(driver.stats.blacklisted),
+        "collision_events": [[round(float(v), 3) for v in c] for c in contacts],
     }
     return SimResult(
         plan=plan,
@@ -425,6 +432,10 @@ def save_figure_png(res: SimResult, path: Path) -> None:
     axes[0].plot(tc, tr, "-", color="tab:green", lw=1.2, label="true")
     axes[0].plot(ec, er, "--", color="tab:red", lw=1.0, label="estimated")
     axes[0].plot(tc[:1], tr[:1], "o", color="tab:green", ms=5)
+    hits = np.array(res.info.get("collision_events") or np.zeros((0, 4)), float).reshape(-1, 4)
+    if len(hits):
+        hr, hc = res.plan.world_to_pixel_float(hits[:, 1], hits[:, 2])
+        axes[0].plot(hc, hr, "x", color="red", ms=7, mew=2, label="collision")
     axes[0].legend(loc="upper right", fontsize=7)
     draw_map(
         axes[1],
@@ -490,7 +501,7 @@ def save_run(res: SimResult, out: str | os.PathLike, *, gif: bool = False) -> di
     (CARMEN, odometry frame, with ``TRUEPOS`` in the plan frame), ``report.json``,
     ``figure.png`` and optionally ``exploration.gif``.
     """
-    from ..maps.ros import save_ros_map
+    from ..maps.formats import save_map
     from .carmen import write_carmen
 
     out = ensure_output_dir(out)
@@ -502,7 +513,7 @@ def save_run(res: SimResult, out: str | os.PathLike, *, gif: bool = False) -> di
         "report": out / "report.json",
         "figure": out / "figure.png",
     }
-    save_ros_map(res.slam_map_plan, paths["slam_map"])
+    save_map(res.slam_map_plan, paths["slam_map"])
     _write_csv(paths["trajectory_true"], res.times, res.true_poses)
     _write_csv(paths["trajectory_estimated"], res.times, res.estimated_poses)
     write_carmen(
