@@ -95,6 +95,9 @@ class ExploreConfig:
         Seconds without getting 0.1 m closer to the goal before it is blacklisted.
     blacklist_radius : float
         Frontier goals this close to a blacklisted goal are skipped (m).
+    blacklist_amnesties : int
+        When only blacklisted frontiers are left, the blacklist is cleared and they
+        are tried again, at most this many times, before exploration ends.
     replan_period : float
         Seconds between replans (explore_lite's planner_frequency is 0.33 Hz).
     plan_resolution : float
@@ -118,6 +121,7 @@ class ExploreConfig:
     goal_reach: float = 0.4
     progress_timeout: float = 15.0
     blacklist_radius: float = 0.3
+    blacklist_amnesties: int = 2
     replan_period: float = 2.0
     plan_resolution: float = 0.1
     switch_margin: float = 1.0
@@ -457,7 +461,7 @@ class PathController:
             # local safety (like DWA's footprint check): sweep the body along the
             # commanded arc through the latest scan's points and slow down or stop
             px, py = self._scan_points(scan)
-            t_hit = _time_to_contact(px, py, v, w, self.cfg.robot_radius + 0.03, 1.2, 0.1)
+            t_hit = _time_to_contact(px, py, v, w, self.cfg.robot_radius + 0.015, 1.2, 0.1)
             if t_hit <= 0.2:
                 return 0.0, w, True
             if t_hit < 1.2:
@@ -541,6 +545,12 @@ class Explorer:
         self._blocked_since: float | None = None
         self._reached: list[tuple[float, float]] = []
         self._empty_plans = 0
+        self._blacklist: list[tuple[float, float]] = []
+        self._amnesties = 0
+
+    def _blacklist_goal(self, xy) -> None:
+        self._blacklist.append(xy)
+        self.stats.blacklisted.append(xy)
 
     # -- planning ----------------------------------------------------------
     def _plan(self, t: float, pose, m: OccupancyMap) -> None:
@@ -582,20 +592,27 @@ class Explorer:
         res = m.resolution
         best = None
         candidates = []
+        n_blacklisted = 0
         for k in range(n):
             if cells[k] < 0 or not np.isfinite(costs[k]):
                 continue
             gr, gc = divmod(int(cells[k]), m.width)
             gx, gy = (float(v[0]) for v in m.pixel_to_world([gr], [gc]))
             if any(
-                math.hypot(gx - bx, gy - by) < cfg.blacklist_radius
-                for bx, by in self.stats.blacklisted
+                math.hypot(gx - bx, gy - by) < cfg.blacklist_radius for bx, by in self._blacklist
             ):
+                n_blacklisted += 1
                 continue
             score = cfg.potential_scale * float(costs[k]) * res - cfg.gain_scale * sizes_m[k]
             candidates.append((score, int(cells[k]), (gx, gy)))
             if best is None or score < best[0]:
                 best = (score, int(cells[k]), (gx, gy))
+        if best is None and n_blacklisted and self._amnesties < cfg.blacklist_amnesties:
+            # only blacklisted frontiers are left: forget the blacklist and retry them
+            self._amnesties += 1
+            self._blacklist.clear()
+            self._plan(t, pose, m_full)
+            return
         if best is None:
             # nothing reachable: look around and try again a few times before giving up
             self._empty_plans += 1
@@ -613,7 +630,7 @@ class Explorer:
                     score, goal_flat, gxy = cand_score, cand_flat, cand_xy
                     break
         if any(math.hypot(gxy[0] - x, gxy[1] - y) < 0.3 for x, y in self._reached):
-            self.stats.blacklisted.append(gxy)
+            self._blacklist_goal(gxy)
             self._reached.clear()
             self._plan(t, pose, m_full)
             return
@@ -646,7 +663,7 @@ class Explorer:
                 g.best_dist = d
                 g.since = t
             elif t - g.since > cfg.progress_timeout:
-                self.stats.blacklisted.append(g.xy)
+                self._blacklist_goal(g.xy)
                 self._goal = None
                 self._next_plan = t
             elif math.hypot(pose[0] - g.xy[0], pose[1] - g.xy[1]) < cfg.goal_tolerance:
