@@ -103,7 +103,8 @@ class ExploreConfig:
     plan_resolution : float
         Cell size of the global planning grid (m); the costmap is min-pooled onto it.
     switch_margin : float
-        A new frontier replaces the current goal only if it scores this much better.
+        The robot stays with its current frontier (followed as it shrinks) unless
+        another one scores this much better (about a metre of path).
     lookahead : float
         Pure-pursuit look-ahead distance (m).
     goal_tolerance : float
@@ -122,9 +123,9 @@ class ExploreConfig:
     progress_timeout: float = 15.0
     blacklist_radius: float = 0.3
     blacklist_amnesties: int = 2
-    replan_period: float = 2.0
+    replan_period: float = 3.0
     plan_resolution: float = 0.1
-    switch_margin: float = 1.0
+    switch_margin: float = 3.0
     lookahead: float = 0.35
     goal_tolerance: float = 0.25
 
@@ -442,20 +443,12 @@ class PathController:
         if not len(self.path):
             return 0.0, 0.0, False
         x, y, th = pose
-        # advance the closest index (never backwards), look a little ahead
-        win = self.path[self._i : self._i + 40]
-        d = np.hypot(win[:, 0] - x, win[:, 1] - y)
-        self._i += int(np.argmin(d))
-        seg = self.path[self._i :]
-        dd = np.hypot(seg[:, 0] - x, seg[:, 1] - y)
-        ahead = np.flatnonzero(dd >= self.cfg.lookahead)
-        tx, ty = seg[ahead[0]] if len(ahead) else seg[-1]
+        self._i, tx, ty, end = _pursuit_target(self.path, self._i, x, y, self.cfg.lookahead)
         alpha = _wrap(math.atan2(ty - y, tx - x) - th)
-        w = float(np.clip(2.5 * alpha, -self.max_w, self.max_w))
+        w = min(max(2.5 * alpha, -self.max_w), self.max_w)
         if abs(alpha) > math.radians(50):
             return 0.0, w, False
         v = self.max_v * max(0.0, 1.0 - abs(alpha) / math.radians(60))
-        end = math.hypot(seg[-1, 0] - x, seg[-1, 1] - y)
         v = min(v, max(0.05, end))  # ease into the goal
         if scan is not None:
             # local safety (like DWA's footprint check): sweep the body along the
@@ -480,13 +473,35 @@ class PathController:
 
 
 @njit(cache=True)
+def _pursuit_target(path, i0, x, y, lookahead):
+    """Advance the closest path index (never backwards, within 40 points) and return
+    ``(index, target_x, target_y, distance_to_end)`` with the target the first point
+    at least ``lookahead`` away."""
+    n = path.shape[0]
+    best = np.inf
+    i = i0
+    for k in range(i0, min(n, i0 + 40)):
+        d = math.hypot(path[k, 0] - x, path[k, 1] - y)
+        if d < best:
+            best = d
+            i = k
+    tx, ty = path[n - 1, 0], path[n - 1, 1]
+    for k in range(i, n):
+        if math.hypot(path[k, 0] - x, path[k, 1] - y) >= lookahead:
+            tx, ty = path[k, 0], path[k, 1]
+            break
+    return i, tx, ty, math.hypot(path[n - 1, 0] - x, path[n - 1, 1] - y)
+
+
+@njit(cache=True)
 def _time_to_contact(px, py, v, w, radius, horizon, dt):
     """First time (s) at which at least two scan points (robot frame) lie inside the
-    body moving with ``(v, w)``; ``horizon`` if none. Two points, so that a single
-    outlier reading does not stop the robot."""
+    body moving with ``(v, w)`` and closer than at the start; ``horizon`` if none.
+    Two points, so that a single outlier reading does not stop the robot; closer
+    than at the start, so that a robot already grazing a wall may move away."""
     r2 = radius * radius
     n = int(horizon / dt + 0.5)
-    for k in range(n + 1):
+    for k in range(1, n + 1):
         t = k * dt
         if abs(w) < 1e-9:
             cx, cy = v * t, 0.0
@@ -497,10 +512,11 @@ def _time_to_contact(px, py, v, w, radius, horizon, dt):
         for i in range(px.shape[0]):
             dx = px[i] - cx
             dy = py[i] - cy
-            if dx * dx + dy * dy < r2:
+            d2 = dx * dx + dy * dy
+            if d2 < r2 and d2 < px[i] * px[i] + py[i] * py[i] - 1e-6:
                 count += 1
                 if count >= 2:
-                    return t
+                    return t - dt
     return horizon
 
 
@@ -623,24 +639,25 @@ class Explorer:
         self._empty_plans = 0
         score, goal_flat, gxy = best
         g = self._goal
-        if g is not None and g.cost - score < cfg.switch_margin:
-            # keep the current goal while it is still a valid candidate (hysteresis)
-            for cand_score, cand_flat, cand_xy in candidates:
-                if math.hypot(cand_xy[0] - g.xy[0], cand_xy[1] - g.xy[1]) < 0.3:
-                    score, goal_flat, gxy = cand_score, cand_flat, cand_xy
-                    break
+        tracked = None
+        if g is not None:
+            # the current goal's frontier, followed as it shrinks (its middle moves)
+            near = [c for c in candidates if math.hypot(c[2][0] - g.xy[0], c[2][1] - g.xy[1]) < 1.0]
+            if near:
+                tracked = min(near, key=lambda c: math.hypot(c[2][0] - g.xy[0], c[2][1] - g.xy[1]))
+                if score > tracked[0] - cfg.switch_margin:  # commit unless much better
+                    score, goal_flat, gxy = tracked
         if any(math.hypot(gxy[0] - x, gxy[1] - y) < 0.3 for x, y in self._reached):
             self._blacklist_goal(gxy)
             self._reached.clear()
             self._plan(t, pose, m_full)
             return
         self._reached.clear()
-        same = g is not None and math.hypot(gxy[0] - g.xy[0], gxy[1] - g.xy[1]) < 0.3
-        if not same:
+        if tracked is not None and gxy == tracked[2]:
+            g.xy, g.cost = gxy, score  # same frontier: keep its progress timer
+        else:
             self._goal = _Goal(gxy, np.inf, t, score)
             self.stats.goals += 1
-        else:
-            g.cost = score
         cells_rc = backtrack(parent, goal_flat, m.width)
         wx, wy = m.pixel_to_world(cells_rc[:, 0], cells_rc[:, 1])
         self.ctrl.set_path(np.column_stack([wx, wy]))
@@ -688,9 +705,6 @@ class Explorer:
                 self._blocked_since = None
         else:
             self._blocked_since = None
-        if v == 0.0 and w == 0.0 and self._goal is not None:
-            self._goal = None  # end of a path short of the goal: plan again
-            self._next_plan = t
         return v, w
 
 

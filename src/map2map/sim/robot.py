@@ -63,8 +63,8 @@ class RobotParams:
 
     def wheel_speed_limit(self, v: float, w: float) -> tuple[float, float]:
         """Scale ``(v, w)`` so that no wheel exceeds ``max_v`` (same curvature)."""
-        v = float(np.clip(v, -self.max_v, self.max_v))
-        w = float(np.clip(w, -self.max_w, self.max_w))
+        v = min(max(float(v), -self.max_v), self.max_v)
+        w = min(max(float(w), -self.max_w), self.max_w)
         fastest = abs(v) + abs(w) * self.wheelbase / 2
         if fastest > self.max_v:
             s = self.max_v / fastest

@@ -50,7 +50,11 @@ from .robot import WAFFLE_PI, DiffDriveRobot, RobotParams
 from .routes import as_waypoints
 from .world import World, check_start
 
-__all__ = ["SimResult", "simulate", "save_run", "choose_start", "validate_route"]
+__all__ = ["SimResult", "simulate", "save_run", "choose_start", "validate_route", "REACH_MARGIN"]
+
+#: Clearance (m) beyond the robot radius that "reachable" free space requires: the
+#: coverage reference is what a navigation stack keeping 5 cm from walls can reach.
+REACH_MARGIN = 0.05
 
 
 @dataclass
@@ -79,7 +83,8 @@ class SimResult:
     slam_map_plan : OccupancyMap
         The same map resampled onto the plan's grid.
     reachable : (H, W) bool
-        Plan cells the robot's body can reach (the coverage reference).
+        Plan cells the robot's body can reach keeping :data:`REACH_MARGIN` from
+        walls (the coverage reference, see :meth:`World.reachable_cells`).
     coverage : float
         Fraction of ``reachable`` the final map marks free.
     path_length : float
@@ -137,7 +142,8 @@ class SimResult:
 
 
 def choose_start(world: World, radius: float, rng: np.random.Generator):
-    """A random start pose with room around it, in the largest reachable region."""
+    """A random start pose with room around it, in the largest region the robot can
+    reach keeping :data:`REACH_MARGIN` from walls."""
     from scipy import ndimage
 
     ok = world.clearance >= radius + 0.15
@@ -145,7 +151,9 @@ def choose_start(world: World, radius: float, rng: np.random.Generator):
         ok = world.clearance >= radius
     if not ok.any():
         raise InputError(None, "plan too small for the robot: no place with enough clearance")
-    lab, n = ndimage.label(world.clearance >= radius)
+    lab, n = ndimage.label(world.clearance >= radius + REACH_MARGIN)
+    if n == 0:
+        lab, n = ndimage.label(world.clearance >= radius)
     sizes = np.bincount(lab.ravel(), minlength=n + 1)
     sizes[0] = 0
     big = lab == int(np.argmax(sizes))
@@ -363,9 +371,11 @@ def simulate(
 
     slam_map = mapper_obj.get_map()
     slam_plan = resample_to_frame(slam_map, start, plan)
-    reachable = world.reachable_cells(start, robot.radius)
+    reachable = world.reachable_cells(start, robot.radius, REACH_MARGIN)
     n_reach = int(reachable.sum())
     coverage = float((slam_plan.free & reachable).sum() / n_reach) if n_reach else 0.0
+    touchable = world.reachable_cells(start, robot.radius)  # no margin: every squeeze counts
+    strict = float((slam_plan.free & touchable).sum() / max(int(touchable.sum()), 1))
     frames = [(ft, resample_to_frame(fm, start, plan), fp) for ft, fm, fp in frames]
     info = {
         "seed": int(seed),
@@ -376,6 +386,7 @@ def simulate(
         "mode": "route" if wp is not None else "explore",
         "replans": driver.stats.replans,
         "blacklisted_goals": len(driver.stats.blacklisted),
+        "coverage_strict": round(strict, 6),
         "collision_events": [[round(float(v), 3) for v in c] for c in contacts],
     }
     return SimResult(
