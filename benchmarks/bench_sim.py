@@ -33,11 +33,11 @@ def bench_raycast(plan, n_scans: int = 4000) -> tuple[float, float]:
     hs = rng.uniform(-np.pi, np.pi, n_scans)
     rel = np.deg2rad(np.arange(360.0))
     max_px = 3.5 / plan.resolution
-    cast_rays_many(scene._grid, scene._skip, xs[:2], ys[:2], hs[:2], rel, max_px)
+    cast_rays_many(scene._field, xs[:2], ys[:2], hs[:2], rel, max_px)
     best, best_cpu = np.inf, np.inf
     for _ in range(3):
         t0, c0 = time.perf_counter(), time.process_time()
-        cast_rays_many(scene._grid, scene._skip, xs, ys, hs, rel, max_px)
+        cast_rays_many(scene._field, xs, ys, hs, rel, max_px)
         best = min(best, time.perf_counter() - t0)
         best_cpu = min(best_cpu, time.process_time() - c0)
     return n_scans / best, n_scans / best_cpu
