@@ -77,8 +77,12 @@ class ExploreConfig:
     ----------
     robot_radius : float
         Body radius used for the lethal zone (m).
+    lethal_margin : float
+        Cells closer than ``robot_radius + lethal_margin`` to a mapped wall are not
+        traversable: the margin covers the planning grid's coarseness and the local
+        safety check's own margin, so that paths are never refused by it.
     safety : float
-        Extra lethal margin beyond the radius (m).
+        Beyond the lethal distance, a further margin of very expensive cells (m).
     inflation_radius : float
         Distance up to which costs are raised near obstacles (m).
     cost_scaling : float
@@ -112,7 +116,8 @@ class ExploreConfig:
     """
 
     robot_radius: float = 0.2
-    safety: float = 0.07
+    lethal_margin: float = 0.03
+    safety: float = 0.05
     inflation_radius: float = 0.6
     cost_scaling: float = 6.0
     inflation_weight: float = 8.0
@@ -579,7 +584,7 @@ class Explorer:
             m = m.crop(r0 - 2, r1 + 2, c0 - 2, c1 + 2)
         cm = make_costmap(
             m,
-            robot_radius=cfg.robot_radius,
+            robot_radius=cfg.robot_radius + cfg.lethal_margin,
             safety=cfg.safety,
             inflation_radius=cfg.inflation_radius,
             cost_scaling=cfg.cost_scaling,
