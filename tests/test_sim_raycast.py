@@ -50,14 +50,14 @@ def test_cast_matches_analytic_boxes(seed):
     solid[:, 40] = True
     for i in range(45):
         solid[12 + i, 20 + i] = True
-    g, skip = make_cast_grid(solid)
+    field = make_cast_grid(solid)
     free_r, free_c = np.nonzero(~solid)
     pick = rng.choice(len(free_r), 40, replace=False)
     angles = rng.uniform(-np.pi, np.pi, 90)
     for k in pick:
         x0 = free_c[k] + rng.random()
         y0 = free_r[k] + rng.random()
-        got = cast_rays(g, skip, x0, y0, angles, 70.0)
+        got = cast_rays(field, x0, y0, angles, 70.0)
         ref = reference_cast(solid, x0, y0, angles, 70.0)
         assert np.array_equal(np.isinf(got), np.isinf(ref))
         fin = np.isfinite(ref)
@@ -67,12 +67,12 @@ def test_cast_matches_analytic_boxes(seed):
 def test_batch_equals_single_and_outside_origin():
     rng = np.random.default_rng(5)
     solid = rng.random((30, 30)) < 0.05
-    g, skip = make_cast_grid(solid)
+    field = make_cast_grid(solid)
     rel = np.deg2rad(np.arange(0, 360, 7.0))
     xs, ys, hs = np.array([3.3, -4.0]), np.array([7.7, 12.2]), np.array([0.4, 0.1])
-    many = cast_rays_many(g, skip, xs, ys, hs, rel, 50.0)
+    many = cast_rays_many(field, xs, ys, hs, rel, 50.0)
     for k in range(2):
-        one = cast_rays(g, skip, xs[k], ys[k], hs[k] + rel, 50.0)
+        one = cast_rays(field, xs[k], ys[k], hs[k] + rel, 50.0)
         np.testing.assert_allclose(many[k], one, atol=1e-9)
         ref = reference_cast(solid, xs[k], ys[k], hs[k] + rel, 50.0)
         assert np.array_equal(np.isinf(many[k]), np.isinf(ref))
@@ -84,10 +84,10 @@ def test_no_leak_through_diagonal_corners():
     solid = np.zeros((30, 30), bool)
     for i in range(30):
         solid[i, i] = True  # cells touch only at corners
-    g, skip = make_cast_grid(solid)
+    field = make_cast_grid(solid)
     # from (5.5, 16.5) along (1, -1) the ray passes exactly through the corners
     # between wall cells; it must stop at the corner (11, 11)
-    d = cast_rays(g, skip, 5.5, 16.5, np.array([-np.pi / 4]), 100.0)
+    d = cast_rays(field, 5.5, 16.5, np.array([-np.pi / 4]), 100.0)
     assert d[0] == pytest.approx(5.5 * math.sqrt(2), abs=1e-9)
 
 
@@ -95,11 +95,11 @@ def test_start_inside_solid_is_zero_and_max_dist_respected():
     solid = np.zeros((10, 10), bool)
     solid[5, 5] = True
     solid[:, 9] = True
-    g, skip = make_cast_grid(solid)
-    assert cast_rays(g, skip, 5.5, 5.5, np.array([0.3]), 10.0)[0] == 0.0
-    d = cast_rays(g, skip, 0.5, 0.5, np.array([0.0]), 5.0)
+    field = make_cast_grid(solid)
+    assert cast_rays(field, 5.5, 5.5, np.array([0.3]), 10.0)[0] == 0.0
+    d = cast_rays(field, 0.5, 0.5, np.array([0.0]), 5.0)
     assert np.isinf(d[0])  # wall at 8.5 px, beyond max_dist 5
-    d = cast_rays(g, skip, 0.5, 0.5, np.array([0.0]), 9.0)
+    d = cast_rays(field, 0.5, 0.5, np.array([0.0]), 9.0)
     assert d[0] == pytest.approx(8.5)
 
 

@@ -185,3 +185,26 @@ def test_gzip_breezyslam(tmp_path):
     with gzip.open(tmp_path / "x.dat.gz", "wt") as f:
         f.write(text)
     assert len(load_log(tmp_path / "x.dat.gz")) == 3
+
+
+def test_simulate_defaults_to_rbpf_and_its_run_replays(tmp_path, capsys):
+    import json
+
+    from map2map.maps.formats import save_map
+    from map2map.maps.grid import OccupancyMap
+
+    data = np.full((52, 72), 127, np.uint8)
+    data[1:-1, 1:-1] = 255
+    data[[1, -2], 1:-1] = 0
+    data[1:-1, [1, -2]] = 0
+    save_map(OccupancyMap(data, 0.05), tmp_path / "plan.yaml")
+    out = tmp_path / "run"
+    rc = main(
+        ["simulate", str(tmp_path / "plan.yaml"), "--out", str(out), "--duration", "15", "--quiet"]
+    )
+    assert rc == 0, capsys.readouterr().err
+    assert json.loads((out / "report.json").read_text())["mapper"] == "rbpf"
+    # the simulator's run folder is a valid input of map2map slam
+    rc = main(["slam", str(out), "--out", str(tmp_path / "slam"), "--backend", "graph", "--quiet"])
+    assert rc == 0, capsys.readouterr().err
+    assert (tmp_path / "slam" / "map.yaml").is_file()

@@ -17,6 +17,7 @@ from typing import Any
 from tqdm.auto import tqdm
 
 from ._io import ensure_output_dir
+from .sim.demo_stage import stage_simulate
 from .slam import demo_stage as _slam_stage
 
 __all__ = ["DemoContext", "STAGES", "run_demo"]
@@ -55,6 +56,7 @@ def _stage_plan(ctx: DemoContext) -> None:
 #: (name, function) of every demo stage, in order.
 STAGES: list[tuple[str, Callable[[DemoContext], None]]] = [
     ("plan", _stage_plan),
+    ("simulate", stage_simulate),
     ("slam", _slam_stage.stage_slam),
 ]
 

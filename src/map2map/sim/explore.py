@@ -6,9 +6,10 @@ estimate, in the mapper's frame, never on the plan:
 
 1. **Costmap** (:func:`make_costmap`): the map's occupied cells are inflated. A
    cell is *lethal* when its distance to the nearest occupied cell is below the
-   robot radius (plus ``safety``); beyond that the cost decays exponentially up to
-   ``inflation_radius`` (like ``costmap_2d``'s inflation layer), so paths keep
-   clear of walls. Unknown cells are not traversable.
+   robot radius; within a further ``safety`` margin it is very expensive (paths
+   only use it to get out of a tight spot); beyond that the cost decays
+   exponentially up to ``inflation_radius`` (like ``costmap_2d``'s inflation
+   layer), so paths keep clear of walls. Unknown cells are not traversable.
 2. **Global planning**: Dijkstra over the 8-connected costmap from the robot
    (:func:`dijkstra`, numba, binary heap) gives the path cost to every cell.
 3. **Frontiers** (:func:`find_frontiers`): free cells next to unknown ones,
@@ -19,8 +20,9 @@ estimate, in the mapper's frame, never on the plan:
    Unreachable frontiers are skipped; goals where the robot made no progress for
    ``progress_timeout`` seconds are **blacklisted**.
 4. **Path following**: pure pursuit on the planned path with a look-ahead
-   distance, turning on the spot when the heading error is large, slowing down
-   near obstacles seen in the latest scan and stopping before them.
+   distance, turning on the spot when the heading error is large; a local safety
+   check sweeps the robot's disc along the commanded arc through the latest scan
+   (like DWA's footprint check) and slows down or stops before contact.
 
 Replanning happens every ``replan_period`` seconds (and at once when the goal is
 reached or the path is blocked). Exploration ends when no frontier is left.
@@ -75,8 +77,12 @@ class ExploreConfig:
     ----------
     robot_radius : float
         Body radius used for the lethal zone (m).
+    lethal_margin : float
+        Cells closer than ``robot_radius + lethal_margin`` to a mapped wall are not
+        traversable: the margin covers the planning grid's coarseness and the local
+        safety check's own margin, so that paths are never refused by it.
     safety : float
-        Extra lethal margin beyond the radius (m).
+        Beyond the lethal distance, a further margin of very expensive cells (m).
     inflation_radius : float
         Distance up to which costs are raised near obstacles (m).
     cost_scaling : float
@@ -93,23 +99,25 @@ class ExploreConfig:
         Seconds without getting 0.1 m closer to the goal before it is blacklisted.
     blacklist_radius : float
         Frontier goals this close to a blacklisted goal are skipped (m).
+    blacklist_amnesties : int
+        When only blacklisted frontiers are left, the blacklist is cleared and they
+        are tried again, at most this many times, before exploration ends.
     replan_period : float
         Seconds between replans (explore_lite's planner_frequency is 0.33 Hz).
     plan_resolution : float
         Cell size of the global planning grid (m); the costmap is min-pooled onto it.
     switch_margin : float
-        A new frontier replaces the current goal only if it scores this much better.
+        The robot stays with its current frontier (followed as it shrinks) unless
+        another one scores this much better (about a metre of path).
     lookahead : float
         Pure-pursuit look-ahead distance (m).
     goal_tolerance : float
         Distance at which a goal counts as reached (m).
-    stop_distance : float
-        The robot stops when an obstacle in front is closer than this (m, from
-        the centre) and slows down below ``2 * stop_distance``.
     """
 
     robot_radius: float = 0.2
-    safety: float = 0.03
+    lethal_margin: float = 0.03
+    safety: float = 0.05
     inflation_radius: float = 0.6
     cost_scaling: float = 6.0
     inflation_weight: float = 8.0
@@ -119,12 +127,12 @@ class ExploreConfig:
     goal_reach: float = 0.4
     progress_timeout: float = 15.0
     blacklist_radius: float = 0.3
-    replan_period: float = 2.0
+    blacklist_amnesties: int = 2
+    replan_period: float = 3.0
     plan_resolution: float = 0.1
-    switch_margin: float = 1.0
+    switch_margin: float = 3.0
     lookahead: float = 0.35
     goal_tolerance: float = 0.25
-    stop_distance: float = 0.3
 
 
 # --------------------------------------------------------------------- costmap
@@ -153,6 +161,7 @@ def make_costmap(
     cost = _inflate(
         clear,
         m.free,
+        robot_radius,
         robot_radius + safety,
         inflation_radius,
         cost_scaling,
@@ -162,14 +171,16 @@ def make_costmap(
 
 
 @njit(cache=True)
-def _inflate(clear, free, lethal_r, inflation_radius, scaling, weight):
+def _inflate(clear, free, radius, lethal_r, inflation_radius, scaling, weight):
     h, w = clear.shape
     out = np.empty((h, w), np.float32)
     for r in range(h):
         for c in range(w):
             d = clear[r, c]
-            if not free[r, c] or d < lethal_r:
+            if not free[r, c] or d < radius:
                 out[r, c] = np.inf
+            elif d < lethal_r:  # inside the safety margin: only to get out of it
+                out[r, c] = 50.0
             elif d > inflation_radius:
                 out[r, c] = 1.0
             else:
@@ -293,60 +304,119 @@ class Frontiers:
 
 
 def find_frontiers(m: OccupancyMap, min_size_cells: int = 10) -> Frontiers:
-    """Free cells with an unknown 4-neighbour, grouped 8-connected, small groups dropped.
+    """Free cells with an unknown 4-neighbour, grouped, small groups dropped.
 
-    Isolated unknown cells inside seen space (gaps between beams) are ignored.
+    Unknown cells with at least 6 free cells among their 8 neighbours (gaps between
+    diverging beams far from the robot) and unknown cells touching a wall (the
+    fringe beams graze) do not make frontiers. Frontier cells up to one cell apart
+    belong to the same group (a ragged boundary is one frontier, not many dashes).
     """
-    free = m.free
-    # unknown cells between diverging beams far from the robot are not frontiers:
-    # close the free region over such one-cell gaps first
-    closed = cv2.morphologyEx(free.astype(np.uint8), cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8))
-    unk = m.unknown & (closed == 0)
+    free = m.free.astype(np.uint8)
+    k3 = np.ones((3, 3), np.uint8)
+    n_free = cv2.filter2D(free, -1, k3, borderType=cv2.BORDER_CONSTANT)
+    near_wall = cv2.dilate(m.occupied.astype(np.uint8), k3)
+    unk = m.unknown & (n_free < 6) & (near_wall == 0)
     nb = np.zeros_like(unk)
     nb[1:, :] |= unk[:-1, :]
     nb[:-1, :] |= unk[1:, :]
     nb[:, 1:] |= unk[:, :-1]
     nb[:, :-1] |= unk[:, 1:]
-    front = (free & nb).astype(np.uint8)
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(front, connectivity=8)
-    sizes = stats[1:, cv2.CC_STAT_AREA].astype(np.int64)
+    front = m.free & nb
+    joined = cv2.dilate(front.astype(np.uint8), k3)
+    n, labels = cv2.connectedComponents(joined, connectivity=8)
+    labels = np.where(front, labels, 0)
+    sizes = np.bincount(labels.ravel(), minlength=n)[1:]
     keep = np.flatnonzero(sizes >= min_size_cells)
     remap = np.zeros(n, np.int32)
     remap[keep + 1] = np.arange(1, len(keep) + 1)
-    return Frontiers(remap[labels], sizes[keep])
+    return Frontiers(remap[labels], sizes[keep].astype(np.int64))
 
 
 @njit(cache=True)
-def frontier_goals(labels, n_groups, dist, reach):
-    """For each frontier group, the reachable cell within ``reach`` cells of it with least cost.
+def _line_of_sight(occ, r0, c0, r1, c1):
+    """No occupied cell strictly between two cells (Bresenham)."""
+    dr = abs(r1 - r0)
+    dc = abs(c1 - c0)
+    sr = 1 if r1 > r0 else -1
+    sc = 1 if c1 > c0 else -1
+    err = dc - dr
+    r, c = r0, c0
+    while True:
+        e2 = 2 * err
+        if e2 > -dr:
+            err -= dr
+            c += sc
+        if e2 < dc:
+            err += dc
+            r += sr
+        if r == r1 and c == c1:
+            return True
+        if occ[r, c]:
+            return False
 
-    Returns ``(goal_flat, goal_cost)`` per group (-1 / inf if none).
+
+@njit(cache=True)
+def frontier_goals(labels, n_groups, dist, occ, reach):
+    """A goal per frontier group: near its middle, reachable, in sight of the frontier.
+
+    The middle of a group is its cell nearest to the group's centroid (explore_lite
+    drives to the frontier's middle: from there the robot sees past the frontier,
+    while the frontier's nearest end is often the edge of a shadow). The goal is the
+    reachable cell within ``reach`` cells of the middle with the least path cost and
+    a clear line of sight to it; when there is none, the same search around every
+    cell of the group. Returns ``(goal_flat, goal_cost)`` per group (-1 / inf if none).
     """
     h, w = labels.shape
-    best = np.full(n_groups, np.inf, np.float32)
-    cell = np.full(n_groups, -1, np.int64)
-    r2 = reach * reach
+    sum_r = np.zeros(n_groups)
+    sum_c = np.zeros(n_groups)
+    cnt = np.zeros(n_groups)
     for r in range(h):
         for c in range(w):
             g = labels[r, c]
-            if g == 0:
-                continue
-            g -= 1
-            for ddr in range(-reach, reach + 1):
-                rr = r + ddr
-                if rr < 0 or rr >= h:
-                    continue
-                for ddc in range(-reach, reach + 1):
-                    if ddr * ddr + ddc * ddc > r2:
-                        continue
-                    cc = c + ddc
-                    if cc < 0 or cc >= w:
-                        continue
-                    d = dist[rr, cc]
-                    if d < best[g]:
-                        best[g] = d
-                        cell[g] = rr * w + cc
+            if g > 0:
+                sum_r[g - 1] += r
+                sum_c[g - 1] += c
+                cnt[g - 1] += 1
+    mid_d = np.full(n_groups, np.inf)
+    mid = np.full(n_groups, -1, np.int64)
+    for r in range(h):
+        for c in range(w):
+            g = labels[r, c] - 1
+            if g >= 0:
+                d = (r - sum_r[g] / cnt[g]) ** 2 + (c - sum_c[g] / cnt[g]) ** 2
+                if d < mid_d[g]:
+                    mid_d[g] = d
+                    mid[g] = r * w + c
+    best = np.full(n_groups, np.inf, np.float32)
+    cell = np.full(n_groups, -1, np.int64)
+    for g in range(n_groups):
+        if mid[g] >= 0:
+            _search_goal(dist, occ, mid[g] // w, mid[g] % w, reach, g, best, cell)
+    for r in range(h):
+        for c in range(w):
+            g = labels[r, c] - 1
+            if g >= 0 and cell[g] < 0:
+                _search_goal(dist, occ, r, c, reach, g, best, cell)
     return cell, best
+
+
+@njit(cache=True)
+def _search_goal(dist, occ, r, c, reach, g, best, cell):
+    h, w = dist.shape
+    for ddr in range(-reach, reach + 1):
+        rr = r + ddr
+        if rr < 0 or rr >= h:
+            continue
+        for ddc in range(-reach, reach + 1):
+            if ddr * ddr + ddc * ddc > reach * reach:
+                continue
+            cc = c + ddc
+            if cc < 0 or cc >= w:
+                continue
+            d = dist[rr, cc]
+            if d < best[g] and _line_of_sight(occ, r, c, rr, cc):
+                best[g] = d
+                cell[g] = rr * w + cc
 
 
 # ------------------------------------------------------------------ controller
@@ -359,6 +429,8 @@ class PathController:
         self.max_w = max_w
         self.path = np.zeros((0, 2))
         self._i = 0
+        self._scan = None
+        self._pts = (np.zeros(0), np.zeros(0))
 
     def set_path(self, path: np.ndarray) -> None:
         self.path = np.asarray(path, float).reshape(-1, 2)
@@ -376,45 +448,85 @@ class PathController:
         if not len(self.path):
             return 0.0, 0.0, False
         x, y, th = pose
-        # advance the closest index (never backwards), look a little ahead
-        win = self.path[self._i : self._i + 40]
-        d = np.hypot(win[:, 0] - x, win[:, 1] - y)
-        self._i += int(np.argmin(d))
-        seg = self.path[self._i :]
-        dd = np.hypot(seg[:, 0] - x, seg[:, 1] - y)
-        ahead = np.flatnonzero(dd >= self.cfg.lookahead)
-        tx, ty = seg[ahead[0]] if len(ahead) else seg[-1]
+        self._i, tx, ty, end = _pursuit_target(self.path, self._i, x, y, self.cfg.lookahead)
         alpha = _wrap(math.atan2(ty - y, tx - x) - th)
-        w = float(np.clip(2.5 * alpha, -self.max_w, self.max_w))
+        w = min(max(2.5 * alpha, -self.max_w), self.max_w)
         if abs(alpha) > math.radians(50):
             return 0.0, w, False
         v = self.max_v * max(0.0, 1.0 - abs(alpha) / math.radians(60))
-        front = _front_distance(scan, alpha) if scan is not None else np.inf
-        stop = self.cfg.stop_distance
-        if front < stop:
-            return 0.0, w, True
-        if front < 2 * stop:
-            v *= (front - stop) / stop
-        end = math.hypot(seg[-1, 0] - x, seg[-1, 1] - y)
         v = min(v, max(0.05, end))  # ease into the goal
+        if scan is not None:
+            # local safety (like DWA's footprint check): sweep the body along the
+            # commanded arc through the latest scan's points and slow down or stop
+            px, py = self._scan_points(scan)
+            t_hit = _time_to_contact(px, py, v, w, self.cfg.robot_radius + 0.015, 1.2, 0.1)
+            if t_hit <= 0.2:
+                return 0.0, w, True
+            if t_hit < 1.2:
+                v *= (t_hit - 0.2) / 1.0
         return v, w, False
 
+    def _scan_points(self, scan: LaserScan):
+        if scan is not self._scan:
+            r = np.asarray(scan.ranges, float)
+            ok = np.isfinite(r) & (r >= max(scan.range_min, 1e-3)) & (r < scan.range_max)
+            a = scan.angles[ok] + scan.sensor_offset[2]
+            ox, oy = scan.sensor_offset[0], scan.sensor_offset[1]
+            self._pts = (ox + r[ok] * np.cos(a), oy + r[ok] * np.sin(a))
+            self._scan = scan
+        return self._pts
 
-def _front_distance(scan: LaserScan, alpha: float) -> float:
-    """Closest valid return within +-30 degrees of the driving direction (sensor frame)."""
-    r = np.asarray(scan.ranges, float)
-    a = _wrap_arr(scan.angles + scan.sensor_offset[2])
-    cone = np.abs(_wrap_arr(a - 0.5 * alpha)) < math.radians(30)
-    ok = cone & np.isfinite(r) & (r >= scan.range_min)
-    return float(r[ok].min()) + scan.sensor_offset[0] if ok.any() else np.inf
+
+@njit(cache=True)
+def _pursuit_target(path, i0, x, y, lookahead):
+    """Advance the closest path index (never backwards, within 40 points) and return
+    ``(index, target_x, target_y, distance_to_end)`` with the target the first point
+    at least ``lookahead`` away."""
+    n = path.shape[0]
+    best = np.inf
+    i = i0
+    for k in range(i0, min(n, i0 + 40)):
+        d = math.hypot(path[k, 0] - x, path[k, 1] - y)
+        if d < best:
+            best = d
+            i = k
+    tx, ty = path[n - 1, 0], path[n - 1, 1]
+    for k in range(i, n):
+        if math.hypot(path[k, 0] - x, path[k, 1] - y) >= lookahead:
+            tx, ty = path[k, 0], path[k, 1]
+            break
+    return i, tx, ty, math.hypot(path[n - 1, 0] - x, path[n - 1, 1] - y)
+
+
+@njit(cache=True)
+def _time_to_contact(px, py, v, w, radius, horizon, dt):
+    """First time (s) at which at least two scan points (robot frame) lie inside the
+    body moving with ``(v, w)`` and closer than at the start; ``horizon`` if none.
+    Two points, so that a single outlier reading does not stop the robot; closer
+    than at the start, so that a robot already grazing a wall may move away."""
+    r2 = radius * radius
+    n = int(horizon / dt + 0.5)
+    for k in range(1, n + 1):
+        t = k * dt
+        if abs(w) < 1e-9:
+            cx, cy = v * t, 0.0
+        else:
+            cx = v / w * math.sin(w * t)
+            cy = v / w * (1.0 - math.cos(w * t))
+        count = 0
+        for i in range(px.shape[0]):
+            dx = px[i] - cx
+            dy = py[i] - cy
+            d2 = dx * dx + dy * dy
+            if d2 < r2 and d2 < px[i] * px[i] + py[i] * py[i] - 1e-6:
+                count += 1
+                if count >= 2:
+                    return t - dt
+    return horizon
 
 
 def _wrap(a: float) -> float:
     return (a + math.pi) % (2 * math.pi) - math.pi
-
-
-def _wrap_arr(a):
-    return (a + np.pi) % (2 * np.pi) - np.pi
 
 
 # ------------------------------------------------------------------- explorer
@@ -452,18 +564,27 @@ class Explorer:
         self._spin_left = 2 * math.pi if spin_first else 0.0
         self._last_t: float | None = None
         self._blocked_since: float | None = None
+        self._reached: list[tuple[float, float]] = []
+        self._empty_plans = 0
+        self._blacklist: list[tuple[float, float]] = []
+        self._amnesties = 0
+
+    def _blacklist_goal(self, xy) -> None:
+        self._blacklist.append(xy)
+        self.stats.blacklisted.append(xy)
 
     # -- planning ----------------------------------------------------------
     def _plan(self, t: float, pose, m: OccupancyMap) -> None:
         cfg = self.cfg
         self.stats.replans += 1
+        m_full = m
         bbox = m.content_bbox()
         if bbox is not None:  # plan on the known part only (plus a frontier margin)
             r0, r1, c0, c1 = bbox
             m = m.crop(r0 - 2, r1 + 2, c0 - 2, c1 + 2)
         cm = make_costmap(
             m,
-            robot_radius=cfg.robot_radius,
+            robot_radius=cfg.robot_radius + cfg.lethal_margin,
             safety=cfg.safety,
             inflation_radius=cfg.inflation_radius,
             cost_scaling=cfg.cost_scaling,
@@ -474,50 +595,74 @@ class Explorer:
         sizes_m = fr.sizes * m.resolution
         # plan on a coarser grid (min-pooled costs keep narrow doors open)
         f = max(1, int(round(cfg.plan_resolution / m.resolution)))
-        cost, labels, frame = _coarsen(cm.cost, fr.labels, m, f)
+        cost, labels, occ, freec, frame = _coarsen(cm.cost, fr.labels, m, f)
         r, c = (int(v) for v in frame.world_to_pixel(pose[0], pose[1]))
         if not frame.contains(r, c):
             self.ctrl.set_path(np.zeros((0, 2)))
             return
+        # the map may put the robot closer to a wall than its radius (map cells are
+        # coarse): let it leave through free cells around itself
+        k = int(math.ceil(cfg.robot_radius * 1.5 / frame.resolution))
+        win = (slice(max(0, r - k), r + k + 1), slice(max(0, c - k), c + k + 1))
+        patch = cost[win]
+        patch[np.isinf(patch) & freec[win]] = 50.0
         dist, parent = dijkstra(cost, r, c)
         reach = max(1, int(round(cfg.goal_reach / frame.resolution)))
-        cells, costs = frontier_goals(labels, n, dist, reach)
+        cells, costs = frontier_goals(labels, n, dist, occ, reach)
         m = frame
         res = m.resolution
         best = None
         candidates = []
+        n_blacklisted = 0
         for k in range(n):
             if cells[k] < 0 or not np.isfinite(costs[k]):
                 continue
             gr, gc = divmod(int(cells[k]), m.width)
             gx, gy = (float(v[0]) for v in m.pixel_to_world([gr], [gc]))
             if any(
-                math.hypot(gx - bx, gy - by) < cfg.blacklist_radius
-                for bx, by in self.stats.blacklisted
+                math.hypot(gx - bx, gy - by) < cfg.blacklist_radius for bx, by in self._blacklist
             ):
+                n_blacklisted += 1
                 continue
             score = cfg.potential_scale * float(costs[k]) * res - cfg.gain_scale * sizes_m[k]
             candidates.append((score, int(cells[k]), (gx, gy)))
             if best is None or score < best[0]:
                 best = (score, int(cells[k]), (gx, gy))
+        if best is None and n_blacklisted and self._amnesties < cfg.blacklist_amnesties:
+            # only blacklisted frontiers are left: forget the blacklist and retry them
+            self._amnesties += 1
+            self._blacklist.clear()
+            self._plan(t, pose, m_full)
+            return
         if best is None:
-            self.done = True
+            # nothing reachable: look around and try again a few times before giving up
+            self._empty_plans += 1
+            self.done = self._empty_plans >= 3
+            self._goal = None
             self.ctrl.set_path(np.zeros((0, 2)))
             return
+        self._empty_plans = 0
         score, goal_flat, gxy = best
         g = self._goal
-        if g is not None and g.cost - score < cfg.switch_margin:
-            # keep the current goal while it is still a valid candidate (hysteresis)
-            for cand_score, cand_flat, cand_xy in candidates:
-                if math.hypot(cand_xy[0] - g.xy[0], cand_xy[1] - g.xy[1]) < 0.3:
-                    score, goal_flat, gxy = cand_score, cand_flat, cand_xy
-                    break
-        same = g is not None and math.hypot(gxy[0] - g.xy[0], gxy[1] - g.xy[1]) < 0.3
-        if not same:
+        tracked = None
+        if g is not None:
+            # the current goal's frontier, followed as it shrinks (its middle moves)
+            near = [c for c in candidates if math.hypot(c[2][0] - g.xy[0], c[2][1] - g.xy[1]) < 1.0]
+            if near:
+                tracked = min(near, key=lambda c: math.hypot(c[2][0] - g.xy[0], c[2][1] - g.xy[1]))
+                if score > tracked[0] - cfg.switch_margin:  # commit unless much better
+                    score, goal_flat, gxy = tracked
+        if any(math.hypot(gxy[0] - x, gxy[1] - y) < 0.3 for x, y in self._reached):
+            self._blacklist_goal(gxy)
+            self._reached.clear()
+            self._plan(t, pose, m_full)
+            return
+        self._reached.clear()
+        if tracked is not None and gxy == tracked[2]:
+            g.xy, g.cost = gxy, score  # same frontier: keep its progress timer
+        else:
             self._goal = _Goal(gxy, np.inf, t, score)
             self.stats.goals += 1
-        else:
-            g.cost = score
         cells_rc = backtrack(parent, goal_flat, m.width)
         wx, wy = m.pixel_to_world(cells_rc[:, 0], cells_rc[:, 1])
         self.ctrl.set_path(np.column_stack([wx, wy]))
@@ -540,17 +685,22 @@ class Explorer:
                 g.best_dist = d
                 g.since = t
             elif t - g.since > cfg.progress_timeout:
-                self.stats.blacklisted.append(g.xy)
+                self._blacklist_goal(g.xy)
                 self._goal = None
                 self._next_plan = t
             elif math.hypot(pose[0] - g.xy[0], pose[1] - g.xy[1]) < cfg.goal_tolerance:
+                # reached: if the same frontier is chosen again, looking from here did
+                # not uncover it, so it is blacklisted
+                self._reached.append(g.xy)
                 self._goal = None
                 self._next_plan = t
-        if t >= self._next_plan or not len(self.ctrl.path):
+        if t >= self._next_plan or (not len(self.ctrl.path) and not self._empty_plans):
             self._plan(t, pose, mapper.get_map())
             self._next_plan = t + cfg.replan_period
             if self.done:
                 return 0.0, 0.0
+        if self._empty_plans:
+            return 0.0, 0.5 * self.max_w
         v, w, blocked = self.ctrl.command(pose, scan)
         if blocked:
             if self._blocked_since is None:
@@ -560,20 +710,20 @@ class Explorer:
                 self._blocked_since = None
         else:
             self._blocked_since = None
-        if v == 0.0 and w == 0.0 and self._goal is not None:
-            self._goal = None  # end of a path short of the goal: plan again
-            self._next_plan = t
         return v, w
 
 
 @njit(cache=True)
-def _pool(cost, labels, f, pad_top):
-    """Min-pool ``cost`` and max-pool ``labels`` by ``f`` (grid padded at the top/right)."""
+def _pool(cost, labels, occ, free, f, pad_top):
+    """Min-pool ``cost``, max-pool ``labels``, ``occ`` and ``free`` by ``f`` (padded at
+    the top/right)."""
     h, w = cost.shape
     h2 = (h + pad_top) // f
     w2 = (w + f - 1) // f
     out_c = np.full((h2, w2), np.inf, np.float32)
     out_l = np.zeros((h2, w2), labels.dtype)
+    out_o = np.zeros((h2, w2), np.bool_)
+    out_f = np.zeros((h2, w2), np.bool_)
     for r in range(h):
         rr = (r + pad_top) // f
         for c in range(w):
@@ -584,19 +734,21 @@ def _pool(cost, labels, f, pad_top):
             lab = labels[r, c]
             if lab > out_l[rr, cc]:
                 out_l[rr, cc] = lab
-    return out_c, out_l
+            if occ[r, c]:
+                out_o[rr, cc] = True
+            if free[r, c]:
+                out_f[rr, cc] = True
+    return out_c, out_l, out_o, out_f
 
 
 def _coarsen(cost, labels, m: OccupancyMap, f: int):
-    """Min-pool costs and max-pool frontier labels by ``f``; the coarse grid's frame."""
-    if f == 1:
-        return cost, labels, m
+    """Min-pool costs, max-pool frontier labels, walls and free cells by ``f``; the frame."""
     h, w = cost.shape
     # pad at the top and the right: the lower-left corner (the origin) stays put
     pad_top = (-h) % f
-    cost, labels = _pool(cost, labels, f, pad_top)
+    cost, labels, occ, free = _pool(cost, labels, m.occupied, m.free, f, pad_top)
     frame = OccupancyMap(np.zeros(cost.shape, np.uint8), m.resolution * f, m.origin)
-    return cost, labels, frame
+    return cost, labels, occ, free, frame
 
 
 class RouteFollower:

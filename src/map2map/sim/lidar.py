@@ -142,7 +142,7 @@ class Scene:
 
     def __post_init__(self) -> None:
         self.solid = np.asarray(self.solid, bool)
-        self._grid, self._skip = make_cast_grid(self.solid)
+        self._field = make_cast_grid(self.solid)
 
     @classmethod
     def from_map(cls, m: OccupancyMap) -> Scene:
@@ -164,8 +164,7 @@ class Scene:
         rel = -np.asarray(rel_angles, float)
         out = np.empty(rel.shape[0])
         cast_scan(
-            self._grid,
-            self._skip,
+            self._field,
             px,
             py,
             heading,

@@ -4,7 +4,8 @@
 Thrun, Burgard & Fox, *Probabilistic Robotics*, table 9.1): every cell a beam
 crosses gets ``l_free``, the cell of its end point ``l_occ``; a beam with no
 return clears its cells up to the maximum range with the weaker ``l_free_far``
-(so one max-range failure through a wall does not make free space behind it).
+(two are needed to mark a cell free, so one max-range failure through a wall does
+not make free space behind it).
 Cells are traced with the same Amanatides-Woo traversal as the simulated lidar
 (numba). The grid grows as the robot explores; a ternary view (0 / 127 / 255) is
 kept up to date cell by cell so that asking for the map is cheap.
@@ -73,15 +74,22 @@ def _set_cell(L, T, r, c, dl, lmin, lmax, occ_thr, free_thr):
 
 
 @njit(cache=True)
-def integrate_scan(L, T, x0, y0, angles, dists, hits, l_free, l_free_far, l_occ, lims):
+def integrate_scan(L, T, x0, y0, angles, dists, hits, l_free, l_free_far, l_occ, lims, margin):
     """Trace every beam from ``(x0, y0)`` (pixel coordinates) and update the grid.
 
     ``angles`` are pixel-frame directions, ``dists`` lengths in pixels, ``hits``
     whether the beam ended on an obstacle (otherwise it only clears, with
-    ``l_free_far``). ``lims = (lmin, lmax, occ_thr, free_thr)``.
+    ``l_free_far``). Cells the beam leaves less than ``margin`` pixels before its
+    end point are not cleared: a noisy return that overshoots into a thin wall at a
+    grazing angle must not erase the wall cell it crossed. A beam that crosses a
+    confidently occupied cell (log-odds >= ``block_thr``) weakens it and stops
+    there: an outlier reading through a known wall (a random or max-range reading)
+    must not carve free space behind it, while a wall that really went away (a
+    person who walked off) still fades after a few beams.
+    ``lims = (lmin, lmax, occ_thr, free_thr, block_thr)``.
     """
     h, w = L.shape
-    lmin, lmax, occ_thr, free_thr = lims[0], lims[1], lims[2], lims[3]
+    lmin, lmax, occ_thr, free_thr, block_thr = lims[0], lims[1], lims[2], lims[3], lims[4]
     for i in range(angles.shape[0]):
         dx = math.cos(angles[i])
         dy = math.sin(angles[i])
@@ -101,12 +109,18 @@ def integrate_scan(L, T, x0, y0, angles, dists, hits, l_free, l_free_far, l_occ,
             sr, ty, tdy = -1, (r - y0) / dy, -1.0 / dy
         else:
             sr, ty, tdy = 0, np.inf, np.inf
+        d_free = d - margin if hits[i] else d
+        blocked = False
         while True:
             t_next = tx if tx < ty else ty
             if t_next >= d:
                 break
-            if 0 <= r < h and 0 <= c < w:
+            if t_next < d_free and 0 <= r < h and 0 <= c < w:
+                solid = L[r, c] >= block_thr
                 _set_cell(L, T, r, c, lf, lmin, lmax, occ_thr, free_thr)
+                if solid:  # a confident wall: whatever lies behind it was not seen
+                    blocked = True
+                    break
             if tx < ty:
                 c += sc
                 tx += tdx
@@ -118,7 +132,7 @@ def integrate_scan(L, T, x0, y0, angles, dists, hits, l_free, l_free_far, l_occ,
                 r += sr
                 tx += tdx
                 ty += tdy
-        if 0 <= r < h and 0 <= c < w:
+        if not blocked and 0 <= r < h and 0 <= c < w:
             _set_cell(L, T, r, c, l_occ if hits[i] else lf, lmin, lmax, occ_thr, free_thr)
 
 
@@ -131,12 +145,17 @@ class LogOddsGrid:
         Metres per cell.
     l_occ, l_free, l_free_far : float
         Log-odds increments for a hit cell, a crossed cell and a cell crossed by a
-        beam without return. Defaults 0.9, -0.4, -0.2.
+        beam without return. Defaults 1.0, -0.33, -0.15: with the occupied
+        threshold at 0 a cell is occupied when more than about a quarter of the
+        beams reaching it end in it, like GMapping's ``occ_thresh`` of 0.25.
     l_min, l_max : float
-        Clamping bounds (-4, 4).
+        Clamping bounds (-2, 3.5).
     occ_threshold, free_threshold : float
-        Log-odds above which a cell is occupied (0.5, p = 0.62) and below which it
-        is free (-0.3, p = 0.43); cells never observed stay unknown.
+        Log-odds above which a cell is occupied (0.0) and below which it is free
+        (-0.3, one crossing beam); cells never observed stay unknown.
+    block_threshold : float
+        Log-odds from which a cell stops the beams crossing it (2.0: hit at least
+        twice more than missed); see :func:`integrate_scan`.
     margin : float
         Extra metres added on each side whenever the grid has to grow.
     """
@@ -145,18 +164,19 @@ class LogOddsGrid:
         self,
         resolution: float = 0.05,
         *,
-        l_occ: float = 0.9,
-        l_free: float = -0.4,
-        l_free_far: float = -0.2,
-        l_min: float = -4.0,
-        l_max: float = 4.0,
-        occ_threshold: float = 0.5,
+        l_occ: float = 1.0,
+        l_free: float = -0.33,
+        l_free_far: float = -0.15,
+        l_min: float = -2.0,
+        l_max: float = 3.5,
+        occ_threshold: float = 0.0,
         free_threshold: float = -0.3,
+        block_threshold: float = 2.0,
         margin: float = 3.0,
     ):
         self.resolution = float(resolution)
         self.l_occ, self.l_free, self.l_free_far = l_occ, l_free, l_free_far
-        self._lims = np.array([l_min, l_max, occ_threshold, free_threshold])
+        self._lims = np.array([l_min, l_max, occ_threshold, free_threshold, block_threshold])
         self.margin = margin
         self.L = np.zeros((0, 0), np.float32)
         self.T = np.zeros((0, 0), np.uint8)
@@ -223,6 +243,7 @@ class LogOddsGrid:
             self.l_free_far,
             self.l_occ,
             self._lims,
+            0.5,
         )
 
     def to_map(self) -> OccupancyMap:

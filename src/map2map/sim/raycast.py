@@ -23,7 +23,7 @@ Examples
 >>> import numpy as np
 >>> solid = np.zeros((10, 10), np.bool_)
 >>> solid[:, 7] = True                      # a vertical wall at columns 7
->>> d = cast_rays(*make_cast_grid(solid), 2.5, 4.5, np.array([0.0, np.pi]), 100.0)
+>>> d = cast_rays(make_cast_grid(solid), 2.5, 4.5, np.array([0.0, np.pi]), 100.0)
 >>> float(d[0])                              # from x=2.5 to the wall face x=7
 4.5
 >>> bool(np.isinf(d[1]))                     # leaves the grid: no return
@@ -43,34 +43,40 @@ __all__ = ["make_cast_grid", "cast_rays", "cast_scan", "cast_rays_many", "TIE_EP
 TIE_EPS = 1e-9
 
 
-def make_cast_grid(solid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Prepare a boolean grid for casting: ``(cells, skip)``, both with a one-cell border.
+def make_cast_grid(solid: np.ndarray) -> np.ndarray:
+    """Prepare a boolean grid for casting: one ``float32`` field with a one-cell border.
 
-    ``cells`` is ``uint8``: 0 empty, 1 solid, 2 outside the grid (the border), so
-    the traversal stops at the grid edge with a single load per step. ``skip`` is
-    a safe jump length (pixels) from anywhere inside each cell: the Euclidean
-    distance from the cell centre to the nearest solid or border cell centre,
-    minus ``sqrt(2)`` (half a diagonal at each end). Empty-space skipping with it
-    never jumps over a cell the ray would touch, so results stay exact.
+    A cell holds -1 if solid, -2 outside the grid (the border, so the traversal
+    stops at the grid edge), and otherwise a safe jump length in pixels: the
+    Euclidean distance from the cell centre to the nearest solid or border cell
+    centre minus ``sqrt(2)`` (half a diagonal at each end). Empty-space skipping
+    with it never jumps over a cell the ray would touch, so results stay exact;
+    one load per step tells both whether a cell blocks and how far one may jump.
+    Coordinates into the field are shifted by one cell; the ``cast_*`` functions
+    take the unshifted coordinates of the original grid.
     """
     from scipy.ndimage import distance_transform_edt
 
     s = np.asarray(solid, bool)
     g = np.full((s.shape[0] + 2, s.shape[1] + 2), 2, np.uint8)
     g[1:-1, 1:-1] = s
-    skip = distance_transform_edt(g == 0).astype(np.float64) - math.sqrt(2.0) - 1e-6
-    return g, np.maximum(skip, 0.0)
+    skip = distance_transform_edt(g == 0) - math.sqrt(2.0) - 1e-6
+    field = np.maximum(skip, 0.0).astype(np.float32)
+    field[g == 1] = -1.0
+    field[g == 2] = -2.0
+    return field
 
 
 @njit(cache=True)
-def _traverse(grid, skip, x0, y0, dx, dy, max_dist):
+def _traverse(field, x0, y0, dx, dy, max_dist):
     """Amanatides-Woo traversal from a point inside the grid (original coordinates)."""
     inf = np.inf
     t_base = 0.0
     while True:  # one pass per (re)start of the DDA after an empty-space jump
         c = int(math.floor(x0))
         r = int(math.floor(y0))
-        if grid[r + 1, c + 1] == 1:
+        jump = field[r + 1, c + 1]
+        if jump == -1.0:
             return t_base
         if dx > 0.0:
             step_c = 1
@@ -98,7 +104,6 @@ def _traverse(grid, skip, x0, y0, dx, dy, max_dist):
             t_dy = inf
         r += 1  # padded-grid indices from here on
         c += 1
-        jump = skip[r, c]
         if jump > 1.5:
             if t_base + jump > max_dist:
                 return inf
@@ -121,20 +126,20 @@ def _traverse(grid, skip, x0, y0, dx, dy, max_dist):
                 t = t_max_x if t_max_x < t_max_y else t_max_y
                 if t_base + t > max_dist:
                     return inf
-                if grid[r, c + step_c] == 1 or grid[r + step_r, c] == 1:
+                if field[r, c + step_c] == -1.0 or field[r + step_r, c] == -1.0:
                     return t_base + t
                 c += step_c
                 r += step_r
                 t_max_x += t_dx
                 t_max_y += t_dy
-            v = grid[r, c]
-            if v != 0:
-                if v == 1 and t_base + t <= max_dist:
+            v = field[r, c]
+            if v < 0.0:
+                if v == -1.0 and t_base + t <= max_dist:
                     return t_base + t
                 return inf
             if t_base + t > max_dist:
                 return inf
-            if skip[r, c] > 3.0:
+            if v > 3.0:
                 # far from everything again: jump from the cell entry point
                 t_base += t
                 x0 += t * dx
@@ -149,12 +154,12 @@ def _traverse(grid, skip, x0, y0, dx, dy, max_dist):
 
 
 @njit(cache=True)
-def _cast_one(grid, skip, x0, y0, dx, dy, max_dist):
+def _cast_one(field, x0, y0, dx, dy, max_dist):
     """Distance along unit direction (dx, dy) to the first solid cell, or inf."""
-    h = grid.shape[0] - 2
-    w = grid.shape[1] - 2
+    h = field.shape[0] - 2
+    w = field.shape[1] - 2
     if 0.0 <= x0 < w and 0.0 <= y0 < h:
-        return _traverse(grid, skip, x0, y0, dx, dy, max_dist)
+        return _traverse(field, x0, y0, dx, dy, max_dist)
     # outside: clip the ray to the grid box, then traverse from the entry point
     t0 = 0.0
     t1 = max_dist
@@ -178,17 +183,17 @@ def _cast_one(grid, skip, x0, y0, dx, dy, max_dist):
         return np.inf
     xe = min(max(x0 + t0 * dx, 0.0), w - 1e-9)
     ye = min(max(y0 + t0 * dy, 0.0), h - 1e-9)
-    return t0 + _traverse(grid, skip, xe, ye, dx, dy, max_dist - t0)
+    return t0 + _traverse(field, xe, ye, dx, dy, max_dist - t0)
 
 
 @njit(cache=True)
-def cast_rays(grid, skip, x0, y0, angles, max_dist):
+def cast_rays(field, x0, y0, angles, max_dist):
     """Cast rays from one point; distance (pixels) to the first solid cell per angle.
 
     Parameters
     ----------
-    grid, skip : arrays
-        The blocking cells and skip distances from :func:`make_cast_grid`.
+    field : (H+2, W+2) float32 array
+        The prepared grid from :func:`make_cast_grid`.
     x0, y0 : float
         Ray origin in continuous pixel coordinates of the original grid.
     angles : (B,) float array
@@ -204,12 +209,12 @@ def cast_rays(grid, skip, x0, y0, angles, max_dist):
     out = np.empty(n, np.float64)
     for i in range(n):
         a = angles[i]
-        out[i] = _cast_one(grid, skip, x0, y0, math.cos(a), math.sin(a), max_dist)
+        out[i] = _cast_one(field, x0, y0, math.cos(a), math.sin(a), max_dist)
     return out
 
 
 @njit(cache=True)
-def cast_scan(grid, skip, x0, y0, heading, cos_rel, sin_rel, max_dist, out):
+def cast_scan(field, x0, y0, heading, cos_rel, sin_rel, max_dist, out):
     """One scan: beam ``j`` points along ``heading + rel_j`` given ``cos/sin(rel_j)``.
 
     Writes distances (pixels, ``inf`` for no return) into ``out``. Avoids one
@@ -220,11 +225,11 @@ def cast_scan(grid, skip, x0, y0, heading, cos_rel, sin_rel, max_dist, out):
     for j in range(cos_rel.shape[0]):
         dx = ch * cos_rel[j] - sh * sin_rel[j]
         dy = sh * cos_rel[j] + ch * sin_rel[j]
-        out[j] = _cast_one(grid, skip, x0, y0, dx, dy, max_dist)
+        out[j] = _cast_one(field, x0, y0, dx, dy, max_dist)
 
 
 @njit(cache=True)
-def cast_rays_many(grid, skip, xs, ys, headings, rel_angles, max_dist):
+def cast_rays_many(field, xs, ys, headings, rel_angles, max_dist):
     """Cast a whole scan from each of ``N`` poses: ``(N, B)`` distances in pixels.
 
     ``headings[k] + rel_angles[j]`` is the direction of beam ``j`` at pose ``k``
@@ -236,5 +241,5 @@ def cast_rays_many(grid, skip, xs, ys, headings, rel_angles, max_dist):
     sr = np.sin(rel_angles)
     out = np.empty((n, b), np.float64)
     for k in range(n):
-        cast_scan(grid, skip, xs[k], ys[k], headings[k], cr, sr, max_dist, out[k])
+        cast_scan(field, xs[k], ys[k], headings[k], cr, sr, max_dist, out[k])
     return out

@@ -9,8 +9,8 @@ constant ``(v, w)`` over the step.
 Collisions are checked on the swept path (numba): the arc is sampled at most half
 a cell apart and every sample must keep the body clear of all blocked cells
 (walls, furniture, everything outside the free space of the plan), using the
-clearance map of :class:`~map2map.sim.world.World` (distance from each cell
-centre to the nearest blocked cell, conservative by half a cell). On contact the
+clearance map of :class:`~map2map.sim.world.World` to skip samples far from any
+wall and an exact disc-square overlap test against the blocked cells near walls. On contact the
 robot stops at the last clear sample, its speed drops to zero and the step
 reports the collision: it never tunnels through a wall.
 
@@ -63,8 +63,8 @@ class RobotParams:
 
     def wheel_speed_limit(self, v: float, w: float) -> tuple[float, float]:
         """Scale ``(v, w)`` so that no wheel exceeds ``max_v`` (same curvature)."""
-        v = float(np.clip(v, -self.max_v, self.max_v))
-        w = float(np.clip(w, -self.max_w, self.max_w))
+        v = min(max(float(v), -self.max_v), self.max_v)
+        w = min(max(float(w), -self.max_w), self.max_w)
         fastest = abs(v) + abs(w) * self.wheelbase / 2
         if fastest > self.max_v:
             s = self.max_v / fastest
@@ -118,6 +118,7 @@ class DiffDriveRobot:
         self.v = 0.0
         self.w = 0.0
         self._clear = world.clearance
+        self._blocked = world.blocked
         m = world.plan
         self._frame = (m.origin[0], m.origin[1], m.origin[2], m.resolution, m.height)
         self._sample_step = m.resolution / 2
@@ -141,6 +142,7 @@ class DiffDriveRobot:
         x, y, th = self.pose
         k, is_person = _sweep(
             self._clear,
+            self._blocked,
             *self._frame,
             x,
             y,
@@ -169,7 +171,7 @@ def _wrap_pose(p):
 
 
 @njit(cache=True)
-def _sweep(clear, ox, oy, yaw, res, height, x, y, th, ds, dth, n, radius, people):
+def _sweep(clear, blocked, ox, oy, yaw, res, height, x, y, th, ds, dth, n, radius, people):
     """Index (0..n) of the first sample along the arc that is not clear, and whether
     a person (rather than a wall) stopped it; ``n`` when the whole arc is clear."""
     h, w = clear.shape
@@ -189,7 +191,11 @@ def _sweep(clear, ox, oy, yaw, res, height, x, y, th, ds, dth, n, radius, people
         ly = -sy * (px - ox) + cy * (py - oy)
         col = int(math.floor(lx / res))
         row = int(math.floor(height - ly / res))
-        if row < 0 or col < 0 or row >= h or col >= w or clear[row, col] < radius:
+        if row < 0 or col < 0 or row >= h or col >= w:
+            return i - 1, False
+        if clear[row, col] < radius + res and _disc_hits(
+            blocked, lx / res, height - ly / res, radius / res
+        ):
             return i - 1, False
         for k in range(people.shape[0]):
             dd = math.hypot(px - people[k, 0], py - people[k, 1])
@@ -198,6 +204,28 @@ def _sweep(clear, ox, oy, yaw, res, height, x, y, th, ds, dth, n, radius, people
                 if dd < d0:  # only motion towards a person is blocked
                     return i - 1, True
     return n, False
+
+
+@njit(cache=True)
+def _disc_hits(blocked, px, py, rad):
+    """Whether a disc (pixel units, centre in continuous pixel coordinates) overlaps
+    any blocked cell square: the exact test, used near walls."""
+    h, w = blocked.shape
+    r0 = max(0, int(math.floor(py - rad)))
+    r1 = min(h - 1, int(math.floor(py + rad)))
+    c0 = max(0, int(math.floor(px - rad)))
+    c1 = min(w - 1, int(math.floor(px + rad)))
+    if py - rad < 0 or px - rad < 0 or py + rad >= h or px + rad >= w:
+        return True  # leaves the plan
+    r2 = rad * rad
+    for r in range(r0, r1 + 1):
+        dy = 0.0 if r <= py <= r + 1 else min(abs(py - r), abs(py - r - 1))
+        for c in range(c0, c1 + 1):
+            if blocked[r, c]:
+                dx = 0.0 if c <= px <= c + 1 else min(abs(px - c), abs(px - c - 1))
+                if dx * dx + dy * dy < r2:
+                    return True
+    return False
 
 
 def _wrap(a: float) -> float:

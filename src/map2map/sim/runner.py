@@ -47,9 +47,14 @@ from .mappers import make_mapper
 from .mapping import compose, relative, resample_to_frame
 from .odometry import OdometryErrors, WheelOdometry
 from .robot import WAFFLE_PI, DiffDriveRobot, RobotParams
+from .routes import as_waypoints
 from .world import World, check_start
 
-__all__ = ["SimResult", "simulate", "save_run", "choose_start", "validate_route"]
+__all__ = ["SimResult", "simulate", "save_run", "choose_start", "validate_route", "REACH_MARGIN"]
+
+#: Clearance (m) beyond the robot radius that "reachable" free space requires: the
+#: coverage reference is what a navigation stack keeping 5 cm from walls can reach.
+REACH_MARGIN = 0.05
 
 
 @dataclass
@@ -78,13 +83,15 @@ class SimResult:
     slam_map_plan : OccupancyMap
         The same map resampled onto the plan's grid.
     reachable : (H, W) bool
-        Plan cells the robot's body can reach (the coverage reference).
+        Plan cells the robot's body can reach keeping :data:`REACH_MARGIN` from
+        walls (the coverage reference, see :meth:`World.reachable_cells`).
     coverage : float
         Fraction of ``reachable`` the final map marks free.
     path_length : float
         Metres driven (true).
     collisions : int
-        Contact events with walls or furniture.
+        Contact events with walls or furniture (times and poses in
+        ``info["collision_events"]``).
     sim_seconds, wall_seconds : float
     stop_reason : str
         ``"explored"``, ``"route done"`` or ``"time budget"``.
@@ -135,7 +142,8 @@ class SimResult:
 
 
 def choose_start(world: World, radius: float, rng: np.random.Generator):
-    """A random start pose with room around it, in the largest reachable region."""
+    """A random start pose with room around it, in the largest region the robot can
+    reach keeping :data:`REACH_MARGIN` from walls."""
     from scipy import ndimage
 
     ok = world.clearance >= radius + 0.15
@@ -143,7 +151,9 @@ def choose_start(world: World, radius: float, rng: np.random.Generator):
         ok = world.clearance >= radius
     if not ok.any():
         raise InputError(None, "plan too small for the robot: no place with enough clearance")
-    lab, n = ndimage.label(world.clearance >= radius)
+    lab, n = ndimage.label(world.clearance >= radius + REACH_MARGIN)
+    if n == 0:
+        lab, n = ndimage.label(world.clearance >= radius)
     sizes = np.bincount(lab.ravel(), minlength=n + 1)
     sizes[0] = 0
     big = lab == int(np.argmax(sizes))
@@ -206,6 +216,7 @@ def simulate(
     frame_every: float = 0.0,
     progress: bool = True,
     source: str | os.PathLike | None = None,
+    route_source: str | os.PathLike | None = None,
 ) -> SimResult:
     """Simulate one run of a TurtleBot3 exploring ``plan`` (or following ``route``).
 
@@ -221,8 +232,9 @@ def simulate(
         Lidar field of view in degrees (360 for the LDS-01, 180 in the thesis).
     mapper : str or Mapper
         A registered mapper name (:mod:`map2map.sim.mappers`) or an instance.
-    route : array-like, optional
-        Waypoints ``(x, y[, theta])`` in the plan frame to drive instead of exploring.
+    route : array-like or trajectory, optional
+        Waypoints ``(x, y[, theta])`` in the plan frame to drive instead of exploring
+        (anything :func:`map2map.sim.routes.as_waypoints` accepts, e.g. a PRM route).
     obstacles, people : int
         Random furniture boxes and walking people (seeded).
     start : (x, y, theta), optional
@@ -238,8 +250,8 @@ def simulate(
         Simulated seconds between animation frames (0: none).
     progress : bool
         Show a tqdm progress bar (simulated seconds).
-    source : path, optional
-        Name used in error messages (the plan file).
+    source, route_source : path, optional
+        Names used in error messages (the plan file, the route file).
 
     Raises
     ------
@@ -266,7 +278,7 @@ def simulate(
         raise InputError(src, "plan too small for the robot: no place with enough clearance")
     wp = None
     if route is not None:
-        wp = validate_route(base, route, robot.radius, "route")
+        wp = validate_route(base, as_waypoints(route), robot.radius, route_source or "route")
         if start is None:
             th = float(wp[0, 2]) if wp.shape[1] == 3 else 0.0
             if wp.shape[1] == 2 and len(wp) > 1:
@@ -309,6 +321,7 @@ def simulate(
     readings: list[OdometryReading] = []
     frames = []
     collisions = 0
+    contacts: list[tuple[float, float, float, float]] = []
     in_contact = False
     path_len = 0.0
     last_scan = None
@@ -352,14 +365,17 @@ def simulate(
         path_len += abs(res.ds)
         if res.collided and not in_contact:
             collisions += 1
+            contacts.append((t, *bot.pose))
         in_contact = res.collided
     bar.close()
 
     slam_map = mapper_obj.get_map()
     slam_plan = resample_to_frame(slam_map, start, plan)
-    reachable = world.reachable_cells(start, robot.radius)
+    reachable = world.reachable_cells(start, robot.radius, REACH_MARGIN)
     n_reach = int(reachable.sum())
     coverage = float((slam_plan.free & reachable).sum() / n_reach) if n_reach else 0.0
+    touchable = world.reachable_cells(start, robot.radius)  # no margin: every squeeze counts
+    strict = float((slam_plan.free & touchable).sum() / max(int(touchable.sum()), 1))
     frames = [(ft, resample_to_frame(fm, start, plan), fp) for ft, fm, fp in frames]
     info = {
         "seed": int(seed),
@@ -370,6 +386,8 @@ def simulate(
         "mode": "route" if wp is not None else "explore",
         "replans": driver.stats.replans,
         "blacklisted_goals": len(driver.stats.blacklisted),
+        "coverage_strict": round(strict, 6),
+        "collision_events": [[round(float(v), 3) for v in c] for c in contacts],
     }
     return SimResult(
         plan=plan,
@@ -425,6 +443,10 @@ def save_figure_png(res: SimResult, path: Path) -> None:
     axes[0].plot(tc, tr, "-", color="tab:green", lw=1.2, label="true")
     axes[0].plot(ec, er, "--", color="tab:red", lw=1.0, label="estimated")
     axes[0].plot(tc[:1], tr[:1], "o", color="tab:green", ms=5)
+    hits = np.array(res.info.get("collision_events") or np.zeros((0, 4)), float).reshape(-1, 4)
+    if len(hits):
+        hr, hc = res.plan.world_to_pixel_float(hits[:, 1], hits[:, 2])
+        axes[0].plot(hc, hr, "x", color="red", ms=7, mew=2, label="collision")
     axes[0].legend(loc="upper right", fontsize=7)
     draw_map(
         axes[1],
@@ -490,7 +512,7 @@ def save_run(res: SimResult, out: str | os.PathLike, *, gif: bool = False) -> di
     (CARMEN, odometry frame, with ``TRUEPOS`` in the plan frame), ``report.json``,
     ``figure.png`` and optionally ``exploration.gif``.
     """
-    from ..maps.ros import save_ros_map
+    from ..maps.formats import save_map
     from .carmen import write_carmen
 
     out = ensure_output_dir(out)
@@ -502,7 +524,7 @@ def save_run(res: SimResult, out: str | os.PathLike, *, gif: bool = False) -> di
         "report": out / "report.json",
         "figure": out / "figure.png",
     }
-    save_ros_map(res.slam_map_plan, paths["slam_map"])
+    save_map(res.slam_map_plan, paths["slam_map"])
     _write_csv(paths["trajectory_true"], res.times, res.true_poses)
     _write_csv(paths["trajectory_estimated"], res.times, res.estimated_poses)
     write_carmen(

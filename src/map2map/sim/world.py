@@ -82,12 +82,19 @@ class World:
         out[inside] = self.clearance[r[inside], c[inside]]
         return out
 
-    def reachable_cells(self, start, radius: float) -> np.ndarray:
-        """Cells the robot's body can cover: the start's component of valid centres, dilated."""
-        ok = self.clearance >= radius
+    def reachable_cells(self, start, radius: float, margin: float = 0.0) -> np.ndarray:
+        """Cells the robot's body can cover: the start's component of centres with at
+        least ``radius + margin`` clearance, dilated by ``radius``.
+
+        With a ``margin`` (the clearance a navigation stack keeps, e.g. 5 cm) gaps the
+        robot could only squeeze through touching both sides do not count as reachable.
+        """
+        ok = self.clearance >= radius + margin
+        r, c = (int(v) for v in self.plan.world_to_pixel(start[0], start[1]))
+        if not ok[r, c]:  # a start closer to a wall than the margin: use its own region
+            ok = self.clearance >= radius
         lab, _ = ndimage.label(ok)
-        r, c = self.plan.world_to_pixel(start[0], start[1])
-        comp = lab == lab[int(r), int(c)]
+        comp = lab == lab[r, c]
         rad = radius / self.plan.resolution
         k = int(math.ceil(rad))
         yy, xx = np.mgrid[-k : k + 1, -k : k + 1]
