@@ -100,18 +100,22 @@ def main() -> None:
             configs.append((b, {}))
     jobs = [(b, o, seed) for b, o in configs for seed in range(args.plans)]
     t0 = time.perf_counter()
-    with ProcessPoolExecutor(max_workers=args.workers) as pool:
-        rows = list(pool.map(one_run, jobs))
-    print(f"{len(rows)} runs in {time.perf_counter() - t0:.0f} s")
     print(
         f"{'configuration':<22}{'seed':>5}{'kind':>10}{'ATE m':>8}{'odo m':>8}{'map m':>8}"
-        f"{'cov':>6}{'cpu s':>7}"
+        f"{'cov':>6}{'cpu s':>7}",
+        flush=True,
     )
-    for r in rows:
-        print(
-            f"{_name(r['backend'], r['options']):<22}{r['seed']:>5}{r['kind']:>10}"
-            f"{r['ate']:>8.3f}{r['odo']:>8.3f}{r['map']:>8.3f}{r['cov']:>6.2f}{r['cpu']:>7.1f}"
-        )
+    rows = []
+    with ProcessPoolExecutor(max_workers=args.workers) as pool:
+        for r in pool.map(one_run, jobs):  # printed as they finish, in order
+            rows.append(r)
+            print(
+                f"{_name(r['backend'], r['options']):<22}{r['seed']:>5}{r['kind']:>10}"
+                f"{r['ate']:>8.3f}{r['odo']:>8.3f}{r['map']:>8.3f}{r['cov']:>6.2f}"
+                f"{r['cpu']:>7.1f}",
+                flush=True,
+            )
+    print(f"{len(rows)} runs in {time.perf_counter() - t0:.0f} s")
     print("\nsummary (mean / median / 90th percentile over plans)")
     for b, o in configs:
         sel = [r for r in rows if r["backend"] == b and r["options"] == o]
