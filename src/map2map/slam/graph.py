@@ -24,7 +24,10 @@ the keyframe scans at their optimised poses.
   matched against each chain's submap with a wide window. A closure is accepted
   when the coarse response exceeds ``loop_min_response_coarse``, its positional
   variance is below ``loop_max_variance_coarse`` and the fine response exceeds
-  ``loop_min_response_fine`` and the match is unambiguous (``loop_max_ambiguity``).
+  ``loop_min_response_fine``, the match is unambiguous (``loop_max_ambiguity``) and
+  the correction it implies is plausible: at most ``loop_max_correction`` plus
+  ``loop_max_drift_rate`` times the path length between the two places along the
+  graph (rejects aliasing with a look-alike room further away).
 * **Back end**: ``scipy.optimize.least_squares`` over all keyframe poses (the first
   fixed) with whitened SE(2) residuals, an analytic sparse Jacobian and a robust
   ``huber`` loss, after every accepted loop closure.
@@ -110,6 +113,8 @@ class GraphSLAMParams:
     loop_min_response_coarse: float = 0.35
     loop_min_response_fine: float = 0.45
     loop_max_ambiguity: float = 0.9
+    loop_max_correction: float = 0.3
+    loop_max_drift_rate: float = 0.05
     odom_sigma_xy: float = 0.05
     odom_sigma_theta: float = 0.05
     huber_scale: float = 3.0
@@ -539,7 +544,8 @@ class GraphSLAM:
             return False
         poses = np.array([f.pose for f in self.keyframes[:k]])
         near = np.hypot(poses[:, 0] - kf.pose[0], poses[:, 1] - kf.pose[1]) < p.loop_search_distance
-        far_in_graph = self._graph_distance(k)[:k] > p.loop_min_graph_distance
+        gdist = self._graph_distance(k)
+        far_in_graph = gdist[:k] > p.loop_min_graph_distance
         cand = np.flatnonzero(near & far_in_graph)
         if cand.size == 0:
             return False
@@ -573,6 +579,12 @@ class GraphSLAM:
             if res.response < p.loop_min_response_fine:
                 continue
             if res.ambiguity > p.loop_max_ambiguity:  # type: ignore[attr-defined]
+                continue
+            # drift gate: the correction must be plausible for the path length between
+            # the two places along the graph (odometry + matching drift is bounded)
+            correction = math.hypot(res.pose[0] - kf.pose[0], res.pose[1] - kf.pose[1])
+            path = float(np.min(gdist[chain]))
+            if correction > p.loop_max_correction + p.loop_max_drift_rate * path:
                 continue
             # constraint to the chain keyframe closest to the matched pose
             cp = np.array([self.keyframes[i].pose for i in chain])
