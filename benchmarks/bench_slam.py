@@ -27,8 +27,8 @@ from concurrent.futures import ProcessPoolExecutor
 
 CONFIGS = [
     ("oracle", {}),
-    ("rbpf", {"particles": 5}),
-    ("rbpf", {}),  # the default: 10 particles
+    ("rbpf", {}),  # the default: 5 particles
+    ("rbpf", {"particles": 10}),
     ("rbpf", {"particles": 30}),
     ("rbpf", {"particles": 100}),  # TurtleBot3's GMapping configuration
     ("graph", {}),

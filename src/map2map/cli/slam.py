@@ -27,9 +27,7 @@ def register(subparsers) -> None:
         default="rbpf",
         help="rbpf: GMapping-style particle filter (default); graph: Karto-style graph SLAM",
     )
-    p.add_argument(
-        "--particles", type=int, default=None, help="particle count of rbpf (default 10)"
-    )
+    p.add_argument("--particles", type=int, default=None, help="particle count of rbpf (default 5)")
     p.add_argument(
         "--resolution", type=float, default=0.05, help="map resolution in m/px (default 0.05)"
     )
