@@ -208,3 +208,19 @@ def test_simulate_defaults_to_rbpf_and_its_run_replays(tmp_path, capsys):
     rc = main(["slam", str(out), "--out", str(tmp_path / "slam"), "--backend", "graph", "--quiet"])
     assert rc == 0, capsys.readouterr().err
     assert (tmp_path / "slam" / "map.yaml").is_file()
+
+
+def test_demo_stage_maps_a_simulated_run(tmp_path):
+    from _slam_synth import room_plan
+
+    from map2map.demo import DemoContext
+    from map2map.slam.demo_stage import stage_slam
+
+    ctx = DemoContext(out=tmp_path, seed=0, results={"plan": room_plan()})
+    stage_slam(ctx)
+    written = {p.relative_to(tmp_path).as_posix() for _, p in ctx.written}
+    for backend in ("rbpf", "graph"):
+        assert {f"slam/{backend}/map.yaml", f"slam/{backend}/figure.png"} <= written
+        m = load_ros_map(tmp_path / "slam" / backend / "map.yaml")
+        assert m.occupied.sum() > 100
+    assert set(ctx.results["slam"]) == {"rbpf", "graph"}
