@@ -5,7 +5,16 @@ The public API re-exports the library functions behind every command line tool.
 
 from ._version import __version__
 from .errors import InputError
-from .maps import FREE, OCCUPIED, UNKNOWN, OccupancyMap, ternarize
+from .maps import (
+    FREE,
+    OCCUPIED,
+    UNKNOWN,
+    OccupancyMap,
+    load_map,
+    save_map,
+    save_map_figure,
+    ternarize,
+)
 
 __all__ = [
     "__version__",
@@ -15,4 +24,7 @@ __all__ = [
     "UNKNOWN",
     "OccupancyMap",
     "ternarize",
+    "load_map",
+    "save_map",
+    "save_map_figure",
 ]
