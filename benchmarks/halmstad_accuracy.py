@@ -25,7 +25,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
 from map2map.evaluate.halmstad import halmstad_pairs, keypoint_residuals, load_halmstad  # noqa: E402
-from map2map.evaluate.pipeline import align_and_warp  # noqa: E402
+from map2map.evaluate.pipeline import register  # noqa: E402
 
 
 def main(argv=None) -> int:
@@ -48,9 +48,11 @@ def main(argv=None) -> int:
         src = load_halmstad(data, src_name)
         tgt = load_halmstad(data, tgt_name)
         t0 = time.perf_counter()
-        res = align_and_warp(src, tgt)
+        res = register(src, tgt)
         dt = time.perf_counter() - t0
-        floor, sim, nonrigid = keypoint_residuals(data, src_name, tgt_name, src, tgt, res)
+        floor, sim, nonrigid = keypoint_residuals(
+            data, src_name, tgt_name, src, tgt, res.map_points
+        )
         rows.append((floor, sim, nonrigid, dt))
         print(
             f"{src_name + '->' + tgt_name:<22s} {floor:6.1f} {sim:6.1f} {sim / floor:6.2f} "

@@ -17,7 +17,9 @@ on a three-level pyramid so that a 1585 x 1585 pair aligns in about a second:
    resolution) are fitted the same way.
 
 Anchors (eqs. 1-6), given or found automatically (:mod:`.anchors`), are applied
-last. When no hypothesis reaches ``min_fitness`` a warning says so and the best
+last. When no hypothesis reaches ``min_score`` (eq. 8 at the refine level times the
+free-space share; real pairs score 0.3-1, unrelated maps about 0.15) or
+``min_fitness`` at full resolution, a warning says so and the best
 rigid (or anchored) result is returned instead.
 
 Examples
@@ -87,6 +89,7 @@ class AlignParams:
     rigid_scale: float = 1.0
     fitness_sigma: float = 2.0
     min_fitness: float = 0.1
+    min_score: float = 0.2
     auto_anchor: bool = True
     max_points: int = 20000
     seed: int = 0
@@ -342,10 +345,16 @@ def _search(src: np.ndarray, tgt: np.ndarray, f1: int, f2: int, p: AlignParams) 
         h.score = _score(T1, Mf1, S1.pts, S1.free_pts, h.T)
     rotations = theta_t - theta_s + np.arange(4) * np.pi / 2
     if min(str_s, str_t) < 0.25:  # no clear rectilinear structure: search all rotations
-        rotations = np.concatenate([rotations, np.radians(np.arange(0, 360, 10.0))])
+        rotations = np.concatenate([rotations, np.radians(np.arange(0, 360, 15.0))])
     n_scales = int(math.ceil(math.log(hi / lo) / math.log(1.1))) + 1
     dense_h = _dense(S1, T1, rotations, np.geomspace(lo, hi, n_scales), sigma1)
     stats.update(dense=len(dense_h), accepted=len(face_h) + len(dense_h))
+    # how much the best hypothesis stands out from the typical (wrong) placement
+    all_scores = np.array([h.score for h in face_h + dense_h])
+    typical = float(np.median([h.score for h in dense_h])) if dense_h else 0.0
+    stats["distinctiveness"] = (
+        float(all_scores.max() / max(typical, 1e-9)) if len(all_scores) else 0.0
+    )
     timings["hypotheses"] = time.perf_counter() - t1
 
     t1 = time.perf_counter()
@@ -456,7 +465,14 @@ def align_maps(
         )
 
     passed = best is not None
-    if passed:
+    fallback = "falling back to the best rigid" + (" anchored" if anchors else "") + " result"
+    if passed and srch.score < p.min_score:
+        passed = False
+        warnings.append(
+            f"no alignment hypothesis passed (best score {srch.score:.3f} < {p.min_score}: "
+            f"the maps do not match at any scale in {p.scale_range}); {fallback}"
+        )
+    elif passed:
         sim = down @ best @ np.linalg.inv(down)
         sim = refine(A3, edt3, sim, sigmas=(2.0 * f2, 1.5, 1.0), iterations=8)
         fit_sim = fitness(Mf3, apply(sim, A3))
@@ -464,9 +480,7 @@ def align_maps(
         if not passed:
             warnings.append(
                 f"no alignment hypothesis passed (best fitness {fit_sim:.3f} < {p.min_fitness}); "
-                "falling back to the best rigid"
-                + (" anchored" if anchors is not None else "")
-                + " result"
+                + fallback
             )
     else:
         warnings.append(
@@ -570,7 +584,7 @@ def align_maps(
 def _fallback_rigid(S1, T1, S3, edt3, p: AlignParams, theta_s, theta_t, f1, fit3) -> np.ndarray:
     """Best rigid transform (scale fixed) from dense hypotheses, refined at full resolution."""
     rotations = np.concatenate(
-        [theta_t - theta_s + np.arange(4) * np.pi / 2, np.radians(np.arange(0, 360, 10.0))]
+        [theta_t - theta_s + np.arange(4) * np.pi / 2, np.radians(np.arange(0, 360, 15.0))]
     )
     hyps = _dense(S1, T1, rotations, np.array([p.rigid_scale]), 1.5)
     if not hyps:

@@ -78,7 +78,7 @@ def edge_points(data: np.ndarray, *, min_normal: float = 0.5) -> tuple[np.ndarra
     near_free = cv2.dilate(free.astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
     surface = band & (occ > 0) & near_free
     r, c = np.nonzero(surface)
-    nx, ny = _normal_field(free)
+    nx, ny = _normal_field(free, radius=4)
     n = np.column_stack([nx[r, c], ny[r, c]]).astype(float)
     norm = np.hypot(n[:, 0], n[:, 1])
     # the kernel sums up to ~ 2*radius unit vectors on a straight face; below that, two-sided

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .nonrigid import SideFields
+from .nonrigid import SideFields, to_plane
 from .transforms import affine_distortion, decompose_similarity
 
 __all__ = ["ChainErrors", "local_errors", "choose_chain", "iou"]
@@ -96,7 +96,9 @@ def local_errors(
     each point is first projected on its wall normal: a nearest-wall correspondence
     cannot observe motion *along* a wall, and the coherence of eq. 7 drags wall
     points sideways near junctions with moved walls (the "shifted correspondences"
-    of the paper's Fig. 9); the projection removes that spurious part. Points whose
+    of the paper's Fig. 9); the projection removes that spurious part. Likewise
+    ``X_corr`` is taken on the normal through ``X_rigid`` (point-to-plane distance),
+    so that the pixel rounding along the wall is not counted. Points whose
     normal points diagonally between the plan's wall axes (within
     ``corner_band`` radians of 45 degrees) are corners and wall ends, where the
     nearest-wall correspondence is ambiguous; they are flagged in ``corner`` and
@@ -112,6 +114,10 @@ def local_errors(
         X_optimised = np.where(has[:, None], X_rigid + along, X_optimised)
     near, _, inside = fields.nearest(X_optimised, normals)
     X_corr = np.where(inside[:, None], near, X_optimised)  # line 11: no match -> itself
+    if normals is not None:
+        # distance across the wall: X_corr is a pixel centre, its rounding along the wall
+        # (up to half a pixel) is no error
+        X_corr = to_plane(X_rigid, X_corr, n)
     dist = np.hypot(*(X_rigid - X_corr).T)
     corner = None
     if normals is not None:

@@ -174,8 +174,10 @@ def deform(
 
     ``field`` is the (H, W, 2) forward displacement ``u`` at the cell centres of
     ``data``. The inverse mapping is found by fixed-point iteration. Returns the
-    deformed map and the displacement each deformed cell came with,
-    ``u(p)`` at its preimage ``p`` (the true error of a cell of the deformed map).
+    deformed map and the displacement each deformed cell actually carries: from the
+    centre of the cell of ``data`` it was copied from to its own centre (whole
+    pixels, as nearest-neighbour resampling realises the field) — the true error of
+    every cell of the deformed map.
     """
     H, W = data.shape
     yy, xx = np.mgrid[0:H, 0:W].astype(np.float32) + 0.5
@@ -186,12 +188,10 @@ def deform(
         sx = cv2.remap(ux, px - 0.5, py - 0.5, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
         sy = cv2.remap(uy, px - 0.5, py - 0.5, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
         px, py = xx - sx, yy - sy
-    out = cv2.remap(
-        data,
-        px - 0.5,
-        py - 0.5,
-        cv2.INTER_NEAREST,
-        borderMode=cv2.BORDER_CONSTANT,
-        borderValue=UNKNOWN,
-    )
-    return out, np.stack([xx - px, yy - py], axis=-1)
+    # nearest-neighbour resampling, explicitly, so that the copied cell is known
+    ci = np.floor(px).astype(np.int64)
+    ri = np.floor(py).astype(np.int64)
+    ok = (ri >= 0) & (ri < H) & (ci >= 0) & (ci < W)
+    out = np.full((H, W), UNKNOWN, np.uint8)
+    out[ok] = data[ri[ok], ci[ok]]
+    return out, np.stack([xx - (ci + 0.5), yy - (ri + 0.5)], axis=-1)
