@@ -46,6 +46,7 @@ import time
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+import cv2
 import numpy as np
 
 from ..errors import InputError
@@ -66,7 +67,15 @@ from .transforms import (
     transform_normals,
 )
 
-__all__ = ["AlignParams", "Alignment", "align_maps", "check_map", "refine", "MIN_MAP_SIZE"]
+__all__ = [
+    "AlignParams",
+    "Alignment",
+    "align_maps",
+    "check_map",
+    "refine",
+    "thin_walls",
+    "MIN_MAP_SIZE",
+]
 
 #: smallest map side (pixels of known content) that can be decomposed
 MIN_MAP_SIZE = 16
@@ -90,6 +99,7 @@ class AlignParams:
     fitness_sigma: float = 2.0
     min_fitness: float = 0.1
     min_score: float = 0.2
+    surface_sigmas: tuple[float, ...] = (2.0, 1.0)
     auto_anchor: bool = True
     max_points: int = 20000
     seed: int = 0
@@ -158,6 +168,20 @@ def check_map(data: np.ndarray, name: str | None) -> tuple[int, int, int, int]:
     return box
 
 
+def thin_walls(data: np.ndarray, max_thickness: float = 3.0) -> bool:
+    """Whether a map's walls are drawn as lines (mean thickness <= ``max_thickness`` px).
+
+    For a wall ``t`` cells thick the mean distance of its cells to the nearest
+    non-wall cell is ``(t / 2 + 1) / 2``.
+    """
+    occ = (data == OCCUPIED).astype(np.uint8)
+    if not occ.any():
+        return True
+    d = cv2.distanceTransform(occ, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+    mean = float(d[occ > 0].mean())
+    return mean <= (max_thickness / 2 + 1) / 2 + 1e-6
+
+
 def _scale(a: float) -> np.ndarray:
     return np.diag([a, a, 1.0])
 
@@ -185,6 +209,13 @@ class _Level:
             self._edt = distance_map(self.data == OCCUPIED, return_indices=True)
         return self._edt
 
+    @property
+    def known(self) -> np.ndarray:
+        """Known cells grown by one cell (walls at the edge of the explored area)."""
+        import cv2
+
+        return cv2.dilate((self.data != UNKNOWN).astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
+
     def fitness_map(self, sigma: float) -> np.ndarray:
         d = self.edt[0].astype(np.float64)
         return np.exp(-(d**2) / (2 * sigma**2)).astype(np.float32)
@@ -199,6 +230,7 @@ def refine(
     sigmas: tuple[float, ...] = (8.0, 4.0, 2.0, 1.0),
     iterations: int = 8,
     scale: float | None = None,
+    known: np.ndarray | None = None,
 ) -> np.ndarray:
     """Maximise eq. 8 from ``T`` by Gaussian-weighted least squares on EDT correspondences.
 
@@ -206,7 +238,9 @@ def refine(
     target wall cell (the distance transform's indices) and refits ``model``
     (``"similarity"``, ``"affine"`` or ``"rigid"`` with the fixed ``scale``)
     with weights ``M_f = exp(-d^2 / 2 sigma^2)``: the fixed point is a stationary
-    point of the fitness of eq. 8. ``sigma`` is annealed through ``sigmas``.
+    point of the fitness of eq. 8. ``sigma`` is annealed through ``sigmas``. With
+    ``known`` (the target's known cells), points over its unknown space are ignored:
+    either map may be the partial one.
     """
     _, idx = edt
     h, w = idx.shape[1:]
@@ -223,6 +257,8 @@ def refine(
             near = np.column_stack([idx[1, rr, cc] + 0.5, idx[0, rr, cc] + 0.5])
             d2 = ((near - q[ok]) ** 2).sum(1)
             wgt = np.exp(-d2 / (2 * sigma**2))
+            if known is not None:  # nothing to match over the target's unknown space
+                wgt = wgt * known[rr, cc]
             if wgt.sum() < 3:
                 break
             if model == "affine":
@@ -361,9 +397,10 @@ def _search(src: np.ndarray, tgt: np.ndarray, f1: int, f2: int, p: AlignParams) 
     # quick refinement of the top hypotheses at the search level, the best few at level 2
     cands = suppress_duplicates(face_h + dense_h, translation=2.0)[: p.top_k]
     pts1 = subsample(S1.pts, 1500, p.seed)
+    known1 = T1.known
     quick = []
     for h in cands:
-        T = refine(pts1, T1.edt, h.T, sigmas=(2.0, 1.0), iterations=4)
+        T = refine(pts1, T1.edt, h.T, sigmas=(2.0, 1.0), iterations=4, known=known1)
         if lo <= decompose_similarity(T)[0] <= hi:
             quick.append((_score(T1, Mf1, S1.pts, S1.free_pts, T), T))
     quick.sort(key=lambda st: -st[0])
@@ -374,7 +411,7 @@ def _search(src: np.ndarray, tgt: np.ndarray, f1: int, f2: int, p: AlignParams) 
     best, best_score = None, -1.0
     for _, T in quick[:3]:
         T = up @ T @ np.linalg.inv(up)
-        T = refine(S2.pts, T2.edt, T, sigmas=(3.0, 1.5, 1.0), iterations=6)
+        T = refine(S2.pts, T2.edt, T, sigmas=(3.0, 1.5, 1.0), iterations=6, known=T2.known)
         if not lo <= decompose_similarity(T)[0] <= hi:
             continue
         sc = _score(T2, Mf2, S2.pts, S2.free_pts, T)
@@ -446,7 +483,8 @@ def align_maps(
     t1 = time.perf_counter()
     A3 = subsample(occupied_points(a), p.max_points, p.seed)
     edt3 = distance_map(b == OCCUPIED, return_indices=True)
-    Mf3 = np.exp(-(edt3[0].astype(np.float64) ** 2) / (2 * p.fitness_sigma**2)).astype(np.float32)
+    known3 = cv2.dilate((b != UNKNOWN).astype(np.uint8), np.ones((7, 7), np.uint8)) > 0
+    Mf3 = np.exp(-(edt3[0] ** 2) / (2 * p.fitness_sigma**2)).astype(np.float32)
     down = _scale(f2)
     centre = A3.mean(0)
 
@@ -474,7 +512,7 @@ def align_maps(
         )
     elif passed:
         sim = down @ best @ np.linalg.inv(down)
-        sim = refine(A3, edt3, sim, sigmas=(2.0 * f2, 1.5, 1.0), iterations=8)
+        sim = refine(A3, edt3, sim, sigmas=(2.0 * f2, 1.5, 1.0), iterations=8, known=known3)
         fit_sim = fitness(Mf3, apply(sim, A3))
         passed = fit_sim >= p.min_fitness
         if not passed:
@@ -489,7 +527,7 @@ def align_maps(
             + " result"
         )
     if passed:
-        aff = refine(A3, edt3, sim, model="affine", sigmas=(1.5, 1.0), iterations=8)
+        aff = refine(A3, edt3, sim, model="affine", sigmas=(1.5, 1.0), iterations=8, known=known3)
         rig = rigid_from(sim)
     else:
         S1, T1 = srch.levels
@@ -510,23 +548,24 @@ def align_maps(
     X, N = edge_points(src)
     keep = subsample(np.arange(len(X))[:, None], p.max_points, p.seed)[:, 0]
     X, N = X[keep] + (c0s, r0s), N[keep]
-    if passed:
-        sim = refine_surfaces(X, N, fields, sim, sigmas=(2.0, 1.0))
-        aff = refine_surfaces(X, N, fields, aff, model="affine", sigmas=(1.5, 1.0))
-    rig = refine_surfaces(X, N, fields, rig, model="rigid", scale=p.rigid_scale, sigmas=(2.0, 1.0))
+    # Wall faces are matched to the plan's faces, free of the sub-pixel bias of thick
+    # walls (inside a wall every cell is its own nearest wall cell). A plan drawn with
+    # line-thin walls has no faces: matching faces to its lines would bias the scale by
+    # half the real walls' thickness, so there the similarity and affine keep the
+    # occupied-cell fit (the rigid variant, which carries the metric, is always refined).
+    if passed and not thin_walls(target):
+        sim = refine_surfaces(X, N, fields, sim, sigmas=p.surface_sigmas)
+        aff = refine_surfaces(X, N, fields, aff, model="affine", sigmas=p.surface_sigmas)
+    rig = refine_surfaces(
+        X, N, fields, rig, model="rigid", scale=p.rigid_scale, sigmas=p.surface_sigmas
+    )
     if not passed:
         sim = aff = rig
     timings["surfaces"] = time.perf_counter() - t1
     S3f = subsample(occupied_points(source), p.max_points, p.seed)
-    Mf3f = (
-        np.exp(
-            -(distance_map(target == OCCUPIED).astype(np.float64) ** 2) / (2 * p.fitness_sigma**2)
-        ).astype(np.float32)
-        if reverse
-        else np.zeros(target.shape, np.float32)
-    )
-    if not reverse:
-        Mf3f[r0t:r1t, c0t:c1t] = Mf3
+    Mf3f = np.zeros(target.shape, np.float32)  # eq. 8 fitness map of the whole target
+    d_t = fields.walls[0] if reverse else edt3[0]
+    Mf3f[r0t:r1t, c0t:c1t] = np.exp(-(d_t**2) / (2 * p.fitness_sigma**2))
     anchored = "none"
     used = anchors
     if anchors is not None:

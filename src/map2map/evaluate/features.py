@@ -69,6 +69,14 @@ def edge_points(data: np.ndarray, *, min_normal: float = 0.5) -> tuple[np.ndarra
     centres (x, y) and the unit direction towards the free space, or ``(0, 0)``
     where free space lies on both sides (a one-pixel wall seen from both rooms).
     """
+    known = data != UNKNOWN
+    rows = np.flatnonzero(known.any(1))
+    if rows.size == 0:
+        return np.zeros((0, 2)), np.zeros((0, 2))
+    cols = np.flatnonzero(known.any(0))
+    # work on the known content only (+ a margin wider than the normal kernel)
+    r0, c0 = max(0, rows[0] - 6), max(0, cols[0] - 6)
+    data = data[r0 : rows[-1] + 7, c0 : cols[-1] + 7]
     occ = (data == OCCUPIED).astype(np.uint8)
     free = data == FREE
     edges = cv2.Canny(occ * 255, 50, 150, L2gradient=True) > 0
@@ -85,7 +93,7 @@ def edge_points(data: np.ndarray, *, min_normal: float = 0.5) -> tuple[np.ndarra
     strong = norm >= min_normal
     n[strong] /= norm[strong, None]
     n[~strong] = 0.0
-    return np.column_stack([c + 0.5, r + 0.5]), n
+    return np.column_stack([c + c0 + 0.5, r + r0 + 0.5]), n
 
 
 def side_masks(data: np.ndarray, theta: float) -> list[np.ndarray]:

@@ -35,14 +35,17 @@ def distance_map(walls: np.ndarray, *, return_indices: bool = False):
     """
     walls = np.asarray(walls, bool)
     if not walls.any():
-        d = np.full(walls.shape, np.inf, np.float32)
+        d = np.full(walls.shape, np.inf)
         if return_indices:
             return d, np.zeros((2, *walls.shape), np.int32)
         return d
-    if return_indices:
-        d, idx = ndimage.distance_transform_edt(~walls, return_indices=True)
-        return d.astype(np.float32), idx.astype(np.int32)
-    return ndimage.distance_transform_edt(~walls).astype(np.float32)
+    d = np.empty(walls.shape, np.float64)
+    if return_indices:  # preallocated int32 indices: no conversion copies
+        idx = np.empty((2, *walls.shape), np.int32)
+        ndimage.distance_transform_edt(~walls, return_indices=True, distances=d, indices=idx)
+        return d, idx
+    ndimage.distance_transform_edt(~walls, distances=d)
+    return d
 
 
 def fitness_map(walls: np.ndarray, sigma: float) -> np.ndarray:

@@ -46,7 +46,7 @@ import cv2
 import numpy as np
 from scipy.spatial import Delaunay
 
-from ..maps.grid import OCCUPIED
+from ..maps.grid import OCCUPIED, UNKNOWN
 from .features import side_masks
 from .fitness import distance_map
 
@@ -73,9 +73,19 @@ class SideFields:
 
     theta: float
     sides: list[tuple[np.ndarray, np.ndarray]]
-    walls: tuple[np.ndarray, np.ndarray]
+    wall_mask: np.ndarray
     offset: tuple[int, int] = (0, 0)
     plan_shape: tuple[int, int] | None = None
+    known: np.ndarray | None = None
+    _walls: tuple[np.ndarray, np.ndarray] | None = None
+    _flat: np.ndarray | None = None
+
+    @property
+    def walls(self) -> tuple[np.ndarray, np.ndarray]:
+        """Distance transform and indices of all wall cells (computed when first needed)."""
+        if self._walls is None:
+            self._walls = distance_map(self.wall_mask, return_indices=True)
+        return self._walls
 
     @classmethod
     def from_map(
@@ -85,12 +95,39 @@ class SideFields:
         r0, r1, c0, c1 = window or (0, data.shape[0], 0, data.shape[1])
         sub = data[r0:r1, c0:c1]
         sides = [distance_map(m, return_indices=True) for m in side_masks(sub, theta)]
-        walls = distance_map(sub == OCCUPIED, return_indices=True)
-        return cls(float(theta), sides, walls, (int(c0), int(r0)), tuple(data.shape))
+        walls = sub == OCCUPIED
+        # the plan's known cells, grown by 3 px: walls seen at the edge of its known area
+        known = cv2.dilate((sub != UNKNOWN).astype(np.uint8), np.ones((7, 7), np.uint8)) > 0
+        return cls(float(theta), sides, walls, (int(c0), int(r0)), tuple(data.shape), known)
+
+    def is_known(self, pts: np.ndarray) -> np.ndarray:
+        """Whether points fall on (or within 3 px of) known cells of the plan."""
+        if self.known is None:
+            return np.ones(len(pts), bool)
+        ox, oy = self.offset
+        h, w = self.known.shape
+        c = np.floor(pts[:, 0] - ox).astype(np.int64)
+        r = np.floor(pts[:, 1] - oy).astype(np.int64)
+        ok = (r >= 0) & (r < h) & (c >= 0) & (c < w)
+        out = np.zeros(len(pts), bool)
+        out[ok] = self.known[r[ok], c[ok]]
+        return out
 
     @property
     def shape(self) -> tuple[int, int]:
-        return self.walls[0].shape
+        return self.wall_mask.shape
+
+    def _table(self) -> np.ndarray:
+        """(5, H * W) flat index of the nearest wall cell: four sides, then all walls."""
+        if getattr(self, "_flat", None) is None:
+            h, w = self.shape
+            rows = []
+            for d, idx in [*self.sides, self.walls]:
+                if not np.isfinite(d).any():  # a side without surfaces: use all walls
+                    d, idx = self.walls
+                rows.append((idx[0] * w + idx[1]).ravel())  # int32: windows < 46k px a side
+            self._flat = np.stack(rows)
+        return self._flat
 
     def nearest(self, pts: np.ndarray, normals: np.ndarray | None = None):
         """Nearest plan wall cell centre (x, y) of each point, its distance, and inside flags.
@@ -105,23 +142,17 @@ class SideFields:
         c = np.floor(pts[:, 0] - ox).astype(np.int64)
         r = np.floor(pts[:, 1] - oy).astype(np.int64)
         inside = (r >= 0) & (r < h) & (c >= 0) & (c < w)
-        near = pts.copy()
-        group = np.full(len(pts), -1)
+        group = np.full(len(pts), 4)  # 4 = all walls (side unknown)
         if normals is not None:
             n = np.asarray(normals, float)
             has = np.hypot(n[:, 0], n[:, 1]) > 0.5
             ang = np.arctan2(n[:, 1], n[:, 0]) - self.theta
             group[has] = np.mod(np.round(ang[has] / (np.pi / 2)), 4).astype(int)
-        for g in (-1, 0, 1, 2, 3):
-            sel = inside & (group == g)
-            if not sel.any():
-                continue
-            d, idx = self.walls if g < 0 else self.sides[g]
-            if not np.isfinite(d).any():
-                d, idx = self.walls
-            rr, cc = r[sel], c[sel]
-            near[sel, 0] = idx[1, rr, cc] + 0.5 + ox
-            near[sel, 1] = idx[0, rr, cc] + 0.5 + oy
+        # one gather in the stacked flat index table of the five fields
+        flat = self._table()[group[inside], r[inside] * w + c[inside]]
+        near = pts.copy()
+        near[inside, 0] = flat % w + 0.5 + ox
+        near[inside, 1] = flat // w + 0.5 + oy
         dist = np.hypot(*(near - pts).T)
         return near, dist, inside
 
@@ -196,7 +227,8 @@ def optimise(
         for _ in range(iterations):
             near, d, inside = fields.nearest(Y, normals)
             near = to_plane(Y, near, normals)
-            m = np.where(inside, np.exp(-(d**2) / (2 * sf**2)), 0.0)
+            # points over the plan's unknown space have nothing to match: they only follow
+            m = np.where(inside & fields.is_known(Y), np.exp(-(d**2) / (2 * sf**2)), 0.0)
             dx = coherent_motion(Y, (near - Y), m, sn)
             Y = Y + dx
             if np.abs(dx).max() < 0.05:
