@@ -397,10 +397,9 @@ def _search(src: np.ndarray, tgt: np.ndarray, f1: int, f2: int, p: AlignParams) 
     # quick refinement of the top hypotheses at the search level, the best few at level 2
     cands = suppress_duplicates(face_h + dense_h, translation=2.0)[: p.top_k]
     pts1 = subsample(S1.pts, 1500, p.seed)
-    known1 = T1.known
     quick = []
     for h in cands:
-        T = refine(pts1, T1.edt, h.T, sigmas=(2.0, 1.0), iterations=4, known=known1)
+        T = refine(pts1, T1.edt, h.T, sigmas=(2.0, 1.0), iterations=4)
         if lo <= decompose_similarity(T)[0] <= hi:
             quick.append((_score(T1, Mf1, S1.pts, S1.free_pts, T), T))
     quick.sort(key=lambda st: -st[0])
@@ -411,7 +410,7 @@ def _search(src: np.ndarray, tgt: np.ndarray, f1: int, f2: int, p: AlignParams) 
     best, best_score = None, -1.0
     for _, T in quick[:3]:
         T = up @ T @ np.linalg.inv(up)
-        T = refine(S2.pts, T2.edt, T, sigmas=(3.0, 1.5, 1.0), iterations=6, known=T2.known)
+        T = refine(S2.pts, T2.edt, T, sigmas=(3.0, 1.5, 1.0), iterations=6)
         if not lo <= decompose_similarity(T)[0] <= hi:
             continue
         sc = _score(T2, Mf2, S2.pts, S2.free_pts, T)

@@ -130,9 +130,16 @@ def register(
     timings["fields"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     res = target.resolution
-    Xa, _, Xo = _optimise_chain(X, normals, al.affine, fields, p, res)
+    Xa, na, Xo = _optimise_chain(X, normals, al.affine, fields, p, res)
     warp = None
-    ctrl = control_points(Xa, max(2.0, p.control_spacing / res))
+    # the warp is defined by the points that found their wall on the plan (within
+    # 3 sigma_f of the finest stage, over its known space); the others only followed
+    _, d, inside = fields.nearest(Xo, na)
+    supported = inside & fields.is_known(Xo) & (d <= 3.0 * max(1.0, p.sigma_f[-1] / res))
+    if supported.sum() < 3:
+        supported[:] = True
+    idx = np.flatnonzero(supported)
+    ctrl = idx[control_points(Xa[idx], max(2.0, p.control_spacing / res))]
     if len(ctrl) >= 3:
         try:
             warp = PiecewiseAffine(Xa[ctrl], Xo[ctrl])
