@@ -100,7 +100,7 @@ def test_no_hypothesis_passes_warns_and_falls_back(plan):
     rng = np.random.default_rng(0)
     source = np.full((H, W), FREE, np.uint8)
     source[rng.random((H, W)) < 0.01] = OCCUPIED  # nothing like the plan
-    res = align_maps(source, plan, params=AlignParams(auto_anchor=False))
+    res = align_maps(source, plan, params=AlignParams(auto_anchor=False, scale_range=(0.8, 1.25)))
     assert res.warnings and "no alignment hypothesis passed" in res.warnings[0]
     assert decompose_similarity(res.similarity)[0] == pytest.approx(1.0)  # rigid fallback
     assert np.all(np.isfinite(res.similarity))

@@ -30,7 +30,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..maps.grid import FREE, OCCUPIED, OccupancyMap
-from .align import Alignment, AlignParams, align_maps
+from .align import Alignment, AlignParams, align_maps, check_map
 from .anchors import Anchors
 from .features import edge_points, subsample
 from .icp import icp
@@ -74,11 +74,19 @@ class Registration:
     X_optimised: np.ndarray
     warp: PiecewiseAffine | None
     timings: dict[str, float]
+    source_warp: PiecewiseAffine | None = None
 
     def map_points(self, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Source pixels -> target pixels by the similarity, and by the nonrigid chain."""
+        """Source pixels -> target pixels by the similarity, and by the nonrigid chain.
+
+        When the target is the partial map (the alignment ran target onto source),
+        the nonrigid correction comes from the target's walls optimised onto the
+        source (``source_warp``, in source pixels): only walls both maps saw move.
+        """
         pts = np.asarray(pts, float).reshape(-1, 2)
         sim = apply(self.alignment.similarity, pts)
+        if self.source_warp is not None:
+            return sim, apply(self.alignment.affine, self.source_warp.forward(pts))
         nonrigid = apply(self.alignment.affine, pts)
         if self.warp is not None:
             nonrigid = self.warp.forward(nonrigid)
@@ -131,22 +139,42 @@ def register(
     t0 = time.perf_counter()
     res = target.resolution
     Xa, na, Xo = _optimise_chain(X, normals, al.affine, fields, p, res)
-    warp = None
-    # the warp is defined by the points that found their wall on the plan (within
-    # 3 sigma_f of the finest stage, over its known space); the others only followed
+    warp = _warp(Xa, na, Xo, fields, p, res)
+    source_warp = None
+    if al.hypotheses.get("direction") == "target->source":
+        # the target is the partial map: its walls, optimised onto the source, say
+        # where the source must bend (in source pixels)
+        box = check_map(source.data, names[0])
+        fields_s = SideFields.from_map(source.data, al.orientation["source"], window=box)
+        Y, ny = edge_points(target.data)
+        keep = subsample(np.arange(len(Y))[:, None], p.max_edge_points, p.seed)[:, 0]
+        Ai = np.linalg.inv(al.affine)
+        Ys, nys, Yo = _optimise_chain(Y[keep], ny[keep], Ai, fields_s, p, source.resolution)
+        inverse = _warp(Ys, nys, Yo, fields_s, p, source.resolution)
+        if inverse is not None:  # optimised -> as aligned: source pixels to corrected ones
+            source_warp = PiecewiseAffine(inverse.dst, inverse.src)
+    timings["nonrigid"] = time.perf_counter() - t0
+    return Registration(al, fields, X, normals, Xa, Xo, warp, timings, source_warp)
+
+
+def _warp(Xa, na, Xo, fields, p: EvaluateParams, res: float) -> PiecewiseAffine | None:
+    """Piecewise-affine warp from the aligned to the optimised positions of supported points.
+
+    The warp is defined by the points that found their wall on the plan (within 3
+    sigma_f of the finest stage, over its known space); the others only followed.
+    """
     _, d, inside = fields.nearest(Xo, na)
     supported = inside & fields.is_known(Xo) & (d <= 3.0 * max(1.0, p.sigma_f[-1] / res))
     if supported.sum() < 3:
         supported[:] = True
     idx = np.flatnonzero(supported)
     ctrl = idx[control_points(Xa[idx], max(2.0, p.control_spacing / res))]
-    if len(ctrl) >= 3:
-        try:
-            warp = PiecewiseAffine(Xa[ctrl], Xo[ctrl])
-        except Exception:  # noqa: BLE001 - collinear control points: no warp
-            warp = None
-    timings["nonrigid"] = time.perf_counter() - t0
-    return Registration(al, fields, X, normals, Xa, Xo, warp, timings)
+    if len(ctrl) < 3:
+        return None
+    try:
+        return PiecewiseAffine(Xa[ctrl], Xo[ctrl])
+    except Exception:  # noqa: BLE001 - collinear control points: no warp
+        return None
 
 
 @dataclass
