@@ -1,7 +1,8 @@
 """Odometry error to map error by EKF-SLAM, thesis eqs. 3.54-3.80 (ref. [57]).
 
-The robot drives the key poses of the trajectory; its odometry reports the *actual*
-increments of the error model (eqs. 3.40-3.43), so its dead-reckoned pose drifts. The
+The robot drives the key poses of the trajectory; its odometry reports each step with
+the error of the model (nominal - actual, eqs. 3.40-3.50), so its dead-reckoned pose
+drifts. The
 filter state ``X = (x, y, theta, lambda_1x, lambda_1y, ...)`` holds the robot pose and
 the landmarks seen so far, ``P`` their covariance:
 
@@ -25,8 +26,11 @@ stacked update (the same linearisation point as sequential updates, one BLAS cal
 Reading of the thesis, where it is ambiguous
 --------------------------------------------
 * Eqs. 3.54-3.57 apply to the odometry increments (whose error is ``sigma``), so that the
-  state is the robot pose; ``Delta thrust`` is recovered from the y increment
-  (eq. 3.55) or, where ``sin(theta)`` is small, from the x increment.
+  state is the robot pose: the reading is the true step between key poses (in the
+  robot's estimated frame) minus the ``sigma`` of eqs. 3.48-3.50, its heading change
+  ``Delta theta`` the true one minus ``sigma_theta`` (eq. 3.54); ``Delta thrust`` is
+  recovered from the y increment (eq. 3.55) or, where ``sin(theta)`` is small, from the
+  x increment. With zero error parameters the filter reproduces the plan exactly.
 * Eq. 3.62 is ``A P A^T + Q``; ``Q`` (3.61) is projected on the nearest positive
   semi-definite matrix (eqs. 3.51-3.53 do not guarantee one).
 * Eq. 3.70 omits the range normalisation of the standard Jacobian (ref. [57]); the rows
@@ -53,7 +57,7 @@ from scipy.interpolate import LinearNDInterpolator, NearestNDInterpolator
 
 from ..trajectory.timing import wrap_angle
 from .lidar import LidarCoefficients, angle_error, measured, polar_displacement, range_error
-from .odometry import OdometryErrors, pose_increment
+from .odometry import OdometryErrors
 from .params import ParametricParams
 from .visibility import Visibility
 
@@ -317,10 +321,16 @@ def ekf_field(
     robot_error = np.zeros((k_poses, 3))
     for k in range(k_poses):
         if k > 0:
-            # odometry reading: the actual increment of the error model (eqs. 3.40-3.43)
+            # odometry reading: the true increment, rotated into the estimated heading, plus
+            # the error model's actual - nominal difference (eqs. 3.40-3.50)
             th = X[2]
-            dth = heading_change(odo.actual["dth"][k - 1])
-            ddx, ddy = pose_increment(odo.actual["dd"][k - 1], dth, th)
+            step = truth[k] - truth[k - 1]
+            dth = heading_change(wrap_angle(step[2]) - sigma["t"][k - 1])
+            rot = th - truth[k - 1, 2]
+            c, s = np.cos(rot), np.sin(rot)
+            ex, ey = -sigma["x"][k - 1], -sigma["y"][k - 1]
+            ddx = c * (step[0] + ex) - s * (step[1] + ey)
+            ddy = s * (step[0] + ex) + c * (step[1] + ey)
             dthrust = thrust(ddx, ddy, th + dth / 2)
             jx, jy = jacobian_terms(dthrust, th + dth / 2)
             X[0] += ddx
