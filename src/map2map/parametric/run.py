@@ -133,13 +133,8 @@ def run_deform(job: DeformJob, progress: bool = True) -> list[tuple[Path, dict]]
                 traj, _ = make_trajectory(
                     plan, params, traj_rng, start=job.start, goal=job.goal, waypoints=waypoints
                 )
-            except InputError as exc:
-                src = (
-                    job.waypoints
-                    if job.waypoints and exc.source in (None, "--waypoints")
-                    else (exc.source or job.plan)
-                )
-                raise InputError(src, exc.problem) from None
+            except InputError as exc:  # name the file the bad point is checked against
+                raise InputError(job.waypoints or job.plan, exc.problem) from None
         plans.append((seed, traj, model_rng))
     ensure_output_dir(job.out)
     out: list[tuple[Path, dict]] = []
