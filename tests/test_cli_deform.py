@@ -51,7 +51,7 @@ def test_deform_writes_the_listed_files(plan_yaml, tmp_path):
             *_pt(plan, 10, 10),
             "--goal",
             *_pt(plan, 70, 100),
-        ]  # fmt: skip
+        ]
     )
     assert rc == 0
     assert {p.name for p in out.iterdir()} == FILES
@@ -71,17 +71,50 @@ def test_deform_writes_the_listed_files(plan_yaml, tmp_path):
 
 def test_repeat_from_params_and_trajectory_gives_identical_bytes(plan_yaml, tmp_path):
     a = tmp_path / "a"
-    assert main(["deform", str(plan_yaml), "--out", str(a), "--samples", "2", "--seed", "10",
-                 "--method", "ekf", "--quiet"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "deform",
+                str(plan_yaml),
+                "--out",
+                str(a),
+                "--samples",
+                "2",
+                "--seed",
+                "10",
+                "--method",
+                "ekf",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     assert sorted(p.name for p in a.iterdir()) == ["sample_000", "sample_001"]
     s1 = a / "sample_001"
     assert {p.name for p in s1.iterdir()} == FILES
     b = tmp_path / "b"
     seed = str(yaml.safe_load((s1 / "params.yaml").read_text())["run"]["seed"])
     assert seed == "11"
-    assert main(["deform", str(plan_yaml), "--out", str(b), "--seed", seed, "--method", "ekf",
-                 "--params", str(s1 / "params.yaml"), "--trajectory", str(s1 / "trajectory.csv"),
-                 "--quiet"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "deform",
+                str(plan_yaml),
+                "--out",
+                str(b),
+                "--seed",
+                seed,
+                "--method",
+                "ekf",
+                "--params",
+                str(s1 / "params.yaml"),
+                "--trajectory",
+                str(s1 / "trajectory.csv"),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     for name in ("slam_map.pgm", "displacement.npz", "trajectory.csv"):
         assert (s1 / name).read_bytes() == (b / name).read_bytes(), name
     # the two samples differ
@@ -93,8 +126,19 @@ def test_waypoints_and_fov(plan_yaml, tmp_path):
     wp = tmp_path / "w.txt"
     wp.write_text("\n".join(" ".join(_pt(plan, r, c)) for r, c in [(10, 10), (30, 90), (70, 60)]))
     out = tmp_path / "o"
-    rc = main(["deform", str(plan_yaml), "--out", str(out), "--waypoints", str(wp), "--fov", "180",
-               "--quiet"])  # fmt: skip
+    rc = main(
+        [
+            "deform",
+            str(plan_yaml),
+            "--out",
+            str(out),
+            "--waypoints",
+            str(wp),
+            "--fov",
+            "180",
+            "--quiet",
+        ]
+    )
     assert rc == 0
     assert yaml.safe_load((out / "params.yaml").read_text())["parameters"]["fov_deg"] == 180
 
@@ -119,12 +163,24 @@ def test_bad_plan_without_free_space(tmp_path, capsys):
 def test_bad_start_in_wall_or_outside(plan_yaml, tmp_path, capsys):
     plan = load_ros_map(plan_yaml)
     goal = _pt(plan, 10, 10)
-    _bad(["deform", str(plan_yaml), "--start", *_pt(plan, 3, 30), "--goal", *goal],
-         tmp_path, capsys, "in a wall")  # fmt: skip
-    _bad(["deform", str(plan_yaml), "--start", "100", "100", "--goal", *goal],
-         tmp_path, capsys, "outside the map")  # fmt: skip
-    _bad(["deform", str(plan_yaml), "--start", *goal, "--goal", "-50", "3"],
-         tmp_path, capsys, "goal (-50, 3) m is outside the map")  # fmt: skip
+    _bad(
+        ["deform", str(plan_yaml), "--start", *_pt(plan, 3, 30), "--goal", *goal],
+        tmp_path,
+        capsys,
+        "in a wall",
+    )
+    _bad(
+        ["deform", str(plan_yaml), "--start", "100", "100", "--goal", *goal],
+        tmp_path,
+        capsys,
+        "outside the map",
+    )
+    _bad(
+        ["deform", str(plan_yaml), "--start", *goal, "--goal", "-50", "3"],
+        tmp_path,
+        capsys,
+        "goal (-50, 3) m is outside the map",
+    )
 
 
 def test_bad_start_goal_not_connected(tmp_path, capsys):
@@ -132,10 +188,20 @@ def test_bad_start_goal_not_connected(tmp_path, capsys):
     save_ros_map(closed, tmp_path / "closed.yaml")
     s, g = centre(closed, 30, 30), centre(closed, 30, 90)
     line = _bad(
-        ["deform", str(tmp_path / "closed.yaml"), "--start", str(s[0]), str(s[1]),
-         "--goal", str(g[0]), str(g[1])],
-        tmp_path, capsys, "are not connected",
-    )  # fmt: skip
+        [
+            "deform",
+            str(tmp_path / "closed.yaml"),
+            "--start",
+            str(s[0]),
+            str(s[1]),
+            "--goal",
+            str(g[0]),
+            str(g[1]),
+        ],
+        tmp_path,
+        capsys,
+        "are not connected",
+    )
     assert f"start ({s[0]:g}, {s[1]:g}) m" in line and f"goal ({g[0]:g}, {g[1]:g}) m" in line
 
 

@@ -179,7 +179,7 @@ def test_eqs_3_81_to_3_88_additive_pieces():
     s_mx, s_my = add.beam_frame_error(s_mz, s_mt)
     assert float(s_mx) == pytest.approx(0.13 * math.cos(s_mt))
     assert float(s_my) == pytest.approx(0.13 * math.sin(s_mt))
-    d_mx, d_my = add.map_frame_error(s_mx, s_my, math.pi / 2)
+    d_mx, d_my = add.map_frame_error(s_mx, s_my, 0.0, 1.0)  # bearing pi / 2
     assert (float(d_mx), float(d_my)) == pytest.approx((-float(s_my), float(s_mx)))
 
 

@@ -6,7 +6,9 @@ key pose the pixels in the LIDAR's field of view (the *mask*, from
 :mod:`map2map.parametric.visibility`) get a range error ``sigma_mz`` (eq. 3.83) and an
 angular error ``sigma_mtheta`` (eq. 3.84), turned into a displacement (eqs. 3.85-3.88)
 and *added* to the pixel's odometry field (eqs. 3.89-3.90): a pixel seen from many poses
-accumulates many errors - the approximation the thesis contrasts with the EKF.
+accumulates many errors - the approximation the thesis contrasts with the EKF. The loop
+over poses and mask pixels runs in numba, calling the very functions below compiled with
+:func:`numba.njit` (each equation is written once).
 
 Reading of the thesis: eqs. 3.85-3.86 decompose the error along the beam
 (``sigma_mz``, range) and across it (angle ``sigma_mtheta``), i.e. in the beam frame;
@@ -29,6 +31,9 @@ Examples
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 
 from .odometry import OdometryErrors
@@ -47,22 +52,22 @@ __all__ = [
 ]
 
 
-def linear_error(dl, sigma: float, gain: float = 0.09):
+def linear_error(dl, sigma, gain=0.09):
     """Eq. 3.81: ``E_lin(Delta l) = 0.09 Delta l + sigma``."""
-    return gain * np.asarray(dl, float) + sigma
+    return gain * dl + sigma
 
 
-def angular_error(dtheta, alpha: float, gain: float = 0.095):
+def angular_error(dtheta, alpha, gain=0.095):
     """Eq. 3.82: ``E_ang(Delta theta) = 0.095 Delta theta + alpha``."""
-    return gain * np.asarray(dtheta, float) + alpha
+    return gain * dtheta + alpha
 
 
-def map_range_error(z_meas, eta: float, e_lin, noise=0.0):
+def map_range_error(z_meas, eta, e_lin, noise=0.0):
     """Eq. 3.83: ``sigma_mz = z_meas(mask) eta + E_lin(Delta l) + N(0, eps_lin)``."""
-    return np.asarray(z_meas, float) * eta + e_lin + noise
+    return z_meas * eta + e_lin + noise
 
 
-def map_angle_error(beta: float, e_ang, noise=0.0):
+def map_angle_error(beta, e_ang, noise=0.0):
     """Eq. 3.84: ``sigma_mtheta = beta / 2 + E_ang(Delta theta) + N(0, eps_ang)``."""
     return beta / 2.0 + e_ang + noise
 
@@ -76,16 +81,49 @@ def beam_frame_error(s_mz, s_mtheta):
     return s_mz * np.cos(s_mtheta), s_mz * np.sin(s_mtheta)
 
 
-def map_frame_error(s_mx, s_my, bearing):
-    """Eqs. 3.87-3.88: ``d_m = sigma_m`` in the map frame (rotated by the beam bearing)."""
-    c, s = np.cos(bearing), np.sin(bearing)
-    return c * s_mx - s * s_my, s * s_mx + c * s_my
+def map_frame_error(s_mx, s_my, cos_b, sin_b):
+    """Eqs. 3.87-3.88: ``d_m = sigma_m`` in the map frame, i.e. rotated by the beam's
+    bearing ``b`` from the pose to the pixel (given as ``cos b``, ``sin b``)."""
+    return cos_b * s_mx - sin_b * s_my, sin_b * s_mx + cos_b * s_my
 
 
-def accumulate(d_o: np.ndarray, mask, d_m):
+def accumulate(d_o, mask, d_m):
     """Eqs. 3.89-3.90: ``d_O(mask) = d_O(mask) + d_m`` (in place, flat indices ``mask``)."""
     d_o[mask] += d_m
     return d_o
+
+
+# the same equations, compiled for the per-pixel loop of the kernel below
+_range_nb = numba.njit(cache=True)(map_range_error)
+_beam_nb = numba.njit(cache=True)(beam_frame_error)
+_frame_nb = numba.njit(cache=True)(map_frame_error)
+_accumulate_nb = numba.njit(cache=True)(accumulate)
+
+
+@numba.njit(cache=True)
+def _additive_kernel(indptr, pixels, w, poses, zerr, pm, eta, e_lin, s_mt, n_lin, n_ang, dxo, dyo):
+    """Eqs. 3.83-3.90 for every key pose and every pixel of its mask."""  # pragma: no cover
+    per_pixel_noise = n_lin.size > 0
+    per_pixel_angle = n_ang.size > 0
+    for k in range(indptr.size - 1):
+        # sigma_mx / sigma_mz and sigma_my / sigma_mz of this pose (eqs. 3.85-3.86, linear in s_mz)
+        cx, cy = _beam_nb(1.0, s_mt[k])
+        for j in range(indptr[k], indptr[k + 1]):
+            idx = pixels[j]
+            rx = idx % w - poses[k, 0]
+            ry = idx // w - poses[k, 1]
+            r = math.sqrt(rx * rx + ry * ry)
+            if r == 0.0:
+                continue
+            z = r / pm + zerr[idx]  # range measured from this pose [m]
+            s_mz = _range_nb(z, eta, e_lin[k], n_lin[j] if per_pixel_noise else 0.0)
+            if per_pixel_angle:
+                s_mx, s_my = _beam_nb(s_mz, s_mt[k] + n_ang[j])
+            else:
+                s_mx, s_my = s_mz * cx, s_mz * cy
+            d_mx, d_my = _frame_nb(s_mx, s_my, rx / r, ry / r)
+            _accumulate_nb(dxo, idx, pm * d_mx)
+            _accumulate_nb(dyo, idx, pm * d_my)
 
 
 def additive_field(
@@ -126,24 +164,16 @@ def additive_field(
     dl = s_x / np.cos(s_t)
     e_lin = linear_error(dl, float(dl[1:].mean()) if k > 1 else 0.0, p.lin_gain)
     e_ang = angular_error(s_t, float(s_t[1:].mean()) if k > 1 else 0.0, p.ang_gain)
-    beta = np.radians(p.beam_aperture_deg)
+    s_mt = map_angle_error(np.radians(p.beam_aperture_deg), e_ang)  # eq. 3.84 per pose
+    nnz = vis.pixels.size
+    n_lin = rng.normal(0.0, p.eps_lin, nnz) if p.eps_lin > 0 else np.zeros(0)
+    n_ang = rng.normal(0.0, p.eps_ang, nnz) if p.eps_ang > 0 else np.zeros(0)
     zerr = (np.asarray(z_meas, float) - np.asarray(D, float)).ravel()
     dxo = np.zeros(h * w)
     dyo = np.zeros(h * w)
-    for i in range(k):
-        idx = vis.seen_from(i)
-        if idx.size == 0:
-            continue
-        n_lin = rng.normal(0.0, p.eps_lin, idx.size) if p.eps_lin > 0 else 0.0
-        n_ang = rng.normal(0.0, p.eps_ang, idx.size) if p.eps_ang > 0 else 0.0
-        rows, cols = np.divmod(idx, w)
-        ry, rx = rows - poses_px[i, 1], cols - poses_px[i, 0]
-        bearing = np.arctan2(ry, rx)
-        z_pose = np.hypot(rx, ry) / pm + zerr[idx]  # range measured from this pose [m]
-        s_mz = map_range_error(z_pose, p.eta, e_lin[i], n_lin)
-        s_mt = map_angle_error(beta, e_ang[i], n_ang)
-        s_mx, s_my = beam_frame_error(s_mz, s_mt)
-        d_mx, d_my = map_frame_error(s_mx, s_my, bearing)
-        accumulate(dxo, idx, pm * d_mx)
-        accumulate(dyo, idx, pm * d_my)
+    _additive_kernel(
+        vis.indptr, vis.pixels, w, np.ascontiguousarray(poses_px, float), zerr, float(pm),
+        float(p.eta), np.ascontiguousarray(e_lin, float), np.ascontiguousarray(s_mt, float),
+        n_lin, n_ang, dxo, dyo,
+    )  # fmt: skip
     return dxo.reshape(h, w), dyo.reshape(h, w)

@@ -96,12 +96,14 @@ class DisplacementField:
 
 
 def invert_field(
-    field: DisplacementField, iterations: int = 20, tol: float = 1e-3
+    field: DisplacementField, iterations: int = 8, tol: float = 0.01, settled: float = 0.999
 ) -> tuple[np.ndarray, np.ndarray]:
     """Source coordinates ``(px, py)`` (float32 maps) with ``p + d(p) = q`` for every pixel ``q``.
 
-    Fixed-point iteration ``p <- q - d(p)`` started at ``p = q - d(q)``; stops when the
-    largest update is below ``tol`` pixels.
+    Fixed-point iteration ``p <- q - d(p)`` started at ``p = q - d(q)``; stops after
+    ``iterations`` or when a fraction ``settled`` of the pixels moved less than ``tol``
+    pixels in the last step. (Where the field jumps, e.g. at the edge of what a pose saw,
+    or folds, there is no exact inverse and the iteration keeps oscillating there.)
 
     >>> f = DisplacementField(np.full((3, 4), 1.5, np.float32), np.zeros((3, 4), np.float32))
     >>> px, py = invert_field(f)
@@ -109,18 +111,18 @@ def invert_field(
     [-1.5, -0.5, 0.5, 1.5]
     """
     h, w = field.shape
-    qy, qx = np.mgrid[0:h, 0:w].astype(np.float32)
-    px = qx - field.dx
-    py = qy - field.dy
+    q = np.dstack(np.mgrid[0:h, 0:w][::-1]).astype(np.float32)  # (h, w, 2): x, y
+    d = np.dstack([field.dx, field.dy])
+    p = q - d
+    limit = (1.0 - settled) * h * w
     for _ in range(iterations):
-        dx = cv2.remap(field.dx, px, py, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        dy = cv2.remap(field.dy, px, py, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        nx, ny = qx - dx, qy - dy
-        change = max(float(np.abs(nx - px).max()), float(np.abs(ny - py).max()))
-        px, py = nx, ny
-        if change < tol:
+        dp = cv2.remap(d, p, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        new = q - dp
+        moving = np.count_nonzero(np.abs(new - p) > tol)  # components: >= moving pixels
+        p = new
+        if moving <= limit:
             break
-    return px, py
+    return np.ascontiguousarray(p[..., 0]), np.ascontiguousarray(p[..., 1])
 
 
 def warp_map(plan: np.ndarray, field: DisplacementField, observed: np.ndarray) -> np.ndarray:

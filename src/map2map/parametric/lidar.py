@@ -160,22 +160,19 @@ def range_error(D, a0: float, a1: float):
     return a0 + a1 * np.asarray(D, float)
 
 
-def angle_error(alpha, D, b):
+def angle_error(alpha, D, b, sincos=None):
     """Eq. 3.10: ``Delta alpha = b1 a + b2 sin a + b3 cos a + b4 sin 2a + b5 cos 2a + b6 / D``.
+
+    ``sincos`` may pass precomputed ``(sin a, cos a)``; ``sin 2a`` and ``cos 2a`` follow
+    from them.
 
     >>> round(float(angle_error(0.0, 2.0, (0, 0, 0.01, 0, 0.02, 0.004))), 6)  # b3+b5+b6/2
     0.032
     """
     a = np.asarray(alpha, float)
+    s, c = (np.sin(a), np.cos(a)) if sincos is None else sincos
     b1, b2, b3, b4, b5, b6 = b
-    return (
-        b1 * a
-        + b2 * np.sin(a)
-        + b3 * np.cos(a)
-        + b4 * np.sin(2 * a)
-        + b5 * np.cos(2 * a)
-        + b6 / np.asarray(D, float)
-    )
+    return b1 * a + b2 * s + b3 * c + b4 * (2 * s * c) + b5 * (c * c - s * s) + b6 / D
 
 
 def polar_displacement(D, alpha, dD, dalpha, pm: float, trig=None):
@@ -260,14 +257,15 @@ def weighted_field(fields, weights):
     return out
 
 
-def measured(D, alpha, dx_l, dy_l, dalpha, pm: float):
+def measured(D, alpha, dx_l, dy_l, dalpha, pm: float, cos_sin=None):
     """Eqs. 3.29-3.30: ``z_meas = D - (d_xL / pm) / cos(alpha - Delta alpha)``,
     ``alpha_meas = alpha - Delta alpha``.
 
     Eq. 3.29 recovers the range from the x component of the field, which is
     ill-conditioned where ``cos(alpha - Delta alpha)`` is small; there (where
     ``|sin| > |cos|``) the same relation is applied to the y component,
-    ``D - (d_yL / pm) / sin(alpha - Delta alpha)``.
+    ``D - (d_yL / pm) / sin(alpha - Delta alpha)``. ``cos_sin`` may pass precomputed
+    ``(cos, sin)`` of ``alpha - Delta alpha``.
 
     >>> z, a = measured(2.0, 0.0, 0.4, 0.0, 0.0, 20.0)   # 0.4 px at 20 px/m: 2 cm short
     >>> round(float(z), 6), float(a)
@@ -275,7 +273,7 @@ def measured(D, alpha, dx_l, dy_l, dalpha, pm: float):
     """
     D = np.asarray(D, float)
     a_meas = np.asarray(alpha, float) - dalpha
-    c, s = np.cos(a_meas), np.sin(a_meas)
+    c, s = (np.cos(a_meas), np.sin(a_meas)) if cos_sin is None else cos_sin
     use_x = np.abs(c) >= np.abs(s)
     num = np.where(use_x, np.asarray(dx_l, float), np.asarray(dy_l, float)) / pm
     return D - num / np.where(use_x, c, s), a_meas
@@ -322,15 +320,17 @@ def lidar_field(
     D = np.asarray(D, float)
     alpha = np.asarray(alpha, float)
     dD = range_error(D, coeffs.a0, coeffs.a1)
-    da = angle_error(alpha, D, coeffs.b)
+    c0, s0 = np.cos(alpha), np.sin(alpha)
+    da = angle_error(alpha, D, coeffs.b, (s0, c0))
     a_m = alpha - da
-    trig = (np.cos(alpha), np.sin(alpha), np.cos(a_m), np.sin(a_m))
+    trig = (c0, s0, np.cos(a_m), np.sin(a_m))
     d_hit = polar_displacement(D, alpha, dD, da, pm, trig)
-    # short readings: a density value drawn between p_short(z*) and p_short(0) (eq. 3.13)
+    # short readings: a density drawn uniformly between p_short(z*) = lam e / (1 - e) and
+    # p_short(0) = lam / (1 - e), e = exp(-lam z*) (eq. 3.13), turned into z by eq. 3.16
     lam = p.lambda_short
     u = median_smooth(rng.uniform(0.0, 1.0, D.shape), p.median_size)
-    lo, hi = p_short(D, D, lam), p_short(np.zeros_like(D), D, lam)
-    z = short_range(lo + u * (hi - lo), D, lam)
+    e = np.exp(-lam * D)
+    z = short_range(lam * (e + u * (1.0 - e)) / (1.0 - e), D, lam)
     e_short = p.short_scale * short_error(D, z)
     d_short = polar_displacement(D, alpha, e_short, da, pm, trig)
     z_max = max_range(z)
@@ -339,7 +339,7 @@ def lidar_field(
     comps = (d_hit, d_short, d_max, d_rand)
     dx = weighted_field([c[0] for c in comps], p.z_weights)
     dy = weighted_field([c[1] for c in comps], p.z_weights)
-    z_meas, a_meas = measured(D, alpha, dx, dy, da, pm)
+    z_meas, a_meas = measured(D, alpha, dx, dy, da, pm, trig[2:])
     if np.any(heading != 0.0):
         c, s = np.cos(heading), np.sin(heading)
         dx, dy = c * dx - s * dy, s * dx + c * dy

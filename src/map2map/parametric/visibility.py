@@ -75,13 +75,16 @@ class Visibility:
 def _cast(occ, poses, rmin, rmax, fov, n_beams):  # pragma: no cover - compiled
     h, w = occ.shape
     k_poses = poses.shape[0]
-    stamp = np.zeros(h * w, np.int32)
+    stamp = np.zeros(h * w, np.uint8)  # small, so it stays in cache; reset every 255 poses
     indptr = np.zeros(k_poses + 1, np.int64)
     cap = max(1024, k_poses * 64)
     out = np.empty(cap, np.int32)
     n = 0
     full = fov >= 2.0 * math.pi - 1e-9
     for k in range(k_poses):
+        mark = np.uint8(k % 255 + 1)
+        if mark == 1 and k > 0:
+            stamp[:] = 0
         # shift so that the cell containing (x, y) is (floor(y), floor(x))
         x0 = poses[k, 0] + 0.5
         y0 = poses[k, 1] + 0.5
@@ -117,8 +120,8 @@ def _cast(occ, poses, rmin, rmax, fov, n_beams):  # pragma: no cover - compiled
                 cell = occ[cy, cx]
                 if t_out >= rmin and cell != 2:
                     idx = cy * w + cx
-                    if stamp[idx] != k + 1:
-                        stamp[idx] = k + 1
+                    if stamp[idx] != mark:
+                        stamp[idx] = mark
                         if n >= cap:
                             cap *= 2
                             bigger = np.empty(cap, np.int32)
