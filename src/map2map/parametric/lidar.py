@@ -73,6 +73,13 @@ __all__ = [
 ]
 
 
+def _arr(x):
+    """``x`` as a floating array, keeping float32 arrays float32."""
+    if isinstance(x, np.ndarray) and x.dtype.kind == "f":
+        return x
+    return np.asarray(x, float)
+
+
 @dataclass(frozen=True)
 class LidarCoefficients:
     """Per-map draws: calibration coefficients (eqs. 3.9-3.10) and Max_err, Ran_err [m]."""
@@ -128,17 +135,17 @@ def random_range_angle(
 
 
 def median_smooth(a: np.ndarray, size: int) -> np.ndarray:
-    """Median filter over ``size x size`` pixels, edges replicated (float32 precision).
+    """Median filter over ``size x size`` pixels, edges replicated; returns float32.
 
     Uses :func:`cv2.medianBlur` for sizes 3 and 5 (an order of magnitude faster than
     :func:`scipy.ndimage.median_filter`, which handles the other sizes).
     """
     if size <= 1:
-        return np.asarray(a, float)
+        return np.asarray(a, np.float32)
     a32 = np.ascontiguousarray(a, np.float32)
     if size in (3, 5):
-        return cv2.medianBlur(a32, size).astype(float)
-    return ndimage.median_filter(a32, size=size, mode="nearest").astype(float)
+        return cv2.medianBlur(a32, size)
+    return ndimage.median_filter(a32, size=size, mode="nearest")
 
 
 def landmark_position(xl, yl, D, alpha):
@@ -151,13 +158,13 @@ def landmark_position(xl, yl, D, alpha):
     >>> [round(float(v), 9) + 0.0 for v in landmark_position(3.0, 4.0, 5.0, np.arctan2(4, 3))]
     [0.0, 0.0]
     """
-    D = np.asarray(D, float)
+    D = _arr(D)
     return np.asarray(xl) - D * np.cos(alpha), np.asarray(yl) - D * np.sin(alpha)
 
 
 def range_error(D, a0: float, a1: float):
     """Eq. 3.9: ``Delta D = a0 + a1 D`` (zero offset plus scale error)."""
-    return a0 + a1 * np.asarray(D, float)
+    return a0 + a1 * _arr(D)
 
 
 def angle_error(alpha, D, b, sincos=None):
@@ -169,7 +176,7 @@ def angle_error(alpha, D, b, sincos=None):
     >>> round(float(angle_error(0.0, 2.0, (0, 0, 0.01, 0, 0.02, 0.004))), 6)  # b3+b5+b6/2
     0.032
     """
-    a = np.asarray(alpha, float)
+    a = _arr(alpha)
     s, c = (np.sin(a), np.cos(a)) if sincos is None else sincos
     b1, b2, b3, b4, b5, b6 = b
     return b1 * a + b2 * s + b3 * c + b4 * (2 * s * c) + b5 * (c * c - s * s) + b6 / D
@@ -186,9 +193,9 @@ def polar_displacement(D, alpha, dD, dalpha, pm: float, trig=None):
 
     ``trig`` may pass precomputed ``(cos a, sin a, cos(a - da), sin(a - da))``.
     """
-    D = np.asarray(D, float)
+    D = _arr(D)
     if trig is None:
-        alpha = np.asarray(alpha, float)
+        alpha = _arr(alpha)
         a = alpha - dalpha
         trig = (np.cos(alpha), np.sin(alpha), np.cos(a), np.sin(a))
     c0, s0, c1, s1 = trig
@@ -198,21 +205,22 @@ def polar_displacement(D, alpha, dD, dalpha, pm: float, trig=None):
 
 def p_short(z, z_star, lam: float):
     """Eq. 3.13: truncated-exponential density of a short reading ``z`` for true range ``z*``."""
-    z = np.asarray(z, float)
-    z_star = np.asarray(z_star, float)
+    z = _arr(z)
+    z_star = _arr(z_star)
     dens = lam * np.exp(-lam * z) / (1.0 - np.exp(-lam * z_star))
     return np.where((z >= 0) & (z <= z_star), dens, 0.0)
 
 
 def p_max(z, z_max):
     """Eq. 3.14: 1 where the reading is the maximum range, else 0."""
-    return (np.asarray(z) == z_max).astype(float)
+    z = _arr(z)
+    return (z == z_max).astype(z.dtype)
 
 
 def p_rand(z, z_max):
     """Eq. 3.15: uniform density ``1 / z_max`` over ``[0, z_max]``."""
-    z = np.asarray(z, float)
-    return np.where((z >= 0) & (z <= z_max), 1.0 / z_max, 0.0)
+    z = _arr(z)
+    return np.where((z >= 0) & (z <= z_max), 1.0 / z_max, 0.0).astype(z.dtype)
 
 
 def short_range(p, z_star, lam: float):
@@ -222,13 +230,13 @@ def short_range(p, z_star, lam: float):
     >>> round(float(z), 9)
     0.7
     """
-    z_star = np.asarray(z_star, float)
-    return -np.log(np.asarray(p, float) * (1.0 - np.exp(-lam * z_star)) / lam) / lam
+    z_star = _arr(z_star)
+    return -np.log(_arr(p) * (1.0 - np.exp(-lam * z_star)) / lam) / lam
 
 
 def short_error(z_star, z):
     """Eq. 3.17: ``E_short = z* - z``."""
-    return np.asarray(z_star, float) - np.asarray(z, float)
+    return _arr(z_star) - _arr(z)
 
 
 def max_range(z):
@@ -251,9 +259,9 @@ def weighted_field(fields, weights):
 
     ``fields`` is the sequence of the four components (x or y), ``weights`` Z.
     """
-    out = np.zeros_like(np.asarray(fields[0], float))
+    out = np.zeros_like(_arr(fields[0]))
     for f, w in zip(fields, weights, strict=True):
-        out = out + w * np.asarray(f, float)
+        out = out + w * _arr(f)
     return out
 
 
@@ -271,11 +279,11 @@ def measured(D, alpha, dx_l, dy_l, dalpha, pm: float, cos_sin=None):
     >>> round(float(z), 6), float(a)
     (1.98, 0.0)
     """
-    D = np.asarray(D, float)
-    a_meas = np.asarray(alpha, float) - dalpha
+    D = _arr(D)
+    a_meas = _arr(alpha) - dalpha
     c, s = (np.cos(a_meas), np.sin(a_meas)) if cos_sin is None else cos_sin
     use_x = np.abs(c) >= np.abs(s)
-    num = np.where(use_x, np.asarray(dx_l, float), np.asarray(dy_l, float)) / pm
+    num = np.where(use_x, _arr(dx_l), _arr(dy_l)) / pm
     return D - num / np.where(use_x, c, s), a_meas
 
 
@@ -317,8 +325,9 @@ def lidar_field(
     heading : float or (H, W) array
         Sensor heading [rad] that rotates the sensor-frame field into the image frame.
     """
-    D = np.asarray(D, float)
-    alpha = np.asarray(alpha, float)
+    # float32: the field is stored as float32 anyway, and this halves the memory traffic
+    D = np.asarray(D, np.float32)
+    alpha = np.asarray(alpha, np.float32)
     dD = range_error(D, coeffs.a0, coeffs.a1)
     c0, s0 = np.cos(alpha), np.sin(alpha)
     da = angle_error(alpha, D, coeffs.b, (s0, c0))

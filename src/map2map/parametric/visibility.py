@@ -72,73 +72,87 @@ class Visibility:
 
 
 @numba.njit(cache=True)
+def _cast_pose(
+    occ, stamp, mark, x0, y0, heading, rmin, rmax, fov, n_beams, buf
+):  # pragma: no cover
+    """Cells seen from one pose into ``buf``; returns how many (each once, via ``stamp``)."""
+    h, w = occ.shape
+    full = fov >= 2.0 * math.pi - 1e-9
+    n = 0
+    # shift so that the cell containing (x, y) is (floor(y), floor(x))
+    x0 += 0.5
+    y0 += 0.5
+    for b in range(n_beams):
+        if full:
+            ang = heading + 2.0 * math.pi * b / n_beams
+        else:
+            ang = heading - 0.5 * fov + fov * b / (n_beams - 1)
+        dx = math.cos(ang)
+        dy = math.sin(ang)
+        cx = int(math.floor(x0))
+        cy = int(math.floor(y0))
+        step_x = 1 if dx > 0 else -1
+        step_y = 1 if dy > 0 else -1
+        if dx != 0.0:
+            t_dx = abs(1.0 / dx)
+            t_mx = ((cx + 1 - x0) if dx > 0 else (x0 - cx)) * t_dx
+        else:
+            t_dx = 1e30
+            t_mx = 1e30
+        if dy != 0.0:
+            t_dy = abs(1.0 / dy)
+            t_my = ((cy + 1 - y0) if dy > 0 else (y0 - cy)) * t_dy
+        else:
+            t_dy = 1e30
+            t_my = 1e30
+        t_in = 0.0
+        while t_in <= rmax:
+            if cx < 0 or cy < 0 or cx >= w or cy >= h:
+                break
+            cell = occ[cy, cx]
+            if cell != 2 and min(t_mx, t_my) >= rmin:
+                idx = cy * w + cx
+                if stamp[idx] != mark:
+                    stamp[idx] = mark
+                    buf[n] = idx
+                    n += 1
+            if cell == 1:
+                break
+            if t_mx < t_my:
+                cx += step_x
+                t_in = t_mx
+                t_mx += t_dx
+            else:
+                cy += step_y
+                t_in = t_my
+                t_my += t_dy
+    return n
+
+
+@numba.njit(cache=True)
 def _cast(occ, poses, rmin, rmax, fov, n_beams):  # pragma: no cover - compiled
     h, w = occ.shape
     k_poses = poses.shape[0]
     stamp = np.zeros(h * w, np.uint8)  # small, so it stays in cache; reset every 255 poses
+    buf = np.empty(h * w, np.int32)
     indptr = np.zeros(k_poses + 1, np.int64)
     cap = max(1024, k_poses * 64)
     out = np.empty(cap, np.int32)
     n = 0
-    full = fov >= 2.0 * math.pi - 1e-9
     for k in range(k_poses):
         mark = np.uint8(k % 255 + 1)
         if mark == 1 and k > 0:
             stamp[:] = 0
-        # shift so that the cell containing (x, y) is (floor(y), floor(x))
-        x0 = poses[k, 0] + 0.5
-        y0 = poses[k, 1] + 0.5
-        heading = poses[k, 2]
-        for b in range(n_beams):
-            if full:
-                ang = heading + 2.0 * math.pi * b / n_beams
-            else:
-                ang = heading - 0.5 * fov + fov * b / (n_beams - 1)
-            dx = math.cos(ang)
-            dy = math.sin(ang)
-            cx = int(math.floor(x0))
-            cy = int(math.floor(y0))
-            step_x = 1 if dx > 0 else -1
-            step_y = 1 if dy > 0 else -1
-            if dx != 0.0:
-                t_dx = abs(1.0 / dx)
-                t_mx = ((cx + 1 - x0) if dx > 0 else (x0 - cx)) * t_dx
-            else:
-                t_dx = 1e30
-                t_mx = 1e30
-            if dy != 0.0:
-                t_dy = abs(1.0 / dy)
-                t_my = ((cy + 1 - y0) if dy > 0 else (y0 - cy)) * t_dy
-            else:
-                t_dy = 1e30
-                t_my = 1e30
-            t_in = 0.0
-            while t_in <= rmax:
-                t_out = min(t_mx, t_my)
-                if cx < 0 or cy < 0 or cx >= w or cy >= h:
-                    break
-                cell = occ[cy, cx]
-                if t_out >= rmin and cell != 2:
-                    idx = cy * w + cx
-                    if stamp[idx] != mark:
-                        stamp[idx] = mark
-                        if n >= cap:
-                            cap *= 2
-                            bigger = np.empty(cap, np.int32)
-                            bigger[:n] = out[:n]
-                            out = bigger
-                        out[n] = idx
-                        n += 1
-                if cell == 1:
-                    break
-                if t_mx < t_my:
-                    cx += step_x
-                    t_in = t_mx
-                    t_mx += t_dx
-                else:
-                    cy += step_y
-                    t_in = t_my
-                    t_my += t_dy
+        m = _cast_pose(
+            occ, stamp, mark, poses[k, 0], poses[k, 1], poses[k, 2], rmin, rmax, fov, n_beams, buf
+        )
+        if n + m > cap:
+            cap = max(2 * cap, n + m)
+            bigger = np.empty(cap, np.int32)
+            bigger[:n] = out[:n]
+            out = bigger
+        out[n : n + m] = buf[:m]
+        n += m
         indptr[k + 1] = n
     return indptr, out[:n].copy()
 
