@@ -31,7 +31,7 @@ def reduce_plan(plan: OccupancyMap, max_side: int = MAX_SIDE) -> OccupancyMap:
 
     >>> m = OccupancyMap(np.full((700, 500), 255, np.uint8), 0.05)
     >>> r = reduce_plan(m)
-    >>> r.shape, r.resolution
+    >>> r.shape, round(r.resolution, 9)
     ((234, 167), 0.15)
     """
     f = int(np.ceil(max(plan.shape) / max_side))
