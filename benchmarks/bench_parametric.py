@@ -179,7 +179,7 @@ def _houseexpo(params: ParametricParams) -> None:
         f"trajectory {traj.length:.1f} m, {len(traj)} poses:"
     )
     # the recorded path is a grid path whose heading jumps by pi/4 at every stair step;
-    # with keyframe_angle 0.5 each jump is a key pose, 0.8 rad ignores them
+    # the key-pose selection filters that jitter (keyframe_indices), 0.8 rad for comparison
     for angle in (0.5, 0.8):
         p = dataclasses.replace(params, keyframe_angle=angle)
         for method in ("additive", "ekf"):

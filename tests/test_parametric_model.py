@@ -215,6 +215,45 @@ def test_keyframes_and_pixel_poses(plan, traj):
     assert px[0, :2] == pytest.approx([20.0, 10.0]) and px[0, 2] == pytest.approx(-0.3)
 
 
+def test_stair_step_heading_jitter_does_not_make_key_poses():
+    # a diagonal grid path: 1 cm steps, heading alternating 0 / pi/4 every 5 steps
+    n = 400
+    th = np.where((np.arange(n) // 5) % 2 == 0, 0.0, np.pi / 4)
+    step = np.stack([np.cos(th), np.sin(th)], 1) * 0.01
+    xy = np.cumsum(step, axis=0)
+    from map2map.trajectory.timing import trajectory_from_poses
+
+    tr = trajectory_from_poses(xy[:, 0], xy[:, 1], th)
+    k = keyframe_indices(tr, 1.0, 0.5)
+    assert len(k) <= 6  # ~3.7 m of travel: a key pose per metre, none for the jitter
+    # a real turn still makes one
+    turn = trajectory_from_poses([0, 0.1, 0.1, 0.1], [0, 0, 0, 0.1], [0, 0, 1.5, 1.5])
+    assert 2 in keyframe_indices(turn, 1.0, 0.5, smooth=1)
+    # ... also through the filter, once the new heading lasts
+    x = np.r_[np.linspace(0, 0.3, 30), np.full(30, 0.3)]
+    y = np.r_[np.zeros(30), np.linspace(0, 0.3, 30)]
+    th = np.r_[np.zeros(30), np.full(30, np.pi / 2)]
+    k = keyframe_indices(trajectory_from_poses(x, y, th), 1.0, 0.5)
+    # first, last, and one key pose per 0.5 rad of the 1.57 rad turn, all around the turn
+    assert len(k) == 5 and all(25 < i < 45 for i in k[1:-1])
+
+
+def test_real_houseexpo_plan_with_recorded_trajectory(shared_data):
+    from map2map.maps.houseexpo import houseexpo_to_world, load_houseexpo
+    from map2map.trajectory import read_trajectory
+    from map2map.trajectory.timing import trajectory_from_poses
+
+    d = shared_data / "houseexpo" / "json"
+    plan = load_houseexpo(d / "0a1b29dba355df2ab02630133187bfab.json", resolution=0.05)
+    rec = read_trajectory(d / "0a1b29dba355df2ab02630133187bfab_trajectory.csv")
+    traj = trajectory_from_poses(*houseexpo_to_world(rec.x, rec.y, rec.theta))
+    res = deform(plan, traj, "additive", ParametricParams(), np.random.default_rng(0))
+    st = res.field.stats(res.observed)
+    assert res.observed.sum() > 0.8 * plan.free.sum()  # the recorded run explores the flat
+    assert 0.3 < st["mean"] < 10 and st["max"] < 40  # centimetres to decimetres at 5 cm/px
+    assert (res.map.data[res.observed] != 127).mean() > 0.99
+
+
 def test_start_goal_errors(plan):
     p = ParametricParams()
     rng = np.random.default_rng(0)

@@ -7,6 +7,7 @@ deformed map``.
 Examples
 --------
 >>> import numpy as np
+from scipy import ndimage
 >>> from map2map.maps.grid import OccupancyMap
 >>> data = np.zeros((64, 64), np.uint8); data[2:62, 2:62] = 255
 >>> plan = OccupancyMap(data, resolution=0.1)
@@ -24,6 +25,7 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy import ndimage
 
 from ..errors import InputError
 from ..maps.grid import FREE, OCCUPIED, OccupancyMap
@@ -71,11 +73,21 @@ class DeformResult:
     timings: dict = field(default_factory=dict)
 
 
-def keyframe_indices(traj: Trajectory, distance: float, angle: float) -> np.ndarray:
+def keyframe_indices(
+    traj: Trajectory, distance: float, angle: float, smooth: int = 15
+) -> np.ndarray:
     """Indices of key poses: the first, then whenever the robot has moved ``distance``
-    metres or turned ``angle`` radians since the last key pose, and the last."""
+    metres or turned ``angle`` radians since the last key pose, and the last.
+
+    The turn is measured on the (unwrapped) heading averaged over ``smooth`` samples, so
+    that the jitter of recorded grid paths (headings jumping by pi/4 at every stair step)
+    does not make every sample a key pose; a real, lasting turn passes the filter.
+    """
     keep = [0]
-    x, y, th = traj.x, traj.y, traj.theta
+    x, y = traj.x, traj.y
+    th = np.unwrap(traj.theta)
+    if smooth > 1 and th.size > smooth:
+        th = ndimage.uniform_filter1d(th, size=smooth, mode="nearest")
     for i in range(1, len(traj)):
         j = keep[-1]
         if (
