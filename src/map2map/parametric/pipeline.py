@@ -7,7 +7,6 @@ deformed map``.
 Examples
 --------
 >>> import numpy as np
-from scipy import ndimage
 >>> from map2map.maps.grid import OccupancyMap
 >>> data = np.zeros((64, 64), np.uint8); data[2:62, 2:62] = 255
 >>> plan = OccupancyMap(data, resolution=0.1)
