@@ -145,9 +145,14 @@ def _read(path: Path):
     if path.is_dir():
         raise InputError(path, "is a directory, not a DXF file")
     try:
-        doc, _auditor = recover.readfile(path)
+        try:
+            doc = ezdxf.readfile(path)
+        except ezdxf.DXFStructureError:  # damaged: let ezdxf's recover mode try
+            doc, _auditor = recover.readfile(path)
     except OSError as exc:
-        raise InputError(path, f"cannot read file ({exc.strerror or exc})") from None
+        if exc.errno is None:  # ezdxf's own "is not a DXF file"
+            raise InputError(path, "not a readable DXF file (no DXF structure)") from None
+        raise InputError(path, f"cannot read file ({exc.strerror})") from None
     except (ezdxf.DXFStructureError, ezdxf.DXFError, UnicodeDecodeError, ValueError) as exc:
         raise InputError(path, f"not a readable DXF file ({exc})") from None
     return doc
