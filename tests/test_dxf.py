@@ -131,6 +131,16 @@ def test_blocks_are_expanded_with_their_insert_layer(tmp_path):
     assert at(both, 0.5, 0.5) == 255 and at(both, 9.5, 7) == 255
 
 
+def test_mline_walls(tmp_path):
+    doc = ezdxf.new(units=6)
+    ml = doc.modelspace().add_mline([(0, 0), (4, 0), (4, 3), (0, 3)], close=True)
+    ml.dxf.scale_factor = 0.2  # a 0.2 m thick wall drawn as two parallel lines
+    ml.update_geometry()
+    m = load_dxf(save(doc, tmp_path), resolution=RES, wall_thickness=0.02)
+    assert at(m, 2, 1.5) == 255 and at(m, 0, 1.5) == 0 and at(m, -0.5, 1.5) == 127
+    assert components(m.free) == 1
+
+
 def test_double_line_walls_have_no_free_cavity(tmp_path):
     doc = ezdxf.new(units=6)
     msp = doc.modelspace()

@@ -2,8 +2,8 @@
 
 What is drawn
 -------------
-LINE, LWPOLYLINE, POLYLINE, ARC, CIRCLE, ELLIPSE and SPLINE entities on the chosen
-layers become walls ``wall_thickness`` metres thick (curves are flattened to within
+LINE, LWPOLYLINE, POLYLINE, ARC, CIRCLE, ELLIPSE, SPLINE and MLINE entities on the
+chosen layers become walls ``wall_thickness`` metres thick (curves are flattened to within
 a quarter pixel, polyline bulges included); HATCH and SOLID entities are filled as
 solid wall. Block references (INSERT) are expanded, nested ones too; an entity on
 layer ``0`` inside a block takes the layer of its INSERT, as in CAD programs. Text,
@@ -165,11 +165,11 @@ def dxf_layers(path: str | os.PathLike) -> list[str]:
 
 
 def _walk(entities: Iterable, layer: str | None = None, depth: int = 0) -> Iterator[tuple]:
-    """(entity, effective layer) of every entity, INSERTs expanded recursively."""
+    """(entity, effective layer) of every entity, INSERTs and MLINEs expanded recursively."""
     for e in entities:
         own = e.dxf.get("layer", "0")
         eff = layer if (layer is not None and own == "0") else own
-        if e.dxftype() == "INSERT":
+        if e.dxftype() in ("INSERT", "MLINE"):  # blocks; multi-line walls as their lines
             if depth >= 16:
                 continue
             try:
