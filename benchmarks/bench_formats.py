@@ -57,7 +57,7 @@ def bench_ros_and_pictures(tmp: Path) -> None:
 
 
 def bench_renders() -> None:
-    renders = sorted((SHARED / "houseexpo" / "renders").glob("*.png"))
+    renders = sorted((SHARED / "houseexpo" / "renders").glob("*.png"))[:20]
     if not renders:
         print("houseexpo renders: shared data absent, skipped")
         return
@@ -126,26 +126,32 @@ def bench_houseexpo() -> None:
 def bench_dxf(tmp: Path) -> None:
     import ezdxf
 
-    doc = ezdxf.new(units=4)
-    msp = doc.modelspace()
-    n = 20  # 20 x 20 rooms of 4 x 3 m, each with a 0.9 m door, walls as single lines
-    for i in range(n):
-        for j in range(n):
-            x0, y0 = i * 4000, j * 3000
-            msp.add_line((x0, y0), (x0 + 1500, y0))
-            msp.add_line((x0 + 2400, y0), (x0 + 4000, y0))
-            msp.add_line((x0, y0), (x0, y0 + 3000))
-            msp.add_arc((x0 + 1500, y0), 900, 0, 90)
-    msp.add_line((0, n * 3000), (n * 4000, n * 3000))
-    msp.add_line((n * 4000, 0), (n * 4000, n * 3000))
-    path = tmp / "grid.dxf"
-    doc.saveas(path)
-    n_entities = len(msp)
-    t, m = timed(load_map, path, repeat=1)
-    print(
-        f"dxf {n * n} rooms ({n_entities} entities, 80 x 60 m) at 5 cm: {m.shape}, "
-        f"{t:.2f} s, free {m.free.sum() * 0.0025:.0f} m²"
-    )
+    rng = np.random.default_rng(0)
+    for n, furniture in ((20, 0), (50, 2)):
+        doc = ezdxf.new(units=4)
+        msp = doc.modelspace()
+        # n x n rooms of 4 x 3 m, each with a 0.9 m door and its swing, single-line walls,
+        # and some furniture outlines
+        for i in range(n):
+            for j in range(n):
+                x0, y0 = i * 4000, j * 3000
+                msp.add_line((x0, y0), (x0 + 1500, y0))
+                msp.add_line((x0 + 2400, y0), (x0 + 4000, y0))
+                msp.add_line((x0, y0), (x0, y0 + 3000))
+                msp.add_arc((x0 + 1500, y0), 900, 0, 90)
+                for _ in range(furniture):
+                    x, y = x0 + rng.uniform(300, 3000), y0 + rng.uniform(300, 2000)
+                    box = [(x, y), (x + 600, y), (x + 600, y + 600), (x, y + 600)]
+                    msp.add_lwpolyline(box, close=True)
+        msp.add_line((0, n * 3000), (n * 4000, n * 3000))
+        msp.add_line((n * 4000, 0), (n * 4000, n * 3000))
+        path = tmp / f"grid{n}.dxf"
+        doc.saveas(path)
+        t, m = timed(load_map, path, repeat=1)
+        print(
+            f"dxf {n * n} rooms ({len(msp)} entities, {n * 4} x {n * 3} m) at 5 cm: "
+            f"{m.shape}, {t:.2f} s, free {m.free.sum() * 0.0025:.0f} m²"
+        )
 
 
 def main() -> None:

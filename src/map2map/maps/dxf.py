@@ -52,9 +52,9 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
+import cv2
 import numpy as np
 import shapely
-from scipy import ndimage as ndi
 from shapely.geometry import LineString, Point
 
 from ..errors import InputError
@@ -80,10 +80,13 @@ _LINEAR = {"LINE", "LWPOLYLINE", "POLYLINE", "ARC", "CIRCLE", "ELLIPSE", "SPLINE
 _FILLED = {"HATCH", "SOLID", "TRACE"}
 
 
-def _polygon_rings(geom) -> list:
-    """Exterior and interior rings of a (multi)polygon."""
+def _polygon_rings(geoms) -> list:
+    """Exterior and interior rings of (multi)polygons."""
     out = []
-    for poly in getattr(geom, "geoms", [geom]):
+    parts = []
+    for geom in np.atleast_1d(np.asarray(geoms, dtype=object)):
+        parts.extend(getattr(geom, "geoms", [geom]))
+    for poly in parts:
         if poly.is_empty or poly.geom_type != "Polygon":
             continue
         out.append(poly.exterior)
@@ -103,7 +106,7 @@ def _gap_seals(strokes: list[np.ndarray], gap: float) -> list[np.ndarray]:
     geoms = [LineString(s_) if len(s_) > 1 else Point(s_[0]) for s_ in strokes]
     ends, owner = [], []
     for i, s_ in enumerate(strokes):
-        if len(s_) > 1 and not np.allclose(s_[0], s_[-1]):
+        if len(s_) > 1 and (s_[0] != s_[-1]).any():
             ends.extend([s_[0], s_[-1]])
             owner.extend([i, i])
     if not ends:
@@ -342,35 +345,37 @@ def load_dxf(
         )
 
     # walls: every stroke widened to wall_thickness (square caps close corners), exact at
-    # pixel centres, plus the stroke itself traced through every pixel it crosses so that
-    # no wall has a hole whatever its width; fills (hatches, solids) even-odd
+    # pixel centres (nonzero rule: the union of the widened strokes), plus the stroke
+    # itself traced through every pixel it crosses so that no wall has a hole whatever
+    # its width; fills (hatches, solids) by the even-odd rule
     px_strokes = [to_px(s_) for s_ in strokes]
     lines = [LineString(s_) if len(s_) > 1 else Point(s_[0]) for s_ in px_strokes]
     half = 0.5 * wall_thickness / resolution
-    body = shapely.union_all(
+    bodies = shapely.orient_polygons(
         shapely.buffer(lines, half, cap_style="square", join_style="mitre", mitre_limit=2.0)
     )
-    shapely.prepare(body)
-    rings = [np.asarray(r.coords) for r in _polygon_rings(body)]
-    wall = fill_exact((h, w), rings, lambda pts: shapely.contains_xy(body, pts[:, 0], pts[:, 1]))
-    wall |= trace((h, w), px_strokes)
+    rings = [np.asarray(r.coords) for r in _polygon_rings(bodies)]
+    wall = fill_exact((h, w), rings, rule="nonzero") | trace((h, w), px_strokes)
     if fills:
         px_fills = [to_px(f) for f in fills]
         wall |= fill_exact((h, w), px_fills) | trace((h, w), px_fills, closed=True)
 
     # inside vs outside: flood the outside, with openings narrower than close_gaps sealed
     barrier = wall | trace((h, w), _gap_seals(px_strokes, close_gaps / resolution))
-    labels, n = ndi.label(~barrier)  # 4-connected: 8-connected walls stop it
-    border = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
-    outside = np.isin(labels, border[border > 0])
+    n, labels = cv2.connectedComponents((~barrier).astype(np.uint8), connectivity=4)
+    rim = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
+    outside = np.isin(labels, rim[rim > 0])
     free = ~wall & ~outside
-    # pockets too narrow to be space (cavities of double-line walls, small columns)
-    if min_free_width > 0 and free.any():
-        flabels, fn = ndi.label(free, np.ones((3, 3), bool))
-        dist = ndi.distance_transform_edt(free)
-        widest = ndi.maximum(dist, flabels, np.arange(1, fn + 1))
-        narrow = np.flatnonzero(2 * np.asarray(widest) * resolution < min_free_width) + 1
-        pockets = np.isin(flabels, narrow)
+    # pockets too narrow to be space (cavities of double-line walls, small columns): the
+    # free components that vanish under erosion by a disk of diameter min_free_width
+    d = int(round(min_free_width / resolution))
+    if d >= 2 and free.any():
+        n_free, flabels = cv2.connectedComponents(free.astype(np.uint8), connectivity=8)
+        disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (d, d))
+        core = cv2.erode(free.astype(np.uint8), disk, borderValue=0) > 0
+        roomy = np.zeros(n_free, bool)
+        roomy[np.unique(flabels[core])] = True
+        pockets = free & ~roomy[flabels]
         free &= ~pockets
         wall |= pockets
     data = np.full((h, w), UNKNOWN, np.uint8)
