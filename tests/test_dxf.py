@@ -9,7 +9,6 @@ from scipy import ndimage as ndi
 
 from map2map.errors import InputError
 from map2map.maps.dxf import load_dxf
-from map2map.maps.rasterize import segment_pixels, trace
 
 RES = 0.05
 
@@ -158,26 +157,6 @@ def test_thin_slanted_wall_still_separates_rooms(tmp_path):
     msp.add_line((0, 0.3), (4, 3.7))  # a slanted wall 1 cm thick, far thinner than a pixel
     m = load_dxf(save(doc, tmp_path), resolution=RES, wall_thickness=0.01)
     assert components(m.free) == 2
-
-
-@pytest.mark.parametrize("seed", range(5))
-def test_segment_pixels_is_an_exact_4_connected_supercover(seed):
-    rng = np.random.default_rng(seed)
-    p0, p1 = rng.uniform(0, 20, (2, 2))
-    rows, cols = segment_pixels(p0[None], p1[None])
-    got = set(zip(rows.tolist(), cols.tolist(), strict=True))
-    t = np.linspace(0, 1, 200001)
-    pts = p0 + t[:, None] * (p1 - p0)
-    crossed = set(
-        zip(
-            np.floor(pts[:, 1]).astype(int).tolist(),
-            np.floor(pts[:, 0]).astype(int).tolist(),
-            strict=True,
-        )
-    )
-    assert crossed <= got and len(got - crossed) <= 2
-    mask = trace((21, 21), [np.array([p0, p1])])
-    assert ndi.label(mask)[1] == 1  # 4-connected
 
 
 # ------------------------------------------------------------------ bad input
