@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from ._mapargs import add_input_options, load_from_args
 
@@ -31,5 +32,8 @@ def run(args: argparse.Namespace) -> int:
     check_output_path(args.output)  # before reading: fail fast, write nothing
     m = load_from_args(args)
     save_map(m, args.output)
-    print(f"wrote {args.output}: {map_summary(m)}")
+    written = str(args.output)
+    if Path(args.output).suffix.lower() in (".yaml", ".yml"):
+        written += f" and {Path(args.output).with_suffix('.pgm')}"
+    print(f"wrote {written}: {map_summary(m)}")
     return 0
