@@ -163,7 +163,8 @@ def per_value(img: RasterImage, fn):
     """
     if img.channels.shape[2] != 1 or img.alpha is not None:
         return fn(img)
-    every = np.arange(img.maxval + 1, dtype=img.channels.dtype)[None, :, None]
+    dtype = img.channels.dtype
+    every = np.arange(np.iinfo(dtype).max + 1, dtype=dtype)[None, :, None]
     lut = fn(RasterImage(every, None, img.maxval))[0]
     return lut[img.channels[:, :, 0]]
 
@@ -208,12 +209,16 @@ def _to_int8_like_c(x: np.ndarray) -> np.ndarray:
 
 def _values_ros1(img: RasterImage, mode, negate, occ_th, free_th) -> np.ndarray:
     """ROS 1 ``map_server::loadMapFromFile`` (SDL image: 8-bit bytes per channel)."""
-    ch = img.channels
-    if img.maxval != 255:  # SDL_image strips 16-bit PNGs to their high byte
-        ch = (ch >> 8).astype(np.uint8)
-    alpha = img.alpha
-    if alpha is not None and img.maxval != 255:
-        alpha = (alpha >> 8).astype(np.uint8)
+
+    def to_bytes(v: np.ndarray) -> np.ndarray:
+        if img.maxval == 255:
+            return v
+        if img.maxval == 65535:  # SDL_image strips 16-bit PNGs to their high byte
+            return (v >> 8).astype(np.uint8)
+        return (v.astype(np.uint32) * 255 // img.maxval).astype(np.uint8)  # PNM maxval
+
+    ch = to_bytes(img.channels)
+    alpha = None if img.alpha is None else to_bytes(img.alpha)
     if ch.shape[2] == 1 and alpha is not None:  # SDL expands grey + alpha to RGBA
         ch = np.repeat(ch, 3, axis=2)
     planes = [ch[:, :, k].astype(np.float64) for k in range(ch.shape[2])]
