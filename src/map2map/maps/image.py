@@ -113,7 +113,7 @@ def _stored_frame(path: Path) -> tuple[float, tuple[float, float, float]] | None
             from PIL import Image
 
             with Image.open(path) as im:
-                text = getattr(im, "text", {}).get(_FRAME_KEY)
+                text = im.info.get(_FRAME_KEY)  # tEXt before the pixels: no decoding
         elif suffix == ".pgm":
             with open(path, "rb") as fh:
                 head = fh.read(512).decode("ascii", "replace")
