@@ -140,6 +140,16 @@ def test_mline_walls(tmp_path):
     assert components(m.free) == 1
 
 
+def test_wide_polylines_keep_their_width(tmp_path):
+    doc = ezdxf.new(units=6)
+    pl = room(doc.modelspace(), 0, 0, 4, 3)
+    pl.dxf.const_width = 0.3  # drawn 30 cm wide in the CAD file
+    m = load_dxf(save(doc, tmp_path), resolution=RES, wall_thickness=0.1)
+    row = m.data[m.world_to_pixel(2, 1.5)[0]]
+    assert (row == 0).sum() == 2 * 6  # two walls of 0.3 m = 6 px
+    assert int(m.free.sum()) == round(3.7 * 2.7 / RES**2)
+
+
 def test_double_line_walls_have_no_free_cavity(tmp_path):
     doc = ezdxf.new(units=6)
     msp = doc.modelspace()
@@ -189,5 +199,7 @@ def test_bad_files_and_parameters(tmp_path):
         load_dxf(save(doc, tmp_path, "huge.dxf"))
     with pytest.raises(InputError, match="resolution must be > 0"):
         load_dxf(tmp_path / "huge.dxf", resolution=0)
+    with pytest.raises(InputError, match="wall thickness must be > 0"):
+        load_dxf(tmp_path / "huge.dxf", wall_thickness=-0.1)
     with pytest.raises(InputError, match="units must be one of"):
         load_dxf(tmp_path / "huge.dxf", units="furlong")

@@ -3,7 +3,8 @@
 What is drawn
 -------------
 LINE, LWPOLYLINE, POLYLINE, ARC, CIRCLE, ELLIPSE, SPLINE and MLINE entities on the
-chosen layers become walls ``wall_thickness`` metres thick (curves are flattened to within
+chosen layers become walls ``wall_thickness`` metres thick (polylines drawn with a
+larger constant width keep that width) (curves are flattened to within
 a quarter pixel, polyline bulges included); HATCH and SOLID entities are filled as
 solid wall. Block references (INSERT) are expanded, nested ones too; an entity on
 layer ``0`` inside a block takes the layer of its INSERT, as in CAD programs. Text,
@@ -184,6 +185,16 @@ def _walk(entities: Iterable, layer: str | None = None, depth: int = 0) -> Itera
             yield e, eff
 
 
+def _drawn_width(e) -> float:
+    """The constant width a (LW)POLYLINE is drawn with, in drawing units (0 if none)."""
+    kind = e.dxftype()
+    if kind == "LWPOLYLINE":
+        return float(e.dxf.get("const_width", 0.0) or 0.0)
+    if kind == "POLYLINE":
+        return float(e.dxf.get("default_start_width", 0.0) or 0.0)
+    return 0.0
+
+
 def _polylines(e, tolerance: float) -> tuple[list[np.ndarray], bool]:
     """Flattened vertex arrays (drawing units, x/y) of an entity and whether it is filled."""
     from ezdxf import path as ezpath
@@ -244,16 +255,17 @@ def load_dxf(
         chosen layers, parameters out of range, raster too large.
     """
     p = Path(path)
-    for name, v, lo in (
-        ("resolution", resolution, 0.0),
-        ("wall thickness", wall_thickness, 0.0),
-        ("margin", margin, -1.0),
-        ("close_gaps", close_gaps, -1.0),
-        ("min_free_width", min_free_width, -1.0),
+    for name, v, positive in (
+        ("--resolution", resolution, True),
+        ("--wall-thickness", wall_thickness, True),
+        ("margin", margin, False),
+        ("close_gaps", close_gaps, False),
+        ("min_free_width", min_free_width, False),
     ):
-        if not isinstance(v, int | float) or not math.isfinite(v) or v <= lo or v < 0:
-            bound = "> 0" if lo == 0.0 else ">= 0"
-            raise InputError(f"--{name.replace(' ', '-')}", f"{name} must be {bound}, got {v!r}")
+        ok = isinstance(v, int | float) and math.isfinite(v) and (v > 0 if positive else v >= 0)
+        if not ok:
+            what = name.lstrip("-").replace("-", " ")
+            raise InputError(name, f"{what} must be {'> 0' if positive else '>= 0'}, got {v!r}")
     if units is not None and units not in UNITS:
         raise InputError("--units", f"units must be one of {', '.join(UNITS)}, got {units!r}")
     doc = _read(p)
@@ -290,8 +302,9 @@ def load_dxf(
             )
 
     res_units = resolution / scale  # one pixel in drawing units
-    strokes: list[np.ndarray] = []
-    fills: list[np.ndarray] = []
+    strokes: list[np.ndarray] = []  # widened to walls
+    widths: list[float] = []  # their wall thickness, metres
+    fills: list[np.ndarray] = []  # filled solid (their outlines are traced)
     counts: Counter = Counter()
     skipped: Counter = Counter()
     used_layers: set[str] = set()
@@ -312,10 +325,12 @@ def load_dxf(
             continue
         counts[kind] += 1
         used_layers.add(layer)
-        (fills if filled else strokes).extend(pieces)
         if filled:
-            strokes.extend(pieces)  # outlines too, so thin fills are not lost
-    if not strokes:
+            fills.extend(pieces)
+        else:
+            strokes.extend(pieces)
+            widths.extend([max(wall_thickness, _drawn_width(e) * scale)] * len(pieces))
+    if not strokes and not fills:
         chosen = "the chosen layers" if wanted is not None else "any layer"
         raise InputError(
             p,
@@ -323,9 +338,9 @@ def load_dxf(
             f"on {chosen}",
         )
 
-    allpts = np.concatenate(strokes) * scale  # metres
+    allpts = np.concatenate(strokes + fills) * scale  # metres
     lo, hi = allpts.min(axis=0), allpts.max(axis=0)
-    border = margin + 0.5 * max(wall_thickness, resolution)
+    border = margin + 0.5 * max([wall_thickness, resolution, *widths])
     ox, oy = lo[0] - border, lo[1] - border
     w = int(math.ceil((hi[0] - lo[0] + 2 * border) / resolution - 1e-9))
     h = int(math.ceil((hi[1] - lo[1] + 2 * border) / resolution - 1e-9))
@@ -344,21 +359,24 @@ def load_dxf(
             axis=1,
         )
 
-    # walls: every stroke widened to wall_thickness (square caps close corners), exact at
+    # walls: every stroke widened to its thickness (square caps close corners), exact at
     # pixel centres (nonzero rule: the union of the widened strokes), plus the stroke
     # itself traced through every pixel it crosses so that no wall has a hole whatever
-    # its width; fills (hatches, solids) by the even-odd rule
+    # its width; fills (hatches, solids) by the even-odd rule, outlines traced
     px_strokes = [to_px(s_) for s_ in strokes]
-    lines = [LineString(s_) if len(s_) > 1 else Point(s_[0]) for s_ in px_strokes]
-    half = 0.5 * wall_thickness / resolution
-    bodies = shapely.orient_polygons(
-        shapely.buffer(lines, half, cap_style="square", join_style="mitre", mitre_limit=2.0)
-    )
-    rings = [np.asarray(r.coords) for r in _polygon_rings(bodies)]
-    wall = fill_exact((h, w), rings, rule="nonzero") | trace((h, w), px_strokes)
-    if fills:
-        px_fills = [to_px(f) for f in fills]
+    wall = np.zeros((h, w), bool)
+    if px_strokes:
+        lines = [LineString(s_) if len(s_) > 1 else Point(s_[0]) for s_ in px_strokes]
+        half = 0.5 * np.asarray(widths) / resolution
+        bodies = shapely.orient_polygons(
+            shapely.buffer(lines, half, cap_style="square", join_style="mitre", mitre_limit=2.0)
+        )
+        rings = [np.asarray(r.coords) for r in _polygon_rings(bodies)]
+        wall = fill_exact((h, w), rings, rule="nonzero") | trace((h, w), px_strokes)
+    px_fills = [to_px(f) for f in fills]
+    if px_fills:
         wall |= fill_exact((h, w), px_fills) | trace((h, w), px_fills, closed=True)
+        px_strokes += px_fills  # their outlines count for gap sealing
 
     # inside vs outside: flood the outside, with openings narrower than close_gaps sealed
     barrier = wall | trace((h, w), _gap_seals(px_strokes, close_gaps / resolution))
