@@ -1,5 +1,9 @@
 """DXF floor plans (read with ``ezdxf``) rasterised into occupancy maps.
 
+This is the appendix paper's first step of map matching (section 3.2): the
+as-planned CAD drawing is exported at the SLAM map's resolution and its cells are
+quantified to occupied 0, open 255 and unexplored 127.
+
 What is drawn
 -------------
 LINE, LWPOLYLINE, POLYLINE, ARC, CIRCLE, ELLIPSE, SPLINE and MLINE entities on the

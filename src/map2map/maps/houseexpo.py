@@ -5,6 +5,11 @@ metres tracing the free space of a whole apartment; interior walls are thin slit
 of that polygon. The file also holds ``bbox`` (``{"min": [x, y], "max": [x, y]}``),
 ``room_num`` and ``room_category`` (``{"Kitchen": [[x1, y1, x2, y2], ...], ...}``).
 
+HouseExpo's plans are the CAD maps the thesis trains on (section 4.1); turning them
+into grids is the appendix paper's first step of map matching (section 3.2: the
+as-planned drawing is exported at the SLAM map's resolution and its cells quantified
+to occupied 0, open 255, unexplored 127).
+
 Rasterisation (:func:`rasterise_houseexpo`)
 -------------------------------------------
 1. Inside the polygon is free, the rest of the bounding box occupied, and a margin
