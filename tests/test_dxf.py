@@ -9,6 +9,8 @@ from scipy import ndimage as ndi
 
 from map2map.errors import InputError
 from map2map.maps.dxf import load_dxf
+from map2map.maps.formats import load_map, save_map
+from map2map.maps.grid import OccupancyMap
 
 RES = 0.05
 
@@ -203,3 +205,64 @@ def test_bad_files_and_parameters(tmp_path):
         load_dxf(tmp_path / "huge.dxf", wall_thickness=-0.1)
     with pytest.raises(InputError, match="units must be one of"):
         load_dxf(tmp_path / "huge.dxf", units="furlong")
+
+
+# ------------------------------------------------------------------ writing
+def flat_map(origin=(-1.234, 5.678, 0.0)):
+    """A walled flat: 1 px and 3 px walls, a door, a staircase (diagonal) wall, a column."""
+    data = np.full((60, 90), 127, np.uint8)
+    data[5:55, 5:85] = 0
+    data[8:52, 8:82] = 255  # 3 px outer walls
+    data[8:52, 40] = 0  # 1 px interior wall ...
+    data[25:33, 40] = 255  # ... with a door
+    for k in range(15):  # a staircase wall, 8-connected steps made 4-connected
+        data[10 + k, 55 + k] = 0
+        data[10 + k, 56 + k] = 0
+    data[40:44, 65:69] = 0  # a column
+    return OccupancyMap(data, RES, origin)
+
+
+def aligned(a, b):
+    """b's cells on a's grid (both on one lattice): rows/cols offset of b in a."""
+    r, c = a.world_to_pixel(*b.pixel_to_world(0, 0))
+    return int(r), int(c)
+
+
+def test_export_round_trip_keeps_every_wall_cell(tmp_path):
+    m = flat_map()
+    save_map(m, tmp_path / "flat.dxf")
+    back = load_map(tmp_path / "flat.dxf")
+    assert back.resolution == m.resolution
+    r, c = aligned(back, m)
+    window = back.data[r : r + m.height, c : c + m.width]
+    assert np.array_equal(window == 0, m.occupied)  # every wall cell, no more, no less
+    assert np.array_equal(window == 255, m.free)  # enclosed free space comes back free
+    outside = np.ones(back.shape, bool)
+    outside[r : r + m.height, c : c + m.width] = False
+    assert (back.data[outside] == 127).all()
+
+
+def test_export_writes_a_hatch_in_metres_with_the_map_frame(tmp_path):
+    m = flat_map(origin=(10.0, 20.0, 0.0))
+    save_map(m, tmp_path / "flat.dxf")
+    doc = ezdxf.readfile(tmp_path / "flat.dxf")
+    hatches = doc.modelspace().query("HATCH")
+    assert len(hatches) == 1 and hatches[0].dxf.layer == "WALLS"
+    assert doc.header["$INSUNITS"] == 6
+    lo, hi = np.full(2, np.inf), np.full(2, -np.inf)
+    for path in hatches[0].paths:
+        pts = np.array([v[:2] for v in path.vertices])
+        lo, hi = np.minimum(lo, pts.min(0)), np.maximum(hi, pts.max(0))
+    # walls span cells 5..84 x 5..54: metres from the origin, 1 % of a cell inside
+    assert np.allclose(lo, [10 + 5 * RES, 20 + 5 * RES], atol=0.02 * RES)
+    assert np.allclose(hi, [10 + 85 * RES, 20 + 55 * RES], atol=0.02 * RES)
+
+
+def test_export_of_a_rotated_map_is_drawn_rotated(tmp_path):
+    m = flat_map(origin=(0.3, -0.2, math.pi / 2))  # a quarter turn: still on a lattice
+    save_map(m, tmp_path / "rot.dxf")
+    back = load_map(tmp_path / "rot.dxf")
+    turned = OccupancyMap(np.rot90(m.data).copy(), RES, (0.3 - m.height * RES, -0.2, 0.0))
+    r, c = aligned(back, turned)
+    window = back.data[r : r + turned.height, c : c + turned.width]
+    assert np.array_equal(window == 0, turned.occupied)

@@ -60,17 +60,18 @@ from typing import Any
 import cv2
 import numpy as np
 import shapely
-from shapely.geometry import LineString, Point
+from shapely.geometry import LineString, Point, Polygon
 
 from ..errors import InputError
 from .grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
-from .rasterize import fill_exact, trace
+from .rasterize import fill_exact, thin_parts, trace
 
 __all__ = [
     "UNITS",
     "DEFAULT_RESOLUTION",
     "DEFAULT_WALL_THICKNESS",
     "load_dxf",
+    "save_dxf",
     "dxf_layers",
 ]
 
@@ -189,6 +190,15 @@ def _walk(entities: Iterable, layer: str | None = None, depth: int = 0) -> Itera
             yield e, eff
 
 
+def _even_odd_region(loops: list[np.ndarray]):
+    """The region the loops of one hatch enclose by the even-odd rule (shapely)."""
+    region = shapely.Polygon()
+    for loop in loops:
+        if len(loop) >= 3:
+            region = shapely.symmetric_difference(region, shapely.make_valid(Polygon(loop)))
+    return region
+
+
 def _drawn_width(e) -> float:
     """The constant width a (LW)POLYLINE is drawn with, in drawing units (0 if none)."""
     kind = e.dxftype()
@@ -222,7 +232,7 @@ def _polylines(e, tolerance: float) -> tuple[list[np.ndarray], bool]:
 def load_dxf(
     path: str | os.PathLike,
     *,
-    resolution: float = DEFAULT_RESOLUTION,
+    resolution: float | None = None,
     wall_thickness: float = DEFAULT_WALL_THICKNESS,
     layers: Iterable[str] | None = None,
     units: str | None = None,
@@ -236,8 +246,9 @@ def load_dxf(
     ----------
     path : path-like
         The ``.dxf`` file.
-    resolution : float
-        Metres per pixel.
+    resolution : float, optional
+        Metres per pixel; default the one :func:`save_dxf` stored in the file, else
+        :data:`DEFAULT_RESOLUTION` (0.05).
     wall_thickness : float
         Width in metres given to every line (at least one pixel).
     layers : iterable of str, optional
@@ -260,7 +271,7 @@ def load_dxf(
     """
     p = Path(path)
     for name, v, positive in (
-        ("--resolution", resolution, True),
+        ("--resolution", DEFAULT_RESOLUTION if resolution is None else resolution, True),
         ("--wall-thickness", wall_thickness, True),
         ("margin", margin, False),
         ("close_gaps", close_gaps, False),
@@ -276,6 +287,9 @@ def load_dxf(
 
     import ezdxf.units
 
+    frame = _stored_frame(doc)
+    if resolution is None:
+        resolution = frame[0] if frame is not None else DEFAULT_RESOLUTION
     meta: dict[str, Any] = {"source": str(p)}
     if units is not None:
         scale = UNITS[units]
@@ -308,7 +322,7 @@ def load_dxf(
     res_units = resolution / scale  # one pixel in drawing units
     strokes: list[np.ndarray] = []  # widened to walls
     widths: list[float] = []  # their wall thickness, metres
-    fills: list[np.ndarray] = []  # filled solid (their outlines are traced)
+    fills: list[list[np.ndarray]] = []  # loops of each filled entity (even-odd inside)
     counts: Counter = Counter()
     skipped: Counter = Counter()
     used_layers: set[str] = set()
@@ -330,7 +344,7 @@ def load_dxf(
         counts[kind] += 1
         used_layers.add(layer)
         if filled:
-            fills.extend(pieces)
+            fills.append(pieces)
         else:
             strokes.extend(pieces)
             widths.extend([max(wall_thickness, _drawn_width(e) * scale)] * len(pieces))
@@ -342,12 +356,17 @@ def load_dxf(
             f"on {chosen}",
         )
 
-    allpts = np.concatenate(strokes + fills) * scale  # metres
+    allpts = np.concatenate(strokes + [loop for loops in fills for loop in loops]) * scale
     lo, hi = allpts.min(axis=0), allpts.max(axis=0)
     border = margin + 0.5 * max([wall_thickness, resolution, *widths])
     ox, oy = lo[0] - border, lo[1] - border
-    w = int(math.ceil((hi[0] - lo[0] + 2 * border) / resolution - 1e-9))
-    h = int(math.ceil((hi[1] - lo[1] + 2 * border) / resolution - 1e-9))
+    quarter_turns = frame is not None and abs(math.remainder(frame[3], math.pi / 2)) < 1e-9
+    if quarter_turns and frame[0] == resolution and scale == 1.0:
+        # a map2map export: back onto the grid it was written from
+        ox = frame[1] + math.floor((ox - frame[1]) / resolution) * resolution
+        oy = frame[2] + math.floor((oy - frame[2]) / resolution) * resolution
+    w = int(math.ceil((hi[0] + border - ox) / resolution - 1e-9))
+    h = int(math.ceil((hi[1] + border - oy) / resolution - 1e-9))
     if w * h > MAX_PIXELS:
         raise InputError(
             p,
@@ -377,10 +396,17 @@ def load_dxf(
         )
         rings = [np.asarray(r.coords) for r in _polygon_rings(bodies)]
         wall = fill_exact((h, w), rings, rule="nonzero") | trace((h, w), px_strokes)
-    px_fills = [to_px(f) for f in fills]
-    if px_fills:
-        wall |= fill_exact((h, w), px_fills) | trace((h, w), px_fills, closed=True)
-        px_strokes += px_fills  # their outlines count for gap sealing
+    if fills:
+        # each entity even-odd (holes), all of them together as a union; only parts
+        # thinner than two pixels are traced, so solid walls keep their true width
+        region = shapely.union_all([_even_odd_region([to_px(f) for f in loops]) for loops in fills])
+        region_rings = [
+            np.asarray(r.coords) for r in _polygon_rings(shapely.orient_polygons(region))
+        ]
+        wall |= fill_exact((h, w), region_rings, rule="nonzero")
+        thin = [np.asarray(r.coords) for r in _polygon_rings(thin_parts(region, 2.0))]
+        wall |= trace((h, w), thin, closed=True)
+        px_strokes += region_rings  # their outlines count for gap sealing
 
     # inside vs outside: flood the outside, with openings narrower than close_gaps sealed
     barrier = wall | trace((h, w), _gap_seals(px_strokes, close_gaps / resolution))
@@ -413,3 +439,86 @@ def load_dxf(
         }
     )
     return OccupancyMap(data, float(resolution), (float(ox), float(oy), 0.0), meta)
+
+
+# --------------------------------------------------------------------------- writing
+_FRAME_VAR = "map2map_frame"
+
+
+def occupied_polygons(m: OccupancyMap):
+    """The occupied cells as (multi)polygons with pixel-exact outlines, in world metres.
+
+    Runs of occupied cells along each row become rectangles whose coverage union
+    (``shapely.coverage_union_all``) is the occupied region; its outline follows the
+    cell edges exactly.
+    """
+    padded = np.pad(m.occupied, ((0, 0), (1, 1))).astype(np.int8)
+    step = np.diff(padded, axis=1)
+    rows, starts = np.nonzero(step == 1)
+    _, ends = np.nonzero(step == -1)
+    if rows.size == 0:
+        return shapely.MultiPolygon()
+    region = shapely.coverage_union_all(shapely.box(starts, rows, ends, rows + 1))
+    return shapely.simplify(region, 0)  # drop the run boundaries' collinear vertices
+
+
+def save_dxf(m: OccupancyMap, path: str | os.PathLike, *, layer: str = "WALLS") -> None:
+    """Write the occupied cells of a map as a DXF drawing (metres) for CAD programs.
+
+    Walls become one solid HATCH on ``layer`` whose boundary loops follow the cell
+    edges, pulled 1 % of a cell inside the walls so that a reader sampling cell
+    centres, or tracing the outlines, finds exactly the same cells. The drawing is
+    in world coordinates (the map's origin and yaw applied). The map's frame is
+    stored in the header (custom property ``map2map_frame``), so :func:`load_dxf`
+    reads it back on the same grid: the occupied cells come back unchanged, and free
+    space is re-derived as the space the walls enclose (unknown cells inside the
+    walls come back free, free cells open to the outside come back unknown).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> data = np.full((40, 60), 255, np.uint8)
+    >>> data[[0, -1], :] = 0; data[:, [0, -1]] = 0
+    >>> m = OccupancyMap(data, 0.05, (1.0, 2.0, 0.0))
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "walls.dxf"
+    >>> save_dxf(m, path)
+    >>> back = load_dxf(path, margin=0)
+    >>> back.crop(*back.content_bbox()) == m
+    True
+    """
+    import ezdxf
+
+    from .._io import atomic_path
+
+    region = shapely.buffer(occupied_polygons(m), -0.01, join_style="mitre")
+    doc = ezdxf.new(units=6)  # metres
+    doc.header["$INSUNITS"] = 6
+    ox, oy, yaw = m.origin
+    doc.header.custom_vars.append(_FRAME_VAR, f"{m.resolution!r} {ox!r} {oy!r} {yaw!r}")
+    if layer not in doc.layers:
+        doc.layers.add(layer)
+    loops = []
+    for ring in _polygon_rings(region):
+        uv = np.asarray(ring.coords)[:-1]
+        # continuous pixel coordinates (u, v) -> fractional cell indices -> world
+        x, y = m.pixel_to_world(uv[:, 1] - 0.5, uv[:, 0] - 0.5)
+        loops.append(np.stack([x, y], axis=1))
+    if loops:
+        hatch = doc.modelspace().add_hatch(color=7, dxfattribs={"layer": layer})
+        hatch.set_solid_fill(color=7)
+        for loop in loops:
+            hatch.paths.add_polyline_path(loop.tolist(), is_closed=True)
+    with atomic_path(path) as tmp:
+        doc.saveas(tmp)
+
+
+def _stored_frame(doc) -> tuple[float, float, float, float] | None:
+    """(resolution, x, y, yaw) that :func:`save_dxf` stored, if any."""
+    try:
+        text = doc.header.custom_vars.get(_FRAME_VAR)
+        values = tuple(float(v) for v in str(text).split()) if text else ()
+    except (AttributeError, ValueError):
+        return None
+    if len(values) != 4 or not all(math.isfinite(v) for v in values) or values[0] <= 0:
+        return None
+    return values  # type: ignore[return-value]

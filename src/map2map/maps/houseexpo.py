@@ -65,7 +65,7 @@ from shapely.geometry import Polygon, box
 
 from ..errors import InputError
 from .grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
-from .rasterize import fill_exact, trace
+from .rasterize import fill_exact, thin_parts, trace
 
 __all__ = [
     "DEFAULT_RESOLUTION",
@@ -178,12 +178,7 @@ def _rings(geom) -> list[np.ndarray]:
 
 def thin_wall_parts(polygon: Polygon, bounds, resolution: float):
     """The parts of the wall region (bounds minus polygon) thinner than two pixels."""
-    walls = box(*bounds).difference(polygon)
-    r = resolution
-    opened = walls.buffer(-r, join_style="mitre").buffer(r, join_style="mitre")
-    thin = walls.difference(opened)
-    eps = 1e-4 * resolution  # drop numerical slivers along thick walls
-    return thin.buffer(-eps, join_style="mitre").buffer(eps, join_style="mitre")
+    return thin_parts(box(*bounds).difference(polygon), 2.0 * resolution)
 
 
 def rasterise_houseexpo(
