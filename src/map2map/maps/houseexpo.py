@@ -1,0 +1,331 @@
+"""HouseExpo floor plans (JSON) rasterised into occupancy maps.
+
+A HouseExpo plan (Li et al., 2019; derived from SUNCG) is ONE polygon ``verts`` in
+metres tracing the free space of a whole apartment; interior walls are thin slits
+of that polygon. The file also holds ``bbox`` (``{"min": [x, y], "max": [x, y]}``),
+``room_num`` and ``room_category`` (``{"Kitchen": [[x1, y1, x2, y2], ...], ...}``).
+
+Rasterisation (:func:`rasterise_houseexpo`)
+-------------------------------------------
+1. Inside the polygon is free, the rest of the bounding box occupied, and a margin
+   around the box unknown. Cells are classified by their centres (``cv2.fillPoly``
+   with sub-pixel vertices), which is unbiased for walls thicker than two pixels.
+2. Thin walls survive. Plain centre sampling drops a wall narrower than a pixel
+   wherever it passes between two rows of centres, opening holes between rooms.
+   The wall region (bounding box minus polygon) is opened morphologically
+   (``shapely`` buffer by -r then +r, mitred, r = one pixel); what the opening
+   removes are the walls thinner than two pixels. Those thin parts are drawn
+   conservatively: filled, and their outlines traced with 4-connected lines, so
+   every pixel they cross is occupied and each thin wall is an unbroken barrier
+   even for 8-connected free space. Thick walls are left at their true width. (An
+   invalid, self-touching polygon, whose zero-width slits have no area, gets its
+   whole outline traced instead.)
+3. Free space never touches unknown space: unknown cells next to free ones become
+   occupied (where the polygon runs along the bounding box, the outer wall has no
+   width in the file).
+
+Frame
+-----
+The picture is laid out as HouseExpo's own renderer draws it: column = x, row = y
+(rows grow with y, so the first row holds the smallest y), which makes our maps
+match HouseExpo's published renders pixel for pixel. A ROS frame (y up) therefore
+sees the plan's y axis reversed: world ``(x, y) = (x_json, -y_json)`` and headings
+``-theta_json``; :func:`houseexpo_to_world` converts poses, e.g. the trajectories
+shipped with HouseExpo.
+
+Examples
+--------
+>>> doc = {"verts": [[0, 0], [2, 0], [2, 1], [0, 1]], "bbox": {"min": [0, 0], "max": [2, 1]},
+...        "room_category": {"Kitchen": [[0, 0, 2, 1]]}}
+>>> m = rasterise_houseexpo(doc, resolution=0.1, margin=0.2)
+>>> m.shape, int(m.free.sum())
+((14, 24), 200)
+>>> labels, names = room_labels(m)
+>>> names, int((labels == 1).sum())
+(['Kitchen'], 200)
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+from shapely.geometry import Polygon, box
+
+from ..errors import InputError
+from .grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+
+__all__ = [
+    "DEFAULT_RESOLUTION",
+    "DEFAULT_MARGIN",
+    "load_houseexpo",
+    "rasterise_houseexpo",
+    "room_labels",
+    "houseexpo_to_world",
+]
+
+DEFAULT_RESOLUTION = 0.05
+#: Unknown margin around the bounding box (HouseExpo's renders pad 25 px at 1 cm).
+DEFAULT_MARGIN = 0.25
+
+_SHIFT = 8  # sub-pixel bits for OpenCV drawing
+_SCALE = 1 << _SHIFT
+
+
+def houseexpo_to_world(x, y, theta=None):
+    """HouseExpo plan coordinates -> world (ROS, y up) coordinates of our maps.
+
+    The conversion is its own inverse.
+
+    Examples
+    --------
+    >>> houseexpo_to_world(1.0, 2.0, 0.5)
+    (1.0, -2.0, -0.5)
+    """
+    wx = np.asarray(x, float) if np.ndim(x) else float(x)
+    wy = -np.asarray(y, float) if np.ndim(y) else -float(y)
+    if theta is None:
+        return wx, wy
+    wt = -np.asarray(theta, float) if np.ndim(theta) else -float(theta)
+    return wx, wy, wt
+
+
+# --------------------------------------------------------------------------- parsing
+def _validate(doc: Any, source) -> tuple[np.ndarray, tuple[float, float, float, float]]:
+    if not isinstance(doc, dict):
+        raise InputError(source, "not a HouseExpo plan (expected a JSON object with 'verts')")
+    if "verts" not in doc:
+        raise InputError(source, "HouseExpo plan has no 'verts'")
+    try:
+        verts = np.asarray(doc["verts"], dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(source, "'verts' must be a list of [x, y] pairs") from None
+    if verts.ndim != 2 or verts.shape[1] != 2:
+        raise InputError(source, "'verts' must be a list of [x, y] pairs")
+    if not np.isfinite(verts).all():
+        raise InputError(source, "'verts' holds non-finite coordinates")
+    if len(verts) > 1 and np.array_equal(verts[0], verts[-1]):
+        verts = verts[:-1]  # explicitly closed ring
+    if len(np.unique(verts, axis=0)) < 3:
+        raise InputError(source, f"'verts' needs at least 3 distinct vertices, got {len(verts)}")
+    if abs(Polygon(verts).area) <= 0:
+        raise InputError(source, "'verts' encloses no area")
+    lo, hi = verts.min(axis=0), verts.max(axis=0)
+    bb = doc.get("bbox")
+    if bb is not None:
+        try:
+            bmin = np.asarray(bb["min"], float)
+            bmax = np.asarray(bb["max"], float)
+            if bmin.shape != (2,) or bmax.shape != (2,) or not np.isfinite([bmin, bmax]).all():
+                raise ValueError
+        except (TypeError, KeyError, ValueError):
+            raise InputError(source, "'bbox' must be {'min': [x, y], 'max': [x, y]}") from None
+        lo, hi = np.minimum(lo, bmin), np.maximum(hi, bmax)
+    return verts, (float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]))
+
+
+def load_houseexpo(
+    path: str | os.PathLike,
+    *,
+    resolution: float = DEFAULT_RESOLUTION,
+    margin: float = DEFAULT_MARGIN,
+) -> OccupancyMap:
+    """Read a HouseExpo JSON plan and rasterise it (see :func:`rasterise_houseexpo`).
+
+    Raises
+    ------
+    InputError
+        File missing, not JSON, no ``verts`` or fewer than 3 vertices, resolution
+        not > 0.
+    """
+    p = Path(path)
+    if not p.exists():
+        raise InputError(p, "file not found")
+    try:
+        doc = json.loads(p.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(p, f"cannot read file ({exc})") from None
+    except json.JSONDecodeError as exc:
+        raise InputError(p, f"not valid JSON (line {exc.lineno}: {exc.msg})") from None
+    return rasterise_houseexpo(doc, resolution=resolution, margin=margin, source=p)
+
+
+# --------------------------------------------------------------------------- drawing
+def _to_cv(xy: np.ndarray, x0: float, y0: float, res: float, pad: int) -> np.ndarray:
+    """Plan metres -> fixed-point OpenCV coordinates (pixel centres at integers)."""
+    u = (xy[:, 0] - x0) / res + pad - 0.5
+    v = (xy[:, 1] - y0) / res + pad - 0.5
+    return np.round(np.stack([u, v], axis=1) * _SCALE).astype(np.int32)
+
+
+def fill_polygon_centres(verts, x0, y0, res, pad, shape) -> np.ndarray:
+    """uint8 mask of the pixels whose centre lies inside the polygon (exact test).
+
+    ``cv2.fillPoly`` fills quickly but also takes pixels its edges touch; every pixel
+    within a pixel of the outline is re-decided by an exact point-in-polygon test of
+    its centre (``matplotlib.path.Path``, which also copes with self-touching rings).
+    """
+    from matplotlib.path import Path as MplPath
+
+    ring = _to_cv(verts, x0, y0, res, pad)
+    mask = np.zeros(shape, np.uint8)
+    cv2.fillPoly(mask, [ring], 1, lineType=cv2.LINE_8, shift=_SHIFT)
+    band = np.zeros(shape, np.uint8)
+    cv2.polylines(band, [ring], True, 1, thickness=3, lineType=cv2.LINE_8, shift=_SHIFT)
+    rows, cols = np.nonzero(band)
+    # continuous pixel coordinates of the plan (pixel (r, c) spans [c, c + 1) x [r, r + 1))
+    uv = np.stack([(verts[:, 0] - x0) / res + pad, (verts[:, 1] - y0) / res + pad], axis=1)
+    inside = MplPath(uv, closed=False).contains_points(np.stack([cols + 0.5, rows + 0.5], axis=1))
+    mask[rows, cols] = inside
+    return mask
+
+
+def _rings(geom) -> list[np.ndarray]:
+    out = []
+    for poly in getattr(geom, "geoms", [geom]):
+        if poly.is_empty or poly.geom_type != "Polygon":
+            continue
+        out.append(np.asarray(poly.exterior.coords))
+        out.extend(np.asarray(r.coords) for r in poly.interiors)
+    return out
+
+
+def thin_wall_parts(polygon: Polygon, bounds, resolution: float):
+    """The parts of the wall region (bounds minus polygon) thinner than two pixels."""
+    walls = box(*bounds).difference(polygon)
+    r = resolution
+    opened = walls.buffer(-r, join_style="mitre").buffer(r, join_style="mitre")
+    thin = walls.difference(opened)
+    eps = 1e-4 * resolution  # drop numerical slivers along thick walls
+    return thin.buffer(-eps, join_style="mitre").buffer(eps, join_style="mitre")
+
+
+def rasterise_houseexpo(
+    doc: dict,
+    *,
+    resolution: float = DEFAULT_RESOLUTION,
+    margin: float = DEFAULT_MARGIN,
+    thin_walls: bool = True,
+    source: str | os.PathLike | None = None,
+) -> OccupancyMap:
+    """Rasterise a parsed HouseExpo plan (method in the module docstring).
+
+    Parameters
+    ----------
+    doc : dict
+        The JSON object (``verts``, optional ``bbox``, ``room_category``, ``id``).
+    resolution : float
+        Metres per pixel (default 0.05).
+    margin : float
+        Width in metres of the unknown band around the bounding box.
+    thin_walls : bool
+        Keep walls thinner than two pixels (default). False gives plain centre
+        sampling, which loses them; it exists for comparison.
+    source : path-like, optional
+        Named in error messages.
+
+    Returns
+    -------
+    OccupancyMap
+        ``meta``: ``source``, ``houseexpo_id``, ``room_num``, ``room_category`` (as in
+        the file), ``rooms`` (list of ``{"category", "bbox"}``, plan metres) and
+        ``frame`` (``"houseexpo"``: see :func:`houseexpo_to_world`).
+    """
+    src = source if source is not None else "HouseExpo plan"
+    if not (isinstance(resolution, int | float) and math.isfinite(resolution) and resolution > 0):
+        raise InputError("--resolution", f"resolution must be > 0, got {resolution!r}")
+    if not (isinstance(margin, int | float) and math.isfinite(margin) and margin >= 0):
+        raise InputError("--margin", f"margin must be >= 0, got {margin!r}")
+    verts, bounds = _validate(doc, src)
+    x0, y0, x1, y1 = bounds
+    res = float(resolution)
+    pad = int(math.ceil(margin / res - 1e-9))
+    w_in = max(1, int(math.ceil((x1 - x0) / res - 1e-9)))
+    h_in = max(1, int(math.ceil((y1 - y0) / res - 1e-9)))
+    h, w = h_in + 2 * pad, w_in + 2 * pad
+
+    free = fill_polygon_centres(verts, x0, y0, res, pad, (h, w))
+    inside_box = np.zeros((h, w), bool)
+    inside_box[pad : pad + h_in, pad : pad + w_in] = True
+    walls = np.zeros((h, w), np.uint8)
+    if thin_walls:
+        polygon = Polygon(verts)
+        if polygon.is_valid:
+            thin = thin_wall_parts(polygon, bounds, res)
+            rings = [_to_cv(r, x0, y0, res, pad) for r in _rings(thin)]
+            if rings:
+                cv2.fillPoly(walls, rings, 1, lineType=cv2.LINE_8, shift=_SHIFT)
+        else:  # zero-width slits have no area: trace the whole outline
+            rings = [_to_cv(verts, x0, y0, res, pad)]
+        if rings:
+            cv2.polylines(walls, rings, True, 1, lineType=cv2.LINE_4, shift=_SHIFT)
+    data = np.full((h, w), UNKNOWN, np.uint8)
+    data[inside_box] = OCCUPIED
+    data[(free > 0) & (walls == 0)] = FREE
+    data[walls > 0] = OCCUPIED
+    # free space is closed: unknown cells touching free ones are wall
+    near_free = cv2.dilate((data == FREE).astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
+    data[near_free & (data == UNKNOWN)] = OCCUPIED
+
+    rooms = []
+    cats = doc.get("room_category") or {}
+    if isinstance(cats, dict):
+        for name, boxes in cats.items():
+            for b in boxes if isinstance(boxes, list) else []:
+                try:
+                    bx = [float(v) for v in b]
+                except (TypeError, ValueError):
+                    continue
+                if len(bx) == 4 and all(math.isfinite(v) for v in bx):
+                    rooms.append({"category": str(name), "bbox": bx})
+    origin = (x0 - pad * res, -(y0 - pad * res) - h * res, 0.0)
+    meta = {
+        "source": str(source) if source is not None else None,
+        "houseexpo_id": doc.get("id"),
+        "room_num": doc.get("room_num"),
+        "room_category": cats,
+        "rooms": rooms,
+        "frame": "houseexpo",
+    }
+    return OccupancyMap(data, res, origin, meta)
+
+
+def room_labels(m: OccupancyMap) -> tuple[np.ndarray, list[str]]:
+    """Room label image of a rasterised HouseExpo plan.
+
+    Returns ``(labels, names)``: ``labels`` is an (H, W) int32 array, 0 outside
+    every room box or off free space, ``k >= 1`` for room ``meta["rooms"][k - 1]``
+    whose category is ``names[k - 1]``. Where room boxes overlap (they do in
+    HouseExpo), the smaller box wins. Works on cropped or padded maps too: boxes are
+    placed through the map's world frame.
+    """
+    rooms = m.meta.get("rooms") or []
+    labels = np.zeros(m.shape, np.int32)
+    if m.origin[2] != 0.0:
+        raise ValueError("room_labels needs an unrotated map (yaw 0)")
+    order = sorted(
+        range(len(rooms)),
+        key=lambda k: (
+            -abs(
+                (rooms[k]["bbox"][2] - rooms[k]["bbox"][0])
+                * (rooms[k]["bbox"][3] - rooms[k]["bbox"][1])
+            )
+        ),
+    )
+    for k in order:
+        bx = rooms[k]["bbox"]
+        wx, wy = houseexpo_to_world(np.array([bx[0], bx[2]]), np.array([bx[1], bx[3]]))
+        rows, cols = m.world_to_pixel_float(wx, wy)
+        r0, r1 = int(math.ceil(rows.min())), int(math.floor(rows.max()))
+        c0, c1 = int(math.ceil(cols.min())), int(math.floor(cols.max()))
+        r0, c0 = max(r0, 0), max(c0, 0)
+        r1, c1 = min(r1, m.height - 1), min(c1, m.width - 1)
+        if r1 >= r0 and c1 >= c0:
+            labels[r0 : r1 + 1, c0 : c1 + 1] = k + 1
+    labels[~m.free] = 0
+    return labels, [r["category"] for r in rooms]
