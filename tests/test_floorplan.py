@@ -153,11 +153,14 @@ def test_explicit_wall_thickness_and_kinds():
         ({"resolution": 0.5}, "between"),
         ({"kind": "castle"}, "unknown building kind"),
         ({"size": "big"}, "two numbers"),
+        ({"seed": -1}, "non-negative"),
+        ({"seed": 1.5}, "non-negative"),
     ],
 )
 def test_bad_arguments(kwargs, message):
+    kwargs = {"seed": 0, **kwargs}
     with pytest.raises(InputError, match=message):
-        generate_floorplan(0, **kwargs)
+        generate_floorplan(**kwargs)
 
 
 def test_connectivity_detects_pockets_and_splits():

@@ -919,7 +919,12 @@ def generate_floorplan(
         raise InputError(
             "resolution", f"resolution must be between 0.01 and 0.25 m per pixel, got {res:g}"
         )
-    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+    if isinstance(seed, np.random.Generator):
+        rng = seed
+    else:
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise InputError("seed", f"seed must be a non-negative integer, got {seed!r}")
+        rng = np.random.default_rng(int(seed))
     wm, hm = _size_for(kind, size, rng)
     lx, ly = int(round(wm / res)), int(round(hm / res))
     mpx = max(2, int(round(margin / res)))
@@ -1061,6 +1066,7 @@ def draw_floorplan(ax, m: OccupancyMap, *, title: str | None = None, doors: bool
         x0, y0, x1, y1 = r["bbox"]
         row, col = m.world_to_pixel_float((x0 + x1) / 2, (y0 + y1) / 2)
         label = _SHORT.get(r["label"], r["label"]).replace("_", " ")
+        w, h = x1 - x0, y1 - y0
         ax.text(
             float(col),
             float(row),
@@ -1068,6 +1074,7 @@ def draw_floorplan(ax, m: OccupancyMap, *, title: str | None = None, doors: bool
             ha="center",
             va="center",
             fontsize=fs,
+            rotation=90 if h > 1.5 * w and w < 3.0 else 0,
             color="#1f4e79",
             clip_on=True,
         )
@@ -1081,6 +1088,6 @@ def save_floorplan_figure(m: OccupancyMap, path, title: str | None = None) -> No
     """Save a figure of a plan with room labels and door marks (PNG, atomic)."""
     from ..viz import new_figure, save_figure
 
-    fig, ax = new_figure(m)
+    fig, ax = new_figure(m, panel_inches=8.0)
     draw_floorplan(ax, m, title=title)
     save_figure(fig, path)
