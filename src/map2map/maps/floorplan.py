@@ -260,9 +260,10 @@ class _Builder:
         rng, px = self.rng, self.px
         cw = self.uniform_px(1.5, 2.2)
         depth_min = px(3.0)
-        if ly < depth_min + cw:
-            rooms = self.bsp(_Room(0, 0, lx, ly), max(3, round(lx * ly * self.res**2 / 12)), 2.0)
-            return self.label_office(rooms)
+        if ly < depth_min + cw or lx < px(8.0):
+            # too small for a corridor: a few offices opening onto each other
+            n = max(3, round(lx * ly * self.res**2 / 12))
+            return self.label_office(self.bsp(_Room(0, 0, lx, ly), n, 2.0))
         # optional full-depth end rooms (lobby / large meeting room)
         xs, xe = 0, lx
         ends: list[_Room] = []
@@ -352,8 +353,8 @@ class _Builder:
         rng, px = self.rng, self.px
         hw = self.uniform_px(1.0, 1.4)
         if lx >= px(8.0) and ly >= px(2.4) + hw and rng.random() < 0.65:
-            lz = int(round(lx * rng.uniform(0.35, 0.5)))
-            rooms = self.living_zone(0, lz, ly)
+            lz = min(int(round(lx * rng.uniform(0.35, 0.5))), px(10.0))
+            rooms = self.refine(self.living_zone(0, lz, ly), 45.0)
             # private zone with a hallway along x
             xe = lx
             end: list[_Room] = []
@@ -362,7 +363,8 @@ class _Builder:
                 end = [_Room(lx - e, 0, lx, ly, "Bedroom")]
                 xe = lx - e
             if ly >= 2 * px(2.4) + hw:
-                yh = int(rng.integers(px(2.4), ly - px(2.4) - hw + 1))
+                lo_y = max(px(2.4), int(0.3 * (ly - hw)))
+                yh = int(rng.integers(lo_y, ly - hw - lo_y + 1))
                 bands = [(0, yh), (yh + hw, ly)]
             else:
                 yh = 0 if rng.random() < 0.5 else ly - hw
@@ -371,12 +373,12 @@ class _Builder:
             private: list[_Room] = []
             for y0, y1 in bands:
                 private += self.band_rooms(lz, xe, y0, y1, 2.0, 4.2)
-            private += end
+            private = self.refine(private + end, 24.0)
             self.label_private(private)
             return rooms + private
         m2 = self.res**2
-        n = int(np.clip(round(lx * ly * m2 / rng.uniform(10.0, 16.0)), 3, 9))
-        rooms = self.bsp(_Room(0, 0, lx, ly), n, 2.0)
+        n = int(np.clip(round(lx * ly * m2 / rng.uniform(10.0, 16.0)), 3, 12))
+        rooms = self.refine(self.bsp(_Room(0, 0, lx, ly), n, 2.0), 40.0)
         by_area = sorted(rooms, key=lambda r: -r.area)
         compact = [r for r in by_area if max(r.w, r.h) < 2.5 * min(r.w, r.h)]
         living = compact[0] if compact else by_area[0]
@@ -398,6 +400,29 @@ class _Builder:
             if thin and r.label == "Bedroom":
                 r.label, r.kind = "Hallway", _CORRIDOR
         return rooms
+
+    def refine(self, rooms: list[_Room], max_area_m2: float, max_aspect: float = 2.6):
+        """Split rooms that are too large or too elongated across their long side."""
+        out: list[_Room] = []
+        queue = list(rooms)
+        min_side = self.px(2.2)
+        while queue:
+            r = queue.pop(0)
+            long_side, short_side = max(r.w, r.h), min(r.w, r.h)
+            too_big = r.area * self.res**2 > max_area_m2 or long_side > max_aspect * short_side
+            if r.kind != _ROOM or not too_big or long_side < 2 * min_side:
+                out.append(r)
+                continue
+            cut = int(np.clip(round(long_side * self.rng.uniform(0.4, 0.6)), min_side,
+                              long_side - min_side))  # fmt: skip
+            if r.w >= r.h:
+                a, b = _Room(r.x0, r.y0, r.x0 + cut, r.y1), _Room(r.x0 + cut, r.y0, r.x1, r.y1)
+            else:
+                a, b = _Room(r.x0, r.y0, r.x1, r.y0 + cut), _Room(r.x0, r.y0 + cut, r.x1, r.y1)
+            a.label = r.label
+            b.label = {"Living_Room": "Office", "Kitchen": "Dining_Room"}.get(r.label, r.label)
+            queue[:0] = [a, b]
+        return out
 
     def living_zone(self, x0: int, x1: int, ly: int) -> list[_Room]:
         """Living room plus kitchen (and dining room when there is space)."""
@@ -424,8 +449,8 @@ class _Builder:
         for r in private:
             r.label = "Bedroom"
         by_area[0].label = "Bathroom"
-        if len(by_area) >= 4:
-            by_area[1].label = "Toilet" if by_area[1].area * m2 < 6 else "Bathroom"
+        if len(by_area) >= 4 and by_area[1].area * m2 < 8:
+            by_area[1].label = "Toilet" if by_area[1].area * m2 < 5 else "Bathroom"
         if len(by_area) >= 6:
             by_area[2].label = "Storage" if by_area[2].area * m2 < 7 else "Office"
 
