@@ -177,3 +177,16 @@ def test_connectivity_detects_pockets_and_splits():
     data[10:20, 30:46] = OCCUPIED  # a cabinet leaving a 0.1 m slot against the wall
     res = connectivity(OccupancyMap(data, 0.05))
     assert res.components == 1 and res.unreachable.any()
+
+
+@pytest.mark.parametrize("kind", ["apartment", "office"])
+def test_every_size_from_4_to_30_m(kind):
+    sides = (4.0, 5.5, 7.0, 9.0, 13.0, 20.0, 30.0)
+    for i, w in enumerate(sides):
+        for j, h in enumerate(sides):
+            furniture = (i + j) % 2 == 1
+            m = generate_floorplan(i * 7 + j, kind, (w, h), resolution=0.1, furniture=furniture)
+            n, unreachable = scipy_connectivity(m)
+            assert n == 1 and unreachable == 0, (kind, w, h)
+            assert sum(r["kind"] == "room" for r in m.meta["rooms"]) >= 3, (kind, w, h)
+            assert m.meta["size_m"] == [w, h]
