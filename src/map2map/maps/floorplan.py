@@ -728,7 +728,14 @@ _FURNITURE = {
 
 
 def _furnish(b: _Builder, data: np.ndarray, rooms, links, margin: int) -> list[dict]:
-    """Place furniture blocks that touch a wall or keep ``clear`` pixels free around them."""
+    """Place furniture blocks in ``data`` (in place); return what was placed.
+
+    A wall item (bed, wardrobe, desk...) stands flush against one wall of its
+    room, its ``along`` side parallel to that wall; a free-standing item (table,
+    column) keeps away from walls. Every side of a block either touches a
+    wall/another block or leaves at least 0.5 m free, so no pocket narrower
+    than the robot appears, and no block stands within 1.1 m of a door.
+    """
     rng = b.rng
     clear = px_ceil(0.5, b.res)
     blocked = np.zeros(data.shape, bool)
@@ -737,80 +744,74 @@ def _furnish(b: _Builder, data: np.ndarray, rooms, links, margin: int) -> list[d
         x0, y0, x1, y1 = _door_zone(lk, b, b.px(1.1))
         blocked[max(0, o + y0) : o + y1, max(0, o + x0) : o + x1] = True
     placed = []
-    h, w = data.shape
     for k, r in enumerate(rooms):
         items = list(_FURNITURE.get(r.label, []))
         if r.label in ("Office", "Lobby") and r.area * b.res**2 >= 35:
             items += [("column", (0.4, 0.5), (0.4, 0.5), False)] * 2
+        # the room's free box before outer walls; clipped to what is free below
+        fx0, fy0 = o + r.x0 + b.hi, o + r.y0 + b.hi
+        fx1, fy1 = o + r.x1 - b.lo, o + r.y1 - b.lo
         for name, along_m, depth_m, wall in items:
             if rng.random() < 0.2:
                 continue
             for _ in range(12):
                 along, depth = b.uniform_px(*along_m), b.uniform_px(*depth_m)
-                fx0, fy0 = o + r.x0 + b.hi, o + r.y0 + b.hi  # room free box (before outer walls)
-                fx1, fy1 = o + r.x1 - b.lo, o + r.y1 - b.lo
-                if wall:
-                    side = int(rng.integers(4))
-                    if side in (0, 1):  # against top / bottom wall
-                        iw, ih = along, depth
-                    else:
-                        iw, ih = depth, along
-                else:
-                    iw, ih = (along, depth) if rng.random() < 0.5 else (depth, along)
+                side = int(rng.integers(4))  # 0 top, 1 bottom, 2 left, 3 right wall
+                iw, ih = (along, depth) if side < 2 else (depth, along)
                 if fx1 - fx0 < iw + 2 or fy1 - fy0 < ih + 2:
                     continue
                 x = int(rng.integers(fx0, fx1 - iw + 1))
                 y = int(rng.integers(fy0, fy1 - ih + 1))
-                box = _snap_to_walls(data, x, y, iw, ih, clear, wall)
-                if box is None:
+                if wall:
+                    x, y = _push(data, x, y, iw, ih, side)
+                x, y = _close_gaps(data, x, y, iw, ih, clear)
+                box = (x, y, x + iw, y + ih)
+                if not _fits(data, blocked, *box, clear):
                     continue
-                x0, y0, x1, y1 = box
-                if not _fits(data, blocked, x0, y0, x1, y1, clear, h, w):
-                    continue
-                data[y0:y1, x0:x1] = OCCUPIED
-                blocked[max(0, y0 - clear) : y1 + clear, max(0, x0 - clear) : x1 + clear] = True
-                placed.append({"kind": name, "room": k, "px": (x0, y0, x1, y1)})
+                data[box[1] : box[3], box[0] : box[2]] = OCCUPIED
+                blocked[max(0, y - clear) : box[3] + clear, max(0, x - clear) : box[2] + clear] = 1
+                placed.append({"kind": name, "room": k, "px": box})
                 break
     return placed
 
 
-def _snap_to_walls(data, x, y, iw, ih, clear, wall):
-    """Move a box flush against the nearest wall(s) within reach; None if it must touch one."""
+def _gaps(data, x, y, iw, ih) -> tuple[int, int, int, int]:
+    """Free cells between the box and the first obstacle: left, right, up, down (mid-lines)."""
     h, w = data.shape
-    free_row = data[min(max(y + ih // 2, 0), h - 1)]
-    free_col = data[:, min(max(x + iw // 2, 0), w - 1)]
-    # distance to the first non-free pixel left/right/up/down
-    left = _run(free_row[:x][::-1])
-    right = _run(free_row[x + iw :])
-    up = _run(free_col[:y][::-1])
-    down = _run(free_col[y + ih :])
-    reach = clear if not wall else 10**9
-    if wall:
-        # flush against the nearest wall
-        dmin = min(left, right, up, down)
-        if dmin == left:
-            x -= left
-        elif dmin == right:
-            x += right
-        elif dmin == up:
-            y -= up
-        else:
-            y += down
-        left = _run(free_row[:x][::-1])
-        right = _run(free_row[x + iw :])
-        up = _run(free_col[:y][::-1])
-        down = _run(free_col[y + ih :])
-        reach = clear
-    # close gaps narrower than the clearance
-    if 0 < left < reach:
+    row = data[min(max(y + ih // 2, 0), h - 1)]
+    col = data[:, min(max(x + iw // 2, 0), w - 1)]
+    return (
+        _run(row[: max(x, 0)][::-1]),
+        _run(row[x + iw :]),
+        _run(col[: max(y, 0)][::-1]),
+        _run(col[y + ih :]),
+    )
+
+
+def _push(data, x, y, iw, ih, side) -> tuple[int, int]:
+    """Slide the box until it touches the wall on ``side`` (0 top, 1 bottom, 2 left, 3 right)."""
+    left, right, up, down = _gaps(data, x, y, iw, ih)
+    if side == 0:
+        return x, y - up
+    if side == 1:
+        return x, y + down
+    if side == 2:
+        return x - left, y
+    return x + right, y
+
+
+def _close_gaps(data, x, y, iw, ih, clear) -> tuple[int, int]:
+    """Slide the box flush against any obstacle closer than ``clear`` (no narrow slots)."""
+    left, right, up, down = _gaps(data, x, y, iw, ih)
+    if 0 < left < clear:
         x -= left
-    elif 0 < right < reach:
+    elif 0 < right < clear:
         x += right
-    if 0 < up < reach:
+    if 0 < up < clear:
         y -= up
-    elif 0 < down < reach:
+    elif 0 < down < clear:
         y += down
-    return x, y, x + iw, y + ih
+    return x, y
 
 
 def _run(values: np.ndarray) -> int:
@@ -819,8 +820,11 @@ def _run(values: np.ndarray) -> int:
     return int(nz[0]) if nz.size else int(values.size)
 
 
-def _fits(data, blocked, x0, y0, x1, y1, clear, h, w) -> bool:
+def _fits(data, blocked, x0, y0, x1, y1, clear) -> bool:
     """The box is free and each side either touches non-free cells or has ``clear`` free around."""
+    h, w = data.shape
+    if x0 < 1 or y0 < 1 or x1 > w - 1 or y1 > h - 1:
+        return False
     if x0 < 0 or y0 < 0 or x1 > w or y1 > h:
         return False
     if (data[y0:y1, x0:x1] != FREE).any() or blocked[y0:y1, x0:x1].any():
