@@ -45,7 +45,7 @@ Examples
 (True, 0.05)
 >>> connectivity(plan).ok
 True
->>> sorted({r["label"] for r in plan.meta["rooms"]})[:2]
+>>> sorted({r["category"] for r in plan.meta["rooms"]})[:2]
 ['Hallway', 'Kitchen']
 """
 
@@ -912,11 +912,15 @@ def generate_floorplan(
     -------
     OccupancyMap
         Walls 0, interior 255, outside 127, origin ``(0, 0, 0)`` at the lower-left
-        corner of the margin. ``meta`` holds ``rooms`` (label, kind, world bbox
-        ``[xmin, ymin, xmax, ymax]``, area), ``room_category`` (HouseExpo style:
-        label -> list of bboxes), ``doors`` and ``openings`` (centre ``x``, ``y``,
-        ``width`` in metres, ``orientation`` of the wall, the two room indices),
-        ``furniture``, the seed, kind, size and wall thickness.
+        corner of the margin. ``meta`` holds, like a loaded HouseExpo plan,
+        ``rooms`` (``category``, ``kind`` room/corridor, ``bbox`` in the
+        HouseExpo frame ``[x0, y0, x1, y1]`` with y pointing down (``y = -world
+        y``), ``world_bbox`` ``[xmin, ymin, xmax, ymax]`` in world metres,
+        ``area``) and ``room_category`` (category -> list of HouseExpo-frame
+        boxes); and ``doors`` / ``openings`` (world centre ``x``, ``y``, ``width``
+        in metres, ``orientation`` of the wall, the two room indices),
+        ``furniture`` (kind, room index, ``bbox`` in world metres),
+        ``building_bbox`` (world), the seed, kind, size and wall thickness.
 
     Raises
     ------
@@ -1030,10 +1034,17 @@ def _meta(b: _Builder, rooms, links, notches, placed, shape, mpx, seed, kind, lx
     room_meta, category = [], {}
     for r in rooms:
         box = world_box(r.x0, r.y0, r.x1, r.y1)
+        plan_box = [box[0], -box[3], box[2], -box[1]]  # HouseExpo frame: x, -y (y down)
         room_meta.append(
-            {"label": r.label, "kind": r.kind, "bbox": box, "area": round(r.area * res**2, 4)}
+            {
+                "category": r.label,
+                "kind": r.kind,
+                "bbox": plan_box,
+                "world_bbox": box,
+                "area": round(r.area * res**2, 4),
+            }
         )
-        category.setdefault(r.label, []).append(box)
+        category.setdefault(r.label, []).append(plan_box)
     doors, openings = [], []
     for lk in links:
         if lk.vertical:
@@ -1077,24 +1088,26 @@ _SHORT = {"Living_Room": "Living", "Dining_Room": "Dining", "Meeting_Room": "Mee
 def draw_floorplan(ax, m: OccupancyMap, *, title: str | None = None, doors: bool = True) -> None:
     """Draw a plan with its room labels (and door marks) from ``m.meta``.
 
-    Works for any map whose ``meta`` has ``rooms`` with world ``bbox`` (the
-    generator's output) or a HouseExpo-style ``room_category``.
+    Works for the generator's plans and for rasterised HouseExpo plans (room
+    boxes in ``meta["rooms"]`` or ``meta["room_category"]``, HouseExpo frame).
     """
     from ..viz import draw_map
 
     draw_map(ax, m, title=title)
-    rooms = m.meta.get("rooms")
-    if rooms is None:
-        rooms = [
-            {"label": k, "bbox": box}
-            for k, boxes in m.meta.get("room_category", {}).items()
-            for box in boxes
-        ]
+    rooms = m.meta.get("rooms") or [
+        {"category": k, "bbox": box}
+        for k, boxes in (m.meta.get("room_category") or {}).items()
+        for box in boxes
+    ]
     fs = 7 if len(rooms) > 12 else 8
     for r in rooms:
-        x0, y0, x1, y1 = r["bbox"]
+        if "world_bbox" in r:
+            x0, y0, x1, y1 = r["world_bbox"]
+        else:  # HouseExpo frame (y down) -> world
+            x0, y0, x1, y1 = r["bbox"][0], -r["bbox"][3], r["bbox"][2], -r["bbox"][1]
         row, col = m.world_to_pixel_float((x0 + x1) / 2, (y0 + y1) / 2)
-        label = _SHORT.get(r["label"], r["label"]).replace("_", " ")
+        name = r.get("category", "")
+        label = _SHORT.get(name, name).replace("_", " ")
         w, h = x1 - x0, y1 - y0
         ax.text(
             float(col),
