@@ -16,7 +16,7 @@ from .. import __version__
 from ..errors import EXIT_BAD_INPUT, InputError
 
 #: Command modules, in the order ``--help`` lists them.
-COMMANDS = ["demo"]
+COMMANDS = ["demo", "convert", "show"]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -151,9 +151,21 @@ def map_server_values(
         raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
     if flavor not in FLAVORS:
         raise ValueError(f"flavor must be one of {FLAVORS}, got {flavor!r}")
-    if flavor == "ros1":
-        return _values_ros1(img, mode, bool(negate), occupied_thresh, free_thresh)
-    return _values_nav2(img, mode, bool(negate), occupied_thresh, free_thresh)
+    fn = _values_ros1 if flavor == "ros1" else _values_nav2
+    return per_value(img, lambda im: fn(im, mode, bool(negate), occupied_thresh, free_thresh))
+
+
+def per_value(img: RasterImage, fn):
+    """``fn(img)`` for a pixel-wise rule, through a look-up table for grey pictures.
+
+    A grey picture without alpha has at most ``maxval + 1`` distinct pixels, so the
+    rule is evaluated once per possible value and the picture indexed into it.
+    """
+    if img.channels.shape[2] != 1 or img.alpha is not None:
+        return fn(img)
+    every = np.arange(img.maxval + 1, dtype=img.channels.dtype)[None, :, None]
+    lut = fn(RasterImage(every, None, img.maxval))[0]
+    return lut[img.channels[:, :, 0]]
 
 
 def _values_nav2(img: RasterImage, mode, negate, occ_th, free_th) -> np.ndarray:
@@ -237,6 +249,10 @@ def ros_values_to_grid(values: np.ndarray) -> np.ndarray:
     [0, 255, 127, 127]
     """
     v = np.asarray(values)
+    if v.dtype == np.int8:  # one look-up per cell
+        lut = np.full(256, UNKNOWN, np.uint8)
+        lut[100], lut[0] = OCCUPIED, FREE
+        return lut[v.view(np.uint8)]
     out = np.full(v.shape, UNKNOWN, np.uint8)
     out[v == 100] = OCCUPIED
     out[v == 0] = FREE
