@@ -473,10 +473,10 @@ class _Builder:
         a, b = rooms[i], rooms[j]
         corridor = _CORRIDOR in (a.kind, b.kind)
         room_span = lambda r: (r.y0, r.y1) if vertical else (r.x0, r.x1)  # noqa: E731
-        # a room whose whole side is the shared segment (a corridor end): open it fully
-        full = any(room_span(r) == (o0, o1) for r in (a, b))
+        # a corridor whose whole end is the shared segment: open it fully
+        full = any(r.kind == _CORRIDOR and room_span(r) == (o0, o1) for r in (a, b))
         usable = (o1 - o0) - 2 * self.clear
-        if corridor and full and (want_open or usable < self.door_min):
+        if full and (want_open or usable < self.door_min):
             return _Link(i, j, vertical, pos, o0 + self.hi, o1 - self.lo, door=False)
         if want_open and usable >= px_ceil(1.2, self.res):
             width = int(
@@ -498,15 +498,24 @@ class _Builder:
         return _Link(i, j, vertical, pos, s0, s0 + width, door=True)
 
     def graph(self, rooms: list[_Room]) -> dict[tuple[int, int], tuple]:
+        """Pairs of rooms that can be linked: (i, j) -> shared boundary segment.
+
+        A pair qualifies when its shared wall takes a door away from the wall
+        ends, or when a corridor ends on it (the whole end can be opened).
+        """
         edges = {}
         for i in range(len(rooms)):
             for j in range(i + 1, len(rooms)):
                 seg = self.shared(rooms[i], rooms[j])
                 if seg is None:
                     continue
-                if seg[3] - seg[2] - 2 * self.clear >= self.door_min or (
-                    _CORRIDOR in (rooms[i].kind, rooms[j].kind)
-                ):
+                vertical, _, o0, o1 = seg
+                door_fits = o1 - o0 - 2 * self.clear >= self.door_min
+                corridor_end = any(
+                    r.kind == _CORRIDOR and ((r.y0, r.y1) if vertical else (r.x0, r.x1)) == (o0, o1)
+                    for r in (rooms[i], rooms[j])
+                )
+                if door_fits or corridor_end:
                     edges[i, j] = seg
         return edges
 
