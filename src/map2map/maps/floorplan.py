@@ -305,7 +305,7 @@ class _Builder:
             y0, y1 = (cw, ly) if yc == 0 else (0, ly - cw)
             rooms += self.band_rooms(xs, xe, y0, y1, 2.6, 5.0)
         rooms = self.merge_open_plan(rooms)
-        return ends + self.label_office(rooms)
+        return self.refine(ends, 50.0, 3.0) + self.label_office(rooms)
 
     def merge_open_plan(self, rooms: list[_Room]) -> list[_Room]:
         """Sometimes merge neighbouring side rooms into one open-plan office."""
@@ -420,7 +420,12 @@ class _Builder:
             else:
                 a, b = _Room(r.x0, r.y0, r.x1, r.y0 + cut), _Room(r.x0, r.y0 + cut, r.x1, r.y1)
             a.label = r.label
-            b.label = {"Living_Room": "Office", "Kitchen": "Dining_Room"}.get(r.label, r.label)
+            b.label = {
+                "Living_Room": "Office",
+                "Kitchen": "Dining_Room",
+                "Lobby": "Office",
+                "Meeting_Room": "Office",
+            }.get(r.label, r.label)
             queue[:0] = [a, b]
         return out
 
@@ -1136,9 +1141,21 @@ def draw_floorplan(ax, m: OccupancyMap, *, title: str | None = None, doors: bool
 
 
 def save_floorplan_figure(m: OccupancyMap, path, title: str | None = None) -> None:
-    """Save a figure of a plan with room labels and door marks (PNG, atomic)."""
+    """Save a figure of a plan with room labels and door marks (format from the suffix, atomic).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "plan.png"
+    >>> save_floorplan_figure(generate_floorplan(1, size=(8, 6)), path, title="apartment")
+    >>> path.stat().st_size > 10_000
+    True
+    """
     from ..viz import new_figure, save_figure
+    from .render import map_summary
 
     fig, ax = new_figure(m, panel_inches=8.0)
-    draw_floorplan(ax, m, title=title)
+    n_doors = len(m.meta.get("doors", []))
+    summary = map_summary(m) + (f", {n_doors} doors (red)" if n_doors else "")
+    draw_floorplan(ax, m, title=f"{title}\n{summary}" if title else summary)
     save_figure(fig, path)
