@@ -145,3 +145,26 @@ def test_prep_real_houseexpo_plan(tmp_path, capsys, shared_data):
     assert m.resolution == pytest.approx(full.resolution * side / 256)
     q0, q1, p0, p1 = m.content_bbox()
     assert (q1 - q0) / (p1 - p0) == pytest.approx((r1 - r0) / (c1 - c0), rel=0.05)
+
+
+def test_prep_figure(tmp_path, capsys, plan_yaml):
+    fig = tmp_path / "prep.png"
+    rc, _, err = run_cli(["prep", plan_yaml, tmp_path / "o.png", "--figure", fig], capsys)
+    assert rc == 0, err
+    assert fig.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    rc, _, err = run_cli(
+        ["prep", plan_yaml, tmp_path / "p.png", "--figure", tmp_path / "x.gif"], capsys
+    )
+    assert rc == 2 and not (tmp_path / "p.png").exists()
+
+
+def test_demo_prep_stage(tmp_path):
+    from map2map.demo import DemoContext
+    from map2map.maps.prep_demo import stage_prep
+
+    ctx = DemoContext(out=tmp_path, seed=0)
+    ctx.results["plan"] = generate_floorplan(0, size=(9, 7))
+    stage_prep(ctx)
+    assert ctx.results["prep"].shape == (256, 256)
+    assert load_map(tmp_path / "plan_256.png").shape == (256, 256)
+    assert [p.name for _, p in ctx.written] == ["plan_256.png", "prep.png"]

@@ -34,6 +34,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="PX",
         help="unknown margin (pixels of the input) kept around the content by --crop (default: 4)",
     )
+    p.add_argument("--figure", help="also save a before/after picture (.png/.pdf/.svg)")
     add_input_options(p)
     p.set_defaults(func=run)
 
@@ -41,7 +42,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..errors import InputError
     from ..maps.formats import check_output_path, save_map
-    from ..maps.preprocess import preprocess
+    from ..maps.preprocess import preprocess, save_preprocess_figure
     from ..maps.render import map_summary
 
     if args.size < 1:
@@ -51,8 +52,13 @@ def run(args: argparse.Namespace) -> int:
     if args.margin < 0:
         raise InputError("--margin", f"margin must be >= 0, got {args.margin}")
     check_output_path(args.output)  # before reading: fail fast, write nothing
+    if args.figure:
+        check_output_path(args.figure, (".png", ".pdf", ".svg"))
     m = load_from_args(args)
     out = preprocess(m, size=args.size, thicken=args.thicken, crop=args.crop, margin=args.margin)
     save_map(out, args.output)
+    if args.figure:
+        steps = f"size {args.size}, thicken {args.thicken}" + (", crop" if args.crop else "")
+        save_preprocess_figure(m, out, args.figure, title=f"{args.input}: {steps}")
     print(f"{args.input}: {map_summary(m)}\n -> {args.output}: {map_summary(out)}")
     return 0
