@@ -849,9 +849,15 @@ def _fits(data, blocked, x0, y0, x1, y1, clear) -> bool:
         (slice(max(0, y0 - clear), y0), slice(x0, x1), slice(y0 - 1, y0), slice(x0, x1)),
         (slice(y1, y1 + clear), slice(x0, x1), slice(y1, y1 + 1), slice(x0, x1)),
     )
-    for br, bc, nr, nc in sides:
-        if (data[nr, nc] != FREE).all():
-            continue  # flush against a wall or another block
+    flush = [bool((data[nr, nc] != FREE).all()) for _, _, nr, nc in sides]
+    if (flush[0] and flush[1]) or (flush[2] and flush[3]):
+        return False  # wall to wall: it would cut the room in two
+    ys = (slice(max(0, y0 - clear), y0), slice(y1, y1 + clear))  # above, below
+    xs = (slice(max(0, x0 - clear), x0), slice(x1, x1 + clear))  # left, right
+    # corners between two open sides must be open too (no wall corner closing a slot)
+    corners = [(ys[v], xs[u]) for v in (0, 1) for u in (0, 1) if not flush[2 + v] and not flush[u]]
+    bands = [(s[0], s[1]) for s, touching in zip(sides, flush, strict=True) if not touching]
+    for br, bc in bands + corners:
         band = data[br, bc]
         if band.size == 0 or (band != FREE).any() or blocked[br, bc].any():
             return False
