@@ -257,6 +257,7 @@ class _Builder:
         return [_Room(a, y0, b, y1) for a, b in zip(edges[:-1], edges[1:], strict=True)]
 
     def office(self, lx: int, ly: int) -> list[_Room]:
+        """Office rooms on ``[0, lx) x [0, ly)`` (long axis x): corridor spine or ring."""
         rng, px = self.rng, self.px
         cw = self.uniform_px(1.5, 2.2)
         depth_min = px(3.0)
@@ -328,6 +329,7 @@ class _Builder:
         return out
 
     def label_office(self, rooms: list[_Room]) -> list[_Room]:
+        """Name office rooms: offices, small toilets/storage, a kitchen, a meeting room."""
         side = [r for r in rooms if r.kind == _ROOM and r.label in ("Room", "Open_Office")]
         if not side:
             return rooms
@@ -350,6 +352,7 @@ class _Builder:
         return rooms
 
     def apartment(self, lx: int, ly: int) -> list[_Room]:
+        """Apartment rooms: living zone + hallway with private rooms, or recursive splitting."""
         rng, px = self.rng, self.px
         hw = self.uniform_px(1.0, 1.4)
         if lx >= px(8.0) and ly >= px(2.4) + hw and rng.random() < 0.65:
@@ -449,6 +452,7 @@ class _Builder:
         return [living, _Room(x0, ys, x1, ly, "Kitchen")]
 
     def label_private(self, private: list[_Room]) -> None:
+        """Name the rooms along an apartment hallway: bedrooms, the smallest as wet rooms."""
         m2 = self.res**2
         by_area = sorted(private, key=lambda r: r.area)
         for r in private:
