@@ -154,12 +154,41 @@ def bench_dxf(tmp: Path) -> None:
         )
 
 
+def bench_dxf_export(tmp: Path) -> None:
+    """Generated plans -> DXF drawing -> map: cells that change (walls and free space)."""
+    try:
+        from map2map.maps.floorplan import generate_floorplan
+    except ImportError:
+        print("dxf export: map2map.maps.floorplan not available, skipped")
+        return
+    from map2map.maps.dxf import load_dxf, save_dxf
+
+    changed, cells, t_save, t_load = 0, 0, 0.0, 0.0
+    for seed in range(5):
+        for kind in ("apartment", "office"):
+            a = generate_floorplan(seed, kind=kind, furniture=True)
+            t0 = time.perf_counter()
+            save_dxf(a, tmp / "plan.dxf")
+            t1 = time.perf_counter()
+            b = load_dxf(tmp / "plan.dxf")
+            t_save, t_load = t_save + t1 - t0, t_load + time.perf_counter() - t1
+            r, c = (int(v) for v in b.world_to_pixel(*a.pixel_to_world(0, 0)))
+            window = b.data[r : r + a.height, c : c + a.width]
+            changed += int((window != a.data).sum())
+            cells += a.data.size
+    print(
+        f"dxf export: 10 generated plans (furniture) -> .dxf -> map: {changed} of {cells} "
+        f"cells changed; save {t_save / 10 * 1e3:.0f} ms, load {t_load / 10 * 1e3:.0f} ms each"
+    )
+
+
 def main() -> None:
     print("(timings on a shared machine: noisy)")
     with tempfile.TemporaryDirectory() as d:
         tmp = Path(d)
         bench_ros_and_pictures(tmp)
         bench_dxf(tmp)
+        bench_dxf_export(tmp)
     bench_houseexpo()
     bench_renders()
 
