@@ -10,6 +10,10 @@ MODULES = [
     "map2map.maps.ros",
     "map2map.maps.image",
     "map2map.maps.houseexpo",
+    "map2map.maps.rasterize",
+    "map2map.maps.dxf",
+    "map2map.maps.formats",
+    "map2map.maps.render",
 ]
 
 

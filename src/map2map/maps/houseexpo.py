@@ -5,19 +5,25 @@ metres tracing the free space of a whole apartment; interior walls are thin slit
 of that polygon. The file also holds ``bbox`` (``{"min": [x, y], "max": [x, y]}``),
 ``room_num`` and ``room_category`` (``{"Kitchen": [[x1, y1, x2, y2], ...], ...}``).
 
+HouseExpo's plans are the CAD maps the thesis trains on (section 4.1); turning them
+into grids is the appendix paper's first step of map matching (section 3.2: the
+as-planned drawing is exported at the SLAM map's resolution and its cells quantified
+to occupied 0, open 255, unexplored 127).
+
 Rasterisation (:func:`rasterise_houseexpo`)
 -------------------------------------------
 1. Inside the polygon is free, the rest of the bounding box occupied, and a margin
-   around the box unknown. Cells are classified by their centres (``cv2.fillPoly``
-   with sub-pixel vertices), which is unbiased for walls thicker than two pixels.
+   around the box unknown. Cells are classified by their centres
+   (:func:`~map2map.maps.rasterize.fill_exact`), which is unbiased for walls thicker
+   than two pixels.
 2. Thin walls survive. Plain centre sampling drops a wall narrower than a pixel
    wherever it passes between two rows of centres, opening holes between rooms.
    The wall region (bounding box minus polygon) is opened morphologically
    (``shapely`` buffer by -r then +r, mitred, r = one pixel); what the opening
    removes are the walls thinner than two pixels. Those thin parts are drawn
-   conservatively: filled, and their outlines traced with 4-connected lines, so
-   every pixel they cross is occupied and each thin wall is an unbroken barrier
-   even for 8-connected free space. Thick walls are left at their true width. (An
+   conservatively: filled, and their outlines traced through every pixel they cross
+   (:func:`~map2map.maps.rasterize.trace`), so each thin wall is an unbroken
+   barrier even for 8-connected free space. Thick walls keep their true width. (An
    invalid, self-touching polygon, whose zero-width slits have no area, gets its
    whole outline traced instead.)
 3. Free space never touches unknown space: unknown cells next to free ones become
@@ -27,8 +33,8 @@ Rasterisation (:func:`rasterise_houseexpo`)
 Frame
 -----
 The picture is laid out as HouseExpo's own renderer draws it: column = x, row = y
-(rows grow with y, so the first row holds the smallest y), which makes our maps
-match HouseExpo's published renders pixel for pixel. A ROS frame (y up) therefore
+(rows grow with y, so the first row holds the smallest y), so our maps have the
+orientation of HouseExpo's published renders. A ROS frame (y up) therefore
 sees the plan's y axis reversed: world ``(x, y) = (x_json, -y_json)`` and headings
 ``-theta_json``; :func:`houseexpo_to_world` converts poses, e.g. the trajectories
 shipped with HouseExpo.
@@ -59,6 +65,7 @@ from shapely.geometry import Polygon, box
 
 from ..errors import InputError
 from .grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from .rasterize import fill_exact, thin_parts, trace
 
 __all__ = [
     "DEFAULT_RESOLUTION",
@@ -72,9 +79,6 @@ __all__ = [
 DEFAULT_RESOLUTION = 0.05
 #: Unknown margin around the bounding box (HouseExpo's renders pad 25 px at 1 cm).
 DEFAULT_MARGIN = 0.25
-
-_SHIFT = 8  # sub-pixel bits for OpenCV drawing
-_SCALE = 1 << _SHIFT
 
 
 def houseexpo_to_world(x, y, theta=None):
@@ -156,33 +160,10 @@ def load_houseexpo(
 
 
 # --------------------------------------------------------------------------- drawing
-def _to_cv(xy: np.ndarray, x0: float, y0: float, res: float, pad: int) -> np.ndarray:
-    """Plan metres -> fixed-point OpenCV coordinates (pixel centres at integers)."""
-    u = (xy[:, 0] - x0) / res + pad - 0.5
-    v = (xy[:, 1] - y0) / res + pad - 0.5
-    return np.round(np.stack([u, v], axis=1) * _SCALE).astype(np.int32)
-
-
-def fill_polygon_centres(verts, x0, y0, res, pad, shape) -> np.ndarray:
-    """uint8 mask of the pixels whose centre lies inside the polygon (exact test).
-
-    ``cv2.fillPoly`` fills quickly but also takes pixels its edges touch; every pixel
-    within a pixel of the outline is re-decided by an exact point-in-polygon test of
-    its centre (``matplotlib.path.Path``, which also copes with self-touching rings).
-    """
-    from matplotlib.path import Path as MplPath
-
-    ring = _to_cv(verts, x0, y0, res, pad)
-    mask = np.zeros(shape, np.uint8)
-    cv2.fillPoly(mask, [ring], 1, lineType=cv2.LINE_8, shift=_SHIFT)
-    band = np.zeros(shape, np.uint8)
-    cv2.polylines(band, [ring], True, 1, thickness=3, lineType=cv2.LINE_8, shift=_SHIFT)
-    rows, cols = np.nonzero(band)
-    # continuous pixel coordinates of the plan (pixel (r, c) spans [c, c + 1) x [r, r + 1))
-    uv = np.stack([(verts[:, 0] - x0) / res + pad, (verts[:, 1] - y0) / res + pad], axis=1)
-    inside = MplPath(uv, closed=False).contains_points(np.stack([cols + 0.5, rows + 0.5], axis=1))
-    mask[rows, cols] = inside
-    return mask
+def _to_px(xy: np.ndarray, x0: float, y0: float, res: float, pad: int) -> np.ndarray:
+    """Plan metres -> continuous pixel coordinates (u = column, v = row)."""
+    xy = np.asarray(xy, float)
+    return np.stack([(xy[:, 0] - x0) / res + pad, (xy[:, 1] - y0) / res + pad], axis=1)
 
 
 def _rings(geom) -> list[np.ndarray]:
@@ -197,12 +178,7 @@ def _rings(geom) -> list[np.ndarray]:
 
 def thin_wall_parts(polygon: Polygon, bounds, resolution: float):
     """The parts of the wall region (bounds minus polygon) thinner than two pixels."""
-    walls = box(*bounds).difference(polygon)
-    r = resolution
-    opened = walls.buffer(-r, join_style="mitre").buffer(r, join_style="mitre")
-    thin = walls.difference(opened)
-    eps = 1e-4 * resolution  # drop numerical slivers along thick walls
-    return thin.buffer(-eps, join_style="mitre").buffer(eps, join_style="mitre")
+    return thin_parts(box(*bounds).difference(polygon), 2.0 * resolution)
 
 
 def rasterise_houseexpo(
@@ -249,25 +225,23 @@ def rasterise_houseexpo(
     h_in = max(1, int(math.ceil((y1 - y0) / res - 1e-9)))
     h, w = h_in + 2 * pad, w_in + 2 * pad
 
-    free = fill_polygon_centres(verts, x0, y0, res, pad, (h, w))
+    free = fill_exact((h, w), [_to_px(verts, x0, y0, res, pad)])
     inside_box = np.zeros((h, w), bool)
     inside_box[pad : pad + h_in, pad : pad + w_in] = True
-    walls = np.zeros((h, w), np.uint8)
+    walls = np.zeros((h, w), bool)
     if thin_walls:
         polygon = Polygon(verts)
         if polygon.is_valid:
-            thin = thin_wall_parts(polygon, bounds, res)
-            rings = [_to_cv(r, x0, y0, res, pad) for r in _rings(thin)]
-            if rings:
-                cv2.fillPoly(walls, rings, 1, lineType=cv2.LINE_8, shift=_SHIFT)
+            rings = [
+                _to_px(r, x0, y0, res, pad) for r in _rings(thin_wall_parts(polygon, bounds, res))
+            ]
+            walls = fill_exact((h, w), rings) | trace((h, w), rings)
         else:  # zero-width slits have no area: trace the whole outline
-            rings = [_to_cv(verts, x0, y0, res, pad)]
-        if rings:
-            cv2.polylines(walls, rings, True, 1, lineType=cv2.LINE_4, shift=_SHIFT)
+            walls = trace((h, w), [_to_px(verts, x0, y0, res, pad)], closed=True)
     data = np.full((h, w), UNKNOWN, np.uint8)
     data[inside_box] = OCCUPIED
-    data[(free > 0) & (walls == 0)] = FREE
-    data[walls > 0] = OCCUPIED
+    data[free & ~walls] = FREE
+    data[walls] = OCCUPIED
     # free space is closed: unknown cells touching free ones are wall
     near_free = cv2.dilate((data == FREE).astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
     data[near_free & (data == UNKNOWN)] = OCCUPIED

@@ -53,15 +53,8 @@ class DeformJob:
 
 def load_plan(path: Path, resolution: float | None = None) -> OccupancyMap:
     """Read a plan with :func:`map2map.maps.formats.load_map` (any supported format)."""
-    try:
-        from ..maps.formats import load_map
-    except ImportError:  # pragma: no cover - until branch formats provides maps.formats
-        from ..maps.image import load_image_map
-        from ..maps.ros import load_ros_map
+    from ..maps.formats import load_map
 
-        if Path(path).suffix.lower() in (".yaml", ".yml"):
-            return load_ros_map(path)
-        return load_image_map(path, resolution=resolution)
     return load_map(path, resolution=resolution)
 
 

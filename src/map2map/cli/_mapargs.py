@@ -1,0 +1,103 @@
+"""Input-map options shared by the commands that read a map (``convert``, ``show``)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from ..maps.dxf import UNITS
+from ..maps.ros import MODES
+
+
+def add_input_options(p: argparse.ArgumentParser) -> None:
+    """Add the options of :func:`map2map.maps.formats.load_map` to a parser."""
+    g = p.add_argument_group(
+        "reading the input",
+        "Options apply only to the formats named; others are refused.",
+    )
+    g.add_argument(
+        "--resolution",
+        type=float,
+        metavar="R",
+        help="metres per pixel for pictures, HouseExpo JSON and DXF (default: stored in "
+        "the picture, else 0.05)",
+    )
+    g.add_argument(
+        "--occupied-thresh",
+        type=float,
+        metavar="P",
+        help="ROS yaml / picture: occupancy above which a pixel is occupied (default 0.65)",
+    )
+    g.add_argument(
+        "--free-thresh",
+        type=float,
+        metavar="P",
+        help="ROS yaml / picture: occupancy below which a pixel is free (default 0.196)",
+    )
+    g.add_argument(
+        "--negate",
+        action="store_true",
+        default=None,
+        help="ROS yaml / picture: white is occupied, black free",
+    )
+    g.add_argument("--mode", choices=MODES, help="ROS yaml: override the map_server mode")
+    g.add_argument(
+        "--layers",
+        action="append",
+        metavar="NAMES",
+        help="DXF: layers to draw, comma-separated or repeated (default: all)",
+    )
+    g.add_argument(
+        "--wall-thickness",
+        type=float,
+        metavar="T",
+        help="DXF: wall thickness in metres (default 0.1)",
+    )
+    g.add_argument(
+        "--units", choices=sorted(UNITS), help="DXF: drawing units (default: from $INSUNITS)"
+    )
+
+
+def _split_layers(values: list[str] | None) -> list[str] | None:
+    if values is None:
+        return None
+    names = [name.strip() for value in values for name in value.split(",")]
+    return [name for name in names if name]
+
+
+def load_from_args(args: argparse.Namespace):
+    """Load ``args.input`` with the options of :func:`add_input_options`."""
+    from ..maps.formats import load_map
+
+    m = load_map(
+        args.input,
+        resolution=args.resolution,
+        occupied_thresh=args.occupied_thresh,
+        free_thresh=args.free_thresh,
+        negate=args.negate,
+        mode=args.mode,
+        layers=_split_layers(args.layers),
+        wall_thickness=args.wall_thickness,
+        units=args.units,
+    )
+    if m.meta.get("resolution_assumed"):
+        print(
+            f"map2map: note: {args.input}: no resolution given or stored; assuming "
+            f"{m.resolution:g} m/px (use --resolution)",
+            file=sys.stderr,
+        )
+    if "entities" in m.meta:  # DXF: say what was drawn and what was left out
+        drawn = ", ".join(f"{n} {k}" for k, n in sorted(m.meta["entities"].items()))
+        left = ", ".join(f"{n} {k}" for k, n in sorted(m.meta.get("skipped_entities", {}).items()))
+        layers = m.meta.get("layers", [])
+        print(
+            f"read {args.input}: {drawn} on layer{'s' if len(layers) > 1 else ''} "
+            f"{', '.join(layers)}" + (f"; ignored {left}" if left else "")
+        )
+    if m.meta.get("units_assumed"):
+        print(
+            f"map2map: note: {args.input}: the drawing has no units; reading it as metres "
+            "(use --units)",
+            file=sys.stderr,
+        )
+    return m

@@ -1,0 +1,268 @@
+"""DXF floor plans built with ezdxf: entities, layers, blocks, units, inside/outside."""
+
+import math
+
+import ezdxf
+import numpy as np
+import pytest
+from scipy import ndimage as ndi
+
+from map2map.errors import InputError
+from map2map.maps.dxf import load_dxf
+from map2map.maps.formats import load_map, save_map
+from map2map.maps.grid import OccupancyMap
+
+RES = 0.05
+
+
+def save(doc, tmp_path, name="plan.dxf"):
+    path = tmp_path / name
+    doc.saveas(path)
+    return path
+
+
+def at(m, x, y):
+    r, c = m.world_to_pixel(x, y)
+    return int(m.data[int(r), int(c)])
+
+
+def components(mask):
+    return ndi.label(mask, np.ones((3, 3), bool))[1]
+
+
+def room(msp, x0, y0, x1, y1, **attribs):
+    return msp.add_lwpolyline(
+        [(x0, y0), (x1, y0), (x1, y1), (x0, y1)], close=True, dxfattribs=attribs
+    )
+
+
+def test_closed_room_is_free_inside_unknown_outside(tmp_path):
+    doc = ezdxf.new(units=6)
+    room(doc.modelspace(), 0, 0, 4, 3)
+    m = load_dxf(save(doc, tmp_path), resolution=RES, wall_thickness=0.1)
+    assert at(m, 2, 1.5) == 255 and at(m, -0.3, 1.5) == 127 and at(m, 0, 1.5) == 0
+    # walls are exactly 0.1 m = 2 px thick: free is (4 - 0.1) x (3 - 0.1) m
+    assert int(m.free.sum()) == round(3.9 * 2.9 / RES**2)
+    row = m.data[m.world_to_pixel(2, 1.5)[0]]
+    assert (row == 0).sum() == 4
+    assert m.meta["entities"] == {"LWPOLYLINE": 1} and m.meta["units"] in ("m", "Meters")
+
+
+def test_units_from_header_and_option(tmp_path):
+    mm = ezdxf.new(units=4)  # millimetres
+    room(mm.modelspace(), 0, 0, 4000, 3000)
+    a = load_dxf(save(mm, tmp_path, "mm.dxf"), resolution=RES)
+    metres = ezdxf.new(units=6)
+    room(metres.modelspace(), 0, 0, 4, 3)
+    b = load_dxf(save(metres, tmp_path, "m.dxf"), resolution=RES)
+    assert a == b
+    plain = ezdxf.new()
+    plain.header["$INSUNITS"] = 0
+    room(plain.modelspace(), 0, 0, 400, 300)
+    c = load_dxf(save(plain, tmp_path, "cm.dxf"), resolution=RES, units="cm")
+    assert c == b
+    assert load_dxf(tmp_path / "cm.dxf", resolution=1.0).meta["units_assumed"] is True
+
+
+def test_lines_with_a_door_gap_and_the_outside_stays_out(tmp_path):
+    doc = ezdxf.new(units=6)
+    msp = doc.modelspace()
+    # a 5 x 4 m flat made of LINEs; the entrance in the bottom wall is a 0.9 m opening
+    for a, b in [((0, 0), (2, 0)), ((2.9, 0), (5, 0)), ((5, 0), (5, 4)), ((5, 4), (0, 4))]:
+        msp.add_line(a, b)
+    msp.add_line((0, 4), (0, 0))
+    m = load_dxf(save(doc, tmp_path), resolution=RES, wall_thickness=0.1)
+    assert at(m, 2.5, 2) == 255  # inside is free although the door is open
+    assert at(m, 2.45, 0.0) == 255  # the opening itself is free, not wall
+    assert at(m, 2.5, -0.4) == 127
+    # without gap closing the outside floods in through the door
+    m0 = load_dxf(tmp_path / "plan.dxf", resolution=RES, close_gaps=0)
+    assert at(m0, 2.5, 2) == 127
+
+
+def test_arcs_circles_and_bulged_polylines(tmp_path):
+    doc = ezdxf.new(units=6)
+    msp = doc.modelspace()
+    msp.add_circle((0, 0), 2.0)
+    # a semicircular room: an ARC closed by a LINE, 10 m away
+    msp.add_arc((10, 0), 2.0, 0, 180)
+    msp.add_line((8, 0), (12, 0))
+    # an old-style POLYLINE whose bulge makes a half circle (radius 1) on top of a square
+    msp.add_polyline2d(
+        [(20, 0, 0, 0, 0), (22, 0, 0, 0, 1.0), (22, 2, 0, 0, 0), (20, 2, 0, 0, 0)],
+        format="xyseb",
+        close=True,
+    )
+    m = load_dxf(save(doc, tmp_path), resolution=RES, wall_thickness=0.1)
+    area = m.free.sum() * RES**2
+    expect = math.pi * 1.95**2 + 0.5 * math.pi * 1.95**2 - 2 * 1.95 * 0.05
+    expect += 1.9 * 1.9 + 0.5 * math.pi * 0.95**2 + 0.05 * 1.9
+    assert abs(area - expect) < 0.04 * expect
+    assert at(m, 0, 0) == 255 and at(m, 10, 1) == 255 and at(m, 22.5, 1) == 255
+    assert at(m, 10, -0.5) == 127 and at(m, 23.2, 1) == 127
+    assert components(m.free) == 3
+
+
+def test_hatch_is_solid_wall(tmp_path):
+    doc = ezdxf.new(units=6)
+    msp = doc.modelspace()
+    room(msp, 0, 0, 4, 4)
+    hatch = msp.add_hatch()
+    hatch.paths.add_polyline_path([(1.5, 1.5), (2.5, 1.5), (2.5, 2.5), (1.5, 2.5)], is_closed=True)
+    m = load_dxf(save(doc, tmp_path), resolution=RES)
+    assert at(m, 2, 2) == 0 and at(m, 1, 1) == 255
+    assert m.occupied[m.world_to_pixel(2.2, 2.2)] and m.meta["entities"]["HATCH"] == 1
+
+
+def test_blocks_are_expanded_with_their_insert_layer(tmp_path):
+    doc = ezdxf.new(units=6)
+    doc.layers.add("WALLS")
+    doc.layers.add("FURNITURE")
+    block = doc.blocks.new("ROOM")
+    room(block, 0, 0, 2, 1)  # on layer 0: takes the INSERT's layer
+    msp = doc.modelspace()
+    msp.add_blockref("ROOM", (10, 5), dxfattribs={"layer": "WALLS", "rotation": 90, "xscale": 2})
+    room(msp, 0, 0, 1, 1, layer="FURNITURE")
+    m = load_dxf(save(doc, tmp_path), resolution=RES, layers=["walls"])
+    # rotated by 90 degrees and stretched 2x along x: the room spans x 9..10, y 5..9
+    assert at(m, 9.5, 7) == 255 and at(m, 10.5, 7) == 127
+    assert m.meta["layers"] == ["WALLS"]
+    assert not m.contains(*m.world_to_pixel(0.5, 0.5))  # furniture layer left out
+    both = load_dxf(tmp_path / "plan.dxf", resolution=RES)
+    assert at(both, 0.5, 0.5) == 255 and at(both, 9.5, 7) == 255
+
+
+def test_mline_walls(tmp_path):
+    doc = ezdxf.new(units=6)
+    ml = doc.modelspace().add_mline([(0, 0), (4, 0), (4, 3), (0, 3)], close=True)
+    ml.dxf.scale_factor = 0.2  # a 0.2 m thick wall drawn as two parallel lines
+    ml.update_geometry()
+    m = load_dxf(save(doc, tmp_path), resolution=RES, wall_thickness=0.02)
+    assert at(m, 2, 1.5) == 255 and at(m, 0, 1.5) == 0 and at(m, -0.5, 1.5) == 127
+    assert components(m.free) == 1
+
+
+def test_wide_polylines_keep_their_width(tmp_path):
+    doc = ezdxf.new(units=6)
+    pl = room(doc.modelspace(), 0, 0, 4, 3)
+    pl.dxf.const_width = 0.3  # drawn 30 cm wide in the CAD file
+    m = load_dxf(save(doc, tmp_path), resolution=RES, wall_thickness=0.1)
+    row = m.data[m.world_to_pixel(2, 1.5)[0]]
+    assert (row == 0).sum() == 2 * 6  # two walls of 0.3 m = 6 px
+    assert int(m.free.sum()) == round(3.7 * 2.7 / RES**2)
+
+
+def test_double_line_walls_have_no_free_cavity(tmp_path):
+    doc = ezdxf.new(units=6)
+    msp = doc.modelspace()
+    room(msp, 0, 0, 4, 3)
+    room(msp, 0.2, 0.2, 3.8, 2.8)  # inner face: the wall is drawn as two lines 0.2 m apart
+    m = load_dxf(save(doc, tmp_path), resolution=RES, wall_thickness=0.02)
+    assert at(m, 0.1, 1.5) == 0 and at(m, 2, 1.5) == 255
+    assert components(m.free) == 1
+
+
+def test_thin_slanted_wall_still_separates_rooms(tmp_path):
+    doc = ezdxf.new(units=6)
+    msp = doc.modelspace()
+    room(msp, 0, 0, 4, 4)
+    msp.add_line((0, 0.3), (4, 3.7))  # a slanted wall 1 cm thick, far thinner than a pixel
+    m = load_dxf(save(doc, tmp_path), resolution=RES, wall_thickness=0.01)
+    assert components(m.free) == 2
+
+
+# ------------------------------------------------------------------ bad input
+def test_no_entities_on_chosen_layers(tmp_path):
+    doc = ezdxf.new(units=6)
+    doc.layers.add("TEXT")
+    msp = doc.modelspace()
+    room(msp, 0, 0, 4, 3)
+    msp.add_text("Kitchen", dxfattribs={"layer": "TEXT"})
+    path = save(doc, tmp_path)
+    with pytest.raises(InputError, match="no drawable entities"):
+        load_dxf(path, layers=["TEXT"])
+    with pytest.raises(InputError, match="no layer named nope"):
+        load_dxf(path, layers=["nope"])
+    empty = ezdxf.new()
+    with pytest.raises(InputError, match="no drawable entities"):
+        load_dxf(save(empty, tmp_path, "empty.dxf"))
+
+
+def test_bad_files_and_parameters(tmp_path):
+    with pytest.raises(InputError, match="file not found"):
+        load_dxf(tmp_path / "absent.dxf")
+    (tmp_path / "junk.dxf").write_bytes(b"\x00\x01 certainly not a drawing \xff" * 10)
+    with pytest.raises(InputError, match="not a readable DXF"):
+        load_dxf(tmp_path / "junk.dxf")
+    doc = ezdxf.new()
+    doc.header["$INSUNITS"] = 0
+    room(doc.modelspace(), 0, 0, 40000, 30000)  # millimetres without units: 40 km wide
+    with pytest.raises(InputError, match="give the right --units"):
+        load_dxf(save(doc, tmp_path, "huge.dxf"))
+    with pytest.raises(InputError, match="resolution must be > 0"):
+        load_dxf(tmp_path / "huge.dxf", resolution=0)
+    with pytest.raises(InputError, match="wall thickness must be > 0"):
+        load_dxf(tmp_path / "huge.dxf", wall_thickness=-0.1)
+    with pytest.raises(InputError, match="units must be one of"):
+        load_dxf(tmp_path / "huge.dxf", units="furlong")
+
+
+# ------------------------------------------------------------------ writing
+def flat_map(origin=(-1.234, 5.678, 0.0)):
+    """A walled flat: 1 px and 3 px walls, a door, a staircase (diagonal) wall, a column."""
+    data = np.full((60, 90), 127, np.uint8)
+    data[5:55, 5:85] = 0
+    data[8:52, 8:82] = 255  # 3 px outer walls
+    data[8:52, 40] = 0  # 1 px interior wall ...
+    data[25:33, 40] = 255  # ... with a door
+    for k in range(15):  # a staircase wall, 8-connected steps made 4-connected
+        data[10 + k, 55 + k] = 0
+        data[10 + k, 56 + k] = 0
+    data[40:44, 65:69] = 0  # a column
+    return OccupancyMap(data, RES, origin)
+
+
+def aligned(a, b):
+    """b's cells on a's grid (both on one lattice): rows/cols offset of b in a."""
+    r, c = a.world_to_pixel(*b.pixel_to_world(0, 0))
+    return int(r), int(c)
+
+
+def test_export_round_trip_keeps_every_wall_cell(tmp_path):
+    m = flat_map()
+    save_map(m, tmp_path / "flat.dxf")
+    back = load_map(tmp_path / "flat.dxf")
+    assert back.resolution == m.resolution
+    r, c = aligned(back, m)
+    window = back.data[r : r + m.height, c : c + m.width]
+    assert np.array_equal(window == 0, m.occupied)  # every wall cell, no more, no less
+    assert np.array_equal(window == 255, m.free)  # enclosed free space comes back free
+    outside = np.ones(back.shape, bool)
+    outside[r : r + m.height, c : c + m.width] = False
+    assert (back.data[outside] == 127).all()
+
+
+def test_export_writes_a_hatch_in_metres_with_the_map_frame(tmp_path):
+    m = flat_map(origin=(10.0, 20.0, 0.0))
+    save_map(m, tmp_path / "flat.dxf")
+    doc = ezdxf.readfile(tmp_path / "flat.dxf")
+    hatches = doc.modelspace().query("HATCH")
+    assert len(hatches) == 1 and hatches[0].dxf.layer == "WALLS"
+    assert doc.header["$INSUNITS"] == 6
+    lo, hi = np.full(2, np.inf), np.full(2, -np.inf)
+    for path in hatches[0].paths:
+        pts = np.array([v[:2] for v in path.vertices])
+        lo, hi = np.minimum(lo, pts.min(0)), np.maximum(hi, pts.max(0))
+    # walls span cells 5..84 x 5..54: metres from the origin, 1 % of a cell inside
+    assert np.allclose(lo, [10 + 5 * RES, 20 + 5 * RES], atol=0.02 * RES)
+    assert np.allclose(hi, [10 + 85 * RES, 20 + 55 * RES], atol=0.02 * RES)
+
+
+def test_export_of_a_rotated_map_is_drawn_rotated(tmp_path):
+    m = flat_map(origin=(0.3, -0.2, math.pi / 2))  # a quarter turn: still on a lattice
+    save_map(m, tmp_path / "rot.dxf")
+    back = load_map(tmp_path / "rot.dxf")
+    turned = OccupancyMap(np.rot90(m.data).copy(), RES, (0.3 - m.height * RES, -0.2, 0.0))
+    r, c = aligned(back, turned)
+    window = back.data[r : r + turned.height, c : c + turned.width]
+    assert np.array_equal(window == 0, turned.occupied)
