@@ -1,6 +1,7 @@
 """Demo stage: the parametric CAD->SLAM model on the demo's generated plan (a few seconds).
 
-Writes under ``<out>/parametric/``: the roadmap and trajectory (thesis Fig. 3.3), the
+The robot tours four roadmap nodes spread over the plan. Writes under
+``<out>/parametric/``: the roadmap and trajectory (thesis Fig. 3.3), the
 modelled SLAM map and its displacement field by the additive method of [58] (the files
 ``map2map deform`` writes) and, for comparison, the EKF method's figure (thesis Figs.
 5.13, 5.15). Plans larger than 320 pixels on a side are reduced by an integer factor
@@ -56,7 +57,7 @@ def stage_parametric(ctx) -> None:
     folder = ctx.out / "parametric"
     params = ParametricParams()
     traj_rng, model_rng = sample_rngs(ctx.seed)
-    traj, rm = make_trajectory(plan, params, traj_rng)
+    traj, rm = make_trajectory(plan, params, traj_rng, tour=4)
     roadmap = folder / "roadmap.png"
     folder.mkdir(parents=True, exist_ok=True)
     roadmap_figure(plan, rm, traj, roadmap)

@@ -28,7 +28,13 @@ from scipy import ndimage
 
 from ..errors import InputError
 from ..maps.grid import FREE, OCCUPIED, OccupancyMap
-from ..trajectory.prm import Roadmap, build_roadmap, path_through, random_start_goal
+from ..trajectory.prm import (
+    Roadmap,
+    build_roadmap,
+    path_through,
+    random_start_goal,
+    random_tour,
+)
 from ..trajectory.timing import Trajectory, time_waypoints, wrap_angle
 from .additive import additive_field
 from .ekf import ekf_field
@@ -130,12 +136,14 @@ def make_trajectory(
     start: tuple[float, float] | None = None,
     goal: tuple[float, float] | None = None,
     waypoints: np.ndarray | None = None,
+    tour: int = 0,
 ) -> tuple[Trajectory, Roadmap]:
     """A timed trajectory over the plan's roadmap (thesis 3.2, Fig. 3.3).
 
     With ``waypoints`` (W, 2, world metres) the path visits them in order; with ``start``
     and ``goal`` (world metres) it joins them; otherwise it joins two random roadmap
-    nodes. Raises :class:`InputError` for points outside the free space or not connected.
+    nodes, or, with ``tour`` > 2, tours that many roadmap nodes spread over the plan.
+    Raises :class:`InputError` for points outside the free space or not connected.
     """
     if not plan.free.any():
         raise InputError(None, "the plan has no free space")
@@ -165,7 +173,7 @@ def make_trajectory(
         rng=rng,
     )
     if pts is None:
-        pts = np.stack(random_start_goal(rm, rng))
+        pts = random_tour(rm, rng, tour) if tour > 2 else np.stack(random_start_goal(rm, rng))
     path_px = path_through(rm, pts, names)
     wx, wy = plan.pixel_to_world(path_px[:, 1], path_px[:, 0])
     traj = time_waypoints(

@@ -45,6 +45,7 @@ __all__ = [
     "shortest_path",
     "path_through",
     "random_start_goal",
+    "random_tour",
     "segments_clear",
     "shortcut_path",
 ]
@@ -322,3 +323,26 @@ def random_start_goal(
             break
     _, a, b = best
     return rm.nodes[a].copy(), rm.nodes[b].copy()
+
+
+def random_tour(rm: Roadmap, rng: np.random.Generator, n: int = 4) -> np.ndarray:
+    """``n`` roadmap nodes of its largest connected part spread over it (greedy farthest
+    point sampling from a random first node): waypoints of a tour that explores the plan.
+    Returns (n, 2) plan pixels.
+
+    >>> data = np.zeros((60, 100), np.uint8); data[5:55, 5:95] = 255
+    >>> from map2map.maps.grid import OccupancyMap
+    >>> rm = build_roadmap(OccupancyMap(data, 0.05), rng=np.random.default_rng(0))
+    >>> random_tour(rm, np.random.default_rng(1), 3).shape
+    (3, 2)
+    """
+    _, labels = connected_components(rm.graph, directed=False)
+    biggest = np.flatnonzero(labels == np.bincount(labels).argmax())
+    pts = rm.nodes[biggest]
+    chosen = [int(rng.integers(biggest.size))]
+    dist = np.hypot(*(pts - pts[chosen[0]]).T)
+    for _ in range(1, min(n, biggest.size)):
+        nxt = int(np.argmax(dist))
+        chosen.append(nxt)
+        dist = np.minimum(dist, np.hypot(*(pts - pts[nxt]).T))
+    return pts[chosen].copy()
