@@ -254,6 +254,26 @@ def test_real_houseexpo_plan_with_recorded_trajectory(shared_data):
     assert (res.map.data[res.observed] != 127).mean() > 0.99
 
 
+def test_rotated_map_frame(plan):
+    # a plan whose grid is rotated in the world (origin yaw): the trajectory still runs
+    # through its free space and the output keeps the frame
+    rot = plan.copy(origin=(2.0, -1.0, 0.4))
+    s, g = centre(rot, 10, 10), centre(rot, 70, 100)
+    traj, _ = make_trajectory(rot, ParametricParams(), np.random.default_rng(0), start=s, goal=g)
+    r, c = rot.world_to_pixel(traj.x, traj.y)
+    assert (rot.data[r, c] == FREE).all()
+    res = deform(rot, traj, "additive", ParametricParams().zero_error(), np.random.default_rng(0))
+    assert res.map.origin == rot.origin
+    assert np.array_equal(res.map.data[res.observed], rot.data[res.observed])
+    # while driving straight, the image angle of a pose is the direction of motion in pixels
+    i = int(np.flatnonzero(traj.v > 0)[0]) + 1
+    px = trajectory_to_pixels(
+        rot, traj.x[i : i + 6 : 5], traj.y[i : i + 6 : 5], traj.theta[i : i + 6 : 5]
+    )
+    motion = np.arctan2(px[1, 1] - px[0, 1], px[1, 0] - px[0, 0])
+    assert abs((px[0, 2] - motion + np.pi) % (2 * np.pi) - np.pi) < 1e-6
+
+
 def test_start_goal_errors(plan):
     p = ParametricParams()
     rng = np.random.default_rng(0)
