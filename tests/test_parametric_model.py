@@ -198,6 +198,24 @@ def test_ekf_and_additive_fields_have_similar_magnitude(plan, traj):
     assert 0.25 < float(np.median(ratios)) < 4.0
 
 
+def test_ekf_reference_initial_is_the_filter_correction_only(plan, traj):
+    p = ParametricParams(alpha_eb_std_deg=1.5, beta_std_deg=2.0)
+    full = deform(plan, traj, "ekf", p, np.random.default_rng(4))
+    corr = deform(
+        plan, traj, "ekf", dataclasses.replace(p, ekf_reference="initial"), np.random.default_rng(4)
+    )
+    assert not np.array_equal(full.field.dx, corr.field.dx)
+    zero = ParametricParams().zero_error()
+    z = deform(
+        plan,
+        traj,
+        "ekf",
+        dataclasses.replace(zero, ekf_reference="initial"),
+        np.random.default_rng(0),
+    )
+    assert np.abs(z.field.dx).max() < 1e-9
+
+
 def test_geometry_mode_and_180_degree_fov(plan, traj):
     p = ParametricParams(lidar_geometry="geometry", fov_deg=180)
     res = deform(plan, traj, "additive", p, np.random.default_rng(0))

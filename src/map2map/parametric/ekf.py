@@ -14,7 +14,10 @@ the landmarks seen so far, ``P`` their covariance:
 3. augmentation with the new landmarks (3.74-3.80).
 
 At the end, the final landmark estimates minus their original (plan) positions are the
-odometry deformation field at the landmarks; it is interpolated to every pixel.
+odometry deformation field at the landmarks ("the difference between the original and
+final state of each observed pixel"); it is interpolated to every pixel. With
+``ekf_reference="initial"`` the reference is instead the estimate each landmark was
+added with, so the field holds only the filter's corrections after that.
 
 Landmarks. The thesis makes every observed pixel a landmark, so the state grows to
 ``2 H W`` and a 256 x 256 run never finished. Here the landmarks are the observed wall
@@ -317,6 +320,7 @@ def ekf_field(
         P[:3, :3] = initial_covariance(sigma)
     Qs = process_noise(sigma) if k_poses > 1 else np.zeros((0, 3, 3))
     slot = np.full(n_lm, -1, np.int64)  # state column of each landmark's x
+    init = np.zeros((n_lm, 2))  # estimate each landmark was added with
     n = 3
     robot_error = np.zeros((k_poses, 3))
     for k in range(k_poses):
@@ -371,12 +375,15 @@ def ekf_field(
             cols = n + 2 * np.arange(m)
             X[cols] = X[0] + rr * np.cos(ang)
             X[cols + 1] = X[1] + rr * np.sin(ang)
+            init[ids[new], 0] = X[cols]
+            init[ids[new], 1] = X[cols + 1]
             jxr, jz = landmark_jacobians(rr, ang)
             n = augment_covariance(P, n, jxr, jz, rdiag[new])
             slot[ids[new]] = cols
     seen = slot >= 0
     est = np.stack([X[slot[seen]], X[slot[seen] + 1]], 1)
-    d_lm = (est - lm_true[seen]) / resolution
+    ref = lm_true[seen] if p.ekf_reference == "plan" else init[seen]
+    d_lm = (est - ref) / resolution
     ldx = np.zeros(n_lm)
     ldy = np.zeros(n_lm)
     ldx[seen], ldy[seen] = d_lm[:, 0], d_lm[:, 1]

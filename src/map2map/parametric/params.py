@@ -74,7 +74,10 @@ class ParametricParams:
     EKF conversion, eqs. 3.54-3.80
         ``ekf_max_landmarks`` 400 (wall pixels decimated on a regular grid to at most this
         many landmarks), ``ekf_range_var_min`` 1e-4 [m^2] and ``ekf_bearing_var_min``
-        3e-4 [rad^2] (floors of R, eq. 3.69, which is singular when a1 or b1 is zero).
+        3e-4 [rad^2] (floors of R, eq. 3.69, which is singular when a1 or b1 is zero),
+        ``ekf_reference`` "plan" (the field is the final landmark estimate minus the
+        landmark's plan position: the map error) or "initial" (minus the estimate the
+        landmark was added with: only the filter's later corrections).
     Roadmap (thesis Fig. 3.3, ref. [54])
         ``prm_nodes_per_m2`` 2.0, ``prm_k`` 10 nearest neighbours, ``prm_skeleton_step``
         0.4 [m] spacing of the extra nodes on the free-space skeleton.
@@ -126,6 +129,7 @@ class ParametricParams:
     ekf_max_landmarks: int = 400
     ekf_range_var_min: float = 1e-4
     ekf_bearing_var_min: float = 3e-4
+    ekf_reference: str = "plan"
     # roadmap
     prm_nodes_per_m2: float = 2.0
     prm_k: int = 10
@@ -160,6 +164,10 @@ def _check(p: ParametricParams) -> str | None:
         if f.name == "lidar_geometry":
             if v not in ("random", "geometry"):
                 return f"lidar_geometry must be 'random' or 'geometry', got {v!r}"
+            continue
+        if f.name == "ekf_reference":
+            if v not in ("plan", "initial"):
+                return f"ekf_reference must be 'plan' or 'initial', got {v!r}"
             continue
         if f.name == "z_weights":
             vals = tuple(v)
@@ -207,7 +215,7 @@ def params_from_dict(d: dict[str, Any], source: str = "parameters") -> Parametri
     kwargs: dict[str, Any] = {}
     for key, value in d.items():
         default = getattr(ParametricParams, key)
-        if key == "lidar_geometry":
+        if key in ("lidar_geometry", "ekf_reference"):
             kwargs[key] = value
             continue
         if key == "z_weights":
