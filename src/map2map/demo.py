@@ -17,6 +17,8 @@ from typing import Any
 from tqdm.auto import tqdm
 
 from ._io import ensure_output_dir
+from .maps.prep_demo import stage_prep
+from .parametric.demo_stage import stage_parametric
 from .sim.demo_stage import stage_simulate
 
 __all__ = ["DemoContext", "STAGES", "run_demo"]
@@ -55,6 +57,8 @@ def _stage_plan(ctx: DemoContext) -> None:
 #: (name, function) of every demo stage, in order.
 STAGES: list[tuple[str, Callable[[DemoContext], None]]] = [
     ("plan", _stage_plan),
+    ("prep", stage_prep),
+    ("parametric", stage_parametric),
     ("simulate", stage_simulate),
 ]
 
