@@ -109,3 +109,16 @@ def test_bad_inputs_raise_input_error():
     tiny[2:10, 2:10] = 255
     with pytest.raises(InputError, match="too small"):
         simulate(OccupancyMap(tiny, 0.05), duration=5, progress=False)
+
+
+def test_demo_stage_writes_its_outputs(tmp_path):
+    from map2map.demo import DemoContext
+    from map2map.sim.demo_stage import stage_simulate
+
+    ctx = DemoContext(out=tmp_path, seed=0)
+    ctx.results["plan"] = two_rooms()
+    stage_simulate(ctx)
+    written = {p.name for _, p in ctx.written}
+    assert {"slam_map.yaml", "run.log", "report.json", "figure.png", "exploration.gif"} <= written
+    assert all(p.exists() for _, p in ctx.written)
+    assert ctx.results["sim"].coverage > 0.9
