@@ -10,10 +10,16 @@ from .maps import (
     OCCUPIED,
     UNKNOWN,
     OccupancyMap,
+    crop_to_content,
+    generate_floorplan,
+    harmonise,
     load_map,
+    preprocess,
     save_map,
     save_map_figure,
+    square_resize,
     ternarize,
+    thicken,
 )
 
 __all__ = [
@@ -27,4 +33,10 @@ __all__ = [
     "load_map",
     "save_map",
     "save_map_figure",
+    "generate_floorplan",
+    "square_resize",
+    "harmonise",
+    "thicken",
+    "crop_to_content",
+    "preprocess",
 ]

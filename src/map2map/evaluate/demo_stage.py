@@ -1,9 +1,11 @@
 """Demo stage: evaluate the demo's SLAM-like maps against its floor plan.
 
-Takes the plan from ``ctx.results["plan"]`` and every SLAM-like map earlier stages
-left (``deformed_maps``, ``sim_map``, ``slam_map``, ``slam_maps``). When there is
-none, it builds one itself with *known* errors (two walls built out of place and a
-smooth bend) and prints the measured errors beside the true ones.
+Takes the plan from ``ctx.results["plan"]`` and the SLAM-like maps earlier stages
+left: the simulator's SLAM map (``ctx.results["sim"].slam_map``), the parametric
+model's maps (``ctx.results["parametric"]``, ``["parametric_ekf"]``, on the reduced
+plan they were modelled on) and any ``deformed_maps`` / ``slam_map(s)``. When there
+is none, it bends the plan by a smooth *known* field itself and prints the measured
+errors beside the true ones.
 """
 
 from __future__ import annotations
@@ -16,19 +18,26 @@ from .pipeline import evaluate_maps
 
 __all__ = ["stage_evaluate"]
 
-_KEYS = ("deformed_maps", "sim_map", "slam_map", "slam_maps")
 
+def _slam_maps(results: dict, plan: OccupancyMap) -> list[tuple[str, OccupancyMap, OccupancyMap]]:
+    """(name, SLAM-like map, plan it models) of every map the earlier stages left."""
+    found: list[tuple[str, OccupancyMap, OccupancyMap]] = []
+    sim = results.get("sim")
+    if isinstance(getattr(sim, "slam_map", None), OccupancyMap):
+        found.append(("simulated_slam", sim.slam_map, getattr(sim, "plan", plan)))
+    for key in ("parametric", "parametric_ekf"):
+        res = results.get(key)
+        if isinstance(getattr(res, "map", None), OccupancyMap):
+            from ..parametric.demo_stage import reduce_plan  # the plan the model ran on
 
-def _slam_maps(results: dict) -> list[tuple[str, OccupancyMap]]:
-    found = []
-    for key in _KEYS:
+            found.append((key, res.map, reduce_plan(plan)))
+    for key in ("deformed_maps", "sim_map", "slam_map", "slam_maps"):
         v = results.get(key)
-        if isinstance(v, OccupancyMap):
-            found.append((key, v))
-        elif isinstance(v, dict):
-            found += [(f"{key}_{k}", m) for k, m in v.items() if isinstance(m, OccupancyMap)]
-        elif isinstance(v, list | tuple):
-            found += [(f"{key}_{i}", m) for i, m in enumerate(v) if isinstance(m, OccupancyMap)]
+        items = v.items() if isinstance(v, dict) else enumerate(v or ()) if isinstance(
+            v, list | tuple) else [("", v)]  # fmt: skip
+        for k, m in items:
+            if isinstance(m, OccupancyMap):
+                found.append((f"{key}_{k}".rstrip("_"), m, plan))
     return found[:3]  # a few seconds each at most
 
 
@@ -52,19 +61,19 @@ def stage_evaluate(ctx) -> None:
         from .synthetic import draw_walls, office_walls
 
         plan = OccupancyMap(draw_walls((280, 360), office_walls(360, 280, thickness=4)), 0.05)
-    maps = _slam_maps(ctx.results)
+    maps = _slam_maps(ctx.results, plan)
     truth = None
     if not maps:
         bent, truth = _known_errors(plan, ctx.seed)
-        maps = [("known_bend", bent)]
+        maps = [("known_bend", bent, plan)]
     summary = {}
-    for name, m in maps:
+    for name, m, ref in maps:
         out = ctx.out / "evaluate" / name
         out.mkdir(parents=True, exist_ok=True)
-        res = plan.resolution
-        ev = evaluate_maps(m, plan, resolution=res, rigid_scale=m.resolution / res,
+        res = ref.resolution
+        ev = evaluate_maps(m, ref, resolution=res, rigid_scale=m.resolution / res,
                            names=(name, "plan"))  # fmt: skip
-        paths = write_evaluation(ev, plan, out, res)
+        paths = write_evaluation(ev, ref, out, res)
         for what, p in paths.items():
             ctx.wrote(f"evaluation {name}: {what.replace('_', ' ')}", p)
         e = ev.report["errors"][ev.chosen]

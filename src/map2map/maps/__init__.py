@@ -1,7 +1,9 @@
 """Maps: the occupancy-grid model, file formats, floor plans and preprocessing."""
 
+from .floorplan import generate_floorplan
 from .formats import load_map, save_map
 from .grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap, ternarize
+from .preprocess import crop_to_content, harmonise, preprocess, square_resize, thicken
 from .render import save_map_figure
 
 __all__ = [
@@ -13,4 +15,10 @@ __all__ = [
     "load_map",
     "save_map",
     "save_map_figure",
+    "generate_floorplan",
+    "square_resize",
+    "harmonise",
+    "thicken",
+    "crop_to_content",
+    "preprocess",
 ]

@@ -1,0 +1,121 @@
+"""``map2map simulate``: drive a simulated TurtleBot3 through a floor plan and map it."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+from ..errors import InputError
+from ._mapargs import add_input_options, load_from_args
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    from ..sim.mappers import available_mappers
+
+    p = sub.add_parser(
+        "simulate",
+        help="explore a floor plan with a simulated TurtleBot3 (LDS-01 lidar, wheel "
+        "odometry) and write the SLAM map, trajectories and a CARMEN log",
+        description="Simulate a TurtleBot3 Waffle Pi with an LDS-01 lidar and encoder "
+        "odometry in PLAN. By default it explores frontiers like ROS explore_lite for "
+        "--duration simulated seconds (7 minutes, as in the thesis); --waypoints or "
+        "--trajectory make it drive a route instead. Writes slam_map.yaml/.pgm in the "
+        "plan's frame, trajectory_true.csv, trajectory_estimated.csv (t,x,y,theta in the "
+        "plan frame), run.log (CARMEN: ODOM, TRUEPOS, RAWLASER1), report.json and "
+        "figure.png to --out. Route coordinates are in the plan's world frame (for a "
+        "HouseExpo JSON plan: HouseExpo's own x, y, theta, as its trajectory files).",
+        epilog="example: map2map simulate plan.yaml --out run1 --seed 3 --fov 180 --gif",
+    )
+    p.add_argument("input", metavar="PLAN", help="floor plan (any format convert reads)")
+    p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    p.add_argument(
+        "--duration",
+        type=float,
+        default=420.0,
+        metavar="SECONDS",
+        help="simulated time budget (default: 420 = 7 minutes)",
+    )
+    p.add_argument(
+        "--fov",
+        type=float,
+        choices=[360.0, 180.0],
+        default=360.0,
+        metavar="{360,180}",
+        help="lidar field of view in degrees (default: 360; the thesis used 180)",
+    )
+    p.add_argument(
+        "--mapper",
+        default="oracle",
+        help=f"mapping backend: {', '.join(available_mappers())} (default: oracle)",
+    )
+    route = p.add_mutually_exclusive_group()
+    route.add_argument("--waypoints", metavar="FILE", help="drive through waypoints (x y per line)")
+    route.add_argument(
+        "--trajectory",
+        metavar="FILE",
+        help="follow a recorded trajectory CSV (x,y,theta or t,x,y,theta)",
+    )
+    p.add_argument(
+        "--start",
+        nargs=3,
+        type=float,
+        metavar=("X", "Y", "THETA"),
+        help="true start pose in the plan frame (default: random, or the route's start)",
+    )
+    p.add_argument("--obstacles", type=int, default=0, metavar="N", help="random furniture boxes")
+    p.add_argument("--people", type=int, default=0, metavar="N", help="people walking around")
+    p.add_argument("--gif", action="store_true", help="also write exploration.gif")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_input_options(p)
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..sim.routes import read_route
+    from ..sim.runner import save_run, simulate
+
+    if not (math.isfinite(args.duration) and args.duration > 0):
+        raise InputError("--duration", f"duration must be > 0 seconds, got {args.duration:g}")
+    if args.obstacles < 0 or args.people < 0:
+        raise InputError("--obstacles/--people", "counts must be >= 0")
+    plan = load_from_args(args)
+    route, route_file = None, None
+    if args.waypoints or args.trajectory:
+        route_file = args.waypoints or args.trajectory
+        kind = "waypoints" if args.waypoints else "trajectory"
+        route = read_route(route_file, kind)
+        if Path(args.input).suffix.lower() == ".json":  # HouseExpo: y axis flipped
+            route = route.copy()
+            route[:, 1] *= -1
+            if route.shape[1] == 3:
+                route[:, 2] *= -1
+    start = tuple(args.start) if args.start else None
+    if start is not None and Path(args.input).suffix.lower() == ".json":
+        start = (start[0], -start[1], -start[2])
+    res = simulate(
+        plan,
+        seed=args.seed,
+        duration=args.duration,
+        fov=args.fov,
+        mapper=args.mapper,
+        route=route,
+        obstacles=args.obstacles,
+        people=args.people,
+        start=start,
+        frame_every=2.0 if args.gif else 0.0,
+        progress=not args.quiet,
+        source=args.input,
+        route_source=route_file,
+    )
+    paths = save_run(res, args.out, gif=args.gif)
+    rep = res.report()
+    print(
+        f"simulated {rep['simulated_seconds']:.0f} s ({rep['stop_reason']}) in "
+        f"{rep['wall_seconds']:.1f} s: coverage {100 * rep['coverage']:.1f} %, "
+        f"path {rep['path_length_m']:.1f} m, {rep['collisions']} collisions"
+    )
+    for name, path in paths.items():
+        print(f"  {name:<22s} {path}")
+    return 0
