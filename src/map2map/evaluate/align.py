@@ -102,6 +102,7 @@ class AlignParams:
     surface_sigmas: tuple[float, ...] = (2.0, 1.0)
     full_sigmas: tuple[float, ...] = (1.5, 1.0)
     line_sigmas: tuple[float, ...] = (8.0, 6.0)
+    affine_line: bool = True
     auto_anchor: bool = True
     max_points: int = 20000
     seed: int = 0
@@ -504,6 +505,7 @@ def align_maps(
         )
 
     passed = best is not None
+    line_plan = False
     fallback = "falling back to the best rigid" + (" anchored" if anchors else "") + " result"
     if passed and srch.score < p.min_score:
         passed = False
@@ -533,7 +535,8 @@ def align_maps(
             + " result"
         )
     if passed:
-        aff = refine(A3, edt3, sim, model="affine", sigmas=(1.5, 1.0), iterations=8, known=known3)
+        aff_sigmas = p.line_sigmas if line_plan and p.affine_line else (1.5, 1.0)
+        aff = refine(A3, edt3, sim, model="affine", sigmas=aff_sigmas, iterations=8, known=known3)
         rig = rigid_from(sim)
     else:
         S1, T1 = srch.levels
