@@ -87,7 +87,12 @@ class AlignParams:
 
     ``rigid_scale`` is the scale of the rigid variant: target pixels per source
     pixel for the same metric length (``res_source / res_target``); 1 when both
-    maps share a resolution, which the paper assumes.
+    maps share a resolution, which the paper assumes. ``min_score`` and
+    ``min_fitness`` decide whether any hypothesis passed. ``full_sigmas`` are the
+    final Gaussian widths (px) of the full-resolution fit, ``line_sigmas`` replace
+    them when one map draws its walls as lines (a plan) and ``affine_line`` applies
+    them to the affine refinement too; ``surface_sigmas`` are those of the final
+    face-to-face refinement.
     """
 
     scale_range: tuple[float, float] = (0.5, 2.0)
