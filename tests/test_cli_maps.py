@@ -72,6 +72,18 @@ def test_convert_every_format(inputs, tmp_path, capsys, name, suffix):
         assert (out.parent / "converted.pgm").exists()
 
 
+def test_convert_to_dxf_and_back(inputs, tmp_path, capsys):
+    """HouseExpo plan -> ROS map -> DXF drawing -> ROS map: the walls survive cell for cell."""
+    assert cli(capsys, "convert", inputs["dir"] / "plan.json", tmp_path / "a.yaml")[0] == 0
+    rc, out, err = cli(capsys, "convert", tmp_path / "a.yaml", tmp_path / "a.dxf")
+    assert rc == 0, err
+    assert cli(capsys, "convert", tmp_path / "a.dxf", tmp_path / "b.yaml")[0] == 0
+    a, b = load_map(tmp_path / "a.yaml"), load_map(tmp_path / "b.yaml")
+    r, c = (int(v) for v in b.world_to_pixel(*a.pixel_to_world(0, 0)))
+    window = b.data[r : r + a.height, c : c + a.width]
+    assert np.array_equal(window == 0, a.occupied) and np.array_equal(window == 255, a.free)
+
+
 def test_convert_ros_round_trip_is_exact(inputs, tmp_path, capsys):
     rc, _, _ = cli(capsys, "convert", inputs["dir"] / "ros.yaml", tmp_path / "a.yaml")
     assert rc == 0

@@ -9,7 +9,8 @@ from scipy import ndimage as ndi
 
 from map2map.errors import InputError
 from map2map.maps.dxf import load_dxf
-from map2map.maps.rasterize import segment_pixels, trace
+from map2map.maps.formats import load_map, save_map
+from map2map.maps.grid import OccupancyMap
 
 RES = 0.05
 
@@ -131,6 +132,26 @@ def test_blocks_are_expanded_with_their_insert_layer(tmp_path):
     assert at(both, 0.5, 0.5) == 255 and at(both, 9.5, 7) == 255
 
 
+def test_mline_walls(tmp_path):
+    doc = ezdxf.new(units=6)
+    ml = doc.modelspace().add_mline([(0, 0), (4, 0), (4, 3), (0, 3)], close=True)
+    ml.dxf.scale_factor = 0.2  # a 0.2 m thick wall drawn as two parallel lines
+    ml.update_geometry()
+    m = load_dxf(save(doc, tmp_path), resolution=RES, wall_thickness=0.02)
+    assert at(m, 2, 1.5) == 255 and at(m, 0, 1.5) == 0 and at(m, -0.5, 1.5) == 127
+    assert components(m.free) == 1
+
+
+def test_wide_polylines_keep_their_width(tmp_path):
+    doc = ezdxf.new(units=6)
+    pl = room(doc.modelspace(), 0, 0, 4, 3)
+    pl.dxf.const_width = 0.3  # drawn 30 cm wide in the CAD file
+    m = load_dxf(save(doc, tmp_path), resolution=RES, wall_thickness=0.1)
+    row = m.data[m.world_to_pixel(2, 1.5)[0]]
+    assert (row == 0).sum() == 2 * 6  # two walls of 0.3 m = 6 px
+    assert int(m.free.sum()) == round(3.7 * 2.7 / RES**2)
+
+
 def test_double_line_walls_have_no_free_cavity(tmp_path):
     doc = ezdxf.new(units=6)
     msp = doc.modelspace()
@@ -148,26 +169,6 @@ def test_thin_slanted_wall_still_separates_rooms(tmp_path):
     msp.add_line((0, 0.3), (4, 3.7))  # a slanted wall 1 cm thick, far thinner than a pixel
     m = load_dxf(save(doc, tmp_path), resolution=RES, wall_thickness=0.01)
     assert components(m.free) == 2
-
-
-@pytest.mark.parametrize("seed", range(5))
-def test_segment_pixels_is_an_exact_4_connected_supercover(seed):
-    rng = np.random.default_rng(seed)
-    p0, p1 = rng.uniform(0, 20, (2, 2))
-    rows, cols = segment_pixels(p0[None], p1[None])
-    got = set(zip(rows.tolist(), cols.tolist(), strict=True))
-    t = np.linspace(0, 1, 200001)
-    pts = p0 + t[:, None] * (p1 - p0)
-    crossed = set(
-        zip(
-            np.floor(pts[:, 1]).astype(int).tolist(),
-            np.floor(pts[:, 0]).astype(int).tolist(),
-            strict=True,
-        )
-    )
-    assert crossed <= got and len(got - crossed) <= 2
-    mask = trace((21, 21), [np.array([p0, p1])])
-    assert ndi.label(mask)[1] == 1  # 4-connected
 
 
 # ------------------------------------------------------------------ bad input
@@ -200,5 +201,68 @@ def test_bad_files_and_parameters(tmp_path):
         load_dxf(save(doc, tmp_path, "huge.dxf"))
     with pytest.raises(InputError, match="resolution must be > 0"):
         load_dxf(tmp_path / "huge.dxf", resolution=0)
+    with pytest.raises(InputError, match="wall thickness must be > 0"):
+        load_dxf(tmp_path / "huge.dxf", wall_thickness=-0.1)
     with pytest.raises(InputError, match="units must be one of"):
         load_dxf(tmp_path / "huge.dxf", units="furlong")
+
+
+# ------------------------------------------------------------------ writing
+def flat_map(origin=(-1.234, 5.678, 0.0)):
+    """A walled flat: 1 px and 3 px walls, a door, a staircase (diagonal) wall, a column."""
+    data = np.full((60, 90), 127, np.uint8)
+    data[5:55, 5:85] = 0
+    data[8:52, 8:82] = 255  # 3 px outer walls
+    data[8:52, 40] = 0  # 1 px interior wall ...
+    data[25:33, 40] = 255  # ... with a door
+    for k in range(15):  # a staircase wall, 8-connected steps made 4-connected
+        data[10 + k, 55 + k] = 0
+        data[10 + k, 56 + k] = 0
+    data[40:44, 65:69] = 0  # a column
+    return OccupancyMap(data, RES, origin)
+
+
+def aligned(a, b):
+    """b's cells on a's grid (both on one lattice): rows/cols offset of b in a."""
+    r, c = a.world_to_pixel(*b.pixel_to_world(0, 0))
+    return int(r), int(c)
+
+
+def test_export_round_trip_keeps_every_wall_cell(tmp_path):
+    m = flat_map()
+    save_map(m, tmp_path / "flat.dxf")
+    back = load_map(tmp_path / "flat.dxf")
+    assert back.resolution == m.resolution
+    r, c = aligned(back, m)
+    window = back.data[r : r + m.height, c : c + m.width]
+    assert np.array_equal(window == 0, m.occupied)  # every wall cell, no more, no less
+    assert np.array_equal(window == 255, m.free)  # enclosed free space comes back free
+    outside = np.ones(back.shape, bool)
+    outside[r : r + m.height, c : c + m.width] = False
+    assert (back.data[outside] == 127).all()
+
+
+def test_export_writes_a_hatch_in_metres_with_the_map_frame(tmp_path):
+    m = flat_map(origin=(10.0, 20.0, 0.0))
+    save_map(m, tmp_path / "flat.dxf")
+    doc = ezdxf.readfile(tmp_path / "flat.dxf")
+    hatches = doc.modelspace().query("HATCH")
+    assert len(hatches) == 1 and hatches[0].dxf.layer == "WALLS"
+    assert doc.header["$INSUNITS"] == 6
+    lo, hi = np.full(2, np.inf), np.full(2, -np.inf)
+    for path in hatches[0].paths:
+        pts = np.array([v[:2] for v in path.vertices])
+        lo, hi = np.minimum(lo, pts.min(0)), np.maximum(hi, pts.max(0))
+    # walls span cells 5..84 x 5..54: metres from the origin, 1 % of a cell inside
+    assert np.allclose(lo, [10 + 5 * RES, 20 + 5 * RES], atol=0.02 * RES)
+    assert np.allclose(hi, [10 + 85 * RES, 20 + 55 * RES], atol=0.02 * RES)
+
+
+def test_export_of_a_rotated_map_is_drawn_rotated(tmp_path):
+    m = flat_map(origin=(0.3, -0.2, math.pi / 2))  # a quarter turn: still on a lattice
+    save_map(m, tmp_path / "rot.dxf")
+    back = load_map(tmp_path / "rot.dxf")
+    turned = OccupancyMap(np.rot90(m.data).copy(), RES, (0.3 - m.height * RES, -0.2, 0.0))
+    r, c = aligned(back, turned)
+    window = back.data[r : r + turned.height, c : c + turned.width]
+    assert np.array_equal(window == 0, turned.occupied)

@@ -108,7 +108,7 @@ def test_rooms_doors_and_sizes(plans):
         # the known content is exactly the building
         r0, r1, c0, c1 = m.content_bbox()
         assert abs((c1 - c0) * res - w) < 1e-6 and abs((r1 - r0) * res - h) < 1e-6
-        labels = {r["label"] for r in meta["rooms"]}
+        labels = {r["category"] for r in meta["rooms"]}
         assert labels <= set(meta["room_category"]), seed
         if kind == "office":
             assert "Office" in labels or "Meeting_Room" in labels, labels
@@ -140,7 +140,7 @@ def test_furniture_is_inside_rooms_and_keeps_doors_clear():
 def test_explicit_wall_thickness_and_kinds():
     m = generate_floorplan(0, "office", size=(20, 12), wall_thickness=(0.15, 0.3))
     assert m.meta["wall_thickness"] == {"interior": 0.15, "outer": 0.3}
-    assert any(r["label"] == "Hallway" for r in m.meta["rooms"])
+    assert any(r["category"] == "Hallway" for r in m.meta["rooms"])
 
 
 @pytest.mark.parametrize(
@@ -153,11 +153,14 @@ def test_explicit_wall_thickness_and_kinds():
         ({"resolution": 0.5}, "between"),
         ({"kind": "castle"}, "unknown building kind"),
         ({"size": "big"}, "two numbers"),
+        ({"seed": -1}, "non-negative"),
+        ({"seed": 1.5}, "non-negative"),
     ],
 )
 def test_bad_arguments(kwargs, message):
+    kwargs = {"seed": 0, **kwargs}
     with pytest.raises(InputError, match=message):
-        generate_floorplan(0, **kwargs)
+        generate_floorplan(**kwargs)
 
 
 def test_connectivity_detects_pockets_and_splits():
@@ -174,3 +177,31 @@ def test_connectivity_detects_pockets_and_splits():
     data[10:20, 30:46] = OCCUPIED  # a cabinet leaving a 0.1 m slot against the wall
     res = connectivity(OccupancyMap(data, 0.05))
     assert res.components == 1 and res.unreachable.any()
+
+
+@pytest.mark.parametrize("kind", ["apartment", "office"])
+def test_every_size_from_4_to_30_m(kind):
+    sides = (4.0, 5.5, 7.0, 9.0, 13.0, 20.0, 30.0)
+    for i, w in enumerate(sides):
+        for j, h in enumerate(sides):
+            furniture = (i + j) % 2 == 1
+            m = generate_floorplan(i * 7 + j, kind, (w, h), resolution=0.1, furniture=furniture)
+            n, unreachable = scipy_connectivity(m)
+            assert n == 1 and unreachable == 0, (kind, w, h)
+            assert sum(r["kind"] == "room" for r in m.meta["rooms"]) >= 3, (kind, w, h)
+            assert m.meta["size_m"] == [w, h]
+
+
+def test_room_boxes_follow_the_houseexpo_convention():
+    from map2map.maps.houseexpo import room_labels
+
+    m = generate_floorplan(8, "apartment", size=(11, 8))
+    for r in m.meta["rooms"]:
+        x0, y0, x1, y1 = r["world_bbox"]
+        assert r["bbox"] == [x0, -y1, x1, -y0]
+        assert r["bbox"] in m.meta["room_category"][r["category"]]
+    labels, names = room_labels(m)  # the HouseExpo reader's helper places them right
+    assert names == [r["category"] for r in m.meta["rooms"]]
+    for k, r in enumerate(m.meta["rooms"]):
+        area = (labels == k + 1).sum() * m.resolution**2
+        assert area >= 0.5 * r["area"], (k, r["category"], area, r["area"])

@@ -154,3 +154,30 @@ def test_preprocess_chain():
 def test_bad_arguments(call, message):
     with pytest.raises(InputError, match=message):
         call(room_map())
+
+
+@pytest.mark.parametrize("size", [37, 64, 77, 100])
+def test_thin_walls_survive_any_reduction_factor(size):
+    rng = np.random.default_rng(size)
+    data = np.full((200, 300), FREE, np.uint8)
+    cols = rng.choice(np.arange(5, 295), 6, replace=False)
+    rows = rng.choice(np.arange(55, 245 - 50), 4, replace=False) - 50
+    data[:, cols] = OCCUPIED
+    data[rows, :] = OCCUPIED
+    m = OccupancyMap(data, 0.02)
+    s = square_resize(m, size)
+    f = int(np.ceil(300 / size))  # input pixels per output pixel; wall ends may shrink by that
+    along_r = np.arange(f, 200 - f, 3)
+    along_c = np.arange(f, 300 - f, 3)
+    for c in cols:  # every vertical wall is still there, at its world position, along its length
+        x, y = m.pixel_to_world(along_r, np.full(along_r.size, c))
+        r, cc = s.world_to_pixel(x, y)
+        near = np.stack([s.data[r, np.clip(cc + d, 0, size - 1)] for d in (-1, 0, 1)])
+        assert (near == OCCUPIED).any(axis=0).all(), (size, c)
+    for r0 in rows:
+        x, y = m.pixel_to_world(np.full(along_c.size, r0), along_c)
+        rr, c = s.world_to_pixel(x, y)
+        near = np.stack([s.data[np.clip(rr + d, 0, size - 1), c] for d in (-1, 0, 1)])
+        assert (near == OCCUPIED).any(axis=0).all(), (size, r0)
+    # and walls do not smear over the free space: free area keeps most of its share
+    assert s.free.mean() > 0.5 * m.free.mean() * (200 / 300)

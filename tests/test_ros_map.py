@@ -76,6 +76,14 @@ def test_sixteen_bit_picture_uses_its_full_range(tmp_path):
     assert m.data.tolist() == [[O, O, U, U, F, F]]
 
 
+def test_pgm_with_its_own_maximum_value(tmp_path):
+    """A PGM may declare maxval 100: 100 is white, as map_server's image readers scale it."""
+    path = write_map(tmp_path, np.zeros((1, 3), np.uint8))
+    (tmp_path / "m.pgm").write_bytes(b"P5\n3 1\n100\n\x00\x32\x64")
+    assert load_ros_map(path).data.tolist() == [[O, U, F]]
+    assert load_ros_map(path, flavor="ros1").data.tolist() == [[O, U, F]]
+
+
 # ----------------------------------------------------------------- scale
 def test_scale_mode_nav2_and_ros1_by_hand(tmp_path):
     # occ 0.6, free 0.2: v=153 -> p 0.4 -> ratio 0.5; v=110 -> p 0.5686 -> ratio 0.9216;

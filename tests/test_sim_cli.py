@@ -116,14 +116,14 @@ def test_bad_route_files(tmp_path, capsys):
     plan = room_plan(tmp_path)
     bad = tmp_path / "bad.txt"
     bad.write_text("0.6 0.6\n1.0 abc\n")
-    _bad(tmp_path, capsys, [str(plan), "--waypoints", str(bad)], "line 2: not a number")
+    _bad(tmp_path, capsys, [str(plan), "--waypoints", str(bad)], "line 2: not numbers")
     cols = tmp_path / "cols.csv"
     cols.write_text("1,2,3,4,5\n1,2,3,4,5\n")
     _bad(tmp_path, capsys, [str(plan), "--trajectory", str(cols)], "columns")
     wall = tmp_path / "wall.txt"
     wall.write_text("0.6 0.6\n5.0 0.6\n")  # leaves the room through the east wall
     _bad(tmp_path, capsys, [str(plan), "--waypoints", str(wall)], "wall.txt")
-    _bad(tmp_path, capsys, [str(plan), "--waypoints", str(tmp_path / "nope.txt")], "not found")
+    _bad(tmp_path, capsys, [str(plan), "--waypoints", str(tmp_path / "nope.txt")], "cannot read")
 
 
 def test_bad_mapper_and_missing_plan(tmp_path, capsys):

@@ -10,13 +10,17 @@ from .maps import (
     OCCUPIED,
     UNKNOWN,
     OccupancyMap,
+    crop_to_content,
+    generate_floorplan,
+    harmonise,
     load_map,
+    preprocess,
     save_map,
     save_map_figure,
+    square_resize,
     ternarize,
+    thicken,
 )
-from .maps.floorplan import generate_floorplan
-from .maps.preprocess import crop_to_content, harmonise, preprocess, square_resize, thicken
 
 __all__ = [
     "__version__",
@@ -26,13 +30,13 @@ __all__ = [
     "UNKNOWN",
     "OccupancyMap",
     "ternarize",
+    "load_map",
+    "save_map",
+    "save_map_figure",
     "generate_floorplan",
     "square_resize",
     "harmonise",
     "thicken",
     "crop_to_content",
     "preprocess",
-    "load_map",
-    "save_map",
-    "save_map_figure",
 ]

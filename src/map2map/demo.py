@@ -17,6 +17,9 @@ from typing import Any
 from tqdm.auto import tqdm
 
 from ._io import ensure_output_dir
+from .evaluate.demo_stage import stage_evaluate
+from .maps.prep_demo import stage_prep
+from .parametric.demo_stage import stage_parametric
 from .sim.demo_stage import stage_simulate
 from .slam import demo_stage as _slam_stage
 
@@ -56,8 +59,11 @@ def _stage_plan(ctx: DemoContext) -> None:
 #: (name, function) of every demo stage, in order.
 STAGES: list[tuple[str, Callable[[DemoContext], None]]] = [
     ("plan", _stage_plan),
+    ("prep", stage_prep),
+    ("parametric", stage_parametric),
     ("simulate", stage_simulate),
     ("slam", _slam_stage.stage_slam),
+    ("evaluate", stage_evaluate),  # keep last: it evaluates the maps the stages above made
 ]
 
 

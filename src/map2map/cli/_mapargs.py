@@ -86,6 +86,14 @@ def load_from_args(args: argparse.Namespace):
             f"{m.resolution:g} m/px (use --resolution)",
             file=sys.stderr,
         )
+    if "entities" in m.meta:  # DXF: say what was drawn and what was left out
+        drawn = ", ".join(f"{n} {k}" for k, n in sorted(m.meta["entities"].items()))
+        left = ", ".join(f"{n} {k}" for k, n in sorted(m.meta.get("skipped_entities", {}).items()))
+        layers = m.meta.get("layers", [])
+        print(
+            f"read {args.input}: {drawn} on layer{'s' if len(layers) > 1 else ''} "
+            f"{', '.join(layers)}" + (f"; ignored {left}" if left else "")
+        )
     if m.meta.get("units_assumed"):
         print(
             f"map2map: note: {args.input}: the drawing has no units; reading it as metres "

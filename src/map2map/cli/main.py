@@ -16,7 +16,18 @@ from .. import __version__
 from ..errors import EXIT_BAD_INPUT, InputError
 
 #: Command modules, in the order ``--help`` lists them.
-COMMANDS = ["demo", "convert", "show", "simulate", "slam"]
+COMMANDS = [
+    "demo",
+    "plan",
+    "convert",
+    "prep",
+    "show",
+    "deform",
+    "simulate",
+    "slam",
+    "align",
+    "evaluate",
+]
 
 
 def build_parser() -> argparse.ArgumentParser:

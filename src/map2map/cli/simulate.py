@@ -42,6 +42,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         type=float,
         choices=[360.0, 180.0],
         default=360.0,
+        metavar="{360,180}",
         help="lidar field of view in degrees (default: 360; the thesis used 180)",
     )
     p.add_argument(

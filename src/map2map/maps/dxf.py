@@ -1,9 +1,14 @@
 """DXF floor plans (read with ``ezdxf``) rasterised into occupancy maps.
 
+This is the appendix paper's first step of map matching (section 3.2): the
+as-planned CAD drawing is exported at the SLAM map's resolution and its cells are
+quantified to occupied 0, open 255 and unexplored 127.
+
 What is drawn
 -------------
-LINE, LWPOLYLINE, POLYLINE, ARC, CIRCLE, ELLIPSE and SPLINE entities on the chosen
-layers become walls ``wall_thickness`` metres thick (curves are flattened to within
+LINE, LWPOLYLINE, POLYLINE, ARC, CIRCLE, ELLIPSE, SPLINE and MLINE entities on the
+chosen layers become walls ``wall_thickness`` metres thick (polylines drawn with a
+larger constant width keep that width) (curves are flattened to within
 a quarter pixel, polyline bulges included); HATCH and SOLID entities are filled as
 solid wall. Block references (INSERT) are expanded, nested ones too; an entity on
 layer ``0`` inside a block takes the layer of its INSERT, as in CAD programs. Text,
@@ -52,20 +57,21 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
+import cv2
 import numpy as np
 import shapely
-from scipy import ndimage as ndi
-from shapely.geometry import LineString, Point
+from shapely.geometry import LineString, Point, Polygon
 
 from ..errors import InputError
 from .grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
-from .rasterize import fill_exact, trace
+from .rasterize import fill_exact, thin_parts, trace
 
 __all__ = [
     "UNITS",
     "DEFAULT_RESOLUTION",
     "DEFAULT_WALL_THICKNESS",
     "load_dxf",
+    "save_dxf",
     "dxf_layers",
 ]
 
@@ -80,10 +86,13 @@ _LINEAR = {"LINE", "LWPOLYLINE", "POLYLINE", "ARC", "CIRCLE", "ELLIPSE", "SPLINE
 _FILLED = {"HATCH", "SOLID", "TRACE"}
 
 
-def _polygon_rings(geom) -> list:
-    """Exterior and interior rings of a (multi)polygon."""
+def _polygon_rings(geoms) -> list:
+    """Exterior and interior rings of (multi)polygons."""
     out = []
-    for poly in getattr(geom, "geoms", [geom]):
+    parts = []
+    for geom in np.atleast_1d(np.asarray(geoms, dtype=object)):
+        parts.extend(getattr(geom, "geoms", [geom]))
+    for poly in parts:
         if poly.is_empty or poly.geom_type != "Polygon":
             continue
         out.append(poly.exterior)
@@ -103,7 +112,7 @@ def _gap_seals(strokes: list[np.ndarray], gap: float) -> list[np.ndarray]:
     geoms = [LineString(s_) if len(s_) > 1 else Point(s_[0]) for s_ in strokes]
     ends, owner = [], []
     for i, s_ in enumerate(strokes):
-        if len(s_) > 1 and not np.allclose(s_[0], s_[-1]):
+        if len(s_) > 1 and (s_[0] != s_[-1]).any():
             ends.extend([s_[0], s_[-1]])
             owner.extend([i, i])
     if not ends:
@@ -145,9 +154,14 @@ def _read(path: Path):
     if path.is_dir():
         raise InputError(path, "is a directory, not a DXF file")
     try:
-        doc, _auditor = recover.readfile(path)
+        try:
+            doc = ezdxf.readfile(path)
+        except ezdxf.DXFStructureError:  # damaged: let ezdxf's recover mode try
+            doc, _auditor = recover.readfile(path)
     except OSError as exc:
-        raise InputError(path, f"cannot read file ({exc.strerror or exc})") from None
+        if exc.errno is None:  # ezdxf's own "is not a DXF file"
+            raise InputError(path, "not a readable DXF file (no DXF structure)") from None
+        raise InputError(path, f"cannot read file ({exc.strerror})") from None
     except (ezdxf.DXFStructureError, ezdxf.DXFError, UnicodeDecodeError, ValueError) as exc:
         raise InputError(path, f"not a readable DXF file ({exc})") from None
     return doc
@@ -160,11 +174,11 @@ def dxf_layers(path: str | os.PathLike) -> list[str]:
 
 
 def _walk(entities: Iterable, layer: str | None = None, depth: int = 0) -> Iterator[tuple]:
-    """(entity, effective layer) of every entity, INSERTs expanded recursively."""
+    """(entity, effective layer) of every entity, INSERTs and MLINEs expanded recursively."""
     for e in entities:
         own = e.dxf.get("layer", "0")
         eff = layer if (layer is not None and own == "0") else own
-        if e.dxftype() == "INSERT":
+        if e.dxftype() in ("INSERT", "MLINE"):  # blocks; multi-line walls as their lines
             if depth >= 16:
                 continue
             try:
@@ -174,6 +188,25 @@ def _walk(entities: Iterable, layer: str | None = None, depth: int = 0) -> Itera
             yield from _walk(children, eff, depth + 1)
         else:
             yield e, eff
+
+
+def _even_odd_region(loops: list[np.ndarray]):
+    """The region the loops of one hatch enclose by the even-odd rule (shapely)."""
+    region = shapely.Polygon()
+    for loop in loops:
+        if len(loop) >= 3:
+            region = shapely.symmetric_difference(region, shapely.make_valid(Polygon(loop)))
+    return region
+
+
+def _drawn_width(e) -> float:
+    """The constant width a (LW)POLYLINE is drawn with, in drawing units (0 if none)."""
+    kind = e.dxftype()
+    if kind == "LWPOLYLINE":
+        return float(e.dxf.get("const_width", 0.0) or 0.0)
+    if kind == "POLYLINE":
+        return float(e.dxf.get("default_start_width", 0.0) or 0.0)
+    return 0.0
 
 
 def _polylines(e, tolerance: float) -> tuple[list[np.ndarray], bool]:
@@ -199,7 +232,7 @@ def _polylines(e, tolerance: float) -> tuple[list[np.ndarray], bool]:
 def load_dxf(
     path: str | os.PathLike,
     *,
-    resolution: float = DEFAULT_RESOLUTION,
+    resolution: float | None = None,
     wall_thickness: float = DEFAULT_WALL_THICKNESS,
     layers: Iterable[str] | None = None,
     units: str | None = None,
@@ -213,8 +246,9 @@ def load_dxf(
     ----------
     path : path-like
         The ``.dxf`` file.
-    resolution : float
-        Metres per pixel.
+    resolution : float, optional
+        Metres per pixel; default the one :func:`save_dxf` stored in the file, else
+        :data:`DEFAULT_RESOLUTION` (0.05).
     wall_thickness : float
         Width in metres given to every line (at least one pixel).
     layers : iterable of str, optional
@@ -236,22 +270,26 @@ def load_dxf(
         chosen layers, parameters out of range, raster too large.
     """
     p = Path(path)
-    for name, v, lo in (
-        ("resolution", resolution, 0.0),
-        ("wall thickness", wall_thickness, 0.0),
-        ("margin", margin, -1.0),
-        ("close_gaps", close_gaps, -1.0),
-        ("min_free_width", min_free_width, -1.0),
+    for name, v, positive in (
+        ("--resolution", DEFAULT_RESOLUTION if resolution is None else resolution, True),
+        ("--wall-thickness", wall_thickness, True),
+        ("margin", margin, False),
+        ("close_gaps", close_gaps, False),
+        ("min_free_width", min_free_width, False),
     ):
-        if not isinstance(v, int | float) or not math.isfinite(v) or v <= lo or v < 0:
-            bound = "> 0" if lo == 0.0 else ">= 0"
-            raise InputError(f"--{name.replace(' ', '-')}", f"{name} must be {bound}, got {v!r}")
+        ok = isinstance(v, int | float) and math.isfinite(v) and (v > 0 if positive else v >= 0)
+        if not ok:
+            what = name.lstrip("-").replace("-", " ")
+            raise InputError(name, f"{what} must be {'> 0' if positive else '>= 0'}, got {v!r}")
     if units is not None and units not in UNITS:
         raise InputError("--units", f"units must be one of {', '.join(UNITS)}, got {units!r}")
     doc = _read(p)
 
     import ezdxf.units
 
+    frame = _stored_frame(doc)
+    if resolution is None:
+        resolution = frame[0] if frame is not None else DEFAULT_RESOLUTION
     meta: dict[str, Any] = {"source": str(p)}
     if units is not None:
         scale = UNITS[units]
@@ -282,8 +320,9 @@ def load_dxf(
             )
 
     res_units = resolution / scale  # one pixel in drawing units
-    strokes: list[np.ndarray] = []
-    fills: list[np.ndarray] = []
+    strokes: list[np.ndarray] = []  # widened to walls
+    widths: list[float] = []  # their wall thickness, metres
+    fills: list[list[np.ndarray]] = []  # loops of each filled entity (even-odd inside)
     counts: Counter = Counter()
     skipped: Counter = Counter()
     used_layers: set[str] = set()
@@ -304,10 +343,12 @@ def load_dxf(
             continue
         counts[kind] += 1
         used_layers.add(layer)
-        (fills if filled else strokes).extend(pieces)
         if filled:
-            strokes.extend(pieces)  # outlines too, so thin fills are not lost
-    if not strokes:
+            fills.append(pieces)
+        else:
+            strokes.extend(pieces)
+            widths.extend([max(wall_thickness, _drawn_width(e) * scale)] * len(pieces))
+    if not strokes and not fills:
         chosen = "the chosen layers" if wanted is not None else "any layer"
         raise InputError(
             p,
@@ -315,12 +356,17 @@ def load_dxf(
             f"on {chosen}",
         )
 
-    allpts = np.concatenate(strokes) * scale  # metres
+    allpts = np.concatenate(strokes + [loop for loops in fills for loop in loops]) * scale
     lo, hi = allpts.min(axis=0), allpts.max(axis=0)
-    border = margin + 0.5 * max(wall_thickness, resolution)
+    border = margin + 0.5 * max([wall_thickness, resolution, *widths])
     ox, oy = lo[0] - border, lo[1] - border
-    w = int(math.ceil((hi[0] - lo[0] + 2 * border) / resolution - 1e-9))
-    h = int(math.ceil((hi[1] - lo[1] + 2 * border) / resolution - 1e-9))
+    quarter_turns = frame is not None and abs(math.remainder(frame[3], math.pi / 2)) < 1e-9
+    if quarter_turns and frame[0] == resolution and scale == 1.0:
+        # a map2map export: back onto the grid it was written from
+        ox = frame[1] + math.floor((ox - frame[1]) / resolution) * resolution
+        oy = frame[2] + math.floor((oy - frame[2]) / resolution) * resolution
+    w = int(math.ceil((hi[0] + border - ox) / resolution - 1e-9))
+    h = int(math.ceil((hi[1] + border - oy) / resolution - 1e-9))
     if w * h > MAX_PIXELS:
         raise InputError(
             p,
@@ -336,36 +382,48 @@ def load_dxf(
             axis=1,
         )
 
-    # walls: every stroke widened to wall_thickness (square caps close corners), exact at
-    # pixel centres, plus the stroke itself traced through every pixel it crosses so that
-    # no wall has a hole whatever its width; fills (hatches, solids) even-odd
+    # walls: every stroke widened to its thickness (square caps close corners), exact at
+    # pixel centres (nonzero rule: the union of the widened strokes), plus the stroke
+    # itself traced through every pixel it crosses so that no wall has a hole whatever
+    # its width; fills (hatches, solids) by the even-odd rule, outlines traced
     px_strokes = [to_px(s_) for s_ in strokes]
-    lines = [LineString(s_) if len(s_) > 1 else Point(s_[0]) for s_ in px_strokes]
-    half = 0.5 * wall_thickness / resolution
-    body = shapely.union_all(
-        shapely.buffer(lines, half, cap_style="square", join_style="mitre", mitre_limit=2.0)
-    )
-    shapely.prepare(body)
-    rings = [np.asarray(r.coords) for r in _polygon_rings(body)]
-    wall = fill_exact((h, w), rings, lambda pts: shapely.contains_xy(body, pts[:, 0], pts[:, 1]))
-    wall |= trace((h, w), px_strokes)
+    wall = np.zeros((h, w), bool)
+    if px_strokes:
+        lines = [LineString(s_) if len(s_) > 1 else Point(s_[0]) for s_ in px_strokes]
+        half = 0.5 * np.asarray(widths) / resolution
+        bodies = shapely.orient_polygons(
+            shapely.buffer(lines, half, cap_style="square", join_style="mitre", mitre_limit=2.0)
+        )
+        rings = [np.asarray(r.coords) for r in _polygon_rings(bodies)]
+        wall = fill_exact((h, w), rings, rule="nonzero") | trace((h, w), px_strokes)
     if fills:
-        px_fills = [to_px(f) for f in fills]
-        wall |= fill_exact((h, w), px_fills) | trace((h, w), px_fills, closed=True)
+        # each entity even-odd (holes), all of them together as a union; only parts
+        # thinner than two pixels are traced, so solid walls keep their true width
+        region = shapely.union_all([_even_odd_region([to_px(f) for f in loops]) for loops in fills])
+        region_rings = [
+            np.asarray(r.coords) for r in _polygon_rings(shapely.orient_polygons(region))
+        ]
+        wall |= fill_exact((h, w), region_rings, rule="nonzero")
+        thin = [np.asarray(r.coords) for r in _polygon_rings(thin_parts(region, 2.0))]
+        wall |= trace((h, w), thin, closed=True)
+        px_strokes += region_rings  # their outlines count for gap sealing
 
     # inside vs outside: flood the outside, with openings narrower than close_gaps sealed
     barrier = wall | trace((h, w), _gap_seals(px_strokes, close_gaps / resolution))
-    labels, n = ndi.label(~barrier)  # 4-connected: 8-connected walls stop it
-    border = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
-    outside = np.isin(labels, border[border > 0])
+    n, labels = cv2.connectedComponents((~barrier).astype(np.uint8), connectivity=4)
+    rim = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
+    outside = np.isin(labels, rim[rim > 0])
     free = ~wall & ~outside
-    # pockets too narrow to be space (cavities of double-line walls, small columns)
-    if min_free_width > 0 and free.any():
-        flabels, fn = ndi.label(free, np.ones((3, 3), bool))
-        dist = ndi.distance_transform_edt(free)
-        widest = ndi.maximum(dist, flabels, np.arange(1, fn + 1))
-        narrow = np.flatnonzero(2 * np.asarray(widest) * resolution < min_free_width) + 1
-        pockets = np.isin(flabels, narrow)
+    # pockets too narrow to be space (cavities of double-line walls, small columns): the
+    # free components that vanish under erosion by a disk of diameter min_free_width
+    d = int(round(min_free_width / resolution))
+    if d >= 2 and free.any():
+        n_free, flabels = cv2.connectedComponents(free.astype(np.uint8), connectivity=8)
+        disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (d, d))
+        core = cv2.erode(free.astype(np.uint8), disk, borderValue=0) > 0
+        roomy = np.zeros(n_free, bool)
+        roomy[np.unique(flabels[core])] = True
+        pockets = free & ~roomy[flabels]
         free &= ~pockets
         wall |= pockets
     data = np.full((h, w), UNKNOWN, np.uint8)
@@ -381,3 +439,86 @@ def load_dxf(
         }
     )
     return OccupancyMap(data, float(resolution), (float(ox), float(oy), 0.0), meta)
+
+
+# --------------------------------------------------------------------------- writing
+_FRAME_VAR = "map2map_frame"
+
+
+def occupied_polygons(m: OccupancyMap):
+    """The occupied cells as (multi)polygons with pixel-exact outlines, in world metres.
+
+    Runs of occupied cells along each row become rectangles whose coverage union
+    (``shapely.coverage_union_all``) is the occupied region; its outline follows the
+    cell edges exactly.
+    """
+    padded = np.pad(m.occupied, ((0, 0), (1, 1))).astype(np.int8)
+    step = np.diff(padded, axis=1)
+    rows, starts = np.nonzero(step == 1)
+    _, ends = np.nonzero(step == -1)
+    if rows.size == 0:
+        return shapely.MultiPolygon()
+    region = shapely.coverage_union_all(shapely.box(starts, rows, ends, rows + 1))
+    return shapely.simplify(region, 0)  # drop the run boundaries' collinear vertices
+
+
+def save_dxf(m: OccupancyMap, path: str | os.PathLike, *, layer: str = "WALLS") -> None:
+    """Write the occupied cells of a map as a DXF drawing (metres) for CAD programs.
+
+    Walls become one solid HATCH on ``layer`` whose boundary loops follow the cell
+    edges, pulled 1 % of a cell inside the walls so that a reader sampling cell
+    centres, or tracing the outlines, finds exactly the same cells. The drawing is
+    in world coordinates (the map's origin and yaw applied). The map's frame is
+    stored in the header (custom property ``map2map_frame``), so :func:`load_dxf`
+    reads it back on the same grid: the occupied cells come back unchanged, and free
+    space is re-derived as the space the walls enclose (unknown cells inside the
+    walls come back free, free cells open to the outside come back unknown).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> data = np.full((40, 60), 255, np.uint8)
+    >>> data[[0, -1], :] = 0; data[:, [0, -1]] = 0
+    >>> m = OccupancyMap(data, 0.05, (1.0, 2.0, 0.0))
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "walls.dxf"
+    >>> save_dxf(m, path)
+    >>> back = load_dxf(path, margin=0)
+    >>> back.crop(*back.content_bbox()) == m
+    True
+    """
+    import ezdxf
+
+    from .._io import atomic_path
+
+    region = shapely.buffer(occupied_polygons(m), -0.01, join_style="mitre")
+    doc = ezdxf.new(units=6)  # metres
+    doc.header["$INSUNITS"] = 6
+    ox, oy, yaw = m.origin
+    doc.header.custom_vars.append(_FRAME_VAR, f"{m.resolution!r} {ox!r} {oy!r} {yaw!r}")
+    if layer not in doc.layers:
+        doc.layers.add(layer)
+    loops = []
+    for ring in _polygon_rings(region):
+        uv = np.asarray(ring.coords)[:-1]
+        # continuous pixel coordinates (u, v) -> fractional cell indices -> world
+        x, y = m.pixel_to_world(uv[:, 1] - 0.5, uv[:, 0] - 0.5)
+        loops.append(np.stack([x, y], axis=1))
+    if loops:
+        hatch = doc.modelspace().add_hatch(color=7, dxfattribs={"layer": layer})
+        hatch.set_solid_fill(color=7)
+        for loop in loops:
+            hatch.paths.add_polyline_path(loop.tolist(), is_closed=True)
+    with atomic_path(path) as tmp:
+        doc.saveas(tmp)
+
+
+def _stored_frame(doc) -> tuple[float, float, float, float] | None:
+    """(resolution, x, y, yaw) that :func:`save_dxf` stored, if any."""
+    try:
+        text = doc.header.custom_vars.get(_FRAME_VAR)
+        values = tuple(float(v) for v in str(text).split()) if text else ()
+    except (AttributeError, ValueError):
+        return None
+    if len(values) != 4 or not all(math.isfinite(v) for v in values) or values[0] <= 0:
+        return None
+    return values  # type: ignore[return-value]

@@ -45,7 +45,7 @@ Examples
 (True, 0.05)
 >>> connectivity(plan).ok
 True
->>> sorted({r["label"] for r in plan.meta["rooms"]})[:2]
+>>> sorted({r["category"] for r in plan.meta["rooms"]})[:2]
 ['Hallway', 'Kitchen']
 """
 
@@ -257,12 +257,14 @@ class _Builder:
         return [_Room(a, y0, b, y1) for a, b in zip(edges[:-1], edges[1:], strict=True)]
 
     def office(self, lx: int, ly: int) -> list[_Room]:
+        """Office rooms on ``[0, lx) x [0, ly)`` (long axis x): corridor spine or ring."""
         rng, px = self.rng, self.px
         cw = self.uniform_px(1.5, 2.2)
         depth_min = px(3.0)
-        if ly < depth_min + cw:
-            rooms = self.bsp(_Room(0, 0, lx, ly), max(3, round(lx * ly * self.res**2 / 12)), 2.0)
-            return self.label_office(rooms)
+        if ly < depth_min + cw or lx < px(8.0):
+            # too small for a corridor: a few offices opening onto each other
+            n = max(3, round(lx * ly * self.res**2 / 12))
+            return self.label_office(self.bsp(_Room(0, 0, lx, ly), n, 2.0))
         # optional full-depth end rooms (lobby / large meeting room)
         xs, xe = 0, lx
         ends: list[_Room] = []
@@ -304,7 +306,7 @@ class _Builder:
             y0, y1 = (cw, ly) if yc == 0 else (0, ly - cw)
             rooms += self.band_rooms(xs, xe, y0, y1, 2.6, 5.0)
         rooms = self.merge_open_plan(rooms)
-        return ends + self.label_office(rooms)
+        return self.refine(ends, 50.0, 3.0) + self.label_office(rooms)
 
     def merge_open_plan(self, rooms: list[_Room]) -> list[_Room]:
         """Sometimes merge neighbouring side rooms into one open-plan office."""
@@ -327,6 +329,7 @@ class _Builder:
         return out
 
     def label_office(self, rooms: list[_Room]) -> list[_Room]:
+        """Name office rooms: offices, small toilets/storage, a kitchen, a meeting room."""
         side = [r for r in rooms if r.kind == _ROOM and r.label in ("Room", "Open_Office")]
         if not side:
             return rooms
@@ -349,11 +352,12 @@ class _Builder:
         return rooms
 
     def apartment(self, lx: int, ly: int) -> list[_Room]:
+        """Apartment rooms: living zone + hallway with private rooms, or recursive splitting."""
         rng, px = self.rng, self.px
         hw = self.uniform_px(1.0, 1.4)
         if lx >= px(8.0) and ly >= px(2.4) + hw and rng.random() < 0.65:
-            lz = int(round(lx * rng.uniform(0.35, 0.5)))
-            rooms = self.living_zone(0, lz, ly)
+            lz = min(int(round(lx * rng.uniform(0.35, 0.5))), px(10.0))
+            rooms = self.refine(self.living_zone(0, lz, ly), 45.0)
             # private zone with a hallway along x
             xe = lx
             end: list[_Room] = []
@@ -362,7 +366,8 @@ class _Builder:
                 end = [_Room(lx - e, 0, lx, ly, "Bedroom")]
                 xe = lx - e
             if ly >= 2 * px(2.4) + hw:
-                yh = int(rng.integers(px(2.4), ly - px(2.4) - hw + 1))
+                lo_y = max(px(2.4), int(0.3 * (ly - hw)))
+                yh = int(rng.integers(lo_y, ly - hw - lo_y + 1))
                 bands = [(0, yh), (yh + hw, ly)]
             else:
                 yh = 0 if rng.random() < 0.5 else ly - hw
@@ -371,12 +376,12 @@ class _Builder:
             private: list[_Room] = []
             for y0, y1 in bands:
                 private += self.band_rooms(lz, xe, y0, y1, 2.0, 4.2)
-            private += end
+            private = self.refine(private + end, 24.0)
             self.label_private(private)
             return rooms + private
         m2 = self.res**2
-        n = int(np.clip(round(lx * ly * m2 / rng.uniform(10.0, 16.0)), 3, 9))
-        rooms = self.bsp(_Room(0, 0, lx, ly), n, 2.0)
+        n = int(np.clip(round(lx * ly * m2 / rng.uniform(10.0, 16.0)), 3, 12))
+        rooms = self.refine(self.bsp(_Room(0, 0, lx, ly), n, 2.0), 40.0)
         by_area = sorted(rooms, key=lambda r: -r.area)
         compact = [r for r in by_area if max(r.w, r.h) < 2.5 * min(r.w, r.h)]
         living = compact[0] if compact else by_area[0]
@@ -399,6 +404,34 @@ class _Builder:
                 r.label, r.kind = "Hallway", _CORRIDOR
         return rooms
 
+    def refine(self, rooms: list[_Room], max_area_m2: float, max_aspect: float = 2.6):
+        """Split rooms that are too large or too elongated across their long side."""
+        out: list[_Room] = []
+        queue = list(rooms)
+        min_side = self.px(2.2)
+        while queue:
+            r = queue.pop(0)
+            long_side, short_side = max(r.w, r.h), min(r.w, r.h)
+            too_big = r.area * self.res**2 > max_area_m2 or long_side > max_aspect * short_side
+            if r.kind != _ROOM or not too_big or long_side < 2 * min_side:
+                out.append(r)
+                continue
+            cut = int(np.clip(round(long_side * self.rng.uniform(0.4, 0.6)), min_side,
+                              long_side - min_side))  # fmt: skip
+            if r.w >= r.h:
+                a, b = _Room(r.x0, r.y0, r.x0 + cut, r.y1), _Room(r.x0 + cut, r.y0, r.x1, r.y1)
+            else:
+                a, b = _Room(r.x0, r.y0, r.x1, r.y0 + cut), _Room(r.x0, r.y0 + cut, r.x1, r.y1)
+            a.label = r.label
+            b.label = {
+                "Living_Room": "Office",
+                "Kitchen": "Dining_Room",
+                "Lobby": "Office",
+                "Meeting_Room": "Office",
+            }.get(r.label, r.label)
+            queue[:0] = [a, b]
+        return out
+
     def living_zone(self, x0: int, x1: int, ly: int) -> list[_Room]:
         """Living room plus kitchen (and dining room when there is space)."""
         rng, px = self.rng, self.px
@@ -419,13 +452,14 @@ class _Builder:
         return [living, _Room(x0, ys, x1, ly, "Kitchen")]
 
     def label_private(self, private: list[_Room]) -> None:
+        """Name the rooms along an apartment hallway: bedrooms, the smallest as wet rooms."""
         m2 = self.res**2
         by_area = sorted(private, key=lambda r: r.area)
         for r in private:
             r.label = "Bedroom"
         by_area[0].label = "Bathroom"
-        if len(by_area) >= 4:
-            by_area[1].label = "Toilet" if by_area[1].area * m2 < 6 else "Bathroom"
+        if len(by_area) >= 4 and by_area[1].area * m2 < 8:
+            by_area[1].label = "Toilet" if by_area[1].area * m2 < 5 else "Bathroom"
         if len(by_area) >= 6:
             by_area[2].label = "Storage" if by_area[2].area * m2 < 7 else "Office"
 
@@ -448,10 +482,10 @@ class _Builder:
         a, b = rooms[i], rooms[j]
         corridor = _CORRIDOR in (a.kind, b.kind)
         room_span = lambda r: (r.y0, r.y1) if vertical else (r.x0, r.x1)  # noqa: E731
-        # a room whose whole side is the shared segment (a corridor end): open it fully
-        full = any(room_span(r) == (o0, o1) for r in (a, b))
+        # a corridor whose whole end is the shared segment: open it fully
+        full = any(r.kind == _CORRIDOR and room_span(r) == (o0, o1) for r in (a, b))
         usable = (o1 - o0) - 2 * self.clear
-        if corridor and full and (want_open or usable < self.door_min):
+        if full and (want_open or usable < self.door_min):
             return _Link(i, j, vertical, pos, o0 + self.hi, o1 - self.lo, door=False)
         if want_open and usable >= px_ceil(1.2, self.res):
             width = int(
@@ -473,15 +507,24 @@ class _Builder:
         return _Link(i, j, vertical, pos, s0, s0 + width, door=True)
 
     def graph(self, rooms: list[_Room]) -> dict[tuple[int, int], tuple]:
+        """Pairs of rooms that can be linked: (i, j) -> shared boundary segment.
+
+        A pair qualifies when its shared wall takes a door away from the wall
+        ends, or when a corridor ends on it (the whole end can be opened).
+        """
         edges = {}
         for i in range(len(rooms)):
             for j in range(i + 1, len(rooms)):
                 seg = self.shared(rooms[i], rooms[j])
                 if seg is None:
                     continue
-                if seg[3] - seg[2] - 2 * self.clear >= self.door_min or (
-                    _CORRIDOR in (rooms[i].kind, rooms[j].kind)
-                ):
+                vertical, _, o0, o1 = seg
+                door_fits = o1 - o0 - 2 * self.clear >= self.door_min
+                corridor_end = any(
+                    r.kind == _CORRIDOR and ((r.y0, r.y1) if vertical else (r.x0, r.x1)) == (o0, o1)
+                    for r in (rooms[i], rooms[j])
+                )
+                if door_fits or corridor_end:
                     edges[i, j] = seg
         return edges
 
@@ -703,7 +746,14 @@ _FURNITURE = {
 
 
 def _furnish(b: _Builder, data: np.ndarray, rooms, links, margin: int) -> list[dict]:
-    """Place furniture blocks that touch a wall or keep ``clear`` pixels free around them."""
+    """Place furniture blocks in ``data`` (in place); return what was placed.
+
+    A wall item (bed, wardrobe, desk...) stands flush against one wall of its
+    room, its ``along`` side parallel to that wall; a free-standing item (table,
+    column) keeps away from walls. Every side of a block either touches a
+    wall/another block or leaves at least 0.5 m free, so no pocket narrower
+    than the robot appears, and no block stands within 1.1 m of a door.
+    """
     rng = b.rng
     clear = px_ceil(0.5, b.res)
     blocked = np.zeros(data.shape, bool)
@@ -712,80 +762,74 @@ def _furnish(b: _Builder, data: np.ndarray, rooms, links, margin: int) -> list[d
         x0, y0, x1, y1 = _door_zone(lk, b, b.px(1.1))
         blocked[max(0, o + y0) : o + y1, max(0, o + x0) : o + x1] = True
     placed = []
-    h, w = data.shape
     for k, r in enumerate(rooms):
         items = list(_FURNITURE.get(r.label, []))
         if r.label in ("Office", "Lobby") and r.area * b.res**2 >= 35:
             items += [("column", (0.4, 0.5), (0.4, 0.5), False)] * 2
+        # the room's free box before outer walls; clipped to what is free below
+        fx0, fy0 = o + r.x0 + b.hi, o + r.y0 + b.hi
+        fx1, fy1 = o + r.x1 - b.lo, o + r.y1 - b.lo
         for name, along_m, depth_m, wall in items:
             if rng.random() < 0.2:
                 continue
             for _ in range(12):
                 along, depth = b.uniform_px(*along_m), b.uniform_px(*depth_m)
-                fx0, fy0 = o + r.x0 + b.hi, o + r.y0 + b.hi  # room free box (before outer walls)
-                fx1, fy1 = o + r.x1 - b.lo, o + r.y1 - b.lo
-                if wall:
-                    side = int(rng.integers(4))
-                    if side in (0, 1):  # against top / bottom wall
-                        iw, ih = along, depth
-                    else:
-                        iw, ih = depth, along
-                else:
-                    iw, ih = (along, depth) if rng.random() < 0.5 else (depth, along)
+                side = int(rng.integers(4))  # 0 top, 1 bottom, 2 left, 3 right wall
+                iw, ih = (along, depth) if side < 2 else (depth, along)
                 if fx1 - fx0 < iw + 2 or fy1 - fy0 < ih + 2:
                     continue
                 x = int(rng.integers(fx0, fx1 - iw + 1))
                 y = int(rng.integers(fy0, fy1 - ih + 1))
-                box = _snap_to_walls(data, x, y, iw, ih, clear, wall)
-                if box is None:
+                if wall:
+                    x, y = _push(data, x, y, iw, ih, side)
+                x, y = _close_gaps(data, x, y, iw, ih, clear)
+                box = (x, y, x + iw, y + ih)
+                if not _fits(data, blocked, *box, clear):
                     continue
-                x0, y0, x1, y1 = box
-                if not _fits(data, blocked, x0, y0, x1, y1, clear, h, w):
-                    continue
-                data[y0:y1, x0:x1] = OCCUPIED
-                blocked[max(0, y0 - clear) : y1 + clear, max(0, x0 - clear) : x1 + clear] = True
-                placed.append({"kind": name, "room": k, "px": (x0, y0, x1, y1)})
+                data[box[1] : box[3], box[0] : box[2]] = OCCUPIED
+                blocked[max(0, y - clear) : box[3] + clear, max(0, x - clear) : box[2] + clear] = 1
+                placed.append({"kind": name, "room": k, "px": box})
                 break
     return placed
 
 
-def _snap_to_walls(data, x, y, iw, ih, clear, wall):
-    """Move a box flush against the nearest wall(s) within reach; None if it must touch one."""
+def _gaps(data, x, y, iw, ih) -> tuple[int, int, int, int]:
+    """Free cells between the box and the first obstacle: left, right, up, down (mid-lines)."""
     h, w = data.shape
-    free_row = data[min(max(y + ih // 2, 0), h - 1)]
-    free_col = data[:, min(max(x + iw // 2, 0), w - 1)]
-    # distance to the first non-free pixel left/right/up/down
-    left = _run(free_row[:x][::-1])
-    right = _run(free_row[x + iw :])
-    up = _run(free_col[:y][::-1])
-    down = _run(free_col[y + ih :])
-    reach = clear if not wall else 10**9
-    if wall:
-        # flush against the nearest wall
-        dmin = min(left, right, up, down)
-        if dmin == left:
-            x -= left
-        elif dmin == right:
-            x += right
-        elif dmin == up:
-            y -= up
-        else:
-            y += down
-        left = _run(free_row[:x][::-1])
-        right = _run(free_row[x + iw :])
-        up = _run(free_col[:y][::-1])
-        down = _run(free_col[y + ih :])
-        reach = clear
-    # close gaps narrower than the clearance
-    if 0 < left < reach:
+    row = data[min(max(y + ih // 2, 0), h - 1)]
+    col = data[:, min(max(x + iw // 2, 0), w - 1)]
+    return (
+        _run(row[: max(x, 0)][::-1]),
+        _run(row[x + iw :]),
+        _run(col[: max(y, 0)][::-1]),
+        _run(col[y + ih :]),
+    )
+
+
+def _push(data, x, y, iw, ih, side) -> tuple[int, int]:
+    """Slide the box until it touches the wall on ``side`` (0 top, 1 bottom, 2 left, 3 right)."""
+    left, right, up, down = _gaps(data, x, y, iw, ih)
+    if side == 0:
+        return x, y - up
+    if side == 1:
+        return x, y + down
+    if side == 2:
+        return x - left, y
+    return x + right, y
+
+
+def _close_gaps(data, x, y, iw, ih, clear) -> tuple[int, int]:
+    """Slide the box flush against any obstacle closer than ``clear`` (no narrow slots)."""
+    left, right, up, down = _gaps(data, x, y, iw, ih)
+    if 0 < left < clear:
         x -= left
-    elif 0 < right < reach:
+    elif 0 < right < clear:
         x += right
-    if 0 < up < reach:
+    if 0 < up < clear:
         y -= up
-    elif 0 < down < reach:
+    elif 0 < down < clear:
         y += down
-    return x, y, x + iw, y + ih
+    return x, y
 
 
 def _run(values: np.ndarray) -> int:
@@ -794,8 +838,11 @@ def _run(values: np.ndarray) -> int:
     return int(nz[0]) if nz.size else int(values.size)
 
 
-def _fits(data, blocked, x0, y0, x1, y1, clear, h, w) -> bool:
+def _fits(data, blocked, x0, y0, x1, y1, clear) -> bool:
     """The box is free and each side either touches non-free cells or has ``clear`` free around."""
+    h, w = data.shape
+    if x0 < 1 or y0 < 1 or x1 > w - 1 or y1 > h - 1:
+        return False
     if x0 < 0 or y0 < 0 or x1 > w or y1 > h:
         return False
     if (data[y0:y1, x0:x1] != FREE).any() or blocked[y0:y1, x0:x1].any():
@@ -806,9 +853,15 @@ def _fits(data, blocked, x0, y0, x1, y1, clear, h, w) -> bool:
         (slice(max(0, y0 - clear), y0), slice(x0, x1), slice(y0 - 1, y0), slice(x0, x1)),
         (slice(y1, y1 + clear), slice(x0, x1), slice(y1, y1 + 1), slice(x0, x1)),
     )
-    for br, bc, nr, nc in sides:
-        if (data[nr, nc] != FREE).all():
-            continue  # flush against a wall or another block
+    flush = [bool((data[nr, nc] != FREE).all()) for _, _, nr, nc in sides]
+    if (flush[0] and flush[1]) or (flush[2] and flush[3]):
+        return False  # wall to wall: it would cut the room in two
+    ys = (slice(max(0, y0 - clear), y0), slice(y1, y1 + clear))  # above, below
+    xs = (slice(max(0, x0 - clear), x0), slice(x1, x1 + clear))  # left, right
+    # corners between two open sides must be open too (no wall corner closing a slot)
+    corners = [(ys[v], xs[u]) for v in (0, 1) for u in (0, 1) if not flush[2 + v] and not flush[u]]
+    bands = [(s[0], s[1]) for s, touching in zip(sides, flush, strict=True) if not touching]
+    for br, bc in bands + corners:
         band = data[br, bc]
         if band.size == 0 or (band != FREE).any() or blocked[br, bc].any():
             return False
@@ -883,11 +936,15 @@ def generate_floorplan(
     -------
     OccupancyMap
         Walls 0, interior 255, outside 127, origin ``(0, 0, 0)`` at the lower-left
-        corner of the margin. ``meta`` holds ``rooms`` (label, kind, world bbox
-        ``[xmin, ymin, xmax, ymax]``, area), ``room_category`` (HouseExpo style:
-        label -> list of bboxes), ``doors`` and ``openings`` (centre ``x``, ``y``,
-        ``width`` in metres, ``orientation`` of the wall, the two room indices),
-        ``furniture``, the seed, kind, size and wall thickness.
+        corner of the margin. ``meta`` holds, like a loaded HouseExpo plan,
+        ``rooms`` (``category``, ``kind`` room/corridor, ``bbox`` in the
+        HouseExpo frame ``[x0, y0, x1, y1]`` with y pointing down (``y = -world
+        y``), ``world_bbox`` ``[xmin, ymin, xmax, ymax]`` in world metres,
+        ``area``) and ``room_category`` (category -> list of HouseExpo-frame
+        boxes); and ``doors`` / ``openings`` (world centre ``x``, ``y``, ``width``
+        in metres, ``orientation`` of the wall, the two room indices),
+        ``furniture`` (kind, room index, ``bbox`` in world metres),
+        ``building_bbox`` (world), the seed, kind, size and wall thickness.
 
     Raises
     ------
@@ -919,7 +976,12 @@ def generate_floorplan(
         raise InputError(
             "resolution", f"resolution must be between 0.01 and 0.25 m per pixel, got {res:g}"
         )
-    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+    if isinstance(seed, np.random.Generator):
+        rng = seed
+    else:
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise InputError("seed", f"seed must be a non-negative integer, got {seed!r}")
+        rng = np.random.default_rng(int(seed))
     wm, hm = _size_for(kind, size, rng)
     lx, ly = int(round(wm / res)), int(round(hm / res))
     mpx = max(2, int(round(margin / res)))
@@ -996,10 +1058,17 @@ def _meta(b: _Builder, rooms, links, notches, placed, shape, mpx, seed, kind, lx
     room_meta, category = [], {}
     for r in rooms:
         box = world_box(r.x0, r.y0, r.x1, r.y1)
+        plan_box = [box[0], -box[3], box[2], -box[1]]  # HouseExpo frame: x, -y (y down)
         room_meta.append(
-            {"label": r.label, "kind": r.kind, "bbox": box, "area": round(r.area * res**2, 4)}
+            {
+                "category": r.label,
+                "kind": r.kind,
+                "bbox": plan_box,
+                "world_bbox": box,
+                "area": round(r.area * res**2, 4),
+            }
         )
-        category.setdefault(r.label, []).append(box)
+        category.setdefault(r.label, []).append(plan_box)
     doors, openings = [], []
     for lk in links:
         if lk.vertical:
@@ -1043,24 +1112,27 @@ _SHORT = {"Living_Room": "Living", "Dining_Room": "Dining", "Meeting_Room": "Mee
 def draw_floorplan(ax, m: OccupancyMap, *, title: str | None = None, doors: bool = True) -> None:
     """Draw a plan with its room labels (and door marks) from ``m.meta``.
 
-    Works for any map whose ``meta`` has ``rooms`` with world ``bbox`` (the
-    generator's output) or a HouseExpo-style ``room_category``.
+    Works for the generator's plans and for rasterised HouseExpo plans (room
+    boxes in ``meta["rooms"]`` or ``meta["room_category"]``, HouseExpo frame).
     """
     from ..viz import draw_map
 
     draw_map(ax, m, title=title)
-    rooms = m.meta.get("rooms")
-    if rooms is None:
-        rooms = [
-            {"label": k, "bbox": box}
-            for k, boxes in m.meta.get("room_category", {}).items()
-            for box in boxes
-        ]
+    rooms = m.meta.get("rooms") or [
+        {"category": k, "bbox": box}
+        for k, boxes in (m.meta.get("room_category") or {}).items()
+        for box in boxes
+    ]
     fs = 7 if len(rooms) > 12 else 8
     for r in rooms:
-        x0, y0, x1, y1 = r["bbox"]
+        if "world_bbox" in r:
+            x0, y0, x1, y1 = r["world_bbox"]
+        else:  # HouseExpo frame (y down) -> world
+            x0, y0, x1, y1 = r["bbox"][0], -r["bbox"][3], r["bbox"][2], -r["bbox"][1]
         row, col = m.world_to_pixel_float((x0 + x1) / 2, (y0 + y1) / 2)
-        label = _SHORT.get(r["label"], r["label"]).replace("_", " ")
+        name = r.get("category", "")
+        label = _SHORT.get(name, name).replace("_", " ")
+        w, h = x1 - x0, y1 - y0
         ax.text(
             float(col),
             float(row),
@@ -1068,6 +1140,7 @@ def draw_floorplan(ax, m: OccupancyMap, *, title: str | None = None, doors: bool
             ha="center",
             va="center",
             fontsize=fs,
+            rotation=90 if h > 1.5 * w and w < 3.0 else 0,
             color="#1f4e79",
             clip_on=True,
         )
@@ -1078,9 +1151,21 @@ def draw_floorplan(ax, m: OccupancyMap, *, title: str | None = None, doors: bool
 
 
 def save_floorplan_figure(m: OccupancyMap, path, title: str | None = None) -> None:
-    """Save a figure of a plan with room labels and door marks (PNG, atomic)."""
-    from ..viz import new_figure, save_figure
+    """Save a figure of a plan with room labels and door marks (format from the suffix, atomic).
 
-    fig, ax = new_figure(m)
-    draw_floorplan(ax, m, title=title)
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "plan.png"
+    >>> save_floorplan_figure(generate_floorplan(1, size=(8, 6)), path, title="apartment")
+    >>> path.stat().st_size > 10_000
+    True
+    """
+    from ..viz import new_figure, save_figure
+    from .render import map_summary
+
+    fig, ax = new_figure(m, panel_inches=8.0)
+    n_doors = len(m.meta.get("doors", []))
+    summary = map_summary(m) + (f", {n_doors} doors (red)" if n_doors else "")
+    draw_floorplan(ax, m, title=f"{title}\n{summary}" if title else summary)
     save_figure(fig, path)

@@ -10,7 +10,8 @@ suffix                    format                                module
 ========================  ====================================  =========================
 
 :func:`save_map` writes ROS maps (``.yaml``: the yaml plus a ``.pgm`` of the same
-stem beside it) and pictures (``.png``, ``.pgm``). Options that do not apply to
+stem beside it), pictures (``.png``, ``.pgm``) and CAD drawings of the walls
+(``.dxf``). Options that do not apply to
 the input's format are refused rather than silently ignored.
 
 Examples
@@ -43,7 +44,7 @@ _KINDS.update({s: "image" for s in IMAGE_SUFFIXES})
 #: Suffixes :func:`load_map` reads.
 READ_SUFFIXES = tuple(_KINDS)
 #: Suffixes :func:`save_map` writes.
-WRITE_SUFFIXES = (".yaml", ".yml", ".png", ".pgm")
+WRITE_SUFFIXES = (".yaml", ".yml", ".png", ".pgm", ".dxf")
 
 _OPTION_KINDS = {
     "resolution": ("image", "houseexpo", "dxf"),
@@ -142,12 +143,11 @@ def load_map(
         return load_houseexpo(
             p, resolution=DEFAULT_RESOLUTION if resolution is None else resolution
         )
-    from .dxf import DEFAULT_RESOLUTION as DXF_RES
     from .dxf import DEFAULT_WALL_THICKNESS, load_dxf
 
     return load_dxf(
         p,
-        resolution=DXF_RES if resolution is None else resolution,
+        resolution=resolution,
         wall_thickness=DEFAULT_WALL_THICKNESS if wall_thickness is None else wall_thickness,
         layers=layers,
         units=units,
@@ -182,7 +182,8 @@ def check_output_path(path: str | os.PathLike, suffixes: Iterable[str] = WRITE_S
 
 
 def save_map(m: OccupancyMap, path: str | os.PathLike) -> None:
-    """Write a map: ``.yaml``/``.yml`` as a ROS map (plus ``.pgm``), ``.png``/``.pgm`` as a picture.
+    """Write a map: ``.yaml``/``.yml`` as a ROS map (plus ``.pgm``), ``.png``/``.pgm`` as a
+    picture, ``.dxf`` as a CAD drawing of the walls (:func:`map2map.maps.dxf.save_dxf`).
 
     Every file is written atomically; on error nothing is left half-written.
     """
@@ -191,6 +192,11 @@ def save_map(m: OccupancyMap, path: str | os.PathLike) -> None:
         from .ros import save_ros_map
 
         save_ros_map(m, p)
+        return
+    if p.suffix.lower() == ".dxf":
+        from .dxf import save_dxf
+
+        save_dxf(m, p)
         return
     from .image import save_image_map
 

@@ -5,6 +5,11 @@ metres tracing the free space of a whole apartment; interior walls are thin slit
 of that polygon. The file also holds ``bbox`` (``{"min": [x, y], "max": [x, y]}``),
 ``room_num`` and ``room_category`` (``{"Kitchen": [[x1, y1, x2, y2], ...], ...}``).
 
+HouseExpo's plans are the CAD maps the thesis trains on (section 4.1); turning them
+into grids is the appendix paper's first step of map matching (section 3.2: the
+as-planned drawing is exported at the SLAM map's resolution and its cells quantified
+to occupied 0, open 255, unexplored 127).
+
 Rasterisation (:func:`rasterise_houseexpo`)
 -------------------------------------------
 1. Inside the polygon is free, the rest of the bounding box occupied, and a margin
@@ -60,7 +65,7 @@ from shapely.geometry import Polygon, box
 
 from ..errors import InputError
 from .grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
-from .rasterize import fill_exact, trace
+from .rasterize import fill_exact, thin_parts, trace
 
 __all__ = [
     "DEFAULT_RESOLUTION",
@@ -173,12 +178,7 @@ def _rings(geom) -> list[np.ndarray]:
 
 def thin_wall_parts(polygon: Polygon, bounds, resolution: float):
     """The parts of the wall region (bounds minus polygon) thinner than two pixels."""
-    walls = box(*bounds).difference(polygon)
-    r = resolution
-    opened = walls.buffer(-r, join_style="mitre").buffer(r, join_style="mitre")
-    thin = walls.difference(opened)
-    eps = 1e-4 * resolution  # drop numerical slivers along thick walls
-    return thin.buffer(-eps, join_style="mitre").buffer(eps, join_style="mitre")
+    return thin_parts(box(*bounds).difference(polygon), 2.0 * resolution)
 
 
 def rasterise_houseexpo(

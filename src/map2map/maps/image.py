@@ -35,16 +35,19 @@ from __future__ import annotations
 import math
 import os
 import re
+import struct
+import zlib
 from pathlib import Path
 from typing import Any
 
+import cv2
 import numpy as np
 
 from .._io import atomic_path
 from ..errors import InputError
 from .grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from .raster import IMAGE_SUFFIXES, RasterImage, pgm_bytes, read_image
-from .ros import SAVER_FREE_THRESH, SAVER_OCCUPIED_THRESH, check_thresholds
+from .ros import SAVER_FREE_THRESH, SAVER_OCCUPIED_THRESH, check_thresholds, per_value
 
 __all__ = [
     "DEFAULT_RESOLUTION",
@@ -82,6 +85,10 @@ def image_to_grid(
     [[0, 0, 127, 127, 127, 255, 255]]
     """
     check_thresholds("thresholds", occupied_thresh, free_thresh)
+    return per_value(img, lambda im: _grid_rule(im, occupied_thresh, free_thresh, negate))
+
+
+def _grid_rule(img: RasterImage, occupied_thresh, free_thresh, negate) -> np.ndarray:
     shade = img.channels.astype(np.float64).mean(axis=2) / img.maxval
     p = shade if negate else 1.0 - shade
     out = np.full(p.shape, UNKNOWN, np.uint8)
@@ -106,7 +113,7 @@ def _stored_frame(path: Path) -> tuple[float, tuple[float, float, float]] | None
             from PIL import Image
 
             with Image.open(path) as im:
-                text = getattr(im, "text", {}).get(_FRAME_KEY)
+                text = im.info.get(_FRAME_KEY)  # tEXt before the pixels: no decoding
         elif suffix == ".pgm":
             with open(path, "rb") as fh:
                 head = fh.read(512).decode("ascii", "replace")
@@ -194,12 +201,17 @@ def save_image_map(m: OccupancyMap, path: str | os.PathLike) -> None:
         with atomic_path(p) as tmp:
             tmp.write_bytes(data)
         return
-    from PIL import Image
-    from PIL.PngImagePlugin import PngInfo
-
-    info = PngInfo()
-    info.add_text(_FRAME_KEY, _frame_text(m))
+    ok, buf = cv2.imencode(".png", np.ascontiguousarray(m.data))
+    if not ok:  # pragma: no cover - OpenCV encodes any uint8 array
+        raise InputError(p, "PNG encoding failed")
+    data = _with_text_chunk(buf.tobytes(), _FRAME_KEY, _frame_text(m))
     with atomic_path(p) as tmp:
-        Image.fromarray(np.ascontiguousarray(m.data), mode="L").save(
-            tmp, format="PNG", pnginfo=info
-        )
+        tmp.write_bytes(data)
+
+
+def _with_text_chunk(png: bytes, key: str, text: str) -> bytes:
+    """Insert a ``tEXt`` chunk right after the IHDR chunk of a PNG file."""
+    body = b"tEXt" + key.encode("latin-1") + b"\0" + text.encode("latin-1")
+    chunk = struct.pack(">I", len(body) - 4) + body + struct.pack(">I", zlib.crc32(body))
+    ihdr_end = 8 + 4 + 4 + 13 + 4  # signature, length, type, IHDR data, CRC
+    return png[:ihdr_end] + chunk + png[ihdr_end:]

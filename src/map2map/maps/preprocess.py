@@ -33,7 +33,14 @@ import numpy as np
 from ..errors import InputError
 from .grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 
-__all__ = ["square_resize", "harmonise", "thicken", "crop_to_content", "preprocess"]
+__all__ = [
+    "square_resize",
+    "harmonise",
+    "thicken",
+    "crop_to_content",
+    "preprocess",
+    "save_preprocess_figure",
+]
 
 #: Grey values that mean "unknown" in the formats we meet: thesis/SLAM 127,
 #: HouseExpo render canvas 128, ROS map_saver 205.
@@ -260,3 +267,28 @@ def preprocess(
 
 
 _thicken = thicken
+
+
+def save_preprocess_figure(
+    before: OccupancyMap, after: OccupancyMap, path, title: str | None = None
+) -> None:
+    """Side-by-side figure of a map before and after :func:`preprocess` (atomic save).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> m = OccupancyMap(np.full((40, 80), 255, np.uint8), 0.05)
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "prep.png"
+    >>> save_preprocess_figure(m, preprocess(m, size=32), path)
+    >>> path.stat().st_size > 0
+    True
+    """
+    from ..viz import draw_map, new_figure, save_figure
+    from .render import map_summary
+
+    fig, axes = new_figure(before, ncols=2)
+    draw_map(axes[0], before, title=f"input\n{map_summary(before)}")
+    draw_map(axes[1], after, title=f"preprocessed\n{map_summary(after)}")
+    if title:
+        fig.suptitle(title, fontsize=11)
+    save_figure(fig, path)

@@ -88,6 +88,26 @@ def _quiet_opencv():
         logging.setLogLevel(old)
 
 
+def _pnm_maxval(head: bytes) -> int | None:
+    """The declared maximum value of a P2/P3/P5/P6 (PGM/PPM) header, else None.
+
+    >>> _pnm_maxval(b"P5\\n# a comment\\n3 2\\n100\\n"), _pnm_maxval(b"\\x89PNG")
+    (100, None)
+    """
+    if len(head) < 2 or head[:1] != b"P" or head[1:2] not in b"2356":
+        return None
+    tokens: list[bytes] = []
+    for line in head[2:].split(b"\n"):
+        tokens += line.split(b"#", 1)[0].split()
+        if len(tokens) >= 3:
+            break
+    try:
+        value = int(tokens[2])
+    except (IndexError, ValueError):
+        return None
+    return value if 0 < value < 65536 else None
+
+
 def read_image(path: str | os.PathLike, *, referenced_by: str | os.PathLike | None = None):
     """Read an image file as :class:`RasterImage`, raising :class:`InputError` on failure.
 
@@ -123,6 +143,9 @@ def read_image(path: str | os.PathLike, *, referenced_by: str | os.PathLike | No
         maxval = 65535
     else:
         raise InputError(p, f"unsupported pixel type {img.dtype} (need 8- or 16-bit){via}")
+    pnm_max = _pnm_maxval(raw[:512].tobytes())
+    if pnm_max is not None:  # PGM/PPM may declare any maximum; OpenCV does not rescale
+        maxval = pnm_max
     if img.ndim == 2:
         return RasterImage(img[:, :, None], None, maxval)
     nch = img.shape[2]

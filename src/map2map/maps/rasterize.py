@@ -2,9 +2,11 @@
 
 Coordinates here are *continuous pixel coordinates*: ``u`` = column, ``v`` = row,
 pixel ``(r, c)`` covers ``[c, c + 1) x [r, r + 1)`` and its centre is
-``(c + 0.5, r + 0.5)`` (the convention of :mod:`map2map.maps.grid`). OpenCV does the
-bulk of the drawing (fixed-point vertices, 8 fractional bits); where OpenCV only
-approximates, an exact test decides.
+``(c + 0.5, r + 0.5)`` (the convention of :mod:`map2map.maps.grid`). Both
+functions are exact and vectorised with numpy: a pixel is inside a polygon when its
+centre is (:func:`fill_exact`), and a line marks every pixel it passes through
+(:func:`trace`). OpenCV's drawing is not used: its sub-pixel lines are not
+4-connected and its fill also takes pixels an edge merely touches.
 
 Examples
 --------
@@ -27,63 +29,61 @@ array([[1, 1, 0],
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 
-import cv2
 import numpy as np
 
-__all__ = ["to_fixed", "fill_exact", "segment_pixels", "trace"]
-
-SHIFT = 8
-_SCALE = 1 << SHIFT
-
-
-def to_fixed(uv: np.ndarray) -> np.ndarray:
-    """Continuous pixel coordinates -> OpenCV fixed-point points (pixel centres at integers)."""
-    uv = np.asarray(uv, float)
-    return np.round((uv - 0.5) * _SCALE).astype(np.int32)
-
-
-def _even_odd(rings: Sequence[np.ndarray]) -> Callable[[np.ndarray], np.ndarray]:
-    from matplotlib.path import Path as MplPath
-
-    paths = [MplPath(np.asarray(r, float)) for r in rings if len(r) >= 3]
-
-    def inside(points: np.ndarray) -> np.ndarray:
-        count = np.zeros(len(points), np.int64)
-        for path in paths:
-            count += path.contains_points(points)
-        return count % 2 == 1
-
-    return inside
+__all__ = ["fill_exact", "segment_pixels", "trace", "thin_parts"]
 
 
 def fill_exact(
-    shape: tuple[int, int],
-    rings: Sequence[np.ndarray],
-    contains: Callable[[np.ndarray], np.ndarray] | None = None,
+    shape: tuple[int, int], rings: Sequence[np.ndarray], rule: str = "evenodd"
 ) -> np.ndarray:
-    """Boolean mask of the pixels whose centre lies inside the rings (even-odd rule).
+    """Boolean mask of the pixels whose centre lies inside closed rings.
 
-    ``cv2.fillPoly`` fills fast but also takes some pixels its edges merely touch;
-    every pixel within a pixel of an edge is re-decided by an exact test of its
-    centre: ``contains(points (N, 2) u, v) -> bool (N,)`` if given (e.g.
-    ``shapely.contains_xy`` of a geometry), else an even-odd point-in-polygon test
-    (``matplotlib.path.Path``, which also copes with self-touching rings).
+    An exact scanline fill, vectorised over all edges: every edge is cut with the
+    horizontal lines through the pixel centres it spans (half-open in y, so shared
+    vertices count once), each crossing adds its winding (+1 upwards, -1 downwards)
+    from the first pixel whose centre lies right of it, and a running sum along the
+    row gives every pixel's winding number.
+
+    Parameters
+    ----------
+    shape : (H, W)
+    rings : sequence of (N, 2) arrays
+        Closed rings (the last vertex joins the first) in continuous pixel
+        coordinates ``(u, v)``.
+    rule : {"evenodd", "nonzero"}
+        ``"evenodd"`` (holes as extra rings, self-touching rings are fine) or
+        ``"nonzero"`` (the union of overlapping rings that share an orientation).
     """
+    if rule not in ("evenodd", "nonzero"):
+        raise ValueError(f"rule must be 'evenodd' or 'nonzero', got {rule!r}")
+    h, w = shape
     rings = [np.asarray(r, float) for r in rings if len(r) >= 3]
-    mask = np.zeros(shape, np.uint8)
     if not rings:
-        return mask.astype(bool)
-    fixed = [to_fixed(r) for r in rings]
-    cv2.fillPoly(mask, fixed, 1, lineType=cv2.LINE_8, shift=SHIFT)
-    band = np.zeros(shape, np.uint8)
-    cv2.polylines(band, fixed, True, 1, thickness=3, lineType=cv2.LINE_8, shift=SHIFT)
-    rows, cols = np.nonzero(band)
-    centres = np.stack([cols + 0.5, rows + 0.5], axis=1)
-    test = contains if contains is not None else _even_odd(rings)
-    mask[rows, cols] = np.asarray(test(centres), bool)
-    return mask.astype(bool)
+        return np.zeros(shape, bool)
+    p0 = np.concatenate(rings)
+    p1 = np.concatenate([np.concatenate([r[1:], r[:1]]) for r in rings])
+    ya, yb = p0[:, 1], p1[:, 1]
+    lo, hi = np.minimum(ya, yb), np.maximum(ya, yb)
+    # rows whose centre r + 0.5 lies in [lo, hi)
+    r_first = np.maximum(np.ceil(lo - 0.5), 0).astype(np.int64)
+    r_end = np.minimum(np.ceil(hi - 0.5), h).astype(np.int64)
+    count = np.maximum(r_end - r_first, 0)
+    edge = np.repeat(np.arange(len(p0)), count)
+    if edge.size == 0:
+        return np.zeros(shape, bool)
+    start = np.cumsum(count) - count
+    rows = r_first[edge] + (np.arange(edge.size) - np.repeat(start, count))
+    yc = rows + 0.5
+    t = (yc - ya[edge]) / (yb[edge] - ya[edge])
+    xc = p0[edge, 0] + t * (p1[edge, 0] - p0[edge, 0])
+    col = np.clip(np.ceil(xc - 0.5), 0, w).astype(np.int64)  # first centre at or right of x
+    wind = np.where(yb[edge] > ya[edge], 1, -1)
+    acc = np.bincount(rows * (w + 1) + col, weights=wind, minlength=h * (w + 1))
+    winding = np.cumsum(acc.reshape(h, w + 1)[:, :w].astype(np.int32), axis=1)
+    return (winding % 2 == 1) if rule == "evenodd" else (winding != 0)
 
 
 def segment_pixels(starts: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -155,3 +155,19 @@ def trace(
     ok = (rows >= 0) & (rows < shape[0]) & (cols >= 0) & (cols < shape[1])
     mask[rows[ok], cols[ok]] = True
     return mask
+
+
+def thin_parts(geom, width: float = 2.0):
+    """The parts of a shapely geometry narrower than ``width`` (e.g. two pixels).
+
+    A morphological opening (buffer by ``-width / 2`` then ``+width / 2``, mitred so
+    that square corners survive) removes exactly the parts too thin to hold a disc
+    of that width; they are what centre sampling can lose, and what callers trace
+    conservatively with :func:`trace`. Numerical slivers along thick parts are
+    dropped.
+    """
+    r = 0.5 * width
+    opened = geom.buffer(-r, join_style="mitre").buffer(r, join_style="mitre")
+    thin = geom.difference(opened)
+    eps = 1e-4 * width
+    return thin.buffer(-eps, join_style="mitre").buffer(eps, join_style="mitre")

@@ -37,6 +37,31 @@ def map_summary(m: OccupancyMap) -> str:
     return f"{w_m:.1f} x {h_m:.1f} m, {res_text} ({m.width} x {m.height} px), free {free_m2:.1f} m²"
 
 
+def display_map(m: OccupancyMap, max_pixels: int = 1200) -> OccupancyMap:
+    """The map reduced by whole blocks to at most ``max_pixels`` per side, walls kept.
+
+    Showing a large map on a few hundred screen pixels with nearest-neighbour
+    sampling drops one-pixel walls; here each block of ``k x k`` cells becomes one
+    cell that is occupied if any cell is, else free if any cell is, else unknown.
+
+    >>> big = OccupancyMap(np.full((10, 10), 255, np.uint8), 0.1)
+    >>> big.data[:, 3] = 0
+    >>> small = display_map(big, max_pixels=5)
+    >>> small.shape, small.resolution, small.data[0].tolist()
+    ((5, 5), 0.2, [255, 0, 255, 255, 255])
+    """
+    k = int(np.ceil(max(m.shape) / max_pixels))
+    if k <= 1:
+        return m
+    h, w = m.shape
+    padded = m.pad(bottom=(-h) % k, right=(-w) % k)
+    hb, wb = padded.height // k, padded.width // k
+    blocks = padded.data.reshape(hb, k, wb, k)
+    occupied = (blocks == OCCUPIED).any(axis=(1, 3))
+    free = (blocks == FREE).any(axis=(1, 3))
+    return OccupancyMap.from_masks(free, occupied, padded.resolution * k, padded.origin, m.meta)
+
+
 def _label_rooms(ax, m: OccupancyMap) -> None:
     """Write HouseExpo room categories at the centre of their free space."""
     from scipy import ndimage as ndi
@@ -95,10 +120,11 @@ def save_map_figure(
     if title is None:
         source = m.meta.get("source")
         title = os.path.basename(str(source)) if source else "map"
-    fig, ax = new_figure(m)
-    draw_map(ax, m, title=f"{title}\n{map_summary(m)}")
+    shown = display_map(m)
+    fig, ax = new_figure(shown)
+    draw_map(ax, shown, title=f"{title}\n{map_summary(m)}")
     if rooms and m.meta.get("rooms"):
-        _label_rooms(ax, m)
+        _label_rooms(ax, shown)
     handles = [
         Patch(facecolor=MAP_COLOURS[FREE], edgecolor="0.4", label="free"),
         Patch(facecolor=MAP_COLOURS[OCCUPIED], edgecolor="0.4", label="occupied"),
@@ -114,4 +140,6 @@ def save_map_figure(
         handlelength=1.2,
         borderpad=0.4,
     )
+    # enough dots for every displayed cell (the map spans about 4 inches)
+    dpi = int(np.clip(max(shown.shape) / 4.0, dpi, 300))
     save_figure(fig, path, dpi=dpi)

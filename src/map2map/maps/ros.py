@@ -151,9 +151,22 @@ def map_server_values(
         raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
     if flavor not in FLAVORS:
         raise ValueError(f"flavor must be one of {FLAVORS}, got {flavor!r}")
-    if flavor == "ros1":
-        return _values_ros1(img, mode, bool(negate), occupied_thresh, free_thresh)
-    return _values_nav2(img, mode, bool(negate), occupied_thresh, free_thresh)
+    fn = _values_ros1 if flavor == "ros1" else _values_nav2
+    return per_value(img, lambda im: fn(im, mode, bool(negate), occupied_thresh, free_thresh))
+
+
+def per_value(img: RasterImage, fn):
+    """``fn(img)`` for a pixel-wise rule, through a look-up table for grey pictures.
+
+    A grey picture without alpha has at most ``maxval + 1`` distinct pixels, so the
+    rule is evaluated once per possible value and the picture indexed into it.
+    """
+    if img.channels.shape[2] != 1 or img.alpha is not None:
+        return fn(img)
+    dtype = img.channels.dtype
+    every = np.arange(np.iinfo(dtype).max + 1, dtype=dtype)[None, :, None]
+    lut = fn(RasterImage(every, None, img.maxval))[0]
+    return lut[img.channels[:, :, 0]]
 
 
 def _values_nav2(img: RasterImage, mode, negate, occ_th, free_th) -> np.ndarray:
@@ -196,12 +209,16 @@ def _to_int8_like_c(x: np.ndarray) -> np.ndarray:
 
 def _values_ros1(img: RasterImage, mode, negate, occ_th, free_th) -> np.ndarray:
     """ROS 1 ``map_server::loadMapFromFile`` (SDL image: 8-bit bytes per channel)."""
-    ch = img.channels
-    if img.maxval != 255:  # SDL_image strips 16-bit PNGs to their high byte
-        ch = (ch >> 8).astype(np.uint8)
-    alpha = img.alpha
-    if alpha is not None and img.maxval != 255:
-        alpha = (alpha >> 8).astype(np.uint8)
+
+    def to_bytes(v: np.ndarray) -> np.ndarray:
+        if img.maxval == 255:
+            return v
+        if img.maxval == 65535:  # SDL_image strips 16-bit PNGs to their high byte
+            return (v >> 8).astype(np.uint8)
+        return (v.astype(np.uint32) * 255 // img.maxval).astype(np.uint8)  # PNM maxval
+
+    ch = to_bytes(img.channels)
+    alpha = None if img.alpha is None else to_bytes(img.alpha)
     if ch.shape[2] == 1 and alpha is not None:  # SDL expands grey + alpha to RGBA
         ch = np.repeat(ch, 3, axis=2)
     planes = [ch[:, :, k].astype(np.float64) for k in range(ch.shape[2])]
@@ -237,6 +254,10 @@ def ros_values_to_grid(values: np.ndarray) -> np.ndarray:
     [0, 255, 127, 127]
     """
     v = np.asarray(values)
+    if v.dtype == np.int8:  # one look-up per cell
+        lut = np.full(256, UNKNOWN, np.uint8)
+        lut[100], lut[0] = OCCUPIED, FREE
+        return lut[v.view(np.uint8)]
     out = np.full(v.shape, UNKNOWN, np.uint8)
     out[v == 100] = OCCUPIED
     out[v == 0] = FREE

@@ -116,7 +116,7 @@ class ExploreConfig:
     """
 
     robot_radius: float = 0.2
-    lethal_margin: float = 0.03
+    lethal_margin: float = 0.01
     safety: float = 0.05
     inflation_radius: float = 0.6
     cost_scaling: float = 6.0
@@ -459,7 +459,7 @@ class PathController:
             # local safety (like DWA's footprint check): sweep the body along the
             # commanded arc through the latest scan's points and slow down or stop
             px, py = self._scan_points(scan)
-            t_hit = _time_to_contact(px, py, v, w, self.cfg.robot_radius + 0.015, 1.2, 0.1)
+            t_hit = _time_to_contact(px, py, v, w, self.cfg.robot_radius + 0.005, 1.2, 0.1)
             if t_hit <= 0.2:
                 return 0.0, w, True
             if t_hit < 1.2:

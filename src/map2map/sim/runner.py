@@ -472,7 +472,7 @@ def save_figure_png(res: SimResult, path: Path) -> None:
 
 
 def save_gif(res: SimResult, path: Path, max_frames: int = 80) -> None:
-    """An animation of the map growing, with the robot's true position."""
+    """An animation of the map growing over the plan (faint), with the true path so far."""
     from PIL import Image, ImageDraw
 
     from ..viz import map_to_rgb
@@ -482,21 +482,32 @@ def save_gif(res: SimResult, path: Path, max_frames: int = 80) -> None:
         return
     step = max(1, int(math.ceil(len(frames) / max_frames)))
     frames = frames[::step]
-    scale = max(1, int(400 / max(res.plan.width, res.plan.height)))
+    plan = plan_with_world(res)
+    scale = max(2, int(math.ceil(480 / max(plan.width, plan.height))))
+    rad = 0.2 / res.plan.resolution * scale
+    tr, tc = res.plan.world_to_pixel_float(res.true_poses[:, 0], res.true_poses[:, 1])
+    trail = np.column_stack([(tc + 0.5) * scale, (tr + 0.5) * scale])
     images = []
-    for _t, m, pose in frames:
-        rgb = (map_to_rgb(m) * 255).astype(np.uint8)
-        img = Image.fromarray(rgb).resize((m.width * scale, m.height * scale), Image.NEAREST)
+    for ft, m, pose in frames:
+        rgb = map_to_rgb(m)
+        ghost = m.unknown & plan.occupied  # walls not mapped yet, faintly
+        rgb[ghost] = (0.55, 0.6, 0.68)
+        img = Image.fromarray((rgb * 255).astype(np.uint8)).resize(
+            (m.width * scale, m.height * scale), Image.NEAREST
+        )
+        d = ImageDraw.Draw(img)
+        k = int(np.searchsorted(res.times, ft, side="right"))
+        if k > 1:
+            d.line([tuple(p) for p in trail[:k]], fill=(40, 150, 40), width=max(1, scale // 2))
         r, c = res.plan.world_to_pixel_float(pose[0], pose[1])
         x, y = (float(c) + 0.5) * scale, (float(r) + 0.5) * scale
-        rad = 0.2 / res.plan.resolution * scale
-        d = ImageDraw.Draw(img)
-        d.ellipse([x - rad, y - rad, x + rad, y + rad], outline=(30, 160, 30), width=2)
+        d.ellipse([x - rad, y - rad, x + rad, y + rad], outline=(200, 40, 40), width=2)
         d.line(
             [x, y, x + rad * math.cos(pose[2]), y - rad * math.sin(pose[2])],
-            fill=(30, 160, 30),
+            fill=(200, 40, 40),
             width=2,
         )
+        d.text((4, 4), f"t = {ft:.0f} s", fill=(0, 0, 0))
         images.append(img)
     with atomic_path(path) as tmp:
         images[0].save(

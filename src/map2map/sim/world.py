@@ -4,7 +4,8 @@ Furniture (static boxes) is added to the plan before driving and people (discs)
 walk between random goals; the lidar sees both, but neither is in the plan, so a
 map built from the scans differs from the plan exactly as a real one would.
 Furniture never disconnects the free space: a box that would cut off part of the
-robot's reachable space, or cover the start, is redrawn.
+robot's reachable space (keeping passages of about 0.7 m, :data:`FURNITURE_PASSAGE`),
+or cover the start, is redrawn.
 
 The robot may only be where the plan is *free*: walls, furniture, unknown cells
 and the outside all block it. :meth:`World.clearance_at` gives the distance from
@@ -33,7 +34,11 @@ from ..errors import InputError
 from ..maps.grid import OccupancyMap
 from .lidar import Scene
 
-__all__ = ["World", "People"]
+__all__ = ["World", "People", "FURNITURE_PASSAGE"]
+
+#: Furniture must leave every region reachable with this much clearance beyond the
+#: robot radius (passages at least about 0.7 m wide), as a furnished home does.
+FURNITURE_PASSAGE = 0.15
 
 
 @dataclass
@@ -125,10 +130,12 @@ class World:
 
     def _add_furniture(self, n, start, robot_radius, rng):
         res = self.plan.resolution
-        reach = self.reachable_cells(start, robot_radius)
-        base = int(reach.sum())
+        margins = (0.05, FURNITURE_PASSAGE)
+        reach = [self.reachable_cells(start, robot_radius, mg) for mg in margins]
         sr, sc = (int(v) for v in self.plan.world_to_pixel(start[0], start[1]))
         keep_out = int(math.ceil((robot_radius + 0.3) / res))
+        # a box may take away reachable space only right around itself
+        near = int(math.ceil((2 * robot_radius + FURNITURE_PASSAGE) / res)) + 1
         free_r, free_c = np.nonzero(self.clearance >= 0.0)
         if len(free_r) == 0:
             return
@@ -154,13 +161,15 @@ class World:
             trial_b[box[0] : box[1], box[2] : box[3]] = True
             trial_s[box[0] : box[1], box[2] : box[3]] = True
             trial = World(self.plan, trial_b, trial_s, [])
-            area = int(trial.reachable_cells(start, robot_radius).sum())
-            # the box may only remove about its own (dilated) footprint
-            foot = (h + 2 * keep_out) * (w + 2 * keep_out)
-            if area < base - foot:
-                continue
+            around = np.zeros_like(trial_b)
+            around[max(0, box[0] - near) : box[1] + near, max(0, box[2] - near) : box[3] + near] = (
+                True
+            )
+            after = [trial.reachable_cells(start, robot_radius, mg) for mg in margins]
+            if any((b & ~a & ~around).any() for b, a in zip(reach, after, strict=True)):
+                continue  # it would cut off (or squeeze shut) space beyond it
             blocked, solid = trial_b, trial_s
-            base = area
+            reach = after
             placed.append(box)
         self.__init__(self.plan, blocked, solid, placed)
 
@@ -199,7 +208,9 @@ class World:
                 continue
             new = pp.positions[k] + d / dist * min(pp.speed * dt, dist)
             clear = self.clearance_at(new[0:1], new[1:2])[0] >= pp.radius
-            near_robot = math.hypot(new[0] - robot_xy[0], new[1] - robot_xy[1]) < 0.6
+            d_new = math.hypot(new[0] - robot_xy[0], new[1] - robot_xy[1])
+            d_old = math.hypot(pp.positions[k][0] - robot_xy[0], pp.positions[k][1] - robot_xy[1])
+            near_robot = d_new < 0.6 and d_new <= d_old  # stepping away is always fine
             if clear and not near_robot:
                 pp.positions[k] = new
             else:  # blocked: pick another goal after a short pause

@@ -4,7 +4,8 @@ It replays the CARMEN log that the ``simulate`` stage recorded (one simulated
 minute of the demo plan) through the GMapping-style particle filter and through
 graph SLAM -- exactly what ``map2map slam run.log --backend rbpf|graph`` does, seeing
 only odometry and scans -- and writes each map (ROS yaml + pgm), trajectory and
-figure under ``slam/``. Without an earlier ``simulate`` stage it simulates the
+figure under ``slam/``, and leaves the maps resampled into the plan's frame in
+``ctx.results["slam_maps"]``. Without an earlier ``simulate`` stage it simulates the
 minute itself. A few seconds in all.
 """
 
@@ -43,3 +44,12 @@ def stage_slam(ctx: DemoContext) -> None:
             ctx.wrote(f"{backend} {p.suffix[1:]}", p)
         results[backend] = res_b
     ctx.results["slam"] = results
+    sim = ctx.results.get("sim")
+    if sim is not None and log_path == ctx.results.get("sim_log"):
+        # the maps in the plan's frame (the map frame starts at the true start pose),
+        # for stages that compare maps with the plan
+        from ..sim.mapping import resample_to_frame
+
+        ctx.results["slam_maps"] = {
+            k: resample_to_frame(r.map, sim.start, sim.plan) for k, r in results.items()
+        }

@@ -1,0 +1,96 @@
+"""``map2map evaluate``: how far apart a SLAM map and a floor plan are, where, in centimetres."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "evaluate",
+        help="local error between a SLAM map and its floor plan (Algorithm 1)",
+        description="Align SLAM_MAP to PLAN, optimise the rigid and nonrigid chains (eq. 7) and "
+        "measure the local error of every wall point (Algorithm 1), in pixels and metres; "
+        "write report.json (both chains, the chosen one, IoU, vanilla ICP, timings), "
+        "overlay.png and error_map.png. With --pairs, evaluate every pair of a CSV list "
+        "(header slam,plan[,anchors]) and write pairs.csv and errors_boxplot.png.",
+    )
+    p.add_argument("slam", metavar="SLAM_MAP", nargs="?", help="the SLAM (as-built) map")
+    p.add_argument("plan", metavar="PLAN", nargs="?", help="the floor plan (as-planned)")
+    p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--pairs", metavar="FILE", help="CSV list of map pairs instead of one pair")
+    p.add_argument(
+        "--anchors",
+        metavar="FILE",
+        help="CSV x_source,y_source,x_target,y_target (pixels): two point pairs (eqs. 1-6)",
+    )
+    p.add_argument(
+        "--resolution",
+        type=float,
+        metavar="R",
+        help="metres per pixel of picture inputs (ROS maps keep their own)",
+    )
+    p.add_argument(
+        "--units",
+        choices=("m", "px"),
+        default="m",
+        help="report errors in metres (needs a resolution) or pixels only (default: m)",
+    )
+    p.add_argument("--no-auto-anchors", action="store_true", help="do not look for anchor points")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..errors import InputError
+    from ..evaluate.outputs import run_evaluate, run_pairs
+
+    if args.resolution is not None and not args.resolution > 0:
+        raise InputError("--resolution", f"must be > 0, got {args.resolution:g}")
+    if args.pairs:
+        if args.slam or args.plan:
+            raise InputError("--pairs", "give either SLAM_MAP PLAN or --pairs FILE, not both")
+        if args.anchors:
+            raise InputError("--anchors", "with --pairs, give anchors in the pairs file")
+        rows = run_pairs(
+            args.pairs,
+            args.out,
+            resolution=args.resolution,
+            units=args.units,
+            auto_anchor=not args.no_auto_anchors,
+            seed=args.seed,
+            progress=not args.quiet,
+        )
+        unit = "px" if args.units == "px" else "m"
+        for r in rows:
+            print(
+                f"{r['pair']:<24s} {r['chosen_chain']:<8s} mean {r['mean_' + unit]:.4g} {unit}, "
+                f"max {r['max_' + unit]:.4g} {unit}"
+            )
+        print(f"wrote {args.out}/pairs.csv and {args.out}/errors_boxplot.png")
+        return 0
+    if not (args.slam and args.plan):
+        raise InputError(None, "give SLAM_MAP and PLAN, or --pairs FILE")
+    ev = run_evaluate(
+        args.slam,
+        args.plan,
+        args.out,
+        anchors=args.anchors,
+        resolution=args.resolution,
+        units=args.units,
+        auto_anchor=not args.no_auto_anchors,
+        seed=args.seed,
+    )
+    r = ev.report
+    for w in r["warnings"]:
+        print(f"map2map: warning: {w}", file=sys.stderr)
+    for chain in ("rigid", "nonrigid"):
+        e = r["errors"][chain]
+        metres = "" if e["mean_m"] is None else f" = {e['mean_m']:.3f} m, max {e['max_m']:.3f} m"
+        mark = "*" if chain == r["chosen_chain"] else " "
+        print(f"{mark} {chain:<8s} mean {e['mean_px']:.2f} px, max {e['max_px']:.2f} px{metres}")
+    print(f"chosen: {r['chosen_chain']} ({r['chosen_reason']})")
+    print(f"wrote report.json, overlay.png, error_map.png in {args.out}")
+    return 0

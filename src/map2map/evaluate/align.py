@@ -1,0 +1,661 @@
+"""Global alignment of a source (SLAM) map to a target (plan): similarity, affine, rigid.
+
+Section 3.2.1 (preliminary alignment) and 3.2.2 (anchoring) of the appendix paper,
+on a three-level pyramid so that a 1585 x 1585 pair aligns in about a second:
+
+1. *search level* (about 160 px): dominant orientations (:mod:`.orientation`), wall
+   lines by radiography (:mod:`.radiography`), faces and their OMBBs
+   (:mod:`.decomposition`), hypotheses from face pairs with non-similarities
+   rejected, plus dense FFT hypotheses (:mod:`.hypotheses`), all scored by the
+   fitness of eq. 8 (:mod:`.fitness`) times the share of the source's free space
+   that lands inside the plan;
+2. *refine level* (about 400 px): the best hypotheses are refined by robust
+   Gaussian-weighted least squares on distance-transform correspondences
+   (an annealed maximisation of eq. 8) and the best is kept;
+3. *full resolution*: the winner is refined again, then an affine refinement and
+   the rigid variant (scale held at ``rigid_scale``, 1 when both maps share a
+   resolution) are fitted the same way.
+
+Anchors (eqs. 1-6), given or found automatically (:mod:`.anchors`), are applied
+last. When no hypothesis reaches ``min_score`` (eq. 8 at the refine level times the
+free-space share; real pairs score 0.3-1, unrelated maps about 0.15) or
+``min_fitness`` at full resolution, a warning says so and the best
+rigid (or anchored) result is returned instead.
+
+Examples
+--------
+>>> import numpy as np, cv2
+>>> from map2map.evaluate.transforms import similarity_matrix, decompose_similarity
+>>> plan = np.full((300, 300), 127, np.uint8)
+>>> _ = cv2.rectangle(plan, (40, 40), (250, 200), 255, -1)
+>>> _ = cv2.rectangle(plan, (40, 40), (250, 200), 0, 3)
+>>> _ = cv2.line(plan, (120, 40), (120, 150), 0, 3)
+>>> _ = cv2.line(plan, (120, 150), (250, 150), 0, 3)
+>>> T = similarity_matrix(0.8, 0.5, 60.0, -20.0)
+>>> src = cv2.warpAffine(plan, T[:2], (300, 300), flags=cv2.INTER_NEAREST, borderValue=127)
+>>> res = align_maps(src, plan)
+>>> s, a, tx, ty = decompose_similarity(res.similarity)
+>>> round(s, 2), round(a, 2)                      # the inverse: scale 1/0.8, angle -0.5
+(1.25, -0.5)
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import cv2
+import numpy as np
+
+from ..errors import InputError
+from ..maps.grid import FREE, OCCUPIED, UNKNOWN
+from .anchors import Anchors, anchor, auto_anchors
+from .decomposition import Face, decompose
+from .features import downsample, edge_points, occupied_points, subsample
+from .fitness import distance_map, fitness, lookup
+from .hypotheses import Hypothesis, dense_hypotheses, face_hypotheses, suppress_duplicates
+from .nonrigid import SideFields, to_plane
+from .orientation import dominant_orientation
+from .transforms import (
+    apply,
+    decompose_similarity,
+    fit_affine,
+    fit_similarity,
+    similarity_matrix,
+    transform_normals,
+)
+
+__all__ = [
+    "AlignParams",
+    "Alignment",
+    "align_maps",
+    "check_map",
+    "refine",
+    "thin_walls",
+    "MIN_MAP_SIZE",
+]
+
+#: smallest map side (pixels of known content) that can be decomposed
+MIN_MAP_SIZE = 16
+
+
+@dataclass
+class AlignParams:
+    """Knobs of :func:`align_maps` (defaults suit 0.02-0.1 m/px building maps).
+
+    ``rigid_scale`` is the scale of the rigid variant: target pixels per source
+    pixel for the same metric length (``res_source / res_target``); 1 when both
+    maps share a resolution, which the paper assumes. ``min_score`` and
+    ``min_fitness`` decide whether any hypothesis passed. ``full_sigmas`` are the
+    final Gaussian widths (px) of the full-resolution fit, ``line_sigmas`` replace
+    them when one map draws its walls as lines (a plan) and ``affine_line`` applies
+    them to the affine refinement too; ``surface_sigmas`` are those of the final
+    face-to-face refinement.
+    """
+
+    scale_range: tuple[float, float] = (0.5, 2.0)
+    max_anisotropy: float = 0.25
+    search_size: int = 128
+    refine_size: int = 400
+    top_k: int = 10
+    rigid_scale: float = 1.0
+    fitness_sigma: float = 2.0
+    min_fitness: float = 0.1
+    min_score: float = 0.2
+    surface_sigmas: tuple[float, ...] = (2.0, 1.0)
+    full_sigmas: tuple[float, ...] = (1.5, 1.0)
+    line_sigmas: tuple[float, ...] = (8.0, 6.0)
+    affine_line: bool = True
+    auto_anchor: bool = True
+    max_points: int = 20000
+    seed: int = 0
+
+
+@dataclass
+class Alignment:
+    """Result of :func:`align_maps`; all matrices map source to target pixels (x, y)."""
+
+    similarity: np.ndarray
+    affine: np.ndarray
+    rigid: np.ndarray
+    fitness: float
+    fitness_affine: float
+    fitness_rigid: float
+    anchored: str = "none"
+    anchors: Anchors | None = None
+    warnings: list[str] = field(default_factory=list)
+    hypotheses: dict[str, Any] = field(default_factory=dict)
+    orientation: dict[str, float] = field(default_factory=dict)
+    faces: dict[str, Any] = field(default_factory=dict)
+    fields: SideFields | None = None
+    timings: dict[str, float] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        s, a, tx, ty = decompose_similarity(self.similarity)
+        return {
+            "similarity": self.similarity.tolist(),
+            "affine": self.affine.tolist(),
+            "rigid": self.rigid.tolist(),
+            "fitness": self.fitness,
+            "fitness_affine": self.fitness_affine,
+            "fitness_rigid": self.fitness_rigid,
+            "scale": s,
+            "rotation_deg": math.degrees(a),
+            "translation": [tx, ty],
+            "anchored": self.anchored,
+            "anchors": None
+            if self.anchors is None
+            else {"source": self.anchors.source.tolist(), "target": self.anchors.target.tolist()},
+            "hypotheses": self.hypotheses,
+            "orientation_deg": {k: math.degrees(v) for k, v in self.orientation.items()},
+            "warnings": list(self.warnings),
+            "timings_s": self.timings,
+        }
+
+
+def check_map(data: np.ndarray, name: str | None) -> tuple[int, int, int, int]:
+    """Validate a map for alignment; returns its content box (row0, row1, col0, col1).
+
+    Raises :class:`InputError` for a map with no occupied cells or one whose known
+    content is smaller than :data:`MIN_MAP_SIZE` pixels on a side.
+    """
+    if not (data == OCCUPIED).any():
+        raise InputError(name, "map has no occupied pixels (no walls to align)")
+    known = data != UNKNOWN
+    rows = np.flatnonzero(known.any(axis=1))
+    cols = np.flatnonzero(known.any(axis=0))
+    box = (int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1)
+    if min(box[1] - box[0], box[3] - box[2]) < MIN_MAP_SIZE:
+        raise InputError(
+            name,
+            f"map content is {box[3] - box[2]} x {box[1] - box[0]} px, too small to decompose "
+            f"(at least {MIN_MAP_SIZE} x {MIN_MAP_SIZE} px needed)",
+        )
+    return box
+
+
+def thin_walls(data: np.ndarray, max_thickness: float = 3.0) -> bool:
+    """Whether a map's walls are drawn as lines (mean thickness <= ``max_thickness`` px).
+
+    For a wall ``t`` cells thick the mean distance of its cells to the nearest
+    non-wall cell is ``(t / 2 + 1) / 2``.
+    """
+    occ = (data == OCCUPIED).astype(np.uint8)
+    if not occ.any():
+        return True
+    d = cv2.distanceTransform(occ, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+    mean = float(d[occ > 0].mean())
+    return mean <= (max_thickness / 2 + 1) / 2 + 1e-6
+
+
+def _scale(a: float) -> np.ndarray:
+    return np.diag([a, a, 1.0])
+
+
+def _shift(dx: float, dy: float) -> np.ndarray:
+    T = np.eye(3)
+    T[:2, 2] = (dx, dy)
+    return T
+
+
+class _Level:
+    """One pyramid level of a (cropped) map: cells, occupied points, distance fields."""
+
+    def __init__(self, data: np.ndarray, factor: int, *, max_points: int, seed: int):
+        self.factor = factor
+        self.data = downsample(data, factor)
+        self.pts = subsample(occupied_points(self.data), max_points, seed)
+        fr, fc = np.nonzero(self.data == FREE)
+        self.free_pts = subsample(np.column_stack([fc + 0.5, fr + 0.5]), max_points, seed)
+        self._edt: tuple[np.ndarray, np.ndarray] | None = None
+
+    @property
+    def edt(self) -> tuple[np.ndarray, np.ndarray]:
+        if self._edt is None:
+            self._edt = distance_map(self.data == OCCUPIED, return_indices=True)
+        return self._edt
+
+    @property
+    def known(self) -> np.ndarray:
+        """Known cells grown by one cell (walls at the edge of the explored area)."""
+        import cv2
+
+        return cv2.dilate((self.data != UNKNOWN).astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
+
+    def fitness_map(self, sigma: float) -> np.ndarray:
+        d = self.edt[0].astype(np.float64)
+        return np.exp(-(d**2) / (2 * sigma**2)).astype(np.float32)
+
+
+def refine(
+    pts: np.ndarray,
+    edt: tuple[np.ndarray, np.ndarray],
+    T: np.ndarray,
+    *,
+    model: str = "similarity",
+    sigmas: tuple[float, ...] = (8.0, 4.0, 2.0, 1.0),
+    iterations: int = 8,
+    scale: float | None = None,
+    known: np.ndarray | None = None,
+) -> np.ndarray:
+    """Maximise eq. 8 from ``T`` by Gaussian-weighted least squares on EDT correspondences.
+
+    Each iteration pairs every source point (mapped by ``T``) with its nearest
+    target wall cell (the distance transform's indices) and refits ``model``
+    (``"similarity"``, ``"affine"`` or ``"rigid"`` with the fixed ``scale``)
+    with weights ``M_f = exp(-d^2 / 2 sigma^2)``: the fixed point is a stationary
+    point of the fitness of eq. 8. ``sigma`` is annealed through ``sigmas``. With
+    ``known`` (the target's known cells), points over its unknown space are ignored:
+    either map may be the partial one.
+    """
+    _, idx = edt
+    h, w = idx.shape[1:]
+    T = T.copy()
+    for sigma in sigmas:
+        for _ in range(iterations):
+            q = apply(T, pts)
+            c = np.floor(q[:, 0]).astype(np.int64)
+            r = np.floor(q[:, 1]).astype(np.int64)
+            ok = (r >= 0) & (r < h) & (c >= 0) & (c < w)
+            if ok.sum() < 3:
+                return T
+            rr, cc = r[ok], c[ok]
+            near = np.column_stack([idx[1, rr, cc] + 0.5, idx[0, rr, cc] + 0.5])
+            d2 = ((near - q[ok]) ** 2).sum(1)
+            wgt = np.exp(-d2 / (2 * sigma**2))
+            if known is not None:  # nothing to match over the target's unknown space
+                wgt = wgt * known[rr, cc]
+            if wgt.sum() < 3:
+                break
+            if model == "affine":
+                T_new = fit_affine(pts[ok], near, wgt)
+            elif model == "rigid":
+                T_new = fit_similarity(pts[ok], near, wgt, scale=scale)
+            else:
+                T_new = fit_similarity(pts[ok], near, wgt)
+            step = np.abs(
+                apply(T_new, pts[ok][:: max(1, ok.sum() // 200)])
+                - apply(T, pts[ok][:: max(1, ok.sum() // 200)])
+            ).max()
+            T = T_new
+            if step < 0.02:
+                break
+    return T
+
+
+def refine_surfaces(
+    X: np.ndarray,
+    normals: np.ndarray,
+    fields: SideFields,
+    T: np.ndarray,
+    *,
+    model: str = "similarity",
+    scale: float | None = None,
+    sigmas: tuple[float, ...] = (2.0, 1.0),
+    iterations: int = 10,
+) -> np.ndarray:
+    """Like :func:`refine`, on wall-surface points matched to plan surfaces facing their way.
+
+    Matching surfaces rather than all occupied cells removes the sub-pixel bias of
+    thick walls (a point inside a wall is its own nearest wall cell) and never
+    pairs the two faces of a wall; the residuals are taken along the point's normal
+    (point-to-plane), so the pixel rounding of the correspondences along a wall
+    does not pull the transform towards whole pixels.
+    """
+    T = T.copy()
+    for sigma in sigmas:
+        for _ in range(iterations):
+            q = apply(T, X)
+            n = transform_normals(T, normals)
+            near, d, inside = fields.nearest(q, n)
+            near = to_plane(q, near, n)
+            wgt = np.where(inside, np.exp(-(d**2) / (2 * sigma**2)), 0.0)
+            if wgt.sum() < 3:
+                return T
+            if model == "affine":
+                T_new = fit_affine(X, near, wgt)
+            elif model == "rigid":
+                T_new = fit_similarity(X, near, wgt, scale=scale)
+            else:
+                T_new = fit_similarity(X, near, wgt)
+            probe = X[:: max(1, len(X) // 200)]
+            step = np.abs(apply(T_new, probe) - apply(T, probe)).max()
+            T = T_new
+            if step < 0.01:
+                break
+    return T
+
+
+def _score(level_t: _Level, Mf: np.ndarray, pts: np.ndarray, free_pts: np.ndarray, T) -> float:
+    """Eq. 8 times the share of source free cells landing on known plan cells."""
+    fit = fitness(Mf, apply(T, pts))
+    if len(free_pts) == 0:
+        return fit
+    known = lookup(level_t.data != UNKNOWN, apply(T, free_pts)).mean()
+    return fit * known
+
+
+def _dense(level_s: _Level, level_t: _Level, rotations, scales, sigma: float) -> list[Hypothesis]:
+    """Dense hypotheses at the search level, scored like :func:`_score`."""
+    Mf = level_t.fitness_map(sigma)
+    hyps = dense_hypotheses(level_s.pts, Mf, rotations, scales, peaks_per_pose=3)
+    for h in hyps:
+        h.score = _score(level_t, Mf, level_s.pts, level_s.free_pts, h.T)
+    return hyps
+
+
+@dataclass
+class _Search:
+    """Outcome of the hypothesis search in one direction (refine-level coordinates)."""
+
+    T: np.ndarray | None
+    score: float
+    stats: dict[str, Any]
+    theta: tuple[float, float]
+    faces: tuple[list[Face], list[Face]]
+    levels: tuple[_Level, _Level]
+    timings: dict[str, float]
+
+
+def _search(src: np.ndarray, tgt: np.ndarray, f1: int, f2: int, p: AlignParams) -> _Search:
+    """Hypotheses at the search level, the best refined at the refine level."""
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    S1 = _Level(src, f1, max_points=3000, seed=p.seed)
+    T1 = _Level(tgt, f1, max_points=3000, seed=p.seed)
+    theta_s, str_s = dominant_orientation(S1.data)
+    theta_t, str_t = dominant_orientation(T1.data)
+    timings["orientation"] = time.perf_counter() - t0
+    t1 = time.perf_counter()
+    gap = max(2, int(round(1.0 / 0.05 / f1)))  # doorways of ~1 m at ~5 cm/px
+    min_len = max(4, int(round(0.6 / 0.05 / f1)))
+    faces_s = decompose(
+        S1.data, theta_s, min_area=max(6, 0.002 * S1.data.size), gap=gap, min_length=min_len
+    )
+    faces_t = decompose(
+        T1.data, theta_t, min_area=max(6, 0.002 * T1.data.size), gap=gap, min_length=min_len
+    )
+    timings["decomposition"] = time.perf_counter() - t1
+    t1 = time.perf_counter()
+    lo, hi = p.scale_range
+    face_h, stats = face_hypotheses(
+        faces_s, theta_s, faces_t, theta_t, scale_range=(lo, hi), max_anisotropy=p.max_anisotropy
+    )
+    sigma1 = 1.5
+    Mf1 = T1.fitness_map(sigma1)
+    for h in face_h:
+        h.score = _score(T1, Mf1, S1.pts, S1.free_pts, h.T)
+    rotations = theta_t - theta_s + np.arange(4) * np.pi / 2
+    if min(str_s, str_t) < 0.25:  # no clear rectilinear structure: search all rotations
+        rotations = np.concatenate([rotations, np.radians(np.arange(0, 360, 15.0))])
+    n_scales = int(math.ceil(math.log(hi / lo) / math.log(1.1))) + 1
+    dense_h = _dense(S1, T1, rotations, np.geomspace(lo, hi, n_scales), sigma1)
+    stats.update(dense=len(dense_h), accepted=len(face_h) + len(dense_h))
+    # how much the best hypothesis stands out from the typical (wrong) placement
+    all_scores = np.array([h.score for h in face_h + dense_h])
+    typical = float(np.median([h.score for h in dense_h])) if dense_h else 0.0
+    stats["distinctiveness"] = (
+        float(all_scores.max() / max(typical, 1e-9)) if len(all_scores) else 0.0
+    )
+    timings["hypotheses"] = time.perf_counter() - t1
+
+    t1 = time.perf_counter()
+    # quick refinement of the top hypotheses at the search level, the best few at level 2
+    cands = suppress_duplicates(face_h + dense_h, translation=2.0)[: p.top_k]
+    pts1 = subsample(S1.pts, 1500, p.seed)
+    quick = []
+    for h in cands:
+        T = refine(pts1, T1.edt, h.T, sigmas=(2.0, 1.0), iterations=4)
+        if lo <= decompose_similarity(T)[0] <= hi:
+            quick.append((_score(T1, Mf1, S1.pts, S1.free_pts, T), T))
+    quick.sort(key=lambda st: -st[0])
+    S2 = _Level(src, f2, max_points=4000, seed=p.seed)
+    T2 = _Level(tgt, f2, max_points=4000, seed=p.seed)
+    up = _scale(f1 / f2)
+    Mf2 = T2.fitness_map(1.0)
+    best, best_score = None, -1.0
+    for _, T in quick[:3]:
+        T = up @ T @ np.linalg.inv(up)
+        T = refine(S2.pts, T2.edt, T, sigmas=(3.0, 1.5, 1.0), iterations=6)
+        if not lo <= decompose_similarity(T)[0] <= hi:
+            continue
+        sc = _score(T2, Mf2, S2.pts, S2.free_pts, T)
+        if sc > best_score:
+            best, best_score = T, sc
+    stats["refined"] = len(cands)
+    timings["refine"] = time.perf_counter() - t1
+    return _Search(
+        best, best_score, stats, (theta_s, theta_t), (faces_s, faces_t), (S1, T1), timings
+    )
+
+
+def _invert_similarity_range(p: AlignParams) -> AlignParams:
+    lo, hi = p.scale_range
+    return replace(p, scale_range=(1.0 / hi, 1.0 / lo), rigid_scale=1.0 / p.rigid_scale)
+
+
+def align_maps(
+    source: np.ndarray,
+    target: np.ndarray,
+    *,
+    anchors: Anchors | None = None,
+    params: AlignParams | None = None,
+    names: tuple[str | None, str | None] = ("source", "target"),
+) -> Alignment:
+    """Align ``source`` to ``target`` (uint8 occupancy arrays); see the module docstring.
+
+    Returns an :class:`Alignment` whose ``similarity``, ``affine`` and ``rigid``
+    3x3 matrices map source pixel coordinates (x = column, y = row, origin
+    top-left, continuous: pixel centres at +0.5) to target pixel coordinates.
+
+    The search runs both ways (source onto target and target onto source) and keeps
+    the direction that scores best: the fitness of eq. 8 is only meaningful when the
+    points scored are a *part* of the map they are scored against, and either map
+    may be the partial one (a SLAM map of part of a building, or a plan of one
+    wing of what the robot mapped). The winning direction is refined at full
+    resolution and inverted if needed.
+    """
+    p = params or AlignParams()
+    timings: dict[str, float] = {}
+    warnings: list[str] = []
+    t0 = time.perf_counter()
+    bs = check_map(source, names[0])
+    bt = check_map(target, names[1])
+    # crop to the known content (+ margin): everything below is in cropped coordinates
+    m = 4
+    r0s, r1s, c0s, c1s = max(0, bs[0] - m), bs[1] + m, max(0, bs[2] - m), bs[3] + m
+    r0t, r1t, c0t, c1t = max(0, bt[0] - m), bt[1] + m, max(0, bt[2] - m), bt[3] + m
+    src = source[r0s:r1s, c0s:c1s]
+    tgt = target[r0t:r1t, c0t:c1t]
+    big = max(*src.shape, *tgt.shape)
+    f1 = max(1, int(math.ceil(big / p.search_size)))
+    f2 = min(f1, max(1, int(round(big / p.refine_size))))
+
+    fwd = _search(src, tgt, f1, f2, p)
+    pb = _invert_similarity_range(p)
+    bwd = _search(tgt, src, f1, f2, pb)
+    reverse = bwd.T is not None and (fwd.T is None or bwd.score > fwd.score)
+    for k, v in fwd.timings.items():
+        timings[k] = v + bwd.timings.get(k, 0.0)
+    stats = dict(fwd.stats)
+    stats["direction"] = "target->source" if reverse else "source->target"
+    stats["score_source_to_target"] = fwd.score
+    stats["score_target_to_source"] = bwd.score
+    srch, a, b, q = (bwd, tgt, src, pb) if reverse else (fwd, src, tgt, p)
+    best = srch.T
+
+    # ---- full resolution, in the winning direction (a -> b)
+    t1 = time.perf_counter()
+    A3 = subsample(occupied_points(a), p.max_points, p.seed)
+    edt3 = distance_map(b == OCCUPIED, return_indices=True)
+    known3 = cv2.dilate((b != UNKNOWN).astype(np.uint8), np.ones((7, 7), np.uint8)) > 0
+    Mf3 = np.exp(-(edt3[0] ** 2) / (2 * p.fitness_sigma**2)).astype(np.float32)
+    down = _scale(f2)
+    centre = A3.mean(0)
+
+    def rigid_from(T: np.ndarray) -> np.ndarray:
+        _, ang, _, _ = decompose_similarity(T)
+        R = similarity_matrix(q.rigid_scale, ang, 0.0, 0.0)
+        R[:2, 2] = apply(T, [centre])[0] - apply(R, [centre])[0]
+        return refine(
+            A3,
+            edt3,
+            R,
+            model="rigid",
+            scale=q.rigid_scale,
+            sigmas=(8.0 * f2, 4.0 * f2, 2.0, 1.0),
+            iterations=8,
+        )
+
+    passed = best is not None
+    line_plan = False
+    fallback = "falling back to the best rigid" + (" anchored" if anchors else "") + " result"
+    if passed and srch.score < p.min_score:
+        passed = False
+        warnings.append(
+            f"no alignment hypothesis passed (best score {srch.score:.3f} < {p.min_score}: "
+            f"the maps do not match at any scale in {p.scale_range}); {fallback}"
+        )
+    elif passed:
+        sim = down @ best @ np.linalg.inv(down)
+        # a line-drawn plan against a noisy map: a wide final sigma averages over the
+        # map's wall noise instead of locking onto the nearest face (Halmstad: the
+        # worst keypoint ratio 1.81 -> 1.46 x the floor)
+        line_plan = thin_walls(a) or thin_walls(b)
+        sigmas = (2.0 * f2, *(p.line_sigmas if line_plan else p.full_sigmas))
+        sim = refine(A3, edt3, sim, sigmas=sigmas, iterations=8, known=known3)
+        fit_sim = fitness(Mf3, apply(sim, A3))
+        passed = fit_sim >= p.min_fitness
+        if not passed:
+            warnings.append(
+                f"no alignment hypothesis passed (best fitness {fit_sim:.3f} < {p.min_fitness}); "
+                + fallback
+            )
+    else:
+        warnings.append(
+            "no alignment hypothesis passed the similarity test; falling back to the best rigid"
+            + (" anchored" if anchors is not None else "")
+            + " result"
+        )
+    if passed:
+        aff_sigmas = p.line_sigmas if line_plan and p.affine_line else (1.5, 1.0)
+        aff = refine(A3, edt3, sim, model="affine", sigmas=aff_sigmas, iterations=8, known=known3)
+        rig = rigid_from(sim)
+    else:
+        S1, T1 = srch.levels
+        th_a, th_b = srch.theta
+        rig = _fallback_rigid(
+            S1, T1, A3, edt3, q, th_a, th_b, f1, lambda T: fitness(Mf3, apply(T, A3))
+        )
+        sim = aff = rig
+    if reverse:
+        sim, aff, rig = (np.linalg.inv(T) for T in (sim, aff, rig))
+    timings["full_resolution"] = time.perf_counter() - t1
+
+    # ---- back to full-image coordinates; final refinement on wall surfaces
+    A, B = _shift(c0t, r0t), _shift(-c0s, -r0s)
+    sim, aff, rig = (A @ T @ B for T in (sim, aff, rig))
+    t1 = time.perf_counter()
+    fields = SideFields.from_map(target, fwd.theta[1], window=(r0t, r1t, c0t, c1t))
+    X, N = edge_points(src)
+    keep = subsample(np.arange(len(X))[:, None], p.max_points, p.seed)[:, 0]
+    X, N = X[keep] + (c0s, r0s), N[keep]
+    # Wall faces are matched to the plan's faces, free of the sub-pixel bias of thick
+    # walls (inside a wall every cell is its own nearest wall cell). A plan drawn with
+    # line-thin walls has no faces: matching faces to its lines would bias the scale by
+    # half the real walls' thickness, so there the similarity and affine keep the
+    # occupied-cell fit (the rigid variant, which carries the metric, is always refined).
+    if passed and not thin_walls(target):
+        sim = refine_surfaces(X, N, fields, sim, sigmas=p.surface_sigmas)
+        aff = refine_surfaces(X, N, fields, aff, model="affine", sigmas=p.surface_sigmas)
+    rig = refine_surfaces(
+        X, N, fields, rig, model="rigid", scale=p.rigid_scale, sigmas=p.surface_sigmas
+    )
+    if not passed:
+        sim = aff = rig
+    timings["surfaces"] = time.perf_counter() - t1
+    S3f = subsample(occupied_points(source), p.max_points, p.seed)
+    Mf3f = np.zeros(target.shape, np.float32)  # eq. 8 fitness map of the whole target
+    d_t = fields.walls[0] if reverse else edt3[0]
+    Mf3f[r0t:r1t, c0t:c1t] = np.exp(-(d_t**2) / (2 * p.fitness_sigma**2))
+    anchored = "none"
+    used = anchors
+    if anchors is not None:
+        if passed:
+            sim = anchor(sim, anchors.source, anchors.target)
+            aff = anchor(aff, anchors.source, anchors.target)
+        else:
+            sim = aff = anchor(np.eye(3), anchors.source, anchors.target)
+        rig = anchor(rig, anchors.source, anchors.target)
+        anchored = "manual"
+    elif p.auto_anchor and passed:
+        t1 = time.perf_counter()
+        found = auto_anchors(source, target, aff)
+        if found is not None:
+            cand = anchor(aff, found.source, found.target)
+            # automatic anchors are accepted only when they improve the fitness (eq. 8)
+            if fitness(Mf3f, apply(cand, S3f)) > fitness(Mf3f, apply(aff, S3f)):
+                aff = cand
+                sim = anchor(sim, found.source, found.target)
+                rig = anchor(rig, found.source, found.target)
+                anchored, used = "auto", found
+            else:
+                anchored = "auto-rejected"
+        else:
+            anchored = "auto-none"
+        timings["anchoring"] = time.perf_counter() - t1
+
+    stats["passed"] = bool(passed)
+    timings["total"] = time.perf_counter() - t0
+    theta_s, theta_t = fwd.theta
+    return Alignment(
+        similarity=sim,
+        affine=aff,
+        rigid=rig,
+        fitness=fitness(Mf3f, apply(sim, S3f)),
+        fitness_affine=fitness(Mf3f, apply(aff, S3f)),
+        fitness_rigid=fitness(Mf3f, apply(rig, S3f)),
+        anchored=anchored,
+        anchors=used,
+        warnings=warnings,
+        hypotheses=stats,
+        orientation={"source": theta_s, "target": theta_t},
+        fields=fields,
+        faces={
+            "source": fwd.faces[0],
+            "target": fwd.faces[1],
+            "factor": f1,
+            "offset_source": (c0s, r0s),
+            "offset_target": (c0t, r0t),
+        },
+        timings=timings,
+    )
+
+
+def _fallback_rigid(S1, T1, S3, edt3, p: AlignParams, theta_s, theta_t, f1, fit3) -> np.ndarray:
+    """Best rigid transform (scale fixed) from dense hypotheses, refined at full resolution."""
+    rotations = np.concatenate(
+        [theta_t - theta_s + np.arange(4) * np.pi / 2, np.radians(np.arange(0, 360, 15.0))]
+    )
+    hyps = _dense(S1, T1, rotations, np.array([p.rigid_scale]), 1.5)
+    if not hyps:
+        return similarity_matrix(p.rigid_scale, 0.0, 0.0, 0.0)
+    down = _scale(f1)
+    best, best_fit = None, -1.0
+    for h in sorted(hyps, key=lambda h: -h.score)[:5]:
+        T = down @ h.T @ np.linalg.inv(down)
+        T = refine(
+            S3,
+            edt3,
+            T,
+            model="rigid",
+            scale=p.rigid_scale,
+            sigmas=(4.0 * f1, 2.0 * f1, 2.0, 1.0),
+            iterations=6,
+        )
+        f = fit3(T)
+        if f > best_fit:
+            best, best_fit = T, f
+    return best

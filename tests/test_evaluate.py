@@ -1,0 +1,338 @@
+"""Map evaluation (issue 6): alignment, anchoring, nonrigid optimisation, error metric, CLI."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+from map2map.cli.main import main
+from map2map.evaluate.align import AlignParams, align_maps
+from map2map.evaluate.anchors import Anchors, anchor, auto_anchors
+from map2map.evaluate.features import edge_points
+from map2map.evaluate.fitness import fitness, fitness_map
+from map2map.evaluate.icp import icp
+from map2map.evaluate.metric import choose_chain
+from map2map.evaluate.nonrigid import PiecewiseAffine, coherent_motion, warp_image
+from map2map.evaluate.pipeline import evaluate_maps, register
+from map2map.evaluate.synthetic import (
+    deform,
+    draw_walls,
+    gaussian_field,
+    office_walls,
+    wall_displacement,
+)
+from map2map.evaluate.transforms import apply, decompose_similarity, similarity_matrix
+from map2map.maps.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+
+W, H = 320, 240
+
+
+@pytest.fixture(scope="module")
+def plan() -> np.ndarray:
+    return draw_walls((H, W), office_walls(W, H, thickness=4))
+
+
+# --------------------------------------------------------------------------- eq. 8
+def test_fitness_eq8_hand_computed():
+    walls = np.zeros((21, 21), bool)
+    walls[:, 10] = True
+    Mf = fitness_map(walls, sigma=2.0)
+    assert Mf[5, 10] == 1.0
+    assert Mf[5, 13] == pytest.approx(math.exp(-9 / 8), rel=1e-6)
+    pts = np.array([[10.5, 3.5], [13.5, 3.5], [7.5, 3.5], [99.0, 3.0]])  # last is off the plan
+    expected = (1.0 + 2 * math.exp(-9 / 8) + 0.0) / 4
+    assert fitness(Mf, pts) == pytest.approx(expected, rel=1e-6)
+
+
+# ------------------------------------------------------------------------ eqs. 1-6
+def test_anchoring_eqs_1_to_6_hand_computed():
+    T_align = np.array([[1.0, 0, 5], [0, 1, 0], [0, 0, 1]])  # alignment off by 5 px in x
+    Ps = np.array([[0.0, 0.0], [10.0, 0.0]])
+    Pd = np.array([[0.0, 0.0], [0.0, 10.0]])
+    # eq. 1: Psa = (5,0), (15,0); eq. 2: ET = rotation +90 deg, t = (0, -5); eq. 3: ET . T_align
+    expected = np.array([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]])
+    np.testing.assert_allclose(anchor(T_align, Ps, Pd), expected, atol=1e-12)
+    # rigid chain (eqs. 4-6) with inconsistent lengths: least squares splits the residual
+    Pd2 = np.array([[0.0, 0.0], [12.0, 0.0]])
+    T = anchor(np.eye(3), Ps, Pd2)
+    np.testing.assert_allclose(apply(T, Ps), [[1.0, 0.0], [11.0, 0.0]], atol=1e-12)
+    assert decompose_similarity(T)[0] == pytest.approx(1.0)  # Euclidean: no scale
+
+
+# ------------------------------------------------------- recovery of a similarity
+def _transform_map(data, T, shape):
+    return cv2.warpAffine(
+        data, T[:2], (shape[1], shape[0]), flags=cv2.INTER_NEAREST, borderValue=UNKNOWN
+    )
+
+
+def test_recovers_known_similarity_on_partial_noisy_map(plan):
+    rng = np.random.default_rng(3)
+    src = plan.copy()
+    src[:, int(0.8 * W) :] = UNKNOWN  # partially explored
+    free = src == FREE
+    speckle = free & (rng.random(src.shape) < 0.004)  # clutter
+    src[speckle] = OCCUPIED
+    drop = (src == OCCUPIED) & (rng.random(src.shape) < 0.1)  # missing wall cells
+    src[drop] = FREE
+    # pixel-centre convention: continuous coordinates c + 0.5 (see transforms docstring)
+    C = np.array([[1, 0, 0.5], [0, 1, 0.5], [0, 0, 1.0]])
+    T_true = similarity_matrix(0.8, math.radians(33.0), 150.0, 20.0)
+    warp = np.linalg.inv(C) @ T_true @ C
+    source = _transform_map(src, warp, (360, 420))
+    res = align_maps(source, plan)
+    probe = np.array([[30.0, 30.0], [250.0, 40.0], [60.0, 200.0], [270.0, 210.0]])
+    in_source = apply(T_true, probe)  # the warp maps plan -> source by T_true
+    got = apply(res.similarity, in_source)
+    assert np.abs(got - probe).max() < 2.0
+    s, a, _, _ = decompose_similarity(res.similarity)
+    assert s == pytest.approx(1 / 0.8, rel=0.01)
+    assert math.degrees(a) == pytest.approx(-33.0, abs=0.5)
+    assert res.hypotheses["passed"] and res.hypotheses["rejected"] > 0
+
+
+def test_no_hypothesis_passes_warns_and_falls_back(plan):
+    rng = np.random.default_rng(0)
+    source = np.full((H, W), FREE, np.uint8)
+    source[rng.random((H, W)) < 0.01] = OCCUPIED  # nothing like the plan
+    res = align_maps(source, plan, params=AlignParams(auto_anchor=False, scale_range=(0.8, 1.25)))
+    assert res.warnings and "no alignment hypothesis passed" in res.warnings[0]
+    assert decompose_similarity(res.similarity)[0] == pytest.approx(1.0)  # rigid fallback
+    assert np.all(np.isfinite(res.similarity))
+
+
+def test_auto_anchors_find_distant_corners(plan):
+    shifted = _transform_map(plan, similarity_matrix(1.0, 0.0, 3.0, -2.0), (H, W))
+    found = auto_anchors(shifted, plan, np.array([[1.0, 0, -3], [0, 1, 2], [0, 0, 1]]))
+    assert isinstance(found, Anchors)
+    np.testing.assert_allclose(found.target - found.source, [[-3, 2], [-3, 2]], atol=1.01)
+    assert np.hypot(*(found.source[0] - found.source[1])) > 100
+
+
+# ----------------------------------------------------------------------- nonrigid
+def test_coherent_motion_is_a_gaussian_neighbourhood_average():
+    rng = np.random.default_rng(0)
+    pts = rng.uniform(0, 200, (400, 2))
+    motion = rng.normal(size=(400, 2))
+    w = rng.uniform(0.2, 1.0, 400)
+    sigma = 30.0
+    d2 = ((pts[:, None] - pts[None]) ** 2).sum(-1)
+    g = np.exp(-d2 / (2 * sigma**2)) * w[None]
+    exact = (g @ motion) / g.sum(1, keepdims=True)  # the O(N^2) definition
+    fast = coherent_motion(pts, motion, w, sigma)
+    assert np.abs(fast - exact).max() < 0.1 * np.abs(exact).max()
+
+
+def test_piecewise_affine_warp_by_triangle_rasterisation():
+    src = np.array([[0.0, 0], [100, 0], [0, 100], [100, 100], [50, 50]])
+    pw = PiecewiseAffine(src, src + [[0, 0], [0, 0], [0, 0], [0, 0], [10, 0]])
+    np.testing.assert_allclose(
+        pw.forward(np.array([[50.0, 50.0], [150.0, 5.0]])), [[60, 50], [150, 5]]
+    )
+    img = np.full((101, 101), FREE, np.uint8)
+    img[:, 50] = OCCUPIED
+    out = warp_image(img, np.eye(3), img.shape, pw)
+    assert out[50, 60] == OCCUPIED and out[50, 50] == FREE  # the middle moved 10 px right
+    assert out[2, 50] == OCCUPIED  # the hull's edge did not move
+
+
+def test_nonrigid_recovers_known_smooth_deformation(plan):
+    field = gaussian_field(plan.shape, (0.6 * W, 0.6 * H), (6.0, -4.0), 45.0)
+    slam, u = deform(plan, field)
+    reg = register(OccupancyMap(slam, 0.05), OccupancyMap(plan, 0.05))
+    r = np.floor(reg.X[:, 1]).astype(int)
+    c = np.floor(reg.X[:, 0]).astype(int)
+    truth = reg.X - u[r, c]  # where each SLAM wall point belongs on the plan
+    moved = np.hypot(*u[r, c].T) > 3.0
+    n = reg.normals[moved]
+    err_affine = np.abs(((reg.X_affine[moved] - truth[moved]) * n).sum(1))
+    err_opt = np.abs(((reg.X_optimised[moved] - truth[moved]) * n).sum(1))
+    assert np.median(err_affine) > 2.0  # the affine alignment cannot follow the bend
+    assert np.median(err_opt) < 1.0  # the wall-normal error is recovered
+    sim, nonrigid = reg.map_points(reg.X[moved])
+    assert np.median(np.hypot(*(nonrigid - truth[moved]).T)) < np.median(
+        np.hypot(*(sim - truth[moved]).T)
+    )
+
+
+# ------------------------------------------------------------------- Algorithm 1
+def _true_error(ev, u):
+    """True local error of the chosen chain's points: across the wall, from X_rigid to
+    where the point belongs on the plan (its SLAM position minus the known displacement)."""
+    X, n = ev.registration.X, ev.registration.normals
+    e = ev.errors[ev.chosen]
+    r = np.floor(X[:, 1]).astype(int)
+    c = np.floor(X[:, 0]).astype(int)
+    return np.abs(((e.X_rigid - (X - u[r, c])) * n).sum(1))[e.valid]
+
+
+def test_metric_within_5_percent_on_walls_moved_by_known_amounts(plan):
+    walls = office_walls(W, H, thickness=4)
+    built_walls = office_walls(
+        W, H, thickness=4, corridor_shift=(-6.0, 0.0), partition_shift=(7.0, -5.0)
+    )
+    built = draw_walls((H, W), built_walls)
+    u = wall_displacement((H, W), walls, built_walls)
+    ev = evaluate_maps(OccupancyMap(built, 0.05), OccupancyMap(plan, 0.05), resolution=0.05)
+    assert ev.chosen == "rigid"
+    true = _true_error(ev, u)
+    rep = ev.report["errors"]["rigid"]
+    assert rep["mean_px"] == pytest.approx(true.mean(), rel=0.05)
+    assert rep["max_px"] == pytest.approx(true.max(), rel=0.05)
+    assert rep["mean_m"] == pytest.approx(true.mean() * 0.05, rel=0.05)
+    assert ev.report["iou"]["rigid"]["free"] > 0.9
+
+
+def test_metric_within_5_percent_on_smooth_field(plan):
+    field = gaussian_field(plan.shape, (0.8 * W, 0.8 * H), (0.0, 8.0), 60.0)  # a bent wing
+    slam, u = deform(plan, field)
+    ev = evaluate_maps(OccupancyMap(slam, 0.05), OccupancyMap(plan, 0.05), resolution=0.05)
+    true = _true_error(ev, u)
+    rep = ev.report["errors"][ev.chosen]
+    assert rep["mean_px"] == pytest.approx(true.mean(), rel=0.05)
+    assert rep["max_px"] == pytest.approx(true.max(), rel=0.05)
+
+
+def test_chain_rule_scale_or_shear_means_nonrigid():
+    sim = similarity_matrix(1.0, 0.3, 5, 5)
+    assert choose_chain(sim, sim)[0] == "rigid"
+    assert choose_chain(similarity_matrix(1.1, 0.3, 5, 5), sim)[0] == "nonrigid"
+    sheared = sim.copy()
+    sheared[0, 1] += 0.1
+    assert choose_chain(sim, sheared)[0] == "nonrigid"
+
+
+# --------------------------------------------------------------------------- ICP
+def test_vanilla_icp_small_offset_converges_large_offset_fails(plan):
+    pts, _ = edge_points(plan)
+    c, s = math.cos(0.02), math.sin(0.02)
+    R = np.array([[c, -s], [s, c]])
+    src = (pts - 150) @ R.T + 150 + [2.0, -1.5]
+    assert icp(src, pts).mean_distance < 0.2
+    far = (pts - 150) @ np.array([[0.0, -1], [1, 0]]).T + 150  # rotated 90 degrees
+    assert icp(far, pts).mean_distance > 2.0  # the paper's point: ICP needs a good start
+
+
+# --------------------------------------------------------------------------- CLI
+def _save(path, data, resolution=0.05):
+    from map2map.maps.formats import save_map
+
+    save_map(OccupancyMap(data, resolution), path)
+    return str(path)
+
+
+def test_cli_align_and_evaluate_outputs(plan, tmp_path, capsys):
+    slam = draw_walls((H, W), office_walls(W, H, thickness=4, partition_shift=(5.0, 0.0)))
+    src = _save(tmp_path / "slam.png", np.ascontiguousarray(np.rot90(slam)))
+    tgt = _save(tmp_path / "plan.png", plan)
+    pts = tmp_path / "pts.csv"
+    pts.write_text("x,y\n20.5,30.5\n100.5,200.5\n")
+    out = tmp_path / "al"
+    assert main(["align", src, tgt, "--out", str(out), "--points", str(pts)]) == 0
+    doc = json.loads((out / "alignment.json").read_text())
+    for k in ("similarity", "affine", "rigid"):
+        assert np.array(doc[k]).shape == (3, 3)
+    T = np.array(doc["similarity"])  # np.rot90: source (x, y) = plan (y, W - x)
+    np.testing.assert_allclose(apply(T, [[30.5, W - 20.5]]), [[20.5, 30.5]], atol=1.5)
+    rows = list(csv.DictReader((out / "points_aligned.csv").open()))
+    assert list(rows[0]) == ["x_similarity", "y_similarity", "x_nonrigid", "y_nonrigid"]
+    assert len(rows) == 2
+    assert (out / "overlay.png").stat().st_size > 0
+
+    ev_out = tmp_path / "ev"
+    assert main(["evaluate", src, tgt, "--out", str(ev_out)]) == 0
+    rep = json.loads((ev_out / "report.json").read_text())
+    assert rep["chosen_chain"] == "rigid"
+    assert rep["chosen_errors"]["max_m"] == pytest.approx(0.25, rel=0.1)
+    assert {"rigid", "nonrigid"} <= set(rep["errors"]) and "from_identity" in rep["icp"]
+    assert (ev_out / "overlay.png").exists() and (ev_out / "error_map.png").exists()
+
+    pairs = tmp_path / "pairs.csv"
+    pairs.write_text("slam,plan\nslam.png,plan.png\nplan.png,plan.png\n")
+    assert main(["evaluate", "--pairs", str(pairs), "--out", str(tmp_path / "b"), "--quiet"]) == 0
+    table = list(csv.DictReader((tmp_path / "b" / "pairs.csv").open()))
+    assert len(table) == 2 and float(table[1]["max_px"]) < 1.0
+    assert (tmp_path / "b" / "errors_boxplot.png").exists()
+    capsys.readouterr()
+
+
+def _bad(args, capsys, out, expect):
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("map2map: error:") and expect in err[0], err
+    assert not out.exists()
+
+
+def test_cli_bad_inputs(plan, tmp_path, capsys):
+    tgt = _save(tmp_path / "plan.png", plan)
+    out = tmp_path / "out"
+    empty = _save(tmp_path / "empty.png", np.full((H, W), FREE, np.uint8))
+    _bad(["evaluate", empty, tgt, "--out", str(out)], capsys, out, "no occupied pixels")
+    tiny = np.full((H, W), UNKNOWN, np.uint8)
+    tiny[10:18, 10:18] = OCCUPIED
+    tiny_p = _save(tmp_path / "tiny.png", tiny)
+    _bad(["align", tiny_p, tgt, "--out", str(out)], capsys, out, "too small to decompose")
+    cases = {
+        "x,y\n1,2\n": "header",
+        "x_source,y_source,x_target,y_target\n1,2,3\n": "expected 4 values",
+        "x_source,y_source,x_target,y_target\n1,2,3,4\n": "at least two anchor pairs",
+        "x_source,y_source,x_target,y_target\n1,2,3,x\n5,6,7,8\n": "must be numbers",
+        "x_source,y_source,x_target,y_target\n10,10,10,10\n9999,10,50,50\n": "outside",
+        "x_source,y_source,x_target,y_target\n10,10,10,10\n10,10,50,50\n": "identical",
+    }
+    for text, expect in cases.items():
+        a = tmp_path / "anchors.csv"
+        a.write_text(text)
+        _bad(["evaluate", tgt, tgt, "--out", str(out), "--anchors", str(a)], capsys, out, expect)
+    no_res = tmp_path / "nores.png"
+    cv2.imwrite(str(no_res), plan)  # a plain picture: no resolution stored
+    _bad(["evaluate", str(no_res), str(no_res), "--out", str(out)], capsys, out, "--resolution")
+    pts = tmp_path / "pts.csv"
+    pts.write_text("x,y\n1,oops\n")
+    _bad(["align", tgt, tgt, "--out", str(out), "--points", str(pts)], capsys, out, "line 2")
+
+
+def test_cli_anchors_are_used(plan, tmp_path, capsys):
+    tgt = _save(tmp_path / "plan.png", plan)
+    a = tmp_path / "anchors.csv"
+    a.write_text(
+        "x_source,y_source,x_target,y_target\n20.5,20.5,20.5,20.5\n300.5,220.5,300.5,220.5\n"
+    )
+    out = tmp_path / "al"
+    assert main(["align", tgt, tgt, "--out", str(out), "--anchors", str(a)]) == 0
+    doc = json.loads((out / "alignment.json").read_text())
+    assert doc["anchored"] == "manual"
+    np.testing.assert_allclose(doc["rigid"], np.eye(3), atol=1e-3)
+    capsys.readouterr()
+
+
+# ----------------------------------------------------------------------- Halmstad
+def test_halmstad_pair_within_floor(shared_data):
+    from map2map.evaluate.halmstad import keypoint_residuals, load_halmstad
+
+    root = shared_data / "halmstad"
+    src, tgt = load_halmstad(root, "E5_05"), load_halmstad(root, "E5_layout")
+    reg = register(src, tgt)
+    floor, sim, nonrigid = keypoint_residuals(root, "E5_05", "E5_layout", src, tgt, reg.map_points)
+    assert sim <= 1.5 * floor
+    assert nonrigid <= 1.5 * floor
+
+
+def test_demo_stage_evaluates_a_known_bend(tmp_path, capsys):
+    from map2map.demo import STAGES, DemoContext
+    from map2map.evaluate.demo_stage import stage_evaluate
+
+    assert STAGES[-1][1] is stage_evaluate
+    ctx = DemoContext(out=tmp_path, seed=0)
+    ctx.results["plan"] = OccupancyMap(draw_walls((H, W), office_walls(W, H, thickness=4)), 0.05)
+    stage_evaluate(ctx)
+    line = capsys.readouterr().out
+    assert "true: mean" in line
+    assert {p.name for _, p in ctx.written} == {"report.json", "overlay.png", "error_map.png"}
+    e = ctx.results["evaluation"]["known_bend"]
+    assert 0.0 < e["mean_m"] < e["max_m"]
