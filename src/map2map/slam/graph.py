@@ -13,7 +13,8 @@ the keyframe scans at their optimised poses.
   scoring each pose by the mean of a likelihood-field lookup table at the scan
   endpoints. Coarse-to-fine: a coarse pass (step ``coarse_resolution``, angle
   ``coarse_angle_step``, wide smear) and a fine pass around the coarse optimum
-  (step ``fine_resolution``, angle ``fine_angle_step``, narrow smear). The
+  (step ``fine_resolution``, angle ``fine_angle_step``, narrow smear), responses
+  penalised for leaving the odometry guess as Karto does (:func:`_penalty`). The
   response spread gives the covariance of the match (Karto's
   ``ComputePositionalCovariance``), whose inverse weights the constraint.
 * **Loop closure** (Karto ``TryCloseLoop``): candidate keyframes lie within
@@ -243,6 +244,18 @@ def _covariance(resp: np.ndarray, dxs, dys, thetas, best, fine_res) -> np.ndarra
     return np.array([[cxx, cxy, 0.0], [cxy, cyy, 0.0], [0.0, 0.0, caa]])
 
 
+def _penalty(dx, dy, dth):
+    """Karto's response penalty for leaving the odometry guess (``ScanMatcher::CorrelateScan``).
+
+    ``1 - 0.2 d^2 / 0.5`` (at least 0.5) times ``1 - 0.2 dtheta^2 / 1.0`` (at least 0.9):
+    slam_toolbox's distance/angle variance penalties 0.5 / 1.0 and minimum penalties
+    0.5 / 0.9. Where the response is flat (a corridor), the guess wins.
+    """
+    d = np.maximum(1.0 - 0.2 * (dx * dx + dy * dy) / 0.5, 0.5)
+    a = np.maximum(1.0 - 0.2 * dth * dth / 1.0, 0.9)
+    return d * a
+
+
 def correlative_match(
     points: np.ndarray,
     guess: np.ndarray,
@@ -254,6 +267,7 @@ def correlative_match(
     coarse_angle: float,
     fine_step: float,
     fine_angle: float,
+    penalize: bool = False,
 ) -> tuple[MatchResult, float]:
     """Coarse-to-fine correlative scan matching of robot-frame ``points`` around ``guess``.
 
@@ -273,12 +287,18 @@ def correlative_match(
     dxs = _grid(half_width, coarse_step)
     ths = gt + _grid(half_angle, coarse_angle)
     resp = coarse.correlate(points, gx, gy, dxs, dxs, ths)
+    if penalize:
+        resp = resp * _penalty(dxs[None, :, None], dxs[None, None, :], ths[:, None, None] - gt)
     best = np.unravel_index(int(np.argmax(resp)), resp.shape)
     coarse_resp = float(resp[best])
     cx, cy, ct = gx + dxs[best[1]], gy + dxs[best[2]], ths[best[0]]
     fxs = _grid(coarse_step, fine_step)
     fts = ct + _grid(coarse_angle, fine_angle)
     fresp = fine.correlate(points, cx, cy, fxs, fxs, fts)
+    if penalize:
+        fresp = fresp * _penalty(
+            cx - gx + fxs[None, :, None], cy - gy + fxs[None, None, :], fts[:, None, None] - gt
+        )
     fb = np.unravel_index(int(np.argmax(fresp)), fresp.shape)
     pose = np.array([cx + fxs[fb[1]], cy + fxs[fb[2]], (fts[fb[0]] + np.pi) % (2 * np.pi) - np.pi])
     cov = _covariance(fresp, fxs, fxs, fts, fb, fine_step)
@@ -489,6 +509,7 @@ class GraphSLAM:
                 p.coarse_angle_step,
                 p.fine_resolution,
                 p.fine_angle_step,
+                penalize=True,
             )
             if res.response >= p.link_min_response:
                 pose = res.pose
