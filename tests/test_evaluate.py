@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from map2map.cli.main import main
-from map2map.evaluate.align import AlignParams, align_maps
+from map2map.evaluate.align import AlignParams, align_maps, maximise_fitness
 from map2map.evaluate.anchors import Anchors, anchor, auto_anchors
 from map2map.evaluate.features import edge_points
 from map2map.evaluate.fitness import fitness, fitness_map
@@ -158,6 +158,17 @@ def test_nonrigid_recovers_known_smooth_deformation(plan):
     assert np.median(np.hypot(*(nonrigid - truth[moved]).T)) < np.median(
         np.hypot(*(sim - truth[moved]).T)
     )
+
+
+def test_maximise_fitness_polishes_a_nearly_right_similarity(plan):
+    from map2map.evaluate.features import occupied_points
+
+    pts = occupied_points(plan)
+    Mf = fitness_map(plan == OCCUPIED, 4.0)
+    T0 = similarity_matrix(1.02, math.radians(1.0), -2.0, 1.5)  # the truth is identity
+    T = maximise_fitness(pts, Mf, T0)
+    assert fitness(Mf, apply(T, pts)) > fitness(Mf, apply(T0, pts))
+    assert np.abs(apply(T, pts) - pts).max() < 0.5 < np.abs(apply(T0, pts) - pts).max()
 
 
 # ------------------------------------------------------------------- Algorithm 1
