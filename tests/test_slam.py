@@ -153,7 +153,15 @@ def test_hill_climb_recovers_known_offset():
     keep = np.isfinite(r) & (r < 3.0)
     args = (np.zeros(3), r[keep], scan.angles[keep].astype(float), 1, 0.05)
     x, y, t, score = hill_climb(
-        *g.match_arrays(), pose[0] + 0.08, pose[1] - 0.06, pose[2] + 0.04, *args, 0.05, 0.05, 5
+        *g.match_arrays(),
+        pose[0] + 0.08,
+        pose[1] - 0.06,
+        pose[2] + 0.04,
+        *args,
+        0.05,
+        0.05,
+        5,
+        np.zeros(6),
     )
     assert abs(x - pose[0]) < 0.02 and abs(y - pose[1]) < 0.02 and abs(t - pose[2]) < 0.01
     best = gmapping_score(*g.match_arrays(), *pose, *args, 0.075)[0]

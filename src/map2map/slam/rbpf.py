@@ -136,6 +136,7 @@ class GMappingParams:
     occ_thresh: float = 0.25
     initial_size: float = 20.0
     sample_proposal: bool = True
+    motion_prior: float = 1.0
     no_return_free: bool = True
     sigma_is_std: bool = True
 
@@ -332,6 +333,9 @@ class GMappingRBPF:
         self._node_time: list[float] = []
         self.leaf = np.full(n, -1, np.int64)
         self._odom0: np.ndarray | None = None
+        # particle poses and odometry at the last processed scan (motion prior anchor)
+        self._upd_pose = np.zeros((n, 3))
+        self._upd_odom = np.zeros(3)
         self._last_odom: np.ndarray | None = None
         self._lin = 0.0
         self._ang = 0.0
@@ -362,6 +366,7 @@ class GMappingRBPF:
         ranges, angles = prepare_scan(scan)
         if self._last_odom is None:
             self._last_odom = o
+            self._upd_odom = o
             self._last_t = scan.t
             self.grids = [
                 CountGrid.around(0.0, 0.0, p.initial_size / 2, p.delta) for _ in range(p.particles)
@@ -387,7 +392,7 @@ class GMappingRBPF:
             return
         self._lin = self._ang = 0.0
         self._last_t = scan.t
-        self._process(ranges, angles, scan)
+        self._process(ranges, angles, scan, o)
         self._add_nodes(scan.t)
         self._map_cache = None
         self.n_updates += 1
@@ -447,11 +452,39 @@ class GMappingRBPF:
         self._node_time.append(float(t))
         self.leaf = base + np.arange(self.poses.shape[0])
 
-    def _process(self, ranges, angles, scan: LaserScan) -> None:
+    def _motion_priors(self, o: np.ndarray) -> np.ndarray:
+        """``(N, 6)`` motion priors ``(mx, my, mt, wx, wy, wt)`` for :func:`hill_climb`.
+
+        The mean is each particle's pose at the previous processed scan moved by the
+        odometry since then, without noise; the weights are ``motion_prior / s^2`` with
+        ``s`` the standard deviations of GMapping's motion model
+        (:func:`sample_motion`) for that odometry increment, expressed in the world
+        frame along the particle's heading (floored at 5 mm and 0.005 rad).
+        """
+        p = self.params
+        n = p.particles
+        out = np.zeros((n, 6))
+        if p.motion_prior <= 0:
+            return out
+        d = absolute_difference(o, self._upd_odom)
+        dx, dy, dt = abs(d[0]), abs(d[1]), abs(d[2])
+        sl = max(p.srr * dx + p.str * dt + 0.3 * p.srr * dy, 0.005)  # along the heading
+        sc = max(p.srr * dy + p.str * dt + 0.3 * p.srr * dx, 0.005)  # across
+        st = max(p.stt * dt + p.srt * math.hypot(d[0], d[1]), 0.005)
+        mean = absolute_sum(self._upd_pose, np.broadcast_to(d, self._upd_pose.shape))
+        out[:, :3] = mean
+        # isotropic in x, y (the larger of the two): the climb moves along world axes
+        s_xy = max(sl, sc)
+        out[:, 3] = out[:, 4] = p.motion_prior / s_xy**2
+        out[:, 5] = p.motion_prior / st**2
+        return out
+
+    def _process(self, ranges, angles, scan: LaserScan, o: np.ndarray) -> None:
         p = self.params
         off = self._laser_offset(scan)
         mr, ma = _matching_beams(ranges, angles, p.max_urange, p.lskip)
         n = p.particles
+        priors = self._motion_priors(o)
         for i in range(n):
             g = self.grids[i]
             x, y, t = self.poses[i]
@@ -470,6 +503,7 @@ class GMappingRBPF:
                 p.lstep,
                 p.astep,
                 p.iterations,
+                priors[i],
             )
             if score > p.minimum_score:
                 cx, cy, ct = mx, my, mt
@@ -508,6 +542,8 @@ class GMappingRBPF:
         if neff < p.resample_threshold * n:
             idx = low_variance_resample(w, self.rng)
             self._resample(idx)
+        self._upd_pose = self.poses.copy()
+        self._upd_odom = o
         self._register_all(ranges, angles, scan)
 
     def _resample(self, idx: np.ndarray) -> None:
