@@ -87,10 +87,10 @@ class GMappingParams:
 
     Deviations, for speed (a 7-minute simulated run should take a few seconds):
     ``particles`` 5 (not 100) and ``lskip`` 1 (not 0; the matcher uses every second
-    of the LDS-01's 360 beams). Measured on 10 simulated explorations (procedural
-    apartments and offices, 7 minutes, realistic odometry): mean map error 7.1 cm
-    with 5 particles, 6.4 cm with 10, 6.7 cm with 30 -- within run-to-run spread --
-    while time grows linearly (about 6, 8 and 22 CPU seconds per run); see
+    of the LDS-01's 360 beams). Measured (before ``motion_prior``) on 10 simulated
+    explorations (procedural apartments and offices, 7 minutes, realistic odometry):
+    mean map error 7.1 cm with 5 particles, 6.4 cm with 10, 6.7 cm with 30 -- within
+    run-to-run spread -- while time grows linearly (about 6, 8 and 22 CPU seconds per run); see
     ``benchmarks/bench_slam.py`` and ``benchmarks/slam_quality.py``.
 
     Three switches that are not GMapping parameters. ``sigma_is_std`` (default True)
