@@ -16,6 +16,10 @@ seconds per map and the implied maps/hour with one process per core
 machine; wall time is what a user sees. The default configuration is then run with two
 processes at once to measure the real two-core throughput. The ``oracle`` row is the
 simulator alone (no SLAM), for reference.
+
+Then the same on real HouseExpo plans from the shared data (skipped when absent): the
+two JSON plans and the first ``--houseexpo`` renders reduced to 0.05 m/px
+(``benchmarks/_sim_plans.py``), per backend.
 """
 
 from __future__ import annotations
@@ -24,6 +28,8 @@ import argparse
 import os
 import time
 from concurrent.futures import ProcessPoolExecutor
+
+from _sim_plans import HOUSEEXPO, houseexpo_json, houseexpo_renders
 
 CONFIGS = [
     ("oracle", {}),
@@ -49,6 +55,41 @@ def one_map(args):
     return time.perf_counter() - t0, time.process_time() - c0, res.sim_seconds
 
 
+def one_plan(backend, options, plan, seed):
+    """Simulate a given plan; returns (wall s, cpu s, coverage)."""
+    from map2map.sim.mappers import make_mapper
+    from map2map.sim.runner import simulate
+
+    mapper = make_mapper(backend, resolution=plan.resolution, seed=seed, **options)
+    t0, c0 = time.perf_counter(), time.process_time()
+    res = simulate(plan, seed=seed, mapper=mapper, duration=420.0, progress=False)
+    return time.perf_counter() - t0, time.process_time() - c0, res.coverage
+
+
+def bench_houseexpo(n_renders: int, cores: int) -> None:
+    """CPU s per 7-minute map on HouseExpo plans, per backend (one process)."""
+    if not HOUSEEXPO.is_dir():
+        print(f"HouseExpo data not found at {HOUSEEXPO}: skipped")
+        return
+    plans = houseexpo_json() + houseexpo_renders(n_renders)
+    areas = [float(p.free.sum()) * p.resolution**2 for _, p in plans]
+    print(
+        f"\nHouseExpo: {len(plans)} plans ({min(areas):.0f}-{max(areas):.0f} m2 free, "
+        "0.05 m/px), 420 simulated s each"
+    )
+    print(f"{'configuration':<26}{'wall s/map':>11}{'cpu s/map':>11}{'maps/h (cpu)':>14}{'cov':>6}")
+    for backend, options in (("oracle", {}), ("rbpf", {}), ("graph", {})):
+        r = [one_plan(backend, options, p, seed) for seed, (_, p) in enumerate(plans)]
+        w = sum(x[0] for x in r) / len(r)
+        c = sum(x[1] for x in r) / len(r)
+        cov = sum(x[2] for x in r) / len(r)
+        print(
+            f"{label(backend, options):<26}{w:>11.2f}{c:>11.2f}{cores * 3600 / c:>14.0f}"
+            f"{cov:>6.2f}",
+            flush=True,
+        )
+
+
 def label(backend, options):
     return backend + "".join(f" {k}={v}" for k, v in options.items())
 
@@ -59,6 +100,7 @@ def main() -> None:
     ap.add_argument(
         "--skip", default="", help="comma-separated labels to skip, e.g. 'rbpf particles=100'"
     )
+    ap.add_argument("--houseexpo", type=int, default=4, help="HouseExpo renders (0: none)")
     args = ap.parse_args()
     skip = {s.strip() for s in args.skip.split(",") if s.strip()}
     cores = 2
@@ -87,6 +129,8 @@ def main() -> None:
         f"default rbpf, {cores} processes: {len(jobs)} maps in {elapsed:.1f} s wall "
         f"-> {len(jobs) * 3600 / elapsed:.0f} maps/hour (target >= 1000)"
     )
+    if args.houseexpo >= 0:
+        bench_houseexpo(args.houseexpo, cores)
 
 
 if __name__ == "__main__":

@@ -153,12 +153,53 @@ def test_hill_climb_recovers_known_offset():
     keep = np.isfinite(r) & (r < 3.0)
     args = (np.zeros(3), r[keep], scan.angles[keep].astype(float), 1, 0.05)
     x, y, t, score = hill_climb(
-        *g.match_arrays(), pose[0] + 0.08, pose[1] - 0.06, pose[2] + 0.04, *args, 0.05, 0.05, 5
+        *g.match_arrays(),
+        pose[0] + 0.08,
+        pose[1] - 0.06,
+        pose[2] + 0.04,
+        *args,
+        0.05,
+        0.05,
+        5,
+        np.zeros(6),
     )
     assert abs(x - pose[0]) < 0.02 and abs(y - pose[1]) < 0.02 and abs(t - pose[2]) < 0.01
     best = gmapping_score(*g.match_arrays(), *pose, *args, 0.075)[0]
     off = gmapping_score(*g.match_arrays(), pose[0] + 0.08, pose[1], pose[2], *args, 0.075)[0]
     assert score >= 0.97 * best and best > off
+
+
+def test_hill_climb_motion_prior_pulls_towards_prediction():
+    pose = np.array([2.0, 2.0, 0.3])
+    _, scan = _scan_in_room(pose)
+    g = CountGrid.around(2.0, 2.0, 6.0, 0.05)
+    r = np.where(np.isfinite(scan.ranges), scan.ranges, np.inf).astype(float)
+    g.register_scan(pose, r, scan.angles, usable_range=3.0)
+    keep = np.isfinite(r) & (r < 3.0)
+    args = (np.zeros(3), r[keep], scan.angles[keep].astype(float), 1, 0.05, 0.05, 0.05, 5)
+    start = (pose[0] + 0.06, pose[1], pose[2])
+    free = hill_climb(*g.match_arrays(), *start, *args, np.zeros(6))
+    weak = np.array([*start, 1.0, 1.0, 1.0])  # 1 m / 1 rad: the scan wins
+    strong = np.array([*start, 1e7, 1e7, 1e7])  # 0.3 mm: the prediction wins
+    assert abs(free[0] - pose[0]) < 0.02
+    assert abs(hill_climb(*g.match_arrays(), *start, *args, weak)[0] - pose[0]) < 0.02
+    held = hill_climb(*g.match_arrays(), *start, *args, strong)
+    assert abs(held[0] - start[0]) < 0.005 and abs(held[1] - start[1]) < 0.005
+    # the reported score is the scan score alone, without the prior's penalty
+    assert held[3] < free[3]
+
+
+def test_wall_error_alignment_removes_a_global_rotation():
+    from map2map.maps.grid import OccupancyMap
+
+    d = np.full((120, 160), 255, np.uint8)
+    d[10, 10:150] = 0
+    d[110, 10:150] = 0
+    d[10:111, 10] = 0
+    plan = OccupancyMap(d, 0.05)
+    placed = wall_error(plan, plan, (0.0, 0.0, 0.02))  # rotated ~1 degree about the origin
+    assert placed > 0.03
+    assert wall_error(plan, plan, (0.0, 0.0, 0.02), align=True) < 0.2 * placed
 
 
 def test_correlative_matcher_recovers_known_offset():

@@ -282,17 +282,27 @@ def hill_climb(
     lstep,
     astep,
     iterations,
+    prior,
 ):
     """GMapping's ``ScanMatcher::optimize``: greedy hill climbing with step halving.
 
     From ``(px, py, pt)`` try the six moves (x +- lstep, y +- lstep, theta +- astep),
     keep the best; when no move improves, halve the steps (a *refinement*); stop
     after ``iterations`` refinements without improvement. Returns ``(x, y, theta,
-    score)`` -- the score of the best pose found.
+    score)`` -- the scan score of the best pose found.
+
+    ``prior`` is ``(mx, my, mt, wx, wy, wt)``: the climb maximises
+    ``score - 0.5 (wx (x - mx)^2 + wy (y - my)^2 + wt (t - mt)^2)``, the motion-model
+    factor of the improved proposal (Grisetti et al. 2007, eq. 9: the proposal is
+    proportional to the scan likelihood *times* the odometry motion model). All
+    weights zero is GMapping's code, which drops that factor; along a featureless
+    corridor the score is flat and the match then slides freely.
     """
     beams = _beam_vectors(ranges, angles, off)
     cx, cy, ct = px, py, pt
-    cur = _score_core(mean, gx0, gy0, delta, cx, cy, ct, beams, kernel, sigma, 1.0)[0]
+    cur = _score_core(mean, gx0, gy0, delta, cx, cy, ct, beams, kernel, sigma, 1.0)[
+        0
+    ] - _prior_penalty(prior, cx, cy, ct)
     best_score = -1.0
     ld, ad = lstep, astep
     refinement = 0
@@ -329,14 +339,24 @@ def hill_climb(
                 kernel,
                 sigma,
                 1.0,
-            )[0]
+            )[0] - _prior_penalty(prior, tx, ty, tt)
             if sc > cur:
                 cur = sc
                 bx, by, bt = tx, ty, tt
         cx, cy, ct = bx, by, bt
         if not (cur > best_score or refinement < iterations):
             break
-    return cx, cy, ct, best_score
+    return cx, cy, ct, best_score + _prior_penalty(prior, cx, cy, ct)
+
+
+@nb.njit(cache=True, inline="always")
+def _prior_penalty(prior, x, y, t):
+    """``0.5 * sum w_i (p_i - m_i)^2`` of the motion prior ``(mx, my, mt, wx, wy, wt)``."""
+    dt = t - prior[2]
+    dt = (dt + math.pi) % (2.0 * math.pi) - math.pi
+    return 0.5 * (
+        prior[3] * (x - prior[0]) ** 2 + prior[4] * (y - prior[1]) ** 2 + prior[5] * dt * dt
+    )
 
 
 @nb.njit(cache=True)
