@@ -71,7 +71,7 @@ from scipy.sparse.csgraph import dijkstra
 from ..maps.grid import OccupancyMap
 from .base import LaserScan, OdometryReading
 from .gridmap import CountGrid, likelihood_field
-from .rbpf import absolute_difference, absolute_sum, prepare_scan
+from .rbpf import StartFrame, absolute_difference, absolute_sum, prepare_scan
 
 __all__ = [
     "GraphSLAMParams",
@@ -422,26 +422,18 @@ class GraphSLAM:
         self.keyframes: list[Keyframe] = []
         self.edges: list[tuple[int, int, np.ndarray, np.ndarray]] = []
         self.loop_closures: list[tuple[int, int]] = []
-        self._odom0: np.ndarray | None = None
+        self._frame = StartFrame()
         self._odom: np.ndarray | None = None
         self._grid: CountGrid | None = None
         self._rendered = 0
         self._map_cache: OccupancyMap | None = None
-        self._n_beams: int | None = None
         self.n_link_failures = 0
         self._travel = 0.0
 
     # ---------------------------------------------------------------- Mapper API
     def update(self, odom: OdometryReading, scan: LaserScan) -> None:
         p = self.params
-        if self._n_beams is None:
-            self._n_beams = scan.n_beams
-        elif scan.n_beams != self._n_beams:
-            raise ValueError(f"scan has {scan.n_beams} beams, earlier scans had {self._n_beams}")
-        raw = np.array([odom.x, odom.y, odom.theta], float)
-        if self._odom0 is None:
-            self._odom0 = raw
-        o = absolute_difference(raw, self._odom0)
+        o = self._frame.accept(odom, scan)  # odometry in the map frame
         self._odom = o
         if self.keyframes:
             last = self.keyframes[-1]

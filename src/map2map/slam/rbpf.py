@@ -190,6 +190,37 @@ def absolute_difference(p1: np.ndarray, p2: np.ndarray) -> np.ndarray:
     return out + 0.0
 
 
+class StartFrame:
+    """Odometry in the map frame (which starts at the first reading) for a scan stream.
+
+    Shared by the backends: it also refuses a scan whose beam count differs from
+    the first scan's (``ValueError``).
+
+    Examples
+    --------
+    >>> sf = StartFrame()
+    >>> scan = LaserScan(0.0, np.ones(4), 0.0, np.pi / 2, 0.1, 5.0)
+    >>> sf.accept(OdometryReading(0.0, 2.0, 1.0, np.pi / 2), scan).tolist()
+    [0.0, 0.0, 0.0]
+    >>> np.round(sf.accept(OdometryReading(1.0, 2.0, 2.0, np.pi / 2), scan), 9).tolist()
+    [1.0, 0.0, 0.0]
+    """
+
+    def __init__(self) -> None:
+        self.origin: np.ndarray | None = None
+        self.n_beams: int | None = None
+
+    def accept(self, odom: OdometryReading, scan: LaserScan) -> np.ndarray:
+        if self.n_beams is None:
+            self.n_beams = scan.n_beams
+        elif scan.n_beams != self.n_beams:
+            raise ValueError(f"scan has {scan.n_beams} beams, earlier scans had {self.n_beams}")
+        raw = np.array([odom.x, odom.y, odom.theta], float)
+        if self.origin is None:
+            self.origin = raw
+        return absolute_difference(raw, self.origin)
+
+
 def absolute_sum(p: np.ndarray, d: np.ndarray) -> np.ndarray:
     """Compose pose ``p`` with the relative motion ``d`` (GMapping ``absoluteSum``), row-wise."""
     p = np.asarray(p, float)
@@ -348,7 +379,7 @@ class GMappingRBPF:
         self._node_parent: list[np.ndarray] = []
         self._node_time: list[float] = []
         self.leaf = np.full(n, -1, np.int64)
-        self._odom0: np.ndarray | None = None
+        self._frame = StartFrame()
         # particle poses and odometry at the last processed scan (motion prior anchor)
         self._upd_pose = np.zeros((n, 3))
         self._upd_odom = np.zeros(3)
@@ -361,7 +392,6 @@ class GMappingRBPF:
         self.n_resamples = 0
         self.n_match_failures = 0
         self.neff_history: list[float] = []
-        self._n_beams: int | None = None
         # denominators of the endpoint Gaussians exp(-d^2 / den), see GMappingParams
         p = self.params
         self._sig = 2 * p.sigma**2 if p.sigma_is_std else p.sigma
@@ -371,14 +401,7 @@ class GMappingRBPF:
     def update(self, odom: OdometryReading, scan: LaserScan) -> None:
         """Feed one odometry reading and its scan (see module docstring for the steps)."""
         p = self.params
-        if self._n_beams is None:
-            self._n_beams = scan.n_beams
-        elif scan.n_beams != self._n_beams:
-            raise ValueError(f"scan has {scan.n_beams} beams, earlier scans had {self._n_beams}")
-        raw = np.array([odom.x, odom.y, odom.theta], float)
-        if self._odom0 is None:
-            self._odom0 = raw
-        o = absolute_difference(raw, self._odom0)  # odometry in the map frame
+        o = self._frame.accept(odom, scan)  # odometry in the map frame
         ranges, angles = prepare_scan(scan)
         if self._last_odom is None:
             self._last_odom = o
