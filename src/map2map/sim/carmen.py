@@ -309,13 +309,7 @@ def read_carmen(path: str | os.PathLike, *, range_min: float = 0.0) -> CarmenLog
             v = _floats(path, lineno, vals, name)
             last_true = (v[0], v[1], v[2])
         elif name == "RAWLASER1":
-            head, rest2 = _take(path, lineno, rest, 8, name)
-            h = _floats(path, lineno, head, name)
-            n = _count(path, lineno, h[7], name)
-            rng, rest3 = _take(path, lineno, rest2, n + 1, name)
-            ranges = _floats(path, lineno, rng[:n], name)
-            nrem = _count(path, lineno, _floats(path, lineno, rng[n:], name)[0], name, True)
-            _, tail = _take(path, lineno, rest3, nrem, name)
+            h, ranges, tail = _laser_block(path, lineno, rest, name)
             t = _stamp(path, lineno, tail, name)
             add_scan(lineno, t, ranges, h[1], h[3], h[4], None)
         elif name == "FLASER":
@@ -330,13 +324,7 @@ def read_carmen(path: str | os.PathLike, *, range_min: float = 0.0) -> CarmenLog
             any_odom = True
             add_scan(lineno, t, v[:n], -math.pi / 2, inc, rmax, odo)
         elif name == "ROBOTLASER1":
-            head, rest2 = _take(path, lineno, rest, 8, name)
-            h = _floats(path, lineno, head, name)
-            n = _count(path, lineno, h[7], name)
-            rng, rest3 = _take(path, lineno, rest2, n + 1, name)
-            ranges = _floats(path, lineno, rng[:n], name)
-            nrem = _count(path, lineno, _floats(path, lineno, rng[n:], name)[0], name, True)
-            _, rest4 = _take(path, lineno, rest3, nrem, name)
+            h, ranges, rest4 = _laser_block(path, lineno, rest, name)
             vals, tail = _take(path, lineno, rest4, 11, name)
             v = _floats(path, lineno, vals, name)
             t = _stamp(path, lineno, tail, name)
@@ -361,6 +349,23 @@ def _count(path, lineno, v, name, zero_ok=False) -> int:
     if not (float(v).is_integer() and (0 if zero_ok else 1) <= v < 100_000):
         raise InputError(path, f"line {lineno}: corrupt {name} message (bad reading count)")
     return int(v)
+
+
+def _laser_block(path, lineno, rest, name):
+    """The laser part shared by RAWLASER and ROBOTLASER lines.
+
+    Eight header numbers (type, start angle, field of view, angular resolution,
+    maximum range, accuracy, remission mode, beam count), the ranges, then the
+    remission count and values. Returns (header, ranges, what follows).
+    """
+    head, rest2 = _take(path, lineno, rest, 8, name)
+    h = _floats(path, lineno, head, name)
+    n = _count(path, lineno, h[7], name)
+    rng, rest3 = _take(path, lineno, rest2, n + 1, name)
+    ranges = _floats(path, lineno, rng[:n], name)
+    nrem = _count(path, lineno, _floats(path, lineno, rng[n:], name)[0], name, True)
+    _, after = _take(path, lineno, rest3, nrem, name)
+    return h, ranges, after
 
 
 def _stamp(path, lineno, tail, name) -> float:
