@@ -104,8 +104,10 @@ def local_errors(
     cannot observe motion *along* a wall, and the coherence of eq. 7 drags wall
     points sideways near junctions with moved walls (the "shifted correspondences"
     of the paper's Fig. 9); the projection removes that spurious part. Likewise
-    ``X_corr`` is taken on the normal through ``X_rigid`` (point-to-plane distance),
-    so that the pixel rounding along the wall is not counted. Points whose
+    ``X_corr`` is taken on the line through ``X_rigid`` along the normal of the plan
+    surface it was matched to (point-to-plane distance to the plan's wall), so that
+    neither the pixel rounding along the wall nor a tilt of the map's wall (a wall
+    bent by drift) shortens or lengthens the error. Points whose
     normal points diagonally between the plan's wall axes (within
     ``corner_band`` radians of 45 degrees, i.e. more than 18 degrees off both
     axes by default) are corners, wall ends and wall junctions, where the edge
@@ -124,12 +126,24 @@ def local_errors(
         d = X_optimised - X_rigid
         along = (d * n).sum(1, keepdims=True) * n
         X_optimised = np.where(has[:, None], X_rigid + along, X_optimised)
-    near, _, inside = fields.nearest(X_optimised, normals)
+    near, d_side, inside = fields.nearest(X_optimised, normals)
+    if normals is not None:
+        # a point optimised onto a plan wall belongs to that wall: when the surface of
+        # its side is farther than the wall's thickness beyond the nearest wall cell,
+        # its normal is a pixel step of the map's wall (a wall shifted by a pixel has
+        # short faces across it), not a face of its own; it takes the nearest wall
+        # cell, the paper's plain label (with a 4 px plan wall one such step once set
+        # the max to 49 px on a wall its truth has at 0.3 px)
+        near_any, d_any, _ = fields.nearest(X_optimised)
+        step = (d_any <= 1.5) & (d_side > d_any + fields.wall_thickness + 1.0)
+        near = np.where(step[:, None], near_any, near)
     X_corr = np.where(inside[:, None], near, X_optimised)  # line 11: no match -> itself
     if normals is not None:
-        # distance across the wall: X_corr is a pixel centre, its rounding along the wall
-        # (up to half a pixel) is no error
-        X_corr = to_plane(X_rigid, X_corr, n)
+        # distance across the plan's wall (point to plane, the plane of the plan surface
+        # the point was matched to): X_corr is a pixel centre, its rounding along the
+        # wall (up to half a pixel) is no error, and neither is a tilt of the map's wall
+        m = fields.side_normals(n)
+        X_corr = to_plane(X_rigid, X_corr, np.where(has[:, None], m, n))
     dist = np.hypot(*(X_rigid - X_corr).T)
     corner = None
     if normals is not None:

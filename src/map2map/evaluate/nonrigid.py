@@ -79,6 +79,7 @@ class SideFields:
     known: np.ndarray | None = None
     _walls: tuple[np.ndarray, np.ndarray] | None = None
     _flat: np.ndarray | None = None
+    _thickness: float | None = None
 
     @property
     def walls(self) -> tuple[np.ndarray, np.ndarray]:
@@ -129,6 +130,35 @@ class SideFields:
             self._flat = np.stack(rows)
         return self._flat
 
+    @property
+    def wall_thickness(self) -> float:
+        """Typical thickness of the plan's walls (px): twice the 90th percentile of the
+        distance from wall cells to the nearest non-wall cell (1 for empty fields)."""
+        if self._thickness is None:
+            if not self.wall_mask.any():
+                self._thickness = 1.0
+            else:
+                inner = cv2.distanceTransform(self.wall_mask.astype(np.uint8), cv2.DIST_L1, 3)
+                self._thickness = float(2 * np.percentile(inner[self.wall_mask], 90))
+        return self._thickness
+
+    def side_groups(self, normals: np.ndarray) -> np.ndarray:
+        """Side index (0-3) whose surfaces each normal faces, 4 where the normal is unknown."""
+        n = np.asarray(normals, float).reshape(-1, 2)
+        group = np.full(len(n), 4)
+        has = np.hypot(n[:, 0], n[:, 1]) > 0.5
+        ang = np.arctan2(n[:, 1], n[:, 0]) - self.theta
+        group[has] = np.mod(np.round(ang[has] / (np.pi / 2)), 4).astype(int)
+        return group
+
+    def side_normals(self, normals: np.ndarray) -> np.ndarray:
+        """Normal ``theta + k pi/2`` of the plan surfaces each point matches (0 if unknown)."""
+        group = self.side_groups(normals)
+        a = self.theta + group * (np.pi / 2)
+        out = np.column_stack([np.cos(a), np.sin(a)])
+        out[group == 4] = 0.0
+        return out
+
     def nearest(self, pts: np.ndarray, normals: np.ndarray | None = None):
         """Nearest plan wall cell centre (x, y) of each point, its distance, and inside flags.
 
@@ -142,12 +172,8 @@ class SideFields:
         c = np.floor(pts[:, 0] - ox).astype(np.int64)
         r = np.floor(pts[:, 1] - oy).astype(np.int64)
         inside = (r >= 0) & (r < h) & (c >= 0) & (c < w)
-        group = np.full(len(pts), 4)  # 4 = all walls (side unknown)
-        if normals is not None:
-            n = np.asarray(normals, float)
-            has = np.hypot(n[:, 0], n[:, 1]) > 0.5
-            ang = np.arctan2(n[:, 1], n[:, 0]) - self.theta
-            group[has] = np.mod(np.round(ang[has] / (np.pi / 2)), 4).astype(int)
+        # 4 = all walls (side unknown)
+        group = np.full(len(pts), 4) if normals is None else self.side_groups(normals)
         # one gather in the stacked flat index table of the five fields
         flat = self._table()[group[inside], r[inside] * w + c[inside]]
         near = pts.copy()

@@ -15,6 +15,12 @@ Examples
 >>> u = wall_displacement((160, 200), walls, built)
 >>> sorted(set(u[..., 0].round(6).ravel().tolist()))
 [0.0, 4.0]
+
+The true local error of a wall point of the built map, aligned by the identity:
+
+>>> X = np.array([[68.5, 30.5]])        # right face of the partition, built 4 px right
+>>> true_errors(X, np.array([[1.0, 0.0]]), np.eye(3), plan, u).round(6).tolist()
+[4.0]
 """
 
 from __future__ import annotations
@@ -25,6 +31,7 @@ import cv2
 import numpy as np
 
 from ..maps.grid import FREE, OCCUPIED, UNKNOWN
+from .transforms import apply
 
 __all__ = [
     "Wall",
@@ -33,6 +40,7 @@ __all__ = [
     "wall_displacement",
     "gaussian_field",
     "deform",
+    "true_errors",
 ]
 
 
@@ -195,3 +203,91 @@ def deform(
     out = np.full((H, W), UNKNOWN, np.uint8)
     out[ok] = data[ri[ok], ci[ok]]
     return out, np.stack([xx - (ci + 0.5), yy - (ri + 0.5)], axis=-1)
+
+
+def _plan_surface(
+    P: np.ndarray, normals: np.ndarray, plan: np.ndarray, max_steps: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The plan wall face over each source cell ``P``, and the axis step towards its free side.
+
+    From the (occupied) plan cell ``P`` walk along the dominant axis of the normal,
+    towards the free side, while the next cell is occupied (at most ``max_steps``
+    cells: a wall end seen edge-on would otherwise be walked along its length).
+    Returns the face point (the edge between the last occupied cell and the free
+    one, continuous pixel coordinates) and the unit axis step.
+    """
+    H, W = plan.shape
+    n = np.asarray(normals, float)
+    ax = (np.abs(n[:, 1]) > np.abs(n[:, 0])).astype(int)
+    step = np.zeros_like(n)
+    step[np.arange(len(n)), ax] = np.sign(n[np.arange(len(n)), ax])
+    B = P.copy()
+    walking = np.ones(len(P), bool)
+    for _ in range(max_steps):
+        nxt = B + step
+        r = np.clip(np.floor(nxt[:, 1]).astype(int), 0, H - 1)
+        c = np.clip(np.floor(nxt[:, 0]).astype(int), 0, W - 1)
+        walking &= plan[r, c] == OCCUPIED
+        B = np.where(walking[:, None], nxt, B)
+    # a walk that never left the wall is a wall end seen along its length: the cell
+    # itself is the best guess of its face
+    B = np.where(walking[:, None], P, B)
+    return B + 0.5 * step, step
+
+
+def true_errors(
+    X: np.ndarray,
+    normals: np.ndarray,
+    T: np.ndarray,
+    plan: np.ndarray,
+    u: np.ndarray,
+    field: np.ndarray | None = None,
+    *,
+    max_steps: int = 6,
+) -> np.ndarray:
+    """Signed true local error of wall points of a deformed map, across their wall (px).
+
+    ``X`` are wall points (cell centres) of the deformed map, ``normals`` their unit
+    normals towards free space, ``T`` the 3x3 transform that aligns the deformed map
+    to the ``plan`` (the metric's rigid alignment; errors are measured from
+    ``T(X)``), ``u`` the displacement every deformed cell carries (from
+    :func:`wall_displacement` or :func:`deform`) and ``field`` the forward field
+    given to :func:`deform`, if that made the map.
+
+    The truth is the displacement of the wall *face*, not of the cell: ``X`` lies
+    on the face of a wall of the deformed map, and that face is the image of the
+    plan face ``S`` found from the cell ``X - u`` it was copied from
+    (:func:`_plan_surface`). Without a field the whole wall moved by ``u``; with one
+    the face moved to ``S + field(S)`` (bilinear). Without one the face is where the
+    deformed map draws it, the edge of ``X`` towards free space. The error is the
+    distance of the aligned face from the plan's wall, ``(T(face) - S) . a``, with
+    ``a`` the plan wall's normal (the axis of ``normals``, as the synthetic plans'
+    walls are axis-aligned). Points without a normal (zero rows: a one-pixel wall
+    seen from both sides) get the distance of ``T(X)`` from the cell ``X - u``. The cell
+    ``X - u`` itself is not the truth: nearest-neighbour resampling of a field that
+    varies across a wall thins or thickens the wall, and the face cell of the
+    deformed map can be copied from inside the plan's wall, one pixel from its face.
+    """
+    X = np.asarray(X, float)
+    n = np.asarray(normals, float)
+    H, W = plan.shape
+    r = np.clip(np.floor(X[:, 1]).astype(int), 0, H - 1)
+    c = np.clip(np.floor(X[:, 0]).astype(int), 0, W - 1)
+    S, step = _plan_surface(X - u[r, c], n, plan, max_steps)
+    if field is None:
+        moved = X + 0.5 * step  # the face as drawn on the deformed map
+    else:
+        mx = (S[:, 0] - 0.5).astype(np.float32)[None]
+        my = (S[:, 1] - 0.5).astype(np.float32)[None]
+        f = [
+            cv2.remap(field[..., k].astype(np.float32), mx, my, cv2.INTER_LINEAR,
+                      borderMode=cv2.BORDER_REPLICATE)[0]
+            for k in (0, 1)
+        ]  # fmt: skip
+        moved = S + np.column_stack(f)
+    err = ((apply(T, moved) - S) * step).sum(1)
+    # a point without a normal (a one-pixel wall with free space on both sides) has no
+    # face: its error is the distance of the cell from the one it was copied from
+    none = ~step.any(1)
+    err[none] = np.hypot(*(apply(T, X[none]) - (X[none] - u[r[none], c[none]])).T)
+    return err
