@@ -10,7 +10,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
-from map2map.maps.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap  # noqa: E402
+from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap  # noqa: E402
 
 SHARED = Path(
     os.environ.get("MAP2MAP_SHARED_DATA", Path(__file__).resolve().parents[2] / "shared" / "data")

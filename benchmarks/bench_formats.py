@@ -22,8 +22,8 @@ sys.path.insert(0, str(HERE.parent / "src"))
 from scipy import ndimage as ndi  # noqa: E402
 from skimage.graph import MCP_Geometric  # noqa: E402
 
+from map2map.core.grid import OccupancyMap  # noqa: E402
 from map2map.maps.formats import load_map, save_map  # noqa: E402
-from map2map.maps.grid import OccupancyMap  # noqa: E402
 from map2map.maps.houseexpo import load_houseexpo  # noqa: E402
 
 SHARED = Path(os.environ.get("MAP2MAP_SHARED_DATA", HERE.parent.parent / "shared" / "data"))

@@ -36,7 +36,7 @@ import numpy as np  # noqa: E402
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "src"))
 
-from map2map.maps.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap  # noqa: E402
+from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap  # noqa: E402
 from map2map.parametric import ParametricParams, deform, make_trajectory  # noqa: E402
 
 SIZE_M = 12.8

@@ -17,8 +17,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
+from map2map.core.grid import OccupancyMap  # noqa: E402
 from map2map.maps.floorplan import connectivity, generate_floorplan  # noqa: E402
-from map2map.maps.grid import OccupancyMap  # noqa: E402
 from map2map.maps.preprocess import harmonise, preprocess  # noqa: E402
 
 RENDERS = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "houseexpo" / "renders"

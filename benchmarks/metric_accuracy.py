@@ -23,6 +23,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
+from map2map.core.grid import OccupancyMap  # noqa: E402
 from map2map.evaluate.pipeline import evaluate_maps  # noqa: E402
 from map2map.evaluate.synthetic import (  # noqa: E402
     deform,
@@ -32,7 +33,6 @@ from map2map.evaluate.synthetic import (  # noqa: E402
     true_errors,
     wall_displacement,
 )
-from map2map.maps.grid import OccupancyMap  # noqa: E402
 
 W, H = 320, 240
 

@@ -71,7 +71,7 @@ def _name(backend, options):
 
 
 def _figure(rows, path):
-    from map2map.viz import draw_map, new_figure, save_figure
+    from map2map.core.viz import draw_map, new_figure, save_figure
 
     rows = rows[:4]
     fig, axes = new_figure(rows[0]["plan"], ncols=len(rows), panel_inches=4.0)

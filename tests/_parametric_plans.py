@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from map2map.maps.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 
 
 def two_rooms(res: float = 0.05, door: bool = True) -> OccupancyMap:

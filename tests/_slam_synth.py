@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from map2map.maps.grid import FREE, OCCUPIED, OccupancyMap
+from map2map.core.grid import FREE, OCCUPIED, OccupancyMap
 from map2map.sim.lidar import Lidar, LidarConfig, Scene
 from map2map.sim.odometry import OdometryErrors, WheelOdometry
 from map2map.slam.base import OdometryReading

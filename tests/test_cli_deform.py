@@ -8,7 +8,7 @@ import yaml
 from _parametric_plans import centre, two_rooms
 
 from map2map.cli.main import main
-from map2map.maps.grid import OCCUPIED, OccupancyMap
+from map2map.core.grid import OCCUPIED, OccupancyMap
 from map2map.maps.ros import load_ros_map, save_ros_map
 
 FILES = {

@@ -10,8 +10,8 @@ import pytest
 import yaml
 
 from map2map.cli.main import main
+from map2map.core.grid import OccupancyMap
 from map2map.maps.formats import load_map, save_map
-from map2map.maps.grid import OccupancyMap
 
 
 @pytest.fixture

@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 from scipy import ndimage as ndi
 
-from map2map.errors import InputError
+from map2map.core.errors import InputError
+from map2map.core.grid import OccupancyMap
 from map2map.maps.dxf import load_dxf
 from map2map.maps.formats import load_map, save_map
-from map2map.maps.grid import OccupancyMap
 
 RES = 0.05
 

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from map2map.cli.main import main
+from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from map2map.evaluate.align import AlignParams, align_maps, maximise_fitness
 from map2map.evaluate.anchors import Anchors, anchor, auto_anchors
 from map2map.evaluate.features import edge_points
@@ -28,7 +29,6 @@ from map2map.evaluate.synthetic import (
     wall_displacement,
 )
 from map2map.evaluate.transforms import apply, decompose_similarity, similarity_matrix
-from map2map.maps.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 
 W, H = 320, 240
 

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from map2map.errors import InputError
+from map2map.core.errors import InputError
+from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from map2map.maps.floorplan import connectivity, generate_floorplan
-from map2map.maps.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 
 ROBOT = 0.2
 

@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from map2map.maps.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap, ternarize
+from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap, ternarize
 
 
 def make_map(h=10, w=14, res=0.1, origin=(1.0, -2.0, 0.0)):

@@ -7,7 +7,7 @@ import pytest
 from scipy import ndimage as ndi
 from skimage.graph import MCP_Geometric
 
-from map2map.errors import InputError
+from map2map.core.errors import InputError
 from map2map.maps.houseexpo import (
     houseexpo_to_world,
     load_houseexpo,

@@ -4,8 +4,8 @@ import cv2
 import numpy as np
 import pytest
 
-from map2map.errors import InputError
-from map2map.maps.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from map2map.core.errors import InputError
+from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from map2map.maps.image import load_image_map, save_image_map
 
 F, O, U = FREE, OCCUPIED, UNKNOWN

@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from map2map.core.errors import InputError
 from map2map.datasets.packed import (
     PackedPairs,
     load_packed,
@@ -10,7 +11,6 @@ from map2map.datasets.packed import (
     save_packed,
     unpack_ternary,
 )
-from map2map.errors import InputError
 from map2map.maps import generate_floorplan, preprocess
 
 

@@ -10,8 +10,8 @@ import pytest
 import yaml
 from _parametric_plans import centre, two_rooms
 
-from map2map.errors import InputError
-from map2map.maps.grid import FREE, OCCUPIED, UNKNOWN
+from map2map.core.errors import InputError
+from map2map.core.grid import FREE, OCCUPIED, UNKNOWN
 from map2map.parametric import (
     DisplacementField,
     ParametricParams,

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 import yaml
 
-from map2map.errors import InputError
-from map2map.maps.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from map2map.core.errors import InputError
+from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from map2map.maps.ros import load_ros_map, map_server_values, save_ros_map
 
 F, O, U = FREE, OCCUPIED, UNKNOWN

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from map2map.cli.main import main
+from map2map.core.grid import OccupancyMap
 from map2map.maps.formats import save_map
-from map2map.maps.grid import OccupancyMap
 
 
 def room_plan(tmp_path, h=50, w=70, name="plan.yaml"):

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from map2map.maps.grid import OccupancyMap
+from map2map.core.grid import OccupancyMap
 from map2map.sim.carmen import read_carmen, replay
 from map2map.sim.explore import dijkstra, find_frontiers, make_costmap
 from map2map.sim.mappers import make_mapper
@@ -92,7 +92,7 @@ def test_narrow_fov_and_odometry_drift_recorded():
 
 
 def test_bad_inputs_raise_input_error():
-    from map2map.errors import InputError
+    from map2map.core.errors import InputError
 
     m = two_rooms()
     with pytest.raises(InputError, match="duration"):

@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from map2map.errors import InputError
-from map2map.maps.grid import OccupancyMap
+from map2map.core.errors import InputError
+from map2map.core.grid import OccupancyMap
 from map2map.sim.carmen import read_carmen, replay, write_carmen
 from map2map.sim.lidar import Lidar, LidarConfig
 from map2map.sim.mappers import make_mapper

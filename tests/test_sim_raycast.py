@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from map2map.maps.grid import OccupancyMap
+from map2map.core.grid import OccupancyMap
 from map2map.sim.lidar import Lidar, LidarConfig, Scene
 from map2map.sim.raycast import cast_rays, cast_rays_many, make_cast_grid
 

@@ -190,7 +190,7 @@ def test_hill_climb_motion_prior_pulls_towards_prediction():
 
 
 def test_wall_error_alignment_removes_a_global_rotation():
-    from map2map.maps.grid import OccupancyMap
+    from map2map.core.grid import OccupancyMap
 
     d = np.full((120, 160), 255, np.uint8)
     d[10, 10:150] = 0

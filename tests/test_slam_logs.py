@@ -10,7 +10,7 @@ import pytest
 from _slam_synth import synthetic_run
 
 from map2map.cli.main import main
-from map2map.errors import InputError
+from map2map.core.errors import InputError
 from map2map.maps.ros import load_ros_map
 from map2map.sim.carmen import write_carmen
 from map2map.slam.logs import BreezyRobot, detect_format, load_log, read_breezyslam
@@ -190,8 +190,8 @@ def test_gzip_breezyslam(tmp_path):
 def test_simulate_defaults_to_rbpf_and_its_run_replays(tmp_path, capsys):
     import json
 
+    from map2map.core.grid import OccupancyMap
     from map2map.maps.formats import save_map
-    from map2map.maps.grid import OccupancyMap
 
     data = np.full((52, 72), 127, np.uint8)
     data[1:-1, 1:-1] = 255

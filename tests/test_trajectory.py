@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from _parametric_plans import centre, two_rooms
 
-from map2map.errors import InputError
+from map2map.core.errors import InputError
 from map2map.trajectory import (
     build_roadmap,
     path_through,

@@ -17,7 +17,7 @@ True
 import importlib
 
 from ._version import __version__
-from .errors import InputError
+from .core.errors import InputError
 from .maps import (
     FREE,
     OCCUPIED,

@@ -16,7 +16,7 @@ from typing import Any
 
 from tqdm.auto import tqdm
 
-from ._io import ensure_output_dir
+from .core._io import ensure_output_dir
 from .evaluate.demo_stage import stage_evaluate
 from .maps.prep_demo import stage_prep
 from .parametric.demo_stage import stage_parametric

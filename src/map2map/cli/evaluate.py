@@ -44,7 +44,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..errors import InputError
+    from ..core.errors import InputError
     from ..evaluate.outputs import run_evaluate, run_pairs
 
     if args.resolution is not None and not args.resolution > 0:

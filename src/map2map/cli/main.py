@@ -13,7 +13,7 @@ import importlib
 import sys
 
 from .. import __version__
-from ..errors import EXIT_BAD_INPUT, InputError
+from ..core.errors import EXIT_BAD_INPUT, InputError
 
 #: Command modules, in the order ``--help`` lists them.
 COMMANDS = [

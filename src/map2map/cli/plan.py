@@ -43,7 +43,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     import json
 
-    from .._io import atomic_path
+    from ..core._io import atomic_path
     from ..maps.floorplan import generate_floorplan, save_floorplan_figure
     from ..maps.formats import check_output_path, save_map
 

@@ -40,7 +40,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..errors import InputError
+    from ..core.errors import InputError
     from ..maps.formats import check_output_path, save_map
     from ..maps.preprocess import preprocess, save_preprocess_figure
     from ..maps.render import map_summary

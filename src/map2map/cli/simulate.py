@@ -6,7 +6,7 @@ import argparse
 import math
 from pathlib import Path
 
-from ..errors import InputError
+from ..core.errors import InputError
 from ._mapargs import add_input_options, load_from_args
 
 

@@ -50,7 +50,7 @@ def register(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..errors import InputError
+    from ..core.errors import InputError
     from ..slam.logs import load_log
     from ..slam.offline import run_slam, write_slam_outputs
 

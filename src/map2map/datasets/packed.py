@@ -38,9 +38,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .._io import atomic_path
-from ..errors import InputError
-from ..maps.grid import FREE, OCCUPIED, UNKNOWN
+from ..core._io import atomic_path
+from ..core.errors import InputError
+from ..core.grid import FREE, OCCUPIED, UNKNOWN
 
 __all__ = ["PackedPairs", "save_packed", "load_packed", "pack_ternary", "unpack_ternary"]
 
@@ -166,7 +166,7 @@ def save_packed(path: str | os.PathLike, pairs: PackedPairs) -> Path:
 def load_packed(path: str | os.PathLike) -> PackedPairs:
     """Read a file written by :func:`save_packed` (no pickle: nothing runs on load).
 
-    Raises :class:`~map2map.errors.InputError` naming the file when it is missing,
+    Raises :class:`~map2map.core.errors.InputError` naming the file when it is missing,
     corrupt, or not a packed-pairs file.
     """
     path = Path(path)

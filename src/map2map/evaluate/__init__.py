@@ -28,7 +28,7 @@ matrix maps source (SLAM) pixels to target (plan) pixels.
 
 Examples
 --------
->>> from map2map.maps.grid import OccupancyMap
+>>> from map2map.core.grid import OccupancyMap
 >>> from map2map.evaluate import evaluate_maps
 >>> from map2map.evaluate.synthetic import draw_walls, office_walls
 >>> plan = OccupancyMap(draw_walls((240, 300), office_walls(300, 240)), 0.05)

@@ -51,8 +51,8 @@ import cv2
 import numpy as np
 from scipy import ndimage, optimize
 
-from ..errors import InputError
-from ..maps.grid import FREE, OCCUPIED, UNKNOWN
+from ..core.errors import InputError
+from ..core.grid import FREE, OCCUPIED, UNKNOWN
 from .anchors import Anchors, anchor, auto_anchors
 from .decomposition import Face, decompose
 from .features import downsample, edge_points, occupied_points, subsample

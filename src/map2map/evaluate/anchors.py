@@ -32,8 +32,8 @@ import os
 import cv2
 import numpy as np
 
-from ..errors import InputError
-from ..maps.grid import OCCUPIED
+from ..core.errors import InputError
+from ..core.grid import OCCUPIED
 from .transforms import apply, fit_rigid
 
 __all__ = ["Anchors", "anchor", "read_anchors", "validate_anchors", "auto_anchors"]

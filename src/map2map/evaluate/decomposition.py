@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from ..maps.grid import FREE, OCCUPIED
+from ..core.grid import FREE, OCCUPIED
 from .radiography import wall_lines
 
 __all__ = ["Face", "decompose", "face_image"]

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..maps.grid import OccupancyMap
+from ..core.grid import OccupancyMap
 from .outputs import write_evaluation
 from .pipeline import evaluate_maps
 

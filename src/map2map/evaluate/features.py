@@ -9,7 +9,7 @@ confused with each other when points are matched to the plan.
 Examples
 --------
 >>> import numpy as np
->>> from map2map.maps.grid import OccupancyMap
+>>> from map2map.core.grid import OccupancyMap
 >>> data = np.full((20, 20), 255, np.uint8); data[:, 10:12] = 0
 >>> pts, normals = edge_points(data)
 >>> sorted(set(pts[:, 0].tolist()))        # both faces of the wall, columns 10 and 11
@@ -23,7 +23,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from ..maps.grid import FREE, OCCUPIED, UNKNOWN
+from ..core.grid import FREE, OCCUPIED, UNKNOWN
 
 __all__ = ["occupied_points", "edge_points", "downsample", "side_masks", "subsample"]
 

@@ -1,12 +1,12 @@
 """Figures of the assessment: overlay of the aligned maps, error heat map, batch box plot.
 
 All drawn in the plan's pixel coordinates (x = column, y = row) with a metric
-scale bar (:mod:`map2map.viz`), cropped to the known content of both maps.
+scale bar (:mod:`map2map.core.viz`), cropped to the known content of both maps.
 
 Examples
 --------
 >>> import numpy as np, tempfile, pathlib
->>> from map2map.maps.grid import OccupancyMap
+>>> from map2map.core.grid import OccupancyMap
 >>> plan = OccupancyMap(np.full((40, 60), 255, np.uint8), 0.05); plan.data[20, :] = 0
 >>> warped = plan.data.copy(); warped[20, :] = 255; warped[22, :] = 0
 >>> out = pathlib.Path(tempfile.mkdtemp())
@@ -24,8 +24,8 @@ import os
 
 import numpy as np
 
-from ..maps.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
-from ..viz import add_scale_bar, new_figure, save_figure
+from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from ..core.viz import add_scale_bar, new_figure, save_figure
 
 __all__ = ["overlay_figure", "error_map_figure", "error_boxplot"]
 

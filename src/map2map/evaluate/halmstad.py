@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from ..maps.grid import OccupancyMap, ternarize
+from ..core.grid import OccupancyMap, ternarize
 from .transforms import apply, fit_similarity
 
 __all__ = [

@@ -46,7 +46,7 @@ import cv2
 import numpy as np
 from scipy.spatial import Delaunay
 
-from ..maps.grid import OCCUPIED, UNKNOWN
+from ..core.grid import OCCUPIED, UNKNOWN
 from .features import side_masks
 from .fitness import distance_map
 

@@ -22,7 +22,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from ..maps.grid import OCCUPIED
+from ..core.grid import OCCUPIED
 
 __all__ = ["dominant_orientation", "orientation_histogram", "projection_sharpness"]
 

@@ -1,7 +1,7 @@
 """Files of ``map2map align`` and ``map2map evaluate``: inputs checked first, outputs atomic.
 
 Every input (maps, anchors, points, pair lists, resolutions) is read and checked
-before anything is written; every output goes through :func:`map2map._io.atomic_path`.
+before anything is written; every output goes through :func:`map2map.core._io.atomic_path`.
 
 * ``align``: ``alignment.json`` (3x3 ``similarity``, ``affine``, ``rigid`` mapping
   source pixels (x = column, y = row, origin top-left) to target pixels, fitness),
@@ -25,9 +25,9 @@ from typing import Any
 
 import numpy as np
 
-from .._io import atomic_path, ensure_output_dir
-from ..errors import InputError
-from ..maps.grid import OccupancyMap
+from ..core._io import atomic_path, ensure_output_dir
+from ..core.errors import InputError
+from ..core.grid import OccupancyMap
 from .align import check_map
 from .anchors import Anchors, read_anchors, validate_anchors
 from .figures import error_boxplot, error_map_figure, overlay_figure

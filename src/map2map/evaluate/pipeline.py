@@ -8,7 +8,7 @@ the aligned maps and the vanilla ICP baseline (``map2map evaluate``).
 
 Examples
 --------
->>> from map2map.maps.grid import OccupancyMap
+>>> from map2map.core.grid import OccupancyMap
 >>> from map2map.evaluate.synthetic import draw_walls, office_walls
 >>> plan = draw_walls((240, 300), office_walls(300, 240))
 >>> built = draw_walls((240, 300), office_walls(300, 240, partition_shift=(6.0, 0.0)))
@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..maps.grid import FREE, OCCUPIED, OccupancyMap
+from ..core.grid import FREE, OCCUPIED, OccupancyMap
 from .align import Alignment, AlignParams, align_maps, check_map
 from .anchors import Anchors
 from .features import edge_points, subsample

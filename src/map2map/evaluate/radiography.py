@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import find_peaks
 
-from ..maps.grid import OCCUPIED
+from ..core.grid import OCCUPIED
 
 __all__ = ["projection", "wall_lines"]
 

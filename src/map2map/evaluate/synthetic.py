@@ -30,7 +30,7 @@ from dataclasses import dataclass, replace
 import cv2
 import numpy as np
 
-from ..maps.grid import FREE, OCCUPIED, UNKNOWN
+from ..core.grid import FREE, OCCUPIED, UNKNOWN
 from .transforms import apply
 
 __all__ = [

@@ -62,8 +62,8 @@ import numpy as np
 import shapely
 from shapely.geometry import LineString, Point, Polygon
 
-from ..errors import InputError
-from .grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from ..core.errors import InputError
+from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from .rasterize import fill_exact, thin_parts, trace
 
 __all__ = [
@@ -488,7 +488,7 @@ def save_dxf(m: OccupancyMap, path: str | os.PathLike, *, layer: str = "WALLS") 
     """
     import ezdxf
 
-    from .._io import atomic_path
+    from ..core._io import atomic_path
 
     region = shapely.buffer(occupied_polygons(m), -0.01, join_style="mitre")
     doc = ezdxf.new(units=6)  # metres

@@ -57,8 +57,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from ..errors import InputError
-from .grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from ..core.errors import InputError
+from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 
 __all__ = [
     "generate_floorplan",
@@ -1115,7 +1115,7 @@ def draw_floorplan(ax, m: OccupancyMap, *, title: str | None = None, doors: bool
     Works for the generator's plans and for rasterised HouseExpo plans (room
     boxes in ``meta["rooms"]`` or ``meta["room_category"]``, HouseExpo frame).
     """
-    from ..viz import draw_map
+    from ..core.viz import draw_map
 
     draw_map(ax, m, title=title)
     rooms = m.meta.get("rooms") or [
@@ -1161,7 +1161,7 @@ def save_floorplan_figure(m: OccupancyMap, path, title: str | None = None) -> No
     >>> path.stat().st_size > 10_000
     True
     """
-    from ..viz import new_figure, save_figure
+    from ..core.viz import new_figure, save_figure
     from .render import map_summary
 
     fig, ax = new_figure(m, panel_inches=8.0)

@@ -17,7 +17,7 @@ the input's format are refused rather than silently ignored.
 Examples
 --------
 >>> import numpy as np, tempfile, pathlib
->>> from map2map.maps.grid import OccupancyMap
+>>> from map2map.core.grid import OccupancyMap
 >>> folder = pathlib.Path(tempfile.mkdtemp())
 >>> m = OccupancyMap(np.array([[0, 127], [255, 255]], np.uint8), 0.05)
 >>> save_map(m, folder / "map.yaml")
@@ -33,8 +33,8 @@ import os
 from collections.abc import Iterable
 from pathlib import Path
 
-from ..errors import InputError
-from .grid import OccupancyMap
+from ..core.errors import InputError
+from ..core.grid import OccupancyMap
 from .raster import IMAGE_SUFFIXES
 
 __all__ = ["load_map", "save_map", "map_kind", "READ_SUFFIXES", "WRITE_SUFFIXES"]
@@ -81,7 +81,7 @@ def load_map(
     wall_thickness: float | None = None,
     units: str | None = None,
 ) -> OccupancyMap:
-    """Load any supported map file as an :class:`~map2map.maps.grid.OccupancyMap`.
+    """Load any supported map file as an :class:`~map2map.core.grid.OccupancyMap`.
 
     Parameters
     ----------

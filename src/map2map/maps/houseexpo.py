@@ -63,8 +63,8 @@ import cv2
 import numpy as np
 from shapely.geometry import Polygon, box
 
-from ..errors import InputError
-from .grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from ..core.errors import InputError
+from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from .rasterize import fill_exact, thin_parts, trace
 
 __all__ = [

@@ -19,7 +19,7 @@ trip keeps the metric frame.
 Examples
 --------
 >>> import numpy as np, tempfile, pathlib
->>> from map2map.maps.grid import OccupancyMap
+>>> from map2map.core.grid import OccupancyMap
 >>> m = OccupancyMap(np.array([[0, 127, 255]], np.uint8), 0.1, (2.0, 3.0, 0.0))
 >>> path = pathlib.Path(tempfile.mkdtemp()) / "map.png"
 >>> save_image_map(m, path)
@@ -43,9 +43,9 @@ from typing import Any
 import cv2
 import numpy as np
 
-from .._io import atomic_path
-from ..errors import InputError
-from .grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from ..core._io import atomic_path
+from ..core.errors import InputError
+from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from .raster import IMAGE_SUFFIXES, RasterImage, pgm_bytes, read_image
 from .ros import SAVER_FREE_THRESH, SAVER_OCCUPIED_THRESH, check_thresholds, per_value
 

@@ -9,7 +9,7 @@ Before training, the thesis processed every CAD/SLAM image pair by
    progressive, low-resolution-first architecture),
 4. cropping the CAD maps to have less grey (unknown) area.
 
-Each step is one function here, on an :class:`~map2map.maps.grid.OccupancyMap`
+Each step is one function here, on an :class:`~map2map.core.grid.OccupancyMap`
 (the metric frame stays right: resolution and origin are updated so every cell
 keeps its world position) or on a bare ``uint8`` array; :func:`preprocess`
 chains them.
@@ -17,7 +17,7 @@ chains them.
 Examples
 --------
 >>> import numpy as np
->>> from map2map.maps.grid import OccupancyMap
+>>> from map2map.core.grid import OccupancyMap
 >>> data = np.full((60, 120), 255, np.uint8)
 >>> data[:, 59] = 0                                   # a 1-pixel wall
 >>> out = preprocess(OccupancyMap(data, 0.05), size=32)
@@ -30,8 +30,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from ..errors import InputError
-from .grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from ..core.errors import InputError
+from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 
 __all__ = [
     "square_resize",
@@ -283,7 +283,7 @@ def save_preprocess_figure(
     >>> path.stat().st_size > 0
     True
     """
-    from ..viz import draw_map, new_figure, save_figure
+    from ..core.viz import draw_map, new_figure, save_figure
     from .render import map_summary
 
     fig, axes = new_figure(before, ncols=2)

@@ -4,7 +4,7 @@ The map loaders (:mod:`map2map.maps.ros`, :mod:`map2map.maps.image`) need the ra
 pixel values of a picture, with its bit depth and alpha channel, exactly as stored,
 so that map_server's thresholds can be applied to them. OpenCV decodes every common
 format (8- and 16-bit, grey, grey+alpha, RGB, RGBA, palette); this module only turns
-its answers and its failures into :class:`~map2map.errors.InputError`.
+its answers and its failures into :class:`~map2map.core.errors.InputError`.
 
 Examples
 --------
@@ -26,8 +26,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from .._io import atomic_path
-from ..errors import InputError
+from ..core._io import atomic_path
+from ..core.errors import InputError
 
 __all__ = [
     "RasterImage",

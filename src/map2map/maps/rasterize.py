@@ -2,7 +2,7 @@
 
 Coordinates here are *continuous pixel coordinates*: ``u`` = column, ``v`` = row,
 pixel ``(r, c)`` covers ``[c, c + 1) x [r, r + 1)`` and its centre is
-``(c + 0.5, r + 0.5)`` (the convention of :mod:`map2map.maps.grid`). Both
+``(c + 0.5, r + 0.5)`` (the convention of :mod:`map2map.core.grid`). Both
 functions are exact and vectorised with numpy: a pixel is inside a polygon when its
 centre is (:func:`fill_exact`), and a line marks every pixel it passes through
 (:func:`trace`). OpenCV's drawing is not used: its sub-pixel lines are not

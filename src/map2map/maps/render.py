@@ -1,13 +1,13 @@
 """A picture of one map that a person can read at a glance.
 
-Free, occupied and unknown cells in the colours of :mod:`map2map.viz`, a metric
+Free, occupied and unknown cells in the colours of :mod:`map2map.core.viz`, a metric
 scale bar, a legend, and a title giving the size in metres, the resolution and
 the free area. Room names are written in when the map carries them (HouseExpo).
 
 Examples
 --------
 >>> import numpy as np, tempfile, pathlib
->>> from map2map.maps.grid import OccupancyMap
+>>> from map2map.core.grid import OccupancyMap
 >>> data = np.full((60, 80), 255, np.uint8); data[0] = data[-1] = 0; data[:, :5] = 127
 >>> path = pathlib.Path(tempfile.mkdtemp()) / "map.png"
 >>> save_map_figure(OccupancyMap(data, 0.05), path, title="Example")
@@ -23,7 +23,7 @@ import os
 
 import numpy as np
 
-from .grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 
 __all__ = ["save_map_figure", "map_summary"]
 
@@ -115,7 +115,7 @@ def save_map_figure(
     """
     from matplotlib.patches import Patch
 
-    from ..viz import MAP_COLOURS, draw_map, new_figure, save_figure
+    from ..core.viz import MAP_COLOURS, draw_map, new_figure, save_figure
 
     if title is None:
         source = m.meta.get("source")

@@ -12,7 +12,7 @@ The yaml keys
     Metres per pixel (> 0).
 ``origin``
     ``[x, y, yaw]``: the world pose of the lower-left corner of the lower-left
-    pixel. This is exactly :class:`~map2map.maps.grid.OccupancyMap`'s origin.
+    pixel. This is exactly :class:`~map2map.core.grid.OccupancyMap`'s origin.
 ``negate``, ``occupied_thresh``, ``free_thresh``, ``mode``
     How pixel values become occupancy (below). ``mode`` is ``trinary`` (default),
     ``scale`` or ``raw``. map_server requires the thresholds and ``negate``; we
@@ -37,9 +37,9 @@ between the thresholds; raw mode applies ``negate`` and stores the 8-bit mean as
 
 How the result maps onto our three values
 -----------------------------------------
-OccupancyGrid 100 -> :data:`~map2map.maps.grid.OCCUPIED` (0), 0 ->
-:data:`~map2map.maps.grid.FREE` (255), everything else (-1 and the intermediate
-1..99 that scale and raw modes produce) -> :data:`~map2map.maps.grid.UNKNOWN` (127):
+OccupancyGrid 100 -> :data:`~map2map.core.grid.OCCUPIED` (0), 0 ->
+:data:`~map2map.core.grid.FREE` (255), everything else (-1 and the intermediate
+1..99 that scale and raw modes produce) -> :data:`~map2map.core.grid.UNKNOWN` (127):
 only cells map_server calls certain become certain. In scale and raw modes, where
 the intermediate values carry information, the loaded map keeps them:
 ``meta["ros_values"]`` is the int8 OccupancyGrid (image order, row 0 at the top)
@@ -56,7 +56,7 @@ flip is needed: ``pixel_to_world(H - 1, 0)`` is the origin plus half a cell.
 Examples
 --------
 >>> import numpy as np, tempfile, pathlib
->>> from map2map.maps.grid import OccupancyMap
+>>> from map2map.core.grid import OccupancyMap
 >>> m = OccupancyMap(np.array([[0, 127], [255, 255]], np.uint8), 0.05, (-1.0, 2.0, 0.5))
 >>> path = pathlib.Path(tempfile.mkdtemp()) / "map.yaml"
 >>> save_ros_map(m, path).name
@@ -77,10 +77,10 @@ from typing import Any
 import numpy as np
 import yaml
 
-from .._io import atomic_paths, ensure_output_dir
 from .._version import __version__
-from ..errors import InputError
-from .grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from ..core._io import atomic_paths, ensure_output_dir
+from ..core.errors import InputError
+from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from .raster import RasterImage, pgm_bytes, read_image
 
 __all__ = [

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..maps.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from .figures import deform_figure, roadmap_figure
 from .params import ParametricParams
 from .pipeline import deform, make_trajectory

@@ -34,9 +34,9 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from .._io import atomic_path
-from ..errors import InputError
-from ..maps.grid import OCCUPIED, UNKNOWN
+from ..core._io import atomic_path
+from ..core.errors import InputError
+from ..core.grid import OCCUPIED, UNKNOWN
 
 __all__ = ["DisplacementField", "invert_field", "warp_map"]
 

@@ -4,7 +4,7 @@
 Examples
 --------
 >>> import numpy as np, tempfile, pathlib
->>> from map2map.maps.grid import OccupancyMap
+>>> from map2map.core.grid import OccupancyMap
 >>> from map2map.parametric import ParametricParams, deform, make_trajectory
 >>> data = np.zeros((64, 64), np.uint8); data[2:62, 2:62] = 255
 >>> plan = OccupancyMap(data, resolution=0.1)
@@ -24,10 +24,10 @@ import os
 import numpy as np
 from matplotlib.collections import LineCollection
 
-from ..maps.grid import OccupancyMap
+from ..core.grid import OccupancyMap
+from ..core.viz import draw_map, new_figure, save_figure
 from ..trajectory.prm import Roadmap
 from ..trajectory.timing import Trajectory
-from ..viz import draw_map, new_figure, save_figure
 from .pipeline import DeformResult, trajectory_to_pixels
 
 __all__ = ["roadmap_figure", "deform_figure", "draw_trajectory"]

@@ -5,7 +5,7 @@ module constants. A parameter file is YAML: either a flat mapping of field names
 the ``params.yaml`` that ``map2map deform`` writes beside every map (its ``parameters:``
 section is read, its informational ``run:`` and ``drawn:`` sections are ignored), so
 that a run can be repeated exactly. Unknown keys, non-numbers and NaN/inf are rejected
-with :class:`~map2map.errors.InputError`.
+with :class:`~map2map.core.errors.InputError`.
 
 Examples
 --------
@@ -26,8 +26,8 @@ from typing import Any
 
 import yaml
 
-from .._io import atomic_path
-from ..errors import InputError
+from ..core._io import atomic_path
+from ..core.errors import InputError
 
 __all__ = ["ParametricParams", "load_params", "save_params", "params_to_dict"]
 

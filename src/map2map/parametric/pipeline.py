@@ -7,7 +7,7 @@ deformed map``.
 Examples
 --------
 >>> import numpy as np
->>> from map2map.maps.grid import OccupancyMap
+>>> from map2map.core.grid import OccupancyMap
 >>> data = np.zeros((64, 64), np.uint8); data[2:62, 2:62] = 255
 >>> plan = OccupancyMap(data, resolution=0.1)
 >>> rng = np.random.default_rng(0)
@@ -26,8 +26,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import ndimage
 
-from ..errors import InputError
-from ..maps.grid import FREE, OCCUPIED, OccupancyMap
+from ..core.errors import InputError
+from ..core.grid import FREE, OCCUPIED, OccupancyMap
 from ..trajectory.prm import (
     Roadmap,
     build_roadmap,

@@ -22,9 +22,9 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from .. import __version__
-from .._io import ensure_output_dir
-from ..errors import InputError
-from ..maps.grid import FREE, OccupancyMap
+from ..core._io import ensure_output_dir
+from ..core.errors import InputError
+from ..core.grid import FREE, OccupancyMap
 from ..trajectory.timing import Trajectory, read_trajectory, read_waypoints
 from .figures import deform_figure
 from .params import ParametricParams, load_params, save_params

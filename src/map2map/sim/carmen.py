@@ -20,7 +20,7 @@ odom_x odom_y odom_theta`` (180 degrees starting at -90 degrees) and
 ``ROBOTLASER1`` messages, accepts gzip (``.gz``), keeps ``PARAM`` lines and
 ignores the other documented message types (``SYNC``, ``RAWLASER2-4``, ``RLASER``,
 GPS, ...). Unknown messages, corrupt lines, logs without odometry or scans and a
-beam count that changes mid-log are bad input (:class:`~map2map.errors.InputError`
+beam count that changes mid-log are bad input (:class:`~map2map.core.errors.InputError`
 naming the line).
 
 Numbers are written so that they read back bit-exactly (poses and times with
@@ -51,8 +51,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .._io import atomic_path
-from ..errors import InputError
+from ..core._io import atomic_path
+from ..core.errors import InputError
 from ..slam.base import LaserScan, Mapper, OdometryReading
 
 __all__ = ["CarmenLog", "write_carmen", "read_carmen", "replay"]

@@ -34,7 +34,7 @@ same controller.
 Examples
 --------
 >>> import numpy as np
->>> from map2map.maps.grid import OccupancyMap
+>>> from map2map.core.grid import OccupancyMap
 >>> data = np.full((40, 60), 127, np.uint8); data[5:35, 5:40] = 255
 >>> data[5:35, 5] = 0                                   # a wall on the left
 >>> m = OccupancyMap(data, 0.05)
@@ -53,7 +53,7 @@ import cv2
 import numpy as np
 from numba import njit
 
-from ..maps.grid import OccupancyMap
+from ..core.grid import OccupancyMap
 from ..slam.base import LaserScan
 
 __all__ = [

@@ -26,7 +26,7 @@ The scan is taken instantaneously at the pose (no motion distortion during the
 Examples
 --------
 >>> import numpy as np
->>> from map2map.maps.grid import OccupancyMap
+>>> from map2map.core.grid import OccupancyMap
 >>> data = np.full((60, 60), 255, np.uint8); data[:, 50] = 0   # wall at column 50
 >>> m = OccupancyMap(data, 0.05)
 >>> lidar = Lidar(LidarConfig(noise_sigma=0.0, p_short=0, p_max=0, p_rand=0))
@@ -44,7 +44,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
-from ..maps.grid import OccupancyMap
+from ..core.grid import OccupancyMap
 from ..slam.base import LaserScan
 from .raycast import cast_scan, make_cast_grid
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable
 
-from ..errors import InputError
+from ..core.errors import InputError
 from ..slam.base import Mapper
 
 __all__ = ["MAPPERS", "make_mapper", "register_mapper", "available_mappers"]

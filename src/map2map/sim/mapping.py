@@ -37,7 +37,7 @@ import cv2
 import numpy as np
 from numba import njit
 
-from ..maps.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from ..slam.base import LaserScan, OdometryReading
 
 __all__ = ["LogOddsGrid", "OracleMapper", "compose", "relative", "resample_to_frame"]

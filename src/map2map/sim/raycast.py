@@ -14,7 +14,7 @@ corner: diagonal walls one pixel thick do not leak.
 
 Units and frame: everything here is in *continuous pixel coordinates* of the
 grid (x = column to the right, y = row downwards, cell ``(r, c)`` covers
-``[c, c+1) x [r, r+1)``, see :mod:`map2map.maps.grid`). Angles are measured in
+``[c, c+1) x [r, r+1)``, see :mod:`map2map.core.grid`). Angles are measured in
 that frame (direction ``(cos a, sin a)``, so positive angles turn clockwise on
 screen). Conversions from metric poses live in :mod:`map2map.sim.lidar`.
 

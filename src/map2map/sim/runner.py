@@ -18,7 +18,7 @@ plan frame with that pose (:func:`map2map.sim.mapping.resample_to_frame`).
 Examples
 --------
 >>> import numpy as np
->>> from map2map.maps.grid import OccupancyMap
+>>> from map2map.core.grid import OccupancyMap
 >>> data = np.full((60, 100), 255, np.uint8); data[[0, -1], :] = 0; data[:, [0, -1]] = 0
 >>> res = simulate(OccupancyMap(data, 0.05), seed=1, duration=30, progress=False)
 >>> res.coverage > 0.9, res.collisions
@@ -37,9 +37,9 @@ from typing import Any
 
 import numpy as np
 
-from .._io import atomic_path, ensure_output_dir
-from ..errors import InputError
-from ..maps.grid import OccupancyMap
+from ..core._io import atomic_path, ensure_output_dir
+from ..core.errors import InputError
+from ..core.grid import OccupancyMap
 from ..slam.base import LaserScan, Mapper, OdometryReading
 from .explore import ExploreConfig, Explorer, RouteFollower
 from .lidar import Lidar, LidarConfig
@@ -433,7 +433,7 @@ def plan_with_world(res: SimResult) -> OccupancyMap:
 
 def save_figure_png(res: SimResult, path: Path) -> None:
     """Three panels: the plan with both paths, the map in the plan frame, the overlay."""
-    from ..viz import draw_map, new_figure, save_figure
+    from ..core.viz import draw_map, new_figure, save_figure
 
     plan = plan_with_world(res)
     fig, axes = new_figure(plan, ncols=3, panel_inches=4.5)
@@ -475,7 +475,7 @@ def save_gif(res: SimResult, path: Path, max_frames: int = 80) -> None:
     """An animation of the map growing over the plan (faint), with the true path so far."""
     from PIL import Image, ImageDraw
 
-    from ..viz import map_to_rgb
+    from ..core.viz import map_to_rgb
 
     frames = res.frames
     if not frames:

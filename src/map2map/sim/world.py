@@ -14,7 +14,7 @@ a point to the nearest blocking cell.
 Examples
 --------
 >>> import numpy as np
->>> from map2map.maps.grid import OccupancyMap
+>>> from map2map.core.grid import OccupancyMap
 >>> data = np.full((80, 80), 255, np.uint8); data[[0, -1], :] = 0; data[:, [0, -1]] = 0
 >>> w = World.build(OccupancyMap(data, 0.05), start=(2.0, 2.0, 0.0), obstacles=3, people=1,
 ...                 rng=np.random.default_rng(1))
@@ -30,8 +30,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import ndimage
 
-from ..errors import InputError
-from ..maps.grid import OccupancyMap
+from ..core.errors import InputError
+from ..core.grid import OccupancyMap
 from .lidar import Scene
 
 __all__ = ["World", "People", "FURNITURE_PASSAGE"]

@@ -26,7 +26,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from ..maps.grid import OccupancyMap
+from ..core.grid import OccupancyMap
 
 __all__ = ["LaserScan", "OdometryReading", "Mapper"]
 

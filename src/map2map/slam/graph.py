@@ -68,7 +68,7 @@ from scipy.optimize import least_squares
 from scipy.sparse import coo_matrix, csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from ..maps.grid import OccupancyMap
+from ..core.grid import OccupancyMap
 from .base import LaserScan, OdometryReading
 from .gridmap import CountGrid, likelihood_field
 from .rbpf import StartFrame, absolute_difference, absolute_sum, prepare_scan

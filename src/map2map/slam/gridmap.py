@@ -11,7 +11,7 @@ of a cell (sub-cell accuracy), as GMapping does.
 Grid layout: arrays are indexed ``[iy, ix]`` where ``ix = floor((x - x0) / delta)``
 and ``iy = floor((y - y0) / delta)``; ``(x0, y0)`` is the world corner of cell
 ``(0, 0)``. :meth:`CountGrid.to_occupancy_map` flips the rows into the package's
-image order (row 0 at the top, see :mod:`map2map.maps.grid`).
+image order (row 0 at the top, see :mod:`map2map.core.grid`).
 
 Two scan scores are provided:
 
@@ -42,7 +42,7 @@ import cv2
 import numba as nb
 import numpy as np
 
-from ..maps.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 
 __all__ = [
     "CountGrid",

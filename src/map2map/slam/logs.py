@@ -11,7 +11,7 @@
 * **BreezySLAM raw logs** (the Mines ParisTech ``exp*.dat`` files) are parsed by
   :func:`read_breezyslam`.
 
-Every format problem is an :class:`~map2map.errors.InputError` naming the file and,
+Every format problem is an :class:`~map2map.core.errors.InputError` naming the file and,
 for a bad line, its line number.
 
 Examples
@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 from ..sim.carmen import CarmenLog, read_carmen
 from .base import LaserScan, OdometryReading
 

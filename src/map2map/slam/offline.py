@@ -34,9 +34,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .._io import atomic_path, ensure_output_dir
-from ..errors import InputError
-from ..maps.grid import OccupancyMap
+from ..core._io import atomic_path, ensure_output_dir
+from ..core.errors import InputError
+from ..core.grid import OccupancyMap
 from ..sim.carmen import CarmenLog
 from .base import Mapper
 
@@ -112,7 +112,7 @@ def run_slam(
 
 
 def _figure(res: SlamResult, path: Path, title: str) -> None:
-    from ..viz import draw_map, new_figure, save_figure
+    from ..core.viz import draw_map, new_figure, save_figure
 
     m = res.map
     fig, ax = new_figure(m, 1, panel_inches=7.0)

@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from ..maps.grid import OccupancyMap
+from ..core.grid import OccupancyMap
 
 __all__ = ["ate_rmse", "rigid_align_2d", "wall_error", "map_to_plan_points"]
 
@@ -73,7 +73,7 @@ def wall_error(
 
     Examples
     --------
-    >>> from map2map.maps.grid import OccupancyMap
+    >>> from map2map.core.grid import OccupancyMap
     >>> d = np.full((40, 40), 255, np.uint8); d[20, 5:35] = 0
     >>> plan = OccupancyMap(d, 0.05)
     >>> wall_error(plan, plan, (0.0, 0.0, 0.0))

@@ -56,7 +56,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from ..maps.grid import OccupancyMap
+from ..core.grid import OccupancyMap
 from .base import LaserScan, OdometryReading
 from .gridmap import CountGrid, hill_climb, sample_likelihood
 

@@ -16,7 +16,7 @@ a 1600 x 1600 plan costs no more than a 256 x 256 one. Node coordinates are stor
 Examples
 --------
 >>> import numpy as np
->>> from map2map.maps.grid import OccupancyMap
+>>> from map2map.core.grid import OccupancyMap
 >>> data = np.zeros((60, 100), np.uint8); data[5:55, 5:95] = 255
 >>> plan = OccupancyMap(data, resolution=0.05)
 >>> rm = build_roadmap(plan, robot_radius=0.15, rng=np.random.default_rng(0))
@@ -36,8 +36,8 @@ from scipy.sparse.csgraph import connected_components, dijkstra
 from scipy.spatial import cKDTree
 from skimage.morphology import skeletonize
 
-from ..errors import InputError
-from ..maps.grid import OccupancyMap
+from ..core.errors import InputError
+from ..core.grid import OccupancyMap
 
 __all__ = [
     "Roadmap",
@@ -331,7 +331,7 @@ def random_tour(rm: Roadmap, rng: np.random.Generator, n: int = 4) -> np.ndarray
     Returns (n, 2) plan pixels.
 
     >>> data = np.zeros((60, 100), np.uint8); data[5:55, 5:95] = 255
-    >>> from map2map.maps.grid import OccupancyMap
+    >>> from map2map.core.grid import OccupancyMap
     >>> rm = build_roadmap(OccupancyMap(data, 0.05), rng=np.random.default_rng(0))
     >>> random_tour(rm, np.random.default_rng(1), 3).shape
     (3, 2)

@@ -34,8 +34,8 @@ from typing import Any
 
 import numpy as np
 
-from .._io import atomic_path
-from ..errors import InputError
+from ..core._io import atomic_path
+from ..core.errors import InputError
 
 __all__ = [
     "Trajectory",

@@ -7,7 +7,7 @@ bar, so that overlays from any stage line up without conversions.
 Examples
 --------
 >>> import numpy as np, tempfile, pathlib
->>> from map2map.maps.grid import OccupancyMap
+>>> from map2map.core.grid import OccupancyMap
 >>> m = OccupancyMap(np.full((40, 60), 255, np.uint8), 0.05)
 >>> fig, ax = new_figure(m)
 >>> draw_map(ax, m)
@@ -30,7 +30,7 @@ from matplotlib.axes import Axes  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
 from ._io import atomic_path  # noqa: E402
-from .maps.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap  # noqa: E402
+from .grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap  # noqa: E402
 
 __all__ = ["MAP_COLOURS", "map_to_rgb", "draw_map", "add_scale_bar", "new_figure", "save_figure"]
 

@@ -19,7 +19,7 @@ Convention (documented here once, used everywhere, converted only at the edges):
 Examples
 --------
 >>> import numpy as np
->>> from map2map.maps.grid import OccupancyMap, FREE
+>>> from map2map.core.grid import OccupancyMap, FREE
 >>> m = OccupancyMap(np.full((4, 6), FREE, np.uint8), resolution=0.5)
 >>> m.shape
 (4, 6)
