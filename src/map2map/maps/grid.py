@@ -1,0 +1,7 @@
+"""Moved to :mod:`map2map.core.grid`; ``map2map.maps.grid`` stays importable for existing code.
+
+New code imports :mod:`map2map.core.grid` (or ``from map2map.maps import OccupancyMap``).
+"""
+
+from ..core.grid import *  # noqa: F403
+from ..core.grid import __all__  # noqa: F401
