@@ -7,11 +7,13 @@ import numpy as np
 import pytest
 
 from map2map.core.errors import InputError
+from map2map.core.geometry import compose_pose as compose
+from map2map.core.geometry import relative_pose as relative
 from map2map.core.grid import OccupancyMap
 from map2map.sim.carmen import read_carmen, replay, write_carmen
 from map2map.sim.lidar import Lidar, LidarConfig
 from map2map.sim.mappers import make_mapper
-from map2map.sim.mapping import OracleMapper, compose, relative
+from map2map.sim.mapping import OracleMapper
 from map2map.sim.odometry import OdometryErrors, WheelOdometry
 from map2map.sim.robot import DiffDriveRobot, RobotParams
 from map2map.sim.world import World

@@ -30,6 +30,7 @@ from dataclasses import dataclass, replace
 import cv2
 import numpy as np
 
+from ..core.geometry import invert_displacement
 from ..core.grid import FREE, OCCUPIED, UNKNOWN
 from .transforms import apply
 
@@ -191,11 +192,9 @@ def deform(
     yy, xx = np.mgrid[0:H, 0:W].astype(np.float32) + 0.5
     ux = field[..., 0].astype(np.float32)
     uy = field[..., 1].astype(np.float32)
-    px, py = xx.copy(), yy.copy()
-    for _ in range(iterations):  # p = q - u(p)
-        sx = cv2.remap(ux, px - 0.5, py - 0.5, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        sy = cv2.remap(uy, px - 0.5, py - 0.5, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        px, py = xx - sx, yy - sy
+    # p = q - u(p): the inverse as the parametric model finds it, every step taken
+    px, py = invert_displacement(ux, uy, max(iterations - 1, 0), tol=0.0, settled=1.0)
+    px, py = px + 0.5, py + 0.5  # pixel indices -> coordinates of cell centres
     # nearest-neighbour resampling, explicitly, so that the copied cell is known
     ci = np.floor(px).astype(np.int64)
     ri = np.floor(py).astype(np.int64)

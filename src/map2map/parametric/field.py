@@ -36,6 +36,7 @@ import numpy as np
 
 from ..core._io import atomic_path
 from ..core.errors import InputError
+from ..core.geometry import invert_displacement
 from ..core.grid import OCCUPIED, UNKNOWN
 
 __all__ = ["DisplacementField", "invert_field", "warp_map"]
@@ -100,29 +101,18 @@ def invert_field(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Source coordinates ``(px, py)`` (float32 maps) with ``p + d(p) = q`` for every pixel ``q``.
 
-    Fixed-point iteration ``p <- q - d(p)`` started at ``p = q - d(q)``; stops after
-    ``iterations`` or when a fraction ``settled`` of the pixels moved less than ``tol``
-    pixels in the last step. (Where the field jumps, e.g. at the edge of what a pose saw,
-    or folds, there is no exact inverse and the iteration keeps oscillating there.)
+    :func:`map2map.core.geometry.invert_displacement`: fixed-point iteration
+    ``p <- q - d(p)`` started at ``p = q - d(q)``; stops after ``iterations`` or when a
+    fraction ``settled`` of the pixels moved less than ``tol`` pixels in the last step.
+    (Where the field jumps, e.g. at the edge of what a pose saw, or folds, there is no
+    exact inverse and the iteration keeps oscillating there.)
 
     >>> f = DisplacementField(np.full((3, 4), 1.5, np.float32), np.zeros((3, 4), np.float32))
     >>> px, py = invert_field(f)
     >>> px[0].tolist()
     [-1.5, -0.5, 0.5, 1.5]
     """
-    h, w = field.shape
-    q = np.dstack(np.mgrid[0:h, 0:w][::-1]).astype(np.float32)  # (h, w, 2): x, y
-    d = np.dstack([field.dx, field.dy])
-    p = q - d
-    limit = (1.0 - settled) * h * w
-    for _ in range(iterations):
-        dp = cv2.remap(d, p, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        new = q - dp
-        moving = np.count_nonzero(np.abs(new - p) > tol)  # components: >= moving pixels
-        p = new
-        if moving <= limit:
-            break
-    return np.ascontiguousarray(p[..., 0]), np.ascontiguousarray(p[..., 1])
+    return invert_displacement(field.dx, field.dy, iterations, tol, settled)
 
 
 def warp_map(plan: np.ndarray, field: DisplacementField, observed: np.ndarray) -> np.ndarray:

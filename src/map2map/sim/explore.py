@@ -53,6 +53,7 @@ import cv2
 import numpy as np
 from numba import njit
 
+from ..core.geometry import wrap_angle
 from ..core.grid import OccupancyMap
 from ..slam.base import LaserScan
 
@@ -449,7 +450,7 @@ class PathController:
             return 0.0, 0.0, False
         x, y, th = pose
         self._i, tx, ty, end = _pursuit_target(self.path, self._i, x, y, self.cfg.lookahead)
-        alpha = _wrap(math.atan2(ty - y, tx - x) - th)
+        alpha = wrap_angle(math.atan2(ty - y, tx - x) - th)
         w = min(max(2.5 * alpha, -self.max_w), self.max_w)
         if abs(alpha) > math.radians(50):
             return 0.0, w, False
@@ -524,9 +525,6 @@ def _time_to_contact(px, py, v, w, radius, horizon, dt):
                     return t - dt
     return horizon
 
-
-def _wrap(a: float) -> float:
-    return (a + math.pi) % (2 * math.pi) - math.pi
 
 
 # ------------------------------------------------------------------- explorer

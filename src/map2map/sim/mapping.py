@@ -37,27 +37,11 @@ import cv2
 import numpy as np
 from numba import njit
 
+from ..core.geometry import compose_pose, relative_pose
 from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from ..slam.base import LaserScan, OdometryReading
 
-__all__ = ["LogOddsGrid", "OracleMapper", "compose", "relative", "resample_to_frame"]
-
-
-def compose(a, b) -> tuple[float, float, float]:
-    """Pose composition ``a (+) b``."""
-    ca, sa = math.cos(a[2]), math.sin(a[2])
-    return (a[0] + ca * b[0] - sa * b[1], a[1] + sa * b[0] + ca * b[1], _wrap(a[2] + b[2]))
-
-
-def relative(a, b) -> tuple[float, float, float]:
-    """``b`` expressed in the frame of ``a`` (``a^-1 (+) b``)."""
-    dx, dy = b[0] - a[0], b[1] - a[1]
-    ca, sa = math.cos(a[2]), math.sin(a[2])
-    return (ca * dx + sa * dy, -sa * dx + ca * dy, _wrap(b[2] - a[2]))
-
-
-def _wrap(a: float) -> float:
-    return (a + math.pi) % (2 * math.pi) - math.pi
+__all__ = ["LogOddsGrid", "OracleMapper", "resample_to_frame"]
 
 
 @njit(cache=True)
@@ -283,8 +267,8 @@ class OracleMapper:
             raise RuntimeError("OracleMapper needs observe_truth(pose) before each update")
         if self._start is None:
             self._start = self._truth
-        self._pose = relative(self._start, self._truth)
-        sensor = compose(self._pose, scan.sensor_offset)
+        self._pose = relative_pose(self._start, self._truth)
+        sensor = compose_pose(self._pose, scan.sensor_offset)
         self.grid.integrate(sensor, scan)
         self._truth = None
 

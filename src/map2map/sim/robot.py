@@ -32,6 +32,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from ..core.geometry import wrap_angle
+
 __all__ = ["RobotParams", "WAFFLE_PI", "DiffDriveRobot", "StepResult", "arc_step"]
 
 
@@ -167,7 +169,7 @@ _NO_PEOPLE = np.zeros((0, 3))
 
 
 def _wrap_pose(p):
-    return (p[0], p[1], _wrap(p[2]))
+    return (p[0], p[1], wrap_angle(p[2]))
 
 
 @njit(cache=True)
@@ -227,6 +229,3 @@ def _disc_hits(blocked, px, py, rad):
                     return True
     return False
 
-
-def _wrap(a: float) -> float:
-    return (a + math.pi) % (2 * math.pi) - math.pi

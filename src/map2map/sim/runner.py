@@ -39,12 +39,13 @@ import numpy as np
 
 from ..core._io import atomic_path, ensure_output_dir
 from ..core.errors import InputError
+from ..core.geometry import compose_pose, relative_pose
 from ..core.grid import OccupancyMap
 from ..slam.base import LaserScan, Mapper, OdometryReading
 from .explore import ExploreConfig, Explorer, RouteFollower
 from .lidar import Lidar, LidarConfig
 from .mappers import make_mapper
-from .mapping import compose, relative, resample_to_frame
+from .mapping import resample_to_frame
 from .odometry import OdometryErrors, WheelOdometry
 from .robot import WAFFLE_PI, DiffDriveRobot, RobotParams
 from .routes import as_waypoints
@@ -308,7 +309,7 @@ def simulate(
     odo = WheelOdometry(odometry or OdometryErrors(), robot, rng=rng_odo)
     sensor = Lidar(lidar_cfg)
     if wp is not None:
-        local = np.array([relative(start, (x, y, 0.0))[:2] for x, y in wp[:, :2]])
+        local = np.array([relative_pose(start, (x, y, 0.0))[:2] for x, y in wp[:, :2]])
         driver: Explorer | RouteFollower = RouteFollower(local, ecfg, robot.max_v, robot.max_w)
     else:
         driver = Explorer(ecfg, robot.max_v, robot.max_w, spin_first=lidar_cfg.fov_deg < 360)
@@ -345,8 +346,8 @@ def simulate(
             readings.append(reading)
             times.append(t)
             true_p.append(bot.pose)
-            est_p.append(compose(start, est))
-            odo_p.append(compose(start, odo.pose))
+            est_p.append(compose_pose(start, est))
+            odo_p.append(compose_pose(start, odo.pose))
             vel.append((bot.v, bot.w))
             last_scan = scan
             if frame_every > 0 and t >= next_frame:

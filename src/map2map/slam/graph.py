@@ -68,6 +68,7 @@ from scipy.optimize import least_squares
 from scipy.sparse import coo_matrix, csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
+from ..core.geometry import wrap_angle
 from ..core.grid import OccupancyMap
 from .base import LaserScan, OdometryReading
 from .gridmap import CountGrid, likelihood_field
@@ -300,7 +301,7 @@ def correlative_match(
             cx - gx + fxs[None, :, None], cy - gy + fxs[None, None, :], fts[:, None, None] - gt
         )
     fb = np.unravel_index(int(np.argmax(fresp)), fresp.shape)
-    pose = np.array([cx + fxs[fb[1]], cy + fxs[fb[2]], (fts[fb[0]] + np.pi) % (2 * np.pi) - np.pi])
+    pose = np.array([cx + fxs[fb[1]], cy + fxs[fb[2]], wrap_angle(fts[fb[0]])])
     cov = _covariance(fresp, fxs, fxs, fts, fb, fine_step)
     # positional spread of the coarse surface is what Karto thresholds for loop closures
     coarse_cov = _covariance(resp, dxs, dxs, ths, best, coarse_step)
@@ -318,7 +319,7 @@ def correlative_match(
 # ----------------------------------------------------------------------------- back end
 def _se2_residual(pi: np.ndarray, pj: np.ndarray, z: np.ndarray) -> np.ndarray:
     d = absolute_difference(pj, pi) - z
-    d[..., 2] = (d[..., 2] + np.pi) % (2 * np.pi) - np.pi
+    d[..., 2] = wrap_angle(d[..., 2])
     return d
 
 
@@ -402,7 +403,7 @@ def optimize_pose_graph(
         max_nfev=100,
     )
     out = np.vstack([p0, sol.x.reshape(-1, 3)])
-    out[:, 2] = (out[:, 2] + np.pi) % (2 * np.pi) - np.pi
+    out[:, 2] = wrap_angle(out[:, 2])
     return out
 
 

@@ -4,7 +4,7 @@ These use ground truth and are for *evaluation only* -- no mapper imports them.
 
 * :func:`ate_rmse` -- absolute trajectory error (Sturm et al. 2012): RMSE of the
   position differences after the least-squares rigid alignment (Umeyama 1991,
-  no scale) of the estimated to the true positions.
+  no scale; :func:`map2map.core.geometry.fit_rigid`) of the estimated to the true positions.
 * :func:`wall_error` -- the mean distance (metres) from each occupied cell of the
   SLAM map to the nearest wall of the plan, with the SLAM map placed in the plan
   by the robot's true start pose (the map frame starts there). With ``align=True``
@@ -25,21 +25,10 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
+from ..core.geometry import apply, fit_rigid
 from ..core.grid import OccupancyMap
 
-__all__ = ["ate_rmse", "rigid_align_2d", "wall_error", "map_to_plan_points"]
-
-
-def rigid_align_2d(src: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Rotation ``R`` (2x2) and translation ``t`` minimising ``|R src + t - dst|^2`` (Umeyama)."""
-    src = np.asarray(src, float)[:, :2]
-    dst = np.asarray(dst, float)[:, :2]
-    ms, md = src.mean(0), dst.mean(0)
-    h = (src - ms).T @ (dst - md)
-    u, _, vt = np.linalg.svd(h)
-    d = np.sign(np.linalg.det(vt.T @ u.T)) or 1.0
-    r = vt.T @ np.diag([1.0, d]) @ u.T
-    return r, md - r @ ms
+__all__ = ["ate_rmse", "wall_error", "map_to_plan_points"]
 
 
 def ate_rmse(est: np.ndarray, true: np.ndarray, align: bool = True) -> float:
@@ -47,8 +36,7 @@ def ate_rmse(est: np.ndarray, true: np.ndarray, align: bool = True) -> float:
     est = np.asarray(est, float)[:, :2]
     true = np.asarray(true, float)[:, :2]
     if align and len(est) >= 2:
-        r, t = rigid_align_2d(est, true)
-        est = est @ r.T + t
+        est = apply(fit_rigid(est, true), est)
     return float(np.sqrt(np.mean(np.sum((est - true) ** 2, axis=1))))
 
 

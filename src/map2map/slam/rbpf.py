@@ -56,6 +56,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
+from ..core.geometry import compose_pose, relative_pose, wrap_angle
 from ..core.grid import OccupancyMap
 from .base import LaserScan, OdometryReading
 from .gridmap import CountGrid, hill_climb, sample_likelihood
@@ -168,12 +169,10 @@ class GMappingParams:
 
 
 # ----------------------------------------------------------------------------- motion
-def _wrap(a):
-    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
-
-
 def absolute_difference(p1: np.ndarray, p2: np.ndarray) -> np.ndarray:
     """Pose of ``p1`` in the frame of ``p2`` (GMapping ``absoluteDifference``), row-wise.
+
+    :func:`map2map.core.geometry.relative_pose` ``(p2, p1)`` on arrays.
 
     Examples
     --------
@@ -181,13 +180,7 @@ def absolute_difference(p1: np.ndarray, p2: np.ndarray) -> np.ndarray:
     >>> np.round(d, 9) + 0.0
     array([ 0., -1.,  0.])
     """
-    p1 = np.asarray(p1, float)
-    p2 = np.asarray(p2, float)
-    dx = p1[..., 0] - p2[..., 0]
-    dy = p1[..., 1] - p2[..., 1]
-    c, s = np.cos(p2[..., 2]), np.sin(p2[..., 2])
-    out = np.stack([c * dx + s * dy, -s * dx + c * dy, _wrap(p1[..., 2] - p2[..., 2])], axis=-1)
-    return out + 0.0
+    return relative_pose(np.asarray(p2, float), np.asarray(p1, float))
 
 
 class StartFrame:
@@ -222,18 +215,11 @@ class StartFrame:
 
 
 def absolute_sum(p: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """Compose pose ``p`` with the relative motion ``d`` (GMapping ``absoluteSum``), row-wise."""
-    p = np.asarray(p, float)
-    d = np.asarray(d, float)
-    c, s = np.cos(p[..., 2]), np.sin(p[..., 2])
-    return np.stack(
-        [
-            p[..., 0] + c * d[..., 0] - s * d[..., 1],
-            p[..., 1] + s * d[..., 0] + c * d[..., 1],
-            _wrap(p[..., 2] + d[..., 2]),
-        ],
-        axis=-1,
-    )
+    """Compose pose ``p`` with the relative motion ``d`` (GMapping ``absoluteSum``), row-wise.
+
+    :func:`map2map.core.geometry.compose_pose` on arrays.
+    """
+    return compose_pose(np.asarray(p, float), np.asarray(d, float))
 
 
 def sample_motion(
@@ -572,7 +558,7 @@ class GMappingRBPF:
                     new = mean + chol @ self.rng.standard_normal(3)
                 else:
                     new = np.array([cx, cy, ct])
-                self.poses[i] = (new[0], new[1], _wrap(new[2]))
+                self.poses[i] = (new[0], new[1], wrap_angle(new[2]))
             self.log_w[i] += log_eta
             self.log_w_sum[i] += log_eta
         w = normalize_log_weights(self.log_w, 1.0 / (p.ogain * n))

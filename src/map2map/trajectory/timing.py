@@ -36,6 +36,7 @@ import numpy as np
 
 from ..core._io import atomic_path
 from ..core.errors import InputError
+from ..core.geometry import wrap_angle as _wrap_angle
 
 __all__ = [
     "Trajectory",
@@ -49,9 +50,14 @@ __all__ = [
 
 
 def wrap_angle(a):
-    """Wrap angles to ``[-pi, pi)``; angles already in range are returned bit for bit."""
-    a = np.asarray(a, float)
-    return np.where((a >= -np.pi) & (a < np.pi), a, (a + np.pi) % (2 * np.pi) - np.pi)
+    """Wrap angles to ``[-pi, pi)``; angles already in range are returned bit for bit.
+
+    :func:`map2map.core.geometry.wrap_angle` with ``keep_in_range=True``.
+
+    >>> wrap_angle([0.25, 7.0]).round(6).tolist()
+    [0.25, 0.716815]
+    """
+    return _wrap_angle(a, keep_in_range=True)
 
 
 @dataclass
