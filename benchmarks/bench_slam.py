@@ -43,7 +43,7 @@ CONFIGS = [
 
 def one_plan(backend, options, plan, seed):
     """Simulate a given plan for 7 minutes; returns (wall s, cpu s, coverage)."""
-    from map2map.sim.mappers import make_mapper
+    from map2map.robotlog.mappers import make_mapper
     from map2map.sim.runner import simulate
 
     mapper = make_mapper(backend, resolution=plan.resolution, seed=seed, **options)

@@ -38,7 +38,7 @@ import numpy as np
 def one_run(job):
     backend, options, seed = job
     from map2map.maps.floorplan import generate_floorplan
-    from map2map.sim.mappers import make_mapper
+    from map2map.robotlog.mappers import make_mapper
     from map2map.sim.runner import simulate
     from map2map.slam.quality import ate_rmse, wall_error
 

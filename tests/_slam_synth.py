@@ -9,9 +9,9 @@ from __future__ import annotations
 import numpy as np
 
 from map2map.core.grid import FREE, OCCUPIED, OccupancyMap
+from map2map.robotlog.base import OdometryReading
 from map2map.sim.lidar import Lidar, LidarConfig, Scene
 from map2map.sim.odometry import OdometryErrors, WheelOdometry
-from map2map.slam.base import OdometryReading
 
 
 def room_plan(resolution: float = 0.05) -> OccupancyMap:

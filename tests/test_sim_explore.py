@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from map2map.core.grid import OccupancyMap
-from map2map.sim.carmen import read_carmen, replay
+from map2map.robotlog.carmen import read_carmen, replay
+from map2map.robotlog.mappers import make_mapper
 from map2map.sim.explore import dijkstra, find_frontiers, make_costmap
-from map2map.sim.mappers import make_mapper
 from map2map.sim.runner import save_run, simulate
 
 

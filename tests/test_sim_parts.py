@@ -10,14 +10,14 @@ from map2map.core.errors import InputError
 from map2map.core.geometry import compose_pose as compose
 from map2map.core.geometry import relative_pose as relative
 from map2map.core.grid import OccupancyMap
-from map2map.sim.carmen import read_carmen, replay, write_carmen
+from map2map.robotlog.base import LaserScan, Mapper, OdometryReading
+from map2map.robotlog.carmen import read_carmen, replay, write_carmen
+from map2map.robotlog.mappers import make_mapper
 from map2map.sim.lidar import Lidar, LidarConfig
-from map2map.sim.mappers import make_mapper
 from map2map.sim.mapping import OracleMapper
 from map2map.sim.odometry import OdometryErrors, WheelOdometry
 from map2map.sim.robot import DiffDriveRobot, RobotParams
 from map2map.sim.world import World
-from map2map.slam.base import LaserScan, Mapper, OdometryReading
 
 
 def box_plan(h=80, w=120, res=0.05):

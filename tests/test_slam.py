@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from _slam_synth import room_plan, synthetic_run
 
+from map2map.robotlog.base import Mapper
 from map2map.sim.lidar import Lidar, LidarConfig, Scene
-from map2map.slam.base import Mapper
 from map2map.slam.graph import (
     GraphSLAM,
     GraphSLAMParams,

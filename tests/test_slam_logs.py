@@ -12,8 +12,8 @@ from _slam_synth import synthetic_run
 from map2map.cli.main import main
 from map2map.core.errors import InputError
 from map2map.maps.ros import load_ros_map
-from map2map.sim.carmen import write_carmen
-from map2map.slam.logs import BreezyRobot, detect_format, load_log, read_breezyslam
+from map2map.robotlog.carmen import write_carmen
+from map2map.robotlog.logs import BreezyRobot, detect_format, load_log, read_breezyslam
 
 
 @pytest.fixture(scope="module")

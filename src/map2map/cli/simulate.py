@@ -11,7 +11,7 @@ from ._mapargs import add_input_options, load_from_args
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ..sim.mappers import available_mappers
+    from ..robotlog.mappers import available_mappers
 
     p = sub.add_parser(
         "simulate",

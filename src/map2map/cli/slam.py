@@ -51,7 +51,7 @@ def register(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..core.errors import InputError
-    from ..slam.logs import load_log
+    from ..robotlog.logs import load_log
     from ..slam.offline import run_slam, write_slam_outputs
 
     if args.particles is not None and args.particles < 1:

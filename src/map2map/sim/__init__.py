@@ -9,6 +9,6 @@ Modules, in the order data flows through a run:
 * :mod:`.odometry` - wheel odometry from encoder ticks, UMBmark errors and slip;
 * :mod:`.mapping` - the oracle mapper (log-odds grid at the true poses);
 * :mod:`.explore` - explore_lite-style frontier exploration and route following;
-* :mod:`.carmen` - CARMEN log files (write, read, replay through any mapper);
+* CARMEN log files (write, read, replay) live in :mod:`map2map.robotlog.carmen`;
 * :mod:`.runner` - :func:`simulate`, tying it all together.
 """

@@ -55,7 +55,7 @@ from numba import njit
 
 from ..core.geometry import wrap_angle
 from ..core.grid import OccupancyMap
-from ..slam.base import LaserScan
+from ..robotlog.base import LaserScan
 
 __all__ = [
     "ExploreConfig",

@@ -10,7 +10,7 @@ range and the true range), a *max-range failure* (no return) or a *random*
 reading (uniform over the whole range). Ranges are quantised to 1 mm, as the
 LDS-01 reports them.
 
-Conventions of the produced :class:`~map2map.slam.base.LaserScan`:
+Conventions of the produced :class:`~map2map.robotlog.base.LaserScan`:
 
 * ``inf`` means *no return* (nothing within ``range_max``; REP 117);
 * ``0.0`` means an invalid reading closer than ``range_min``;
@@ -45,7 +45,7 @@ import numpy as np
 from numba import njit
 
 from ..core.grid import OccupancyMap
-from ..slam.base import LaserScan
+from ..robotlog.base import LaserScan
 from .raycast import cast_scan, make_cast_grid
 
 __all__ = ["LidarConfig", "Lidar", "Scene", "LDS01"]

@@ -18,7 +18,7 @@ Its map frame starts at the first true pose, like every mapper's.
 Examples
 --------
 >>> import numpy as np
->>> from map2map.slam.base import LaserScan, OdometryReading
+>>> from map2map.robotlog.base import LaserScan, OdometryReading
 >>> m = OracleMapper(resolution=0.05)
 >>> scan = LaserScan(0.0, np.full(360, 1.0, np.float32), 0.0, np.deg2rad(1), 0.12, 3.5)
 >>> m.observe_truth((5.0, 5.0, 0.3))
@@ -39,7 +39,7 @@ from numba import njit
 
 from ..core.geometry import compose_pose, relative_pose
 from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
-from ..slam.base import LaserScan, OdometryReading
+from ..robotlog.base import LaserScan, OdometryReading
 
 __all__ = ["LogOddsGrid", "OracleMapper", "resample_to_frame"]
 

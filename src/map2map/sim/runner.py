@@ -41,10 +41,10 @@ from ..core._io import atomic_path, ensure_output_dir
 from ..core.errors import InputError
 from ..core.geometry import compose_pose, relative_pose
 from ..core.grid import OccupancyMap
-from ..slam.base import LaserScan, Mapper, OdometryReading
+from ..robotlog.base import LaserScan, Mapper, OdometryReading
+from ..robotlog.mappers import make_mapper
 from .explore import ExploreConfig, Explorer, RouteFollower
 from .lidar import Lidar, LidarConfig
-from .mappers import make_mapper
 from .mapping import resample_to_frame
 from .odometry import OdometryErrors, WheelOdometry
 from .robot import WAFFLE_PI, DiffDriveRobot, RobotParams
@@ -232,7 +232,7 @@ def simulate(
     fov : float
         Lidar field of view in degrees (360 for the LDS-01, 180 in the thesis).
     mapper : str or Mapper
-        A registered mapper name (:mod:`map2map.sim.mappers`) or an instance.
+        A registered mapper name (:mod:`map2map.robotlog.mappers`) or an instance.
     route : array-like or trajectory, optional
         Waypoints ``(x, y[, theta])`` in the plan frame to drive instead of exploring
         (anything :func:`map2map.sim.routes.as_waypoints` accepts, e.g. a PRM route).
@@ -525,7 +525,7 @@ def save_run(res: SimResult, out: str | os.PathLike, *, gif: bool = False) -> di
     ``figure.png`` and optionally ``exploration.gif``.
     """
     from ..maps.formats import save_map
-    from .carmen import write_carmen
+    from ..robotlog.carmen import write_carmen
 
     out = ensure_output_dir(out)
     paths = {

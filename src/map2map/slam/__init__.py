@@ -1,5 +1,5 @@
 """SLAM: the mapper interface shared by the simulator and every backend."""
 
-from .base import LaserScan, Mapper, OdometryReading
+from ..robotlog.base import LaserScan, Mapper, OdometryReading
 
 __all__ = ["LaserScan", "Mapper", "OdometryReading"]

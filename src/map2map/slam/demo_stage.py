@@ -22,9 +22,9 @@ __all__ = ["stage_slam"]
 def stage_slam(ctx: DemoContext) -> None:
     """Map the demo's simulated run with ``rbpf`` and ``graph``; write maps and figures."""
     from ..maps.floorplan import generate_floorplan
-    from ..sim.carmen import write_carmen
+    from ..robotlog.carmen import write_carmen
+    from ..robotlog.logs import load_log
     from ..sim.runner import simulate
-    from .logs import load_log
     from .offline import run_slam, write_slam_outputs
 
     out = ctx.out / "slam"

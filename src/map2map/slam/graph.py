@@ -48,7 +48,7 @@ coarse response more than 4 coarse steps away from the optimum must stay below
 Examples
 --------
 >>> import numpy as np
->>> from map2map.slam.base import LaserScan, OdometryReading
+>>> from map2map.robotlog.base import LaserScan, OdometryReading
 >>> g = GraphSLAM()
 >>> r = np.full(360, 1.5)
 >>> g.update(OdometryReading(0.0, 0.0, 0.0, 0.0),
@@ -70,7 +70,7 @@ from scipy.sparse.csgraph import dijkstra
 
 from ..core.geometry import wrap_angle
 from ..core.grid import OccupancyMap
-from .base import LaserScan, OdometryReading
+from ..robotlog.base import LaserScan, OdometryReading
 from .gridmap import CountGrid, likelihood_field
 from .rbpf import StartFrame, absolute_difference, absolute_sum, prepare_scan
 
@@ -414,7 +414,7 @@ def _sqrt_info(cov: np.ndarray) -> np.ndarray:
 
 # ----------------------------------------------------------------------------- mapper
 class GraphSLAM:
-    """Karto-style graph SLAM mapper (implements :class:`map2map.slam.base.Mapper`)."""
+    """Karto-style graph SLAM mapper (implements :class:`map2map.robotlog.base.Mapper`)."""
 
     name = "graph"
 

@@ -3,7 +3,7 @@
 This is what ``map2map slam LOG --out DIR`` does:
 
 1. :func:`run_slam` feeds every ``(odometry, scan)`` pair of a log to a backend
-   chosen by name from the mapper registry (:mod:`map2map.sim.mappers`), with a
+   chosen by name from the mapper registry (:mod:`map2map.robotlog.mappers`), with a
    tqdm progress bar, and returns the final map and estimated trajectory;
 2. :func:`write_slam_outputs` writes ``map.yaml`` + ``map.pgm`` (ROS map_saver
    format), ``trajectory.csv`` (``t, x, y, theta`` in the map frame) and
@@ -12,8 +12,8 @@ This is what ``map2map slam LOG --out DIR`` does:
 Examples
 --------
 >>> import numpy as np, tempfile, pathlib
->>> from map2map.sim.carmen import CarmenLog
->>> from map2map.slam.base import LaserScan, OdometryReading
+>>> from map2map.robotlog.carmen import CarmenLog
+>>> from map2map.robotlog.base import LaserScan, OdometryReading
 >>> ang = np.deg2rad(1.0)
 >>> log = CarmenLog([OdometryReading(0.2 * k, 0.1 * k, 0.0, 0.0) for k in range(5)],
 ...                 [LaserScan(0.2 * k, np.full(360, 1.5, np.float32), 0.0, ang, 0.1, 3.5)
@@ -37,8 +37,8 @@ import numpy as np
 from ..core._io import atomic_path, ensure_output_dir
 from ..core.errors import InputError
 from ..core.grid import OccupancyMap
-from ..sim.carmen import CarmenLog
-from .base import Mapper
+from ..robotlog.base import Mapper
+from ..robotlog.carmen import CarmenLog
 
 __all__ = ["SlamResult", "run_slam", "write_slam_outputs", "odometry_in_map_frame"]
 
@@ -84,7 +84,7 @@ def run_slam(
     """
     from tqdm.auto import tqdm
 
-    from ..sim.mappers import make_mapper
+    from ..robotlog.mappers import make_mapper
 
     if backend == "oracle":
         raise InputError("--backend", "the oracle mapper needs true poses; use rbpf or graph")

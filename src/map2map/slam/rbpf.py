@@ -37,7 +37,7 @@ of the 360-beam LDS-01), both for speed; ``benchmarks/bench_slam.py`` and
 Examples
 --------
 >>> import numpy as np
->>> from map2map.slam.base import LaserScan, OdometryReading
+>>> from map2map.robotlog.base import LaserScan, OdometryReading
 >>> f = GMappingRBPF(GMappingParams(particles=5), seed=0)
 >>> ang = np.deg2rad(np.arange(360.0))
 >>> r = np.full(360, 1.5)
@@ -58,7 +58,7 @@ import numpy as np
 
 from ..core.geometry import compose_pose, relative_pose, wrap_angle
 from ..core.grid import OccupancyMap
-from .base import LaserScan, OdometryReading
+from ..robotlog.base import LaserScan, OdometryReading
 from .gridmap import CountGrid, hill_climb, sample_likelihood
 
 __all__ = [
@@ -339,7 +339,7 @@ def _matching_beams(r: np.ndarray, a: np.ndarray, usable: float, lskip: int):
 
 # ----------------------------------------------------------------------------- filter
 class GMappingRBPF:
-    """GMapping-style RBPF mapper (implements :class:`map2map.slam.base.Mapper`).
+    """GMapping-style RBPF mapper (implements :class:`map2map.robotlog.base.Mapper`).
 
     Parameters
     ----------

@@ -2,7 +2,7 @@
 
 Each entry maps a name to ``"module:attribute"``, a factory called as
 ``factory(resolution=..., seed=..., **options)`` that returns an object
-implementing :class:`map2map.slam.base.Mapper`. Modules are imported only when
+implementing :class:`map2map.robotlog.base.Mapper`. Modules are imported only when
 the mapper is used. A backend adds itself with one line in :data:`MAPPERS` (or at
 run time with :func:`register_mapper`).
 
@@ -21,7 +21,7 @@ import importlib
 from collections.abc import Callable
 
 from ..core.errors import InputError
-from ..slam.base import Mapper
+from .base import Mapper
 
 __all__ = ["MAPPERS", "make_mapper", "register_mapper", "available_mappers"]
 

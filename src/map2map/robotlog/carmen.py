@@ -30,7 +30,7 @@ scanner's own quantisation), so replaying a saved run rebuilds the same map.
 Examples
 --------
 >>> import numpy as np, tempfile, pathlib
->>> from map2map.slam.base import LaserScan, OdometryReading
+>>> from map2map.robotlog.base import LaserScan, OdometryReading
 >>> scan = LaserScan(0.2, np.array([1.0, np.inf, 2.5], np.float32), -0.1, 0.1, 0.12, 3.5)
 >>> odo = OdometryReading(0.2, 0.1, 0.0, 0.05)
 >>> path = pathlib.Path(tempfile.mkdtemp()) / "run.log"
@@ -53,7 +53,7 @@ import numpy as np
 
 from ..core._io import atomic_path
 from ..core.errors import InputError
-from ..slam.base import LaserScan, Mapper, OdometryReading
+from .base import LaserScan, Mapper, OdometryReading
 
 __all__ = ["CarmenLog", "write_carmen", "read_carmen", "replay"]
 

@@ -1,11 +1,11 @@
 """Recorded runs for the SLAM backends: CARMEN logs, simulator runs and BreezySLAM raw logs.
 
-:func:`load_log` reads any of them into a :class:`~map2map.sim.carmen.CarmenLog`
-(one :class:`~map2map.slam.base.OdometryReading` per
-:class:`~map2map.slam.base.LaserScan`, in time order):
+:func:`load_log` reads any of them into a :class:`~map2map.robotlog.carmen.CarmenLog`
+(one :class:`~map2map.robotlog.base.OdometryReading` per
+:class:`~map2map.robotlog.base.LaserScan`, in time order):
 
 * **CARMEN** logs (``ODOM``, ``FLASER``, ``RAWLASER1``, ``ROBOTLASER1`` lines; ``.gz``
-  allowed) are parsed by :func:`map2map.sim.carmen.read_carmen`;
+  allowed) are parsed by :func:`map2map.robotlog.carmen.read_carmen`;
 * a **simulator run** folder (``map2map simulate --out DIR``) is read from its
   ``run.log`` (CARMEN);
 * **BreezySLAM raw logs** (the Mines ParisTech ``exp*.dat`` files) are parsed by
@@ -36,8 +36,8 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import InputError
-from ..sim.carmen import CarmenLog, read_carmen
 from .base import LaserScan, OdometryReading
+from .carmen import CarmenLog, read_carmen
 
 __all__ = ["BreezyRobot", "read_breezyslam", "load_log", "detect_format"]
 
