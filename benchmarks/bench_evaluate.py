@@ -28,7 +28,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
-from map2map.evaluate.outputs import run_evaluate  # noqa: E402
+from map2map.jobs.evaluate import run_evaluate  # noqa: E402
 
 
 def _timed(src: Path, tgt: Path, out: Path) -> tuple[float, float, dict]:

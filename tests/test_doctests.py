@@ -32,8 +32,8 @@ NO_EXAMPLE_NEEDED = {
     "map2map._version",
     "map2map.demo",
     "map2map.maps.prep_demo",
-    "map2map.parametric.run",
-    "map2map.evaluate.outputs",
+    "map2map.jobs.deform",
+    "map2map.jobs.evaluate",
 }
 
 

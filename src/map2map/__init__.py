@@ -39,13 +39,13 @@ from .maps import (
 _LAZY = {
     "run_demo": "map2map.demo",
     "deform": "map2map.parametric.pipeline",
-    "run_deform": "map2map.parametric.run",
+    "run_deform": "map2map.jobs.deform",
     "simulate": "map2map.sim.runner",
     "save_run": "map2map.sim.runner",
     "run_slam": "map2map.slam.offline",
     "evaluate_maps": "map2map.evaluate.pipeline",
-    "run_align": "map2map.evaluate.outputs",
-    "run_evaluate": "map2map.evaluate.outputs",
+    "run_align": "map2map.jobs.evaluate",
+    "run_evaluate": "map2map.jobs.evaluate",
 }
 
 __all__ = [

@@ -46,7 +46,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     import sys
 
-    from ..evaluate.outputs import run_align
+    from ..jobs.evaluate import run_align
 
     written = run_align(
         args.source,

@@ -65,7 +65,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..parametric.run import DeformJob, run_deform
+    from ..jobs.deform import DeformJob, run_deform
 
     if args.samples < 1:
         raise InputError("--samples", f"must be at least 1, got {args.samples}")

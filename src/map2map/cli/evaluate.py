@@ -45,7 +45,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..core.errors import InputError
-    from ..evaluate.outputs import run_evaluate, run_pairs
+    from ..jobs.evaluate import run_evaluate, run_pairs
 
     if args.resolution is not None and not args.resolution > 0:
         raise InputError("--resolution", f"must be > 0, got {args.resolution:g}")

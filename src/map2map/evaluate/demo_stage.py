@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.grid import OccupancyMap
-from .outputs import write_evaluation
+from ..jobs.evaluate import write_evaluation
 from .pipeline import evaluate_maps
 
 __all__ = ["stage_evaluate"]

@@ -13,10 +13,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from ..jobs.deform import sample_rngs, write_result
 from .figures import deform_figure, roadmap_figure
 from .params import ParametricParams
 from .pipeline import deform, make_trajectory
-from .run import sample_rngs, write_result
 
 __all__ = ["reduce_plan", "stage_parametric"]
 

@@ -25,10 +25,10 @@ from .. import __version__
 from ..core._io import ensure_output_dir
 from ..core.errors import InputError
 from ..core.grid import FREE, OccupancyMap
+from ..parametric.figures import deform_figure
+from ..parametric.params import ParametricParams, load_params, save_params
+from ..parametric.pipeline import DeformResult, deform, make_trajectory
 from ..trajectory.timing import Trajectory, read_trajectory, read_waypoints
-from .figures import deform_figure
-from .params import ParametricParams, load_params, save_params
-from .pipeline import DeformResult, deform, make_trajectory
 
 __all__ = ["DeformJob", "load_plan", "sample_rngs", "write_result", "run_deform"]
 

@@ -28,11 +28,11 @@ import numpy as np
 from ..core._io import atomic_path, ensure_output_dir
 from ..core.errors import InputError
 from ..core.grid import OccupancyMap
-from .align import check_map
-from .anchors import Anchors, read_anchors, validate_anchors
-from .figures import error_boxplot, error_map_figure, overlay_figure
-from .nonrigid import warp_image
-from .pipeline import EvaluateParams, Evaluation, evaluate_maps, register
+from ..evaluate.align import check_map
+from ..evaluate.anchors import Anchors, read_anchors, validate_anchors
+from ..evaluate.figures import error_boxplot, error_map_figure, overlay_figure
+from ..evaluate.nonrigid import warp_image
+from ..evaluate.pipeline import EvaluateParams, Evaluation, evaluate_maps, register
 
 __all__ = [
     "MapInput",
