@@ -306,7 +306,7 @@ def fit_affine(src: np.ndarray, dst: np.ndarray, weights: np.ndarray | None = No
     Examples
     --------
     >>> P = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
-    >>> fit_affine(P, P * [2, 1]).round(9)[:2, :2].tolist()
+    >>> (fit_affine(P, P * [2, 1]).round(9)[:2, :2] + 0.0).tolist()
     [[2.0, 0.0], [0.0, 1.0]]
     """
     src = np.asarray(src, float).reshape(-1, 2)
