@@ -36,7 +36,7 @@ def main() -> None:
         groups["houseexpo"] = houseexpo_json() + houseexpo_renders(args.renders)
     else:
         print(f"(no shared data at {HOUSEEXPO}: procedural apartments only)")
-    simulate(groups["apartments"][0][1], seed=0, duration=10, progress=False)  # warm-up
+    simulate(groups["apartments"][0][1], mapper="oracle", seed=0, duration=10, progress=False)
     print(
         f"oracle exploration, fov {args.fov:g} deg, budget {args.duration:g} s, "
         f"obstacles {args.obstacles}, people {args.people}"
@@ -51,7 +51,7 @@ def main() -> None:
         for i, (name, plan) in enumerate(plans):
             t0 = time.perf_counter()
             res = simulate(
-                plan,
+                plan, mapper="oracle",
                 seed=i,
                 duration=args.duration,
                 fov=args.fov,

@@ -47,7 +47,7 @@ def test_costmap_and_dijkstra_keep_out_of_walls():
 
 def test_exploration_covers_two_rooms_without_collisions():
     m = two_rooms()
-    res = simulate(m, seed=3, duration=120, progress=False)
+    res = simulate(m, mapper="oracle", seed=3, duration=120, progress=False)
     assert res.stop_reason == "explored"
     assert res.coverage > 0.95
     assert res.collisions == 0
@@ -59,14 +59,14 @@ def test_exploration_covers_two_rooms_without_collisions():
 def test_same_seed_identical_outputs_and_log_replays_to_same_map(tmp_path):
     m = two_rooms()
     kw = dict(seed=5, duration=25, obstacles=2, people=1, progress=False)
-    a, b = simulate(m, **kw), simulate(m, **kw)
+    a, b = simulate(m, mapper="oracle", **kw), simulate(m, mapper="oracle", **kw)
     pa, pb = save_run(a, tmp_path / "a"), save_run(b, tmp_path / "b")
     for key in ("slam_map", "trajectory_true", "trajectory_estimated", "log"):
         assert pa[key].read_bytes() == pb[key].read_bytes(), key
     assert pa["slam_map"].with_suffix(".pgm").read_bytes() == (
         pb["slam_map"].with_suffix(".pgm").read_bytes()
     )
-    c = simulate(m, **{**kw, "seed": 6})
+    c = simulate(m, mapper="oracle", **{**kw, "seed": 6})
     assert not np.array_equal(c.true_poses[-1], a.true_poses[-1])
     log = read_carmen(pa["log"])
     assert len(log) == len(a.scans)
@@ -77,7 +77,7 @@ def test_same_seed_identical_outputs_and_log_replays_to_same_map(tmp_path):
 def test_route_following_reaches_the_end():
     m = two_rooms()
     route = [(-0.3, 2.0), (0.7, 2.0), (1.5, 2.0), (2.3, 2.0)]
-    res = simulate(m, seed=0, duration=60, route=route, progress=False)
+    res = simulate(m, mapper="oracle", seed=0, duration=60, route=route, progress=False)
     assert res.stop_reason == "route done"
     assert np.hypot(*(res.true_poses[-1, :2] - route[-1])) < 0.2
     assert res.collisions == 0
@@ -85,7 +85,7 @@ def test_route_following_reaches_the_end():
 
 def test_narrow_fov_and_odometry_drift_recorded():
     m = two_rooms()
-    res = simulate(m, seed=1, duration=30, fov=180, progress=False)
+    res = simulate(m, mapper="oracle", seed=1, duration=30, fov=180, progress=False)
     assert res.scans[0].n_beams == 181
     drift = np.hypot(*(res.odometry_poses[-1, :2] - res.true_poses[-1, :2]))
     assert 0 < drift < 0.5
@@ -96,19 +96,19 @@ def test_bad_inputs_raise_input_error():
 
     m = two_rooms()
     with pytest.raises(InputError, match="duration"):
-        simulate(m, duration=0)
+        simulate(m, mapper="oracle", duration=0)
     with pytest.raises(InputError, match="no free space"):
-        simulate(OccupancyMap(np.zeros((20, 20), np.uint8), 0.05), duration=5)
+        simulate(OccupancyMap(np.zeros((20, 20), np.uint8), 0.05), mapper="oracle", duration=5)
     with pytest.raises(InputError, match="wall"):
-        simulate(m, start=(-0.95, 0.56, 0.0), duration=5, progress=False)
+        simulate(m, mapper="oracle", start=(-0.95, 0.56, 0.0), duration=5, progress=False)
     with pytest.raises(InputError, match="outside"):
-        simulate(m, start=(50.0, 0.0, 0.0), duration=5, progress=False)
+        simulate(m, mapper="oracle", start=(50.0, 0.0, 0.0), duration=5, progress=False)
     with pytest.raises(InputError, match="through a wall"):
-        simulate(m, route=[(-0.3, 1.0), (2.3, 1.0)], duration=5, progress=False)
+        simulate(m, mapper="oracle", route=[(-0.3, 1.0), (2.3, 1.0)], duration=5, progress=False)
     tiny = np.zeros((12, 12), np.uint8)
     tiny[2:10, 2:10] = 255
     with pytest.raises(InputError, match="too small"):
-        simulate(OccupancyMap(tiny, 0.05), duration=5, progress=False)
+        simulate(OccupancyMap(tiny, 0.05), mapper="oracle", duration=5, progress=False)
 
 
 def test_demo_stage_writes_its_outputs(tmp_path):
@@ -147,7 +147,7 @@ class OdometryOnlyMapper:
 
 
 def test_any_mapper_instance_drives_the_explorer(monkeypatch):
-    from map2map.sim import mappers
+    from map2map.robotlog import mappers
     from map2map.sim.odometry import OdometryErrors
 
     monkeypatch.setattr(mappers, "MAPPERS", dict(mappers.MAPPERS))

@@ -47,6 +47,18 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _as_flags(exc: InputError, args: argparse.Namespace) -> str:
+    """The error as the command line says it: a library parameter name becomes its flag.
+
+    The library names parameters (``max_range``); when the command has an option of
+    that name, the message names the option (``--max-range``).
+    """
+    name = exc.source
+    if name and name.isidentifier() and name in vars(args) and name != "func":
+        return f"--{name.replace('_', '-')}: {exc.problem}"
+    return str(exc)
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser()
@@ -56,7 +68,7 @@ def main(argv: list[str] | None = None) -> int:
     except InputError as exc:
         if args.debug:
             raise
-        print(f"map2map: error: {exc}", file=sys.stderr)
+        print(f"map2map: error: {_as_flags(exc, args)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print("map2map: interrupted", file=sys.stderr)

@@ -102,7 +102,7 @@ def write_result(
 def run_deform(job: DeformJob, progress: bool = True) -> list[tuple[Path, dict]]:
     """Run ``map2map deform``; returns (folder, field statistics) per sample."""
     if job.samples < 1:
-        raise InputError("--samples", f"must be at least 1, got {job.samples}")
+        raise InputError("samples", f"must be at least 1, got {job.samples}")
     params = load_params(job.params) if job.params else ParametricParams()
     if job.fov is not None:
         params = dataclasses.replace(params, fov_deg=float(job.fov))

@@ -271,18 +271,18 @@ def load_dxf(
     """
     p = Path(path)
     for name, v, positive in (
-        ("--resolution", DEFAULT_RESOLUTION if resolution is None else resolution, True),
-        ("--wall-thickness", wall_thickness, True),
+        ("resolution", DEFAULT_RESOLUTION if resolution is None else resolution, True),
+        ("wall_thickness", wall_thickness, True),
         ("margin", margin, False),
         ("close_gaps", close_gaps, False),
         ("min_free_width", min_free_width, False),
     ):
         ok = isinstance(v, int | float) and math.isfinite(v) and (v > 0 if positive else v >= 0)
         if not ok:
-            what = name.lstrip("-").replace("-", " ")
+            what = "wall thickness" if name == "wall_thickness" else name
             raise InputError(name, f"{what} must be {'> 0' if positive else '>= 0'}, got {v!r}")
     if units is not None and units not in UNITS:
-        raise InputError("--units", f"units must be one of {', '.join(UNITS)}, got {units!r}")
+        raise InputError("units", f"units must be one of {', '.join(UNITS)}, got {units!r}")
     doc = _read(p)
 
     import ezdxf.units

@@ -214,9 +214,9 @@ def rasterise_houseexpo(
     """
     src = source if source is not None else "HouseExpo plan"
     if not (isinstance(resolution, int | float) and math.isfinite(resolution) and resolution > 0):
-        raise InputError("--resolution", f"resolution must be > 0, got {resolution!r}")
+        raise InputError("resolution", f"resolution must be > 0, got {resolution!r}")
     if not (isinstance(margin, int | float) and math.isfinite(margin) and margin >= 0):
-        raise InputError("--margin", f"margin must be >= 0, got {margin!r}")
+        raise InputError("margin", f"margin must be >= 0, got {margin!r}")
     verts, bounds = _validate(doc, src)
     x0, y0, x1, y1 = bounds
     res = float(resolution)

@@ -169,7 +169,7 @@ def load_image_map(
     free = SAVER_FREE_THRESH if free_thresh is None else float(free_thresh)
     check_thresholds("thresholds", occ, free)
     if resolution is not None and not (math.isfinite(resolution) and resolution > 0):
-        raise InputError("--resolution", f"resolution must be > 0, got {resolution:g}")
+        raise InputError("resolution", f"resolution must be > 0, got {resolution:g}")
     img = read_image(p)
     stored = _stored_frame(p)
     meta: dict[str, Any] = {"source": str(p)}

@@ -212,7 +212,7 @@ def deform(
         All random draws; the same generator state gives the same bytes.
     """
     if method not in METHODS:
-        raise InputError("--method", f"unknown method {method!r} (use additive or ekf)")
+        raise InputError("method", f"unknown method {method!r} (use additive or ekf)")
     p = params or ParametricParams()
     rng = rng if rng is not None else np.random.default_rng()
     if not plan.free.any():

@@ -45,9 +45,8 @@ def available_mappers() -> list[str]:
 def make_mapper(name: str, *, resolution: float = 0.05, seed: int = 0, **options) -> Mapper:
     """Instantiate the backend registered as ``name``."""
     if name not in MAPPERS:
-        raise InputError(
-            "--mapper", f"unknown mapper '{name}' (choose from {', '.join(available_mappers())})"
-        )
+        choices = ", ".join(available_mappers())
+        raise InputError("mapper", f"unknown mapper '{name}' (choose from {choices})")
     factory = MAPPERS[name]
     if isinstance(factory, str):
         module, _, attr = factory.partition(":")

@@ -15,7 +15,9 @@ def stage_simulate(ctx) -> None:
     from .runner import save_run, simulate
 
     plan = ctx.results["plan"]
-    res = simulate(plan, seed=ctx.seed, duration=60.0, frame_every=2.0, progress=False)
+    res = simulate(
+        plan, mapper="oracle", seed=ctx.seed, duration=60.0, frame_every=2.0, progress=False
+    )
     paths = save_run(res, ctx.out / "simulate", gif=True)
     ctx.results["sim"] = res
     ctx.results["sim_log"] = paths["log"]

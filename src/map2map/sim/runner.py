@@ -20,7 +20,7 @@ Examples
 >>> import numpy as np
 >>> from map2map.core.grid import OccupancyMap
 >>> data = np.full((60, 100), 255, np.uint8); data[[0, -1], :] = 0; data[:, [0, -1]] = 0
->>> res = simulate(OccupancyMap(data, 0.05), seed=1, duration=30, progress=False)
+>>> res = simulate(OccupancyMap(data, 0.05), mapper="oracle", seed=1, duration=30, progress=False)
 >>> res.coverage > 0.9, res.collisions
 (True, 0)
 """
@@ -204,7 +204,7 @@ def simulate(
     seed: int = 0,
     duration: float = 420.0,
     fov: float = 360.0,
-    mapper: str | Mapper = "oracle",
+    mapper: str | Mapper = "rbpf",
     route=None,
     obstacles: int = 0,
     people: int = 0,
@@ -232,7 +232,8 @@ def simulate(
     fov : float
         Lidar field of view in degrees (360 for the LDS-01, 180 in the thesis).
     mapper : str or Mapper
-        A registered mapper name (:mod:`map2map.robotlog.mappers`) or an instance.
+        A registered mapper name (:mod:`map2map.robotlog.mappers`) or an instance;
+        default ``"rbpf"``, the GMapping-style particle filter (as ``map2map simulate``).
     route : array-like or trajectory, optional
         Waypoints ``(x, y[, theta])`` in the plan frame to drive instead of exploring
         (anything :func:`map2map.sim.routes.as_waypoints` accepts, e.g. a PRM route).
@@ -265,7 +266,7 @@ def simulate(
     t_wall = time.perf_counter()
     src = source if source is not None else "plan"
     if not (isinstance(duration, int | float) and math.isfinite(duration) and duration > 0):
-        raise InputError("--duration", f"duration must be > 0 seconds, got {duration}")
+        raise InputError("duration", f"duration must be > 0 seconds, got {duration}")
     if not plan.free.any():
         raise InputError(src, "plan has no free space")
     rng = np.random.default_rng(seed)

@@ -87,11 +87,11 @@ def run_slam(
     from ..robotlog.mappers import make_mapper
 
     if backend == "oracle":
-        raise InputError("--backend", "the oracle mapper needs true poses; use rbpf or graph")
+        raise InputError("backend", "the oracle mapper needs true poses; use rbpf or graph")
     if particles is not None and particles < 1:
-        raise InputError("--particles", f"must be >= 1, got {particles}")
+        raise InputError("particles", f"must be >= 1, got {particles}")
     if not resolution > 0:
-        raise InputError("--resolution", f"must be > 0, got {resolution}")
+        raise InputError("resolution", f"must be > 0, got {resolution}")
     if len(log) == 0:
         raise InputError(None, "log holds no scans")
     sensor_max = float(log.scans[0].range_max)
