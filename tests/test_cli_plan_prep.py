@@ -159,12 +159,11 @@ def test_prep_figure(tmp_path, capsys, plan_yaml):
 
 
 def test_demo_prep_stage(tmp_path):
-    from map2map.demo import DemoContext
-    from map2map.maps.prep_demo import stage_prep
+    from map2map.demo import DemoContext, stage_prep
 
     ctx = DemoContext(out=tmp_path, seed=0)
-    ctx.results["plan"] = generate_floorplan(0, size=(9, 7))
+    ctx.plan = generate_floorplan(0, size=(9, 7))
     stage_prep(ctx)
-    assert ctx.results["prep"].shape == (256, 256)
+    assert ctx.prep.shape == (256, 256)
     assert load_map(tmp_path / "plan_256.png").shape == (256, 256)
     assert [p.name for _, p in ctx.written] == ["plan_256.png", "prep.png"]

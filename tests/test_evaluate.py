@@ -428,15 +428,14 @@ def test_halmstad_pair_within_floor(shared_data):
 
 
 def test_demo_stage_evaluates_a_known_bend(tmp_path, capsys):
-    from map2map.demo import STAGES, DemoContext
-    from map2map.evaluate.demo_stage import stage_evaluate
+    from map2map.demo import STAGES, DemoContext, stage_evaluate
 
     assert STAGES[-1][1] is stage_evaluate
     ctx = DemoContext(out=tmp_path, seed=0)
-    ctx.results["plan"] = OccupancyMap(draw_walls((H, W), office_walls(W, H, thickness=4)), 0.05)
+    ctx.plan = OccupancyMap(draw_walls((H, W), office_walls(W, H, thickness=4)), 0.05)
     stage_evaluate(ctx)
     line = capsys.readouterr().out
     assert "true: mean" in line
     assert {p.name for _, p in ctx.written} == {"report.json", "overlay.png", "error_map.png"}
-    e = ctx.results["evaluation"]["known_bend"]
+    e = ctx.evaluation["known_bend"]
     assert 0.0 < e["mean_m"] < e["max_m"]

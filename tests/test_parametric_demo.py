@@ -4,15 +4,15 @@ from __future__ import annotations
 
 from _parametric_plans import two_rooms
 
-from map2map.demo import STAGES, DemoContext
+from map2map.demo import STAGES, DemoContext, stage_parametric
+from map2map.maps.preprocess import reduce_plan
 from map2map.maps.ros import load_ros_map
-from map2map.parametric.demo_stage import reduce_plan, stage_parametric
 
 
 def test_demo_stage_writes_map_field_and_figures(tmp_path):
     assert [name for name, _ in STAGES].index("parametric") > [n for n, _ in STAGES].index("plan")
     ctx = DemoContext(out=tmp_path, seed=3)
-    ctx.results["plan"] = two_rooms()
+    ctx.plan = two_rooms()
     stage_parametric(ctx)
     names = {p.name for _, p in ctx.written}
     assert {"roadmap.png", "slam_map.yaml", "displacement.npz", "figure.png"} <= names
@@ -20,8 +20,8 @@ def test_demo_stage_writes_map_field_and_figures(tmp_path):
     for _, p in ctx.written:
         assert p.exists() and p.stat().st_size > 0
     m = load_ros_map(tmp_path / "parametric" / "slam_map.yaml")
-    assert m.shape == ctx.results["plan"].shape
-    assert ctx.results["parametric"].observed.sum() > 0.5 * ctx.results["plan"].free.sum()
+    assert m.shape == ctx.plan.shape
+    assert ctx.parametric.observed.sum() > 0.5 * ctx.plan.free.sum()
 
 
 def test_reduce_plan_keeps_walls_and_frame():

@@ -4,10 +4,11 @@ import numpy as np
 import pytest
 
 from map2map.core.grid import OccupancyMap
+from map2map.jobs.simulate import save_run
 from map2map.robotlog.carmen import read_carmen, replay
 from map2map.robotlog.mappers import make_mapper
 from map2map.sim.explore import dijkstra, find_frontiers, make_costmap
-from map2map.sim.runner import save_run, simulate
+from map2map.sim.runner import simulate
 
 
 def two_rooms(res=0.05):
@@ -112,16 +113,15 @@ def test_bad_inputs_raise_input_error():
 
 
 def test_demo_stage_writes_its_outputs(tmp_path):
-    from map2map.demo import DemoContext
-    from map2map.sim.demo_stage import stage_simulate
+    from map2map.demo import DemoContext, stage_simulate
 
     ctx = DemoContext(out=tmp_path, seed=0)
-    ctx.results["plan"] = two_rooms()
+    ctx.plan = two_rooms()
     stage_simulate(ctx)
     written = {p.name for _, p in ctx.written}
     assert {"slam_map.yaml", "run.log", "report.json", "figure.png", "exploration.gif"} <= written
     assert all(p.exists() for _, p in ctx.written)
-    assert ctx.results["sim"].coverage > 0.9
+    assert ctx.sim.coverage > 0.9
 
 
 class OdometryOnlyMapper:

@@ -213,14 +213,13 @@ def test_simulate_defaults_to_rbpf_and_its_run_replays(tmp_path, capsys):
 def test_demo_stage_maps_a_simulated_run(tmp_path):
     from _slam_synth import room_plan
 
-    from map2map.demo import DemoContext
-    from map2map.slam.demo_stage import stage_slam
+    from map2map.demo import DemoContext, stage_slam
 
-    ctx = DemoContext(out=tmp_path, seed=0, results={"plan": room_plan()})
+    ctx = DemoContext(out=tmp_path, seed=0, plan=room_plan())
     stage_slam(ctx)
     written = {p.relative_to(tmp_path).as_posix() for _, p in ctx.written}
     for backend in ("rbpf", "graph"):
         assert {f"slam/{backend}/map.yaml", f"slam/{backend}/figure.png"} <= written
         m = load_ros_map(tmp_path / "slam" / backend / "map.yaml")
         assert m.occupied.sum() > 100
-    assert set(ctx.results["slam"]) == {"rbpf", "graph"}
+    assert set(ctx.slam) == {"rbpf", "graph"}

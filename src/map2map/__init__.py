@@ -41,7 +41,7 @@ _LAZY = {
     "deform": "map2map.parametric.pipeline",
     "run_deform": "map2map.jobs.deform",
     "simulate": "map2map.sim.runner",
-    "save_run": "map2map.sim.runner",
+    "save_run": "map2map.jobs.simulate",
     "run_slam": "map2map.slam.offline",
     "evaluate_maps": "map2map.evaluate.pipeline",
     "run_align": "map2map.jobs.evaluate",

@@ -3,10 +3,7 @@
 from __future__ import annotations
 
 import argparse
-import math
-from pathlib import Path
 
-from ..core.errors import InputError
 from ._mapargs import add_input_options, load_from_args
 
 
@@ -74,49 +71,32 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..sim.routes import read_route
-    from ..sim.runner import save_run, simulate
+    from ..jobs.simulate import SimulateSpec, simulate
 
-    if not (math.isfinite(args.duration) and args.duration > 0):
-        raise InputError("--duration", f"duration must be > 0 seconds, got {args.duration:g}")
-    if args.obstacles < 0 or args.people < 0:
-        raise InputError("--obstacles/--people", "counts must be >= 0")
-    plan = load_from_args(args)
-    route, route_file = None, None
-    if args.waypoints or args.trajectory:
-        route_file = args.waypoints or args.trajectory
-        kind = "waypoints" if args.waypoints else "trajectory"
-        route = read_route(route_file, kind)
-        if Path(args.input).suffix.lower() == ".json":  # HouseExpo: y axis flipped
-            route = route.copy()
-            route[:, 1] *= -1
-            if route.shape[1] == 3:
-                route[:, 2] *= -1
-    start = tuple(args.start) if args.start else None
-    if start is not None and Path(args.input).suffix.lower() == ".json":
-        start = (start[0], -start[1], -start[2])
-    res = simulate(
-        plan,
-        seed=args.seed,
-        duration=args.duration,
-        fov=args.fov,
-        mapper=args.mapper,
-        route=route,
-        obstacles=args.obstacles,
-        people=args.people,
-        start=start,
-        frame_every=2.0 if args.gif else 0.0,
-        progress=not args.quiet,
-        source=args.input,
-        route_source=route_file,
+    run = simulate(
+        SimulateSpec(
+            plan=load_from_args(args),
+            plan_name=args.input,
+            out=args.out,
+            seed=args.seed,
+            duration=args.duration,
+            fov=args.fov,
+            mapper=args.mapper,
+            waypoints=args.waypoints,
+            trajectory=args.trajectory,
+            start=tuple(args.start) if args.start else None,
+            obstacles=args.obstacles,
+            people=args.people,
+            gif=args.gif,
+            progress=not args.quiet,
+        )
     )
-    paths = save_run(res, args.out, gif=args.gif)
-    rep = res.report()
+    rep = run.result.report()
     print(
         f"simulated {rep['simulated_seconds']:.0f} s ({rep['stop_reason']}) in "
         f"{rep['wall_seconds']:.1f} s: coverage {100 * rep['coverage']:.1f} %, "
         f"path {rep['path_length_m']:.1f} m, {rep['collisions']} collisions"
     )
-    for name, path in paths.items():
+    for name, path in run.written.items():
         print(f"  {name:<22s} {path}")
     return 0

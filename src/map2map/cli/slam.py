@@ -50,29 +50,21 @@ def register(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..core.errors import InputError
-    from ..robotlog.logs import load_log
-    from ..slam.offline import run_slam, write_slam_outputs
+    from ..jobs.slam import SlamSpec, slam
 
-    if args.particles is not None and args.particles < 1:
-        raise InputError("--particles", f"must be >= 1, got {args.particles}")
-    if not args.resolution > 0:
-        raise InputError("--resolution", f"must be > 0, got {args.resolution}")
-    if args.max_range is not None and not args.max_range > 0:
-        raise InputError("--max-range", f"must be > 0, got {args.max_range}")
-    if args.out.exists() and not args.out.is_dir():
-        raise InputError(args.out, "output path exists and is not a directory")
-    log = load_log(args.log, args.format)  # every format problem is raised here, before output
-    res = run_slam(
-        log,
-        args.backend,
-        particles=args.particles,
-        resolution=args.resolution,
-        seed=args.seed,
-        max_range=args.max_range,
-        progress=not args.quiet,
+    run = slam(
+        SlamSpec(
+            log=args.log,
+            out=args.out,
+            backend=args.backend,
+            particles=args.particles,
+            resolution=args.resolution,
+            max_range=args.max_range,
+            seed=args.seed,
+            format=args.format,
+            progress=not args.quiet,
+        )
     )
-    paths = write_slam_outputs(res, args.out, title=f"{args.log.name}: {args.backend}")
-    for p in paths:
+    for p in run.written.values():
         print(p)
     return 0

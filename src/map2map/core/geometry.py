@@ -364,6 +364,9 @@ def invert_displacement(
     iterations: int = 8,
     tol: float = 0.01,
     settled: float = 0.999,
+    *,
+    origin: float = 0.0,
+    planar: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Source coordinates ``(px, py)`` with ``p + d(p) = q`` for every pixel ``q`` of a field.
 
@@ -381,12 +384,20 @@ def invert_displacement(
     iterations : int
         Most steps after the start.
     tol, settled : float
-        Early stop: fraction ``settled`` of the pixels moved less than ``tol`` px.
+        Early stop: fraction ``settled`` of the pixels moved less than ``tol`` px
+        (``tol=0, settled=1``: every step is taken unless nothing moves).
+    origin : float
+        Coordinates of pixel ``(0, 0)``: 0 for pixel indices, 0.5 for cell centres.
+    planar : bool
+        Sample with two float coordinate maps (one per axis) instead of one packed
+        two-channel map; OpenCV quantises the two differently, so results differ in
+        the last bits. The parametric model uses packed maps, the synthetic test maps
+        planar ones; each keeps its outputs bit for bit.
 
     Returns
     -------
     px, py : (H, W) float32
-        Source column and row (pixel indices, not centres) of every output pixel.
+        Source column and row of every output pixel, in the coordinates of ``origin``.
 
     Examples
     --------
@@ -398,11 +409,21 @@ def invert_displacement(
 
     h, w = dx.shape
     q = np.dstack(np.mgrid[0:h, 0:w][::-1]).astype(np.float32)  # (h, w, 2): x, y
+    if origin:
+        q = q + np.float32(origin)
     d = np.dstack([dx, dy]).astype(np.float32, copy=False)
     p = q - d
     limit = (1.0 - settled) * h * w
     for _ in range(iterations):
-        dp = cv2.remap(d, p, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        at = p - np.float32(origin) if origin else p  # pixel indices, as remap samples
+        if planar:
+            ax, ay = at[..., 0], at[..., 1]
+            dp = np.dstack(
+                [cv2.remap(c, ax, ay, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+                 for c in (d[..., 0], d[..., 1])]
+            )  # fmt: skip
+        else:
+            dp = cv2.remap(d, at, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
         new = q - dp
         moving = np.count_nonzero(np.abs(new - p) > tol)  # components: >= moving pixels
         p = new

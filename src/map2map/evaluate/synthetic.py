@@ -193,8 +193,9 @@ def deform(
     ux = field[..., 0].astype(np.float32)
     uy = field[..., 1].astype(np.float32)
     # p = q - u(p): the inverse as the parametric model finds it, every step taken
-    px, py = invert_displacement(ux, uy, max(iterations - 1, 0), tol=0.0, settled=1.0)
-    px, py = px + 0.5, py + 0.5  # pixel indices -> coordinates of cell centres
+    px, py = invert_displacement(
+        ux, uy, max(iterations - 1, 0), 0.0, 1.0, origin=0.5, planar=True
+    )
     # nearest-neighbour resampling, explicitly, so that the copied cell is known
     ci = np.floor(px).astype(np.int64)
     ri = np.floor(py).astype(np.int64)

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 from tqdm.auto import tqdm
 
-from .. import __version__
+from .._version import __version__
 from ..core._io import ensure_output_dir
 from ..core.errors import InputError
 from ..core.grid import FREE, OccupancyMap

@@ -68,6 +68,8 @@ from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from .rasterize import fill_exact, thin_parts, trace
 
 __all__ = [
+    "is_houseexpo",
+    "plan_poses_to_world",
     "DEFAULT_RESOLUTION",
     "DEFAULT_MARGIN",
     "load_houseexpo",
@@ -97,6 +99,36 @@ def houseexpo_to_world(x, y, theta=None):
         return wx, wy
     wt = -np.asarray(theta, float) if np.ndim(theta) else -float(theta)
     return wx, wy, wt
+
+
+def is_houseexpo(m: OccupancyMap) -> bool:
+    """Whether ``m`` was read from a HouseExpo JSON plan (its coordinates have y down).
+
+    Examples
+    --------
+    >>> doc = {"verts": [[0, 0], [2, 0], [2, 1], [0, 1]], "bbox": {"min": [0, 0], "max": [2, 1]}}
+    >>> is_houseexpo(rasterise_houseexpo(doc, resolution=0.1))
+    True
+    """
+    return m.meta.get("frame") == "houseexpo"
+
+
+def plan_poses_to_world(poses: np.ndarray) -> np.ndarray:
+    """(N, 2) points or (N, 3) poses in HouseExpo's plan frame -> the map's world (ROS) frame.
+
+    What a user gives for a HouseExpo plan (start, goal, waypoints, a trajectory) is in
+    HouseExpo's own coordinates, as its trajectory files are; every job converts it here.
+
+    Examples
+    --------
+    >>> plan_poses_to_world(np.array([[1.0, 2.0, 0.5]])).tolist()
+    [[1.0, -2.0, -0.5]]
+    """
+    out = np.array(poses, float, copy=True)
+    out[:, 1] *= -1
+    if out.shape[1] == 3:
+        out[:, 2] *= -1
+    return out
 
 
 # --------------------------------------------------------------------------- parsing

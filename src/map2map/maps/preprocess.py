@@ -34,6 +34,7 @@ from ..core.errors import InputError
 from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 
 __all__ = [
+    "reduce_plan",
     "square_resize",
     "harmonise",
     "thicken",
@@ -292,3 +293,34 @@ def save_preprocess_figure(
     if title:
         fig.suptitle(title, fontsize=11)
     save_figure(fig, path)
+
+
+#: Largest side (pixels) the demo runs the model at.
+MAX_SIDE = 320
+
+
+def reduce_plan(plan: OccupancyMap, max_side: int = MAX_SIDE) -> OccupancyMap:
+    """Reduce a plan by the smallest integer factor that fits ``max_side``.
+
+    A reduced cell is occupied if any of its pixels is, else free if any is free, else
+    unknown, so that walls and doors survive.
+
+    >>> m = OccupancyMap(np.full((700, 500), 255, np.uint8), 0.05)
+    >>> r = reduce_plan(m)
+    >>> r.shape, round(r.resolution, 9)
+    ((234, 167), 0.15)
+    """
+    f = int(np.ceil(max(plan.shape) / max_side))
+    if f <= 1:
+        return plan
+    h, w = plan.shape
+    hh, ww = -(-h // f) * f, -(-w // f) * f
+    data = np.full((hh, ww), UNKNOWN, np.uint8)
+    data[hh - h :, :w] = plan.data  # pad at the top/right so the origin corner stays put
+    blocks = data.reshape(hh // f, f, ww // f, f)
+    occ = (blocks == OCCUPIED).any(axis=(1, 3))
+    free = (blocks == FREE).any(axis=(1, 3))
+    out = np.full(occ.shape, UNKNOWN, np.uint8)
+    out[free] = FREE
+    out[occ] = OCCUPIED
+    return OccupancyMap(out, plan.resolution * f, plan.origin, dict(plan.meta))

@@ -5,13 +5,14 @@ This is what ``map2map slam LOG --out DIR`` does:
 1. :func:`run_slam` feeds every ``(odometry, scan)`` pair of a log to a backend
    chosen by name from the mapper registry (:mod:`map2map.robotlog.mappers`), with a
    tqdm progress bar, and returns the final map and estimated trajectory;
-2. :func:`write_slam_outputs` writes ``map.yaml`` + ``map.pgm`` (ROS map_saver
+2. :func:`map2map.jobs.slam.write_slam_outputs` writes ``map.yaml`` + ``map.pgm``
+   (ROS map_saver
    format), ``trajectory.csv`` (``t, x, y, theta`` in the map frame) and
    ``figure.png`` (the map with the estimated trajectory and the raw odometry).
 
 Examples
 --------
->>> import numpy as np, tempfile, pathlib
+>>> import numpy as np
 >>> from map2map.robotlog.carmen import CarmenLog
 >>> from map2map.robotlog.base import LaserScan, OdometryReading
 >>> ang = np.deg2rad(1.0)
@@ -21,26 +22,20 @@ Examples
 >>> res = run_slam(log, "graph")
 >>> res.trajectory.shape[1], res.map.resolution
 (4, 0.05)
->>> out = pathlib.Path(tempfile.mkdtemp())
->>> sorted(p.name for p in write_slam_outputs(res, out))
-['figure.png', 'map.pgm', 'map.yaml', 'trajectory.csv']
 """
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-from ..core._io import atomic_path, ensure_output_dir
 from ..core.errors import InputError
 from ..core.grid import OccupancyMap
 from ..robotlog.base import Mapper
 from ..robotlog.carmen import CarmenLog
 
-__all__ = ["SlamResult", "run_slam", "write_slam_outputs", "odometry_in_map_frame"]
+__all__ = ["SlamResult", "check_options", "run_slam", "odometry_in_map_frame"]
 
 
 @dataclass
@@ -62,6 +57,33 @@ def odometry_in_map_frame(log: CarmenLog) -> np.ndarray:
     rel = absolute_difference(o, o[0][None, :].repeat(len(o), 0))
     t = np.array([r.t for r in log.odometry], float)
     return np.column_stack([t, rel])
+
+
+def check_options(
+    backend: str = "rbpf",
+    *,
+    particles: int | None = None,
+    resolution: float = 0.05,
+    max_range: float | None = None,
+) -> None:
+    """Raise :class:`InputError` (naming the parameter) for options :func:`run_slam` refuses.
+
+    Examples
+    --------
+    >>> check_options("graph", resolution=0.05)
+    >>> check_options("rbpf", particles=0)
+    Traceback (most recent call last):
+    ...
+    map2map.core.errors.InputError: particles: must be >= 1, got 0
+    """
+    if backend == "oracle":
+        raise InputError("backend", "the oracle mapper needs true poses; use rbpf or graph")
+    if particles is not None and particles < 1:
+        raise InputError("particles", f"must be >= 1, got {particles}")
+    if not resolution > 0:
+        raise InputError("resolution", f"must be > 0, got {resolution}")
+    if max_range is not None and not max_range > 0:
+        raise InputError("max_range", f"must be > 0, got {max_range}")
 
 
 def run_slam(
@@ -86,12 +108,7 @@ def run_slam(
 
     from ..robotlog.mappers import make_mapper
 
-    if backend == "oracle":
-        raise InputError("backend", "the oracle mapper needs true poses; use rbpf or graph")
-    if particles is not None and particles < 1:
-        raise InputError("particles", f"must be >= 1, got {particles}")
-    if not resolution > 0:
-        raise InputError("resolution", f"must be > 0, got {resolution}")
+    check_options(backend, particles=particles, resolution=resolution, max_range=max_range)
     if len(log) == 0:
         raise InputError(None, "log holds no scans")
     sensor_max = float(log.scans[0].range_max)
@@ -109,46 +126,3 @@ def run_slam(
         mapper.optimize()
     traj = mapper.trajectory() if hasattr(mapper, "trajectory") else np.zeros((0, 4))
     return SlamResult(mapper.get_map(), traj, odometry_in_map_frame(log), mapper, backend)
-
-
-def _figure(res: SlamResult, path: Path, title: str) -> None:
-    from ..core.viz import draw_map, new_figure, save_figure
-
-    m = res.map
-    fig, ax = new_figure(m, 1, panel_inches=7.0)
-    draw_map(ax, m, title=title)
-    if len(res.odometry):
-        r, c = m.world_to_pixel_float(res.odometry[:, 1], res.odometry[:, 2])
-        ax.plot(c + 0.5, r + 0.5, color="0.55", lw=1.0, ls="--", label="raw odometry")
-    if len(res.trajectory):
-        r, c = m.world_to_pixel_float(res.trajectory[:, 1], res.trajectory[:, 2])
-        ax.plot(c + 0.5, r + 0.5, color="tab:red", lw=1.4, label=f"{res.backend} estimate")
-        ax.plot(c[:1] + 0.5, r[:1] + 0.5, "o", color="tab:green", ms=5, label="start")
-    ax.set_xlim(-0.5, m.width - 0.5)
-    ax.set_ylim(m.height - 0.5, -0.5)
-    ax.legend(loc="upper right", fontsize=8, framealpha=0.8)
-    save_figure(fig, path)
-
-
-def write_slam_outputs(
-    res: SlamResult, out: str | os.PathLike, *, title: str | None = None
-) -> list[Path]:
-    """Write ``map.yaml``/``map.pgm``, ``trajectory.csv`` and ``figure.png`` under ``out``."""
-    from ..maps.ros import save_ros_map
-
-    out = ensure_output_dir(out)
-    m = res.map
-    bbox = m.content_bbox()
-    if bbox is not None:  # crop to what was seen, with a small unknown border
-        r0, r1, c0, c1 = bbox
-        m = m.crop(r0 - 10, r1 + 10, c0 - 10, c1 + 10)
-        res = SlamResult(m, res.trajectory, res.odometry, res.mapper, res.backend)
-    pgm = save_ros_map(m, out / "map.yaml")
-    csv = out / "trajectory.csv"
-    with atomic_path(csv) as tmp:
-        np.savetxt(
-            tmp, res.trajectory, fmt="%.6f", delimiter=",", header="t,x,y,theta", comments=""
-        )
-    fig = out / "figure.png"
-    _figure(res, fig, title or f"{res.backend} map and trajectory")
-    return [out / "map.yaml", Path(pgm), csv, fig]

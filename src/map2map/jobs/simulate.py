@@ -1,0 +1,262 @@
+"""``map2map simulate`` as a job: read the plan and route, simulate, write the run's files.
+
+:func:`simulate` takes a :class:`SimulateSpec` and returns a :class:`SimulateRun`: the
+files written (``written``) and the in-memory :class:`~map2map.sim.runner.SimResult`.
+:func:`save_run` writes a result: ``slam_map.yaml``/``.pgm`` (plan frame),
+``trajectory_true.csv``, ``trajectory_estimated.csv`` (``t,x,y,theta``), ``run.log``
+(CARMEN), ``report.json``, ``figure.png`` and optionally ``exploration.gif``.
+
+Examples
+--------
+>>> import numpy as np, tempfile, pathlib
+>>> from map2map.core.grid import OccupancyMap
+>>> data = np.full((60, 100), 255, np.uint8); data[[0, -1], :] = 0; data[:, [0, -1]] = 0
+>>> out = pathlib.Path(tempfile.mkdtemp())
+>>> run = simulate(SimulateSpec(OccupancyMap(data, 0.05), out, duration=5, mapper="oracle",
+...                             figures=False, progress=False))
+>>> sorted(run.written), run.result.collisions
+(['log', 'report', 'slam_map', 'trajectory_estimated', 'trajectory_true'], 0)
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..core._io import atomic_path, ensure_output_dir
+from ..core.errors import InputError
+from ..core.grid import OccupancyMap
+from ..maps.formats import save_map
+from ..robotlog.carmen import write_carmen
+from ..sim.runner import SimResult
+from ..sim.runner import simulate as run_simulation
+
+__all__ = ["SimulateSpec", "SimulateRun", "simulate", "save_run", "save_figure_png", "save_gif"]
+
+
+@dataclass
+class SimulateSpec:
+    """What ``map2map simulate`` is asked to do.
+
+    ``plan`` is a file (any format :func:`map2map.maps.formats.load_map` reads, with
+    ``load_options``) or an :class:`OccupancyMap`. Route and start coordinates are in
+    the plan's own world frame (for a HouseExpo JSON plan: HouseExpo's x, y, theta,
+    converted by :func:`map2map.maps.houseexpo.houseexpo_to_world`). ``figures=False``
+    skips ``figure.png`` and the gif (a dataset builder's choice). ``plan_name`` names
+    an in-memory plan in error messages.
+    """
+
+    plan: str | os.PathLike | OccupancyMap
+    out: str | os.PathLike
+    plan_name: str | os.PathLike | None = None
+    seed: int = 0
+    duration: float = 420.0
+    fov: float = 360.0
+    mapper: str = "rbpf"
+    waypoints: str | os.PathLike | None = None
+    trajectory: str | os.PathLike | None = None
+    start: tuple[float, float, float] | None = None
+    obstacles: int = 0
+    people: int = 0
+    gif: bool = False
+    figures: bool = True
+    progress: bool = True
+    load_options: dict = field(default_factory=dict)
+
+
+@dataclass
+class SimulateRun:
+    """What :func:`simulate` wrote (name -> path) and the simulated run itself."""
+
+    written: dict[str, Path]
+    result: SimResult
+
+
+def simulate(spec: SimulateSpec) -> SimulateRun:
+    """Run ``map2map simulate``: every input checked before the first file is written."""
+    from ..maps.formats import load_map
+    from ..maps.houseexpo import is_houseexpo, plan_poses_to_world
+    from ..sim.routes import read_route
+
+    if not (math.isfinite(spec.duration) and spec.duration > 0):
+        raise InputError("duration", f"duration must be > 0 seconds, got {spec.duration:g}")
+    if spec.obstacles < 0 or spec.people < 0:
+        raise InputError("obstacles/people", "counts must be >= 0")
+    if isinstance(spec.plan, OccupancyMap):
+        plan, source = spec.plan, spec.plan_name
+    else:
+        plan, source = load_map(spec.plan, **spec.load_options), spec.plan
+    route, route_file = None, None
+    if spec.waypoints or spec.trajectory:
+        route_file = spec.waypoints or spec.trajectory
+        route = read_route(route_file, "waypoints" if spec.waypoints else "trajectory")
+    start = tuple(spec.start) if spec.start is not None else None
+    if is_houseexpo(plan):  # HouseExpo's frame has y down: route and start to the ROS frame
+        route = None if route is None else plan_poses_to_world(route)
+        start = None if start is None else tuple(plan_poses_to_world(np.array([start]))[0])
+    res = run_simulation(
+        plan,
+        seed=spec.seed,
+        duration=spec.duration,
+        fov=spec.fov,
+        mapper=spec.mapper,
+        route=route,
+        obstacles=spec.obstacles,
+        people=spec.people,
+        start=start,
+        frame_every=2.0 if (spec.gif and spec.figures) else 0.0,
+        progress=spec.progress,
+        source=source,
+        route_source=route_file,
+    )
+    written = save_run(res, spec.out, gif=spec.gif, figures=spec.figures)
+    return SimulateRun(written, res)
+
+
+def _write_csv(path: Path, times, poses) -> None:
+    with atomic_path(path) as tmp:
+        with open(tmp, "w", encoding="ascii") as f:
+            f.write("t,x,y,theta\n")
+            for t, (x, y, th) in zip(times, poses, strict=True):
+                f.write(f"{t!r},{float(x)!r},{float(y)!r},{float(th)!r}\n")
+
+
+def plan_with_world(res: SimResult) -> OccupancyMap:
+    """The plan with the furniture drawn in (what the robot actually drove through)."""
+    data = res.plan.data.copy()
+    for r0, r1, c0, c1 in res.world.furniture:
+        data[r0:r1, c0:c1] = 0
+    return res.plan.copy(data=data)
+
+
+def save_figure_png(res: SimResult, path: Path) -> None:
+    """Three panels: the plan with both paths, the map in the plan frame, the overlay."""
+    from ..core.viz import draw_map, new_figure, save_figure
+
+    plan = plan_with_world(res)
+    fig, axes = new_figure(plan, ncols=3, panel_inches=4.5)
+    tr, tc = res.plan.world_to_pixel_float(res.true_poses[:, 0], res.true_poses[:, 1])
+    er, ec = res.plan.world_to_pixel_float(res.estimated_poses[:, 0], res.estimated_poses[:, 1])
+    draw_map(axes[0], plan, title="plan (+furniture): true and estimated path")
+    axes[0].plot(tc, tr, "-", color="tab:green", lw=1.2, label="true")
+    axes[0].plot(ec, er, "--", color="tab:red", lw=1.0, label="estimated")
+    axes[0].plot(tc[:1], tr[:1], "o", color="tab:green", ms=5)
+    hits = np.array(res.info.get("collision_events") or np.zeros((0, 4)), float).reshape(-1, 4)
+    if len(hits):
+        hr, hc = res.plan.world_to_pixel_float(hits[:, 1], hits[:, 2])
+        axes[0].plot(hc, hr, "x", color="red", ms=7, mew=2, label="collision")
+    axes[0].legend(loc="upper right", fontsize=7)
+    draw_map(
+        axes[1],
+        res.slam_map_plan,
+        title=f"{res.info.get('mapper', '')} map, coverage {100 * res.coverage:.1f} %",
+    )
+    axes[1].plot(tc, tr, "-", color="tab:green", lw=0.8, alpha=0.7)
+    rgb = np.ones((*plan.shape, 3))
+    rgb[res.reachable & ~res.slam_map_plan.free] = (1.0, 0.75, 0.3)
+    rgb[res.reachable & res.slam_map_plan.free] = (0.75, 0.9, 0.75)
+    rgb[plan.occupied] = (0.2, 0.2, 0.2)
+    rgb[res.slam_map_plan.occupied] = (0.85, 0.1, 0.1)
+    axes[2].imshow(rgb, interpolation="nearest")
+    axes[2].set_xticks([])
+    axes[2].set_yticks([])
+    axes[2].set_title("reachable: mapped (green) / missed (orange); map walls red", fontsize=9)
+    fig.suptitle(
+        f"{res.info.get('mode')} {res.sim_seconds:.0f} s simulated, "
+        f"{res.path_length:.1f} m, {res.collisions} collisions, stop: {res.stop_reason}",
+        fontsize=10,
+    )
+    save_figure(fig, path)
+
+
+def save_gif(res: SimResult, path: Path, max_frames: int = 80) -> None:
+    """An animation of the map growing over the plan (faint), with the true path so far."""
+    from PIL import Image, ImageDraw
+
+    from ..core.viz import map_to_rgb
+
+    frames = res.frames
+    if not frames:
+        return
+    step = max(1, int(math.ceil(len(frames) / max_frames)))
+    frames = frames[::step]
+    plan = plan_with_world(res)
+    scale = max(2, int(math.ceil(480 / max(plan.width, plan.height))))
+    rad = 0.2 / res.plan.resolution * scale
+    tr, tc = res.plan.world_to_pixel_float(res.true_poses[:, 0], res.true_poses[:, 1])
+    trail = np.column_stack([(tc + 0.5) * scale, (tr + 0.5) * scale])
+    images = []
+    for ft, m, pose in frames:
+        rgb = map_to_rgb(m)
+        ghost = m.unknown & plan.occupied  # walls not mapped yet, faintly
+        rgb[ghost] = (0.55, 0.6, 0.68)
+        img = Image.fromarray((rgb * 255).astype(np.uint8)).resize(
+            (m.width * scale, m.height * scale), Image.NEAREST
+        )
+        d = ImageDraw.Draw(img)
+        k = int(np.searchsorted(res.times, ft, side="right"))
+        if k > 1:
+            d.line([tuple(p) for p in trail[:k]], fill=(40, 150, 40), width=max(1, scale // 2))
+        r, c = res.plan.world_to_pixel_float(pose[0], pose[1])
+        x, y = (float(c) + 0.5) * scale, (float(r) + 0.5) * scale
+        d.ellipse([x - rad, y - rad, x + rad, y + rad], outline=(200, 40, 40), width=2)
+        d.line(
+            [x, y, x + rad * math.cos(pose[2]), y - rad * math.sin(pose[2])],
+            fill=(200, 40, 40),
+            width=2,
+        )
+        d.text((4, 4), f"t = {ft:.0f} s", fill=(0, 0, 0))
+        images.append(img)
+    with atomic_path(path) as tmp:
+        images[0].save(
+            tmp, format="GIF", save_all=True, append_images=images[1:], duration=120, loop=0
+        )
+
+
+def save_run(
+    res: SimResult, out: str | os.PathLike, *, gif: bool = False, figures: bool = True
+) -> dict[str, Path]:
+    """Write the run's outputs into folder ``out``; returns name -> path.
+
+    ``slam_map.yaml``/``.pgm`` (plan frame), ``trajectory_true.csv``,
+    ``trajectory_estimated.csv`` (plan frame, columns ``t,x,y,theta``), ``run.log``
+    (CARMEN, odometry frame, with ``TRUEPOS`` in the plan frame), ``report.json``,
+    ``figure.png`` (unless ``figures`` is false) and optionally ``exploration.gif``.
+    """
+
+    out = ensure_output_dir(out)
+    paths = {
+        "slam_map": out / "slam_map.yaml",
+        "trajectory_true": out / "trajectory_true.csv",
+        "trajectory_estimated": out / "trajectory_estimated.csv",
+        "log": out / "run.log",
+        "report": out / "report.json",
+    }
+    if figures:
+        paths["figure"] = out / "figure.png"
+    save_map(res.slam_map_plan, paths["slam_map"])
+    _write_csv(paths["trajectory_true"], res.times, res.true_poses)
+    _write_csv(paths["trajectory_estimated"], res.times, res.estimated_poses)
+    write_carmen(
+        paths["log"],
+        zip(res.odometry, res.scans, [tuple(p) for p in res.true_poses], strict=True),
+        velocities=[tuple(v) for v in res.velocities],
+        params={
+            "map2map_start_x": res.start[0],
+            "map2map_start_y": res.start[1],
+            "map2map_start_theta": res.start[2],
+        },
+    )
+    if figures:
+        save_figure_png(res, paths["figure"])
+    if figures and gif and res.frames:
+        paths["gif"] = out / "exploration.gif"
+        save_gif(res, paths["gif"])
+    with atomic_path(paths["report"]) as tmp:
+        tmp.write_text(json.dumps(res.report(), indent=2) + "\n")
+    return paths
