@@ -56,7 +56,14 @@ from ..maps.grid import FREE, OCCUPIED, UNKNOWN
 from .anchors import Anchors, anchor, auto_anchors
 from .confidence import ConfidenceParams, alignment_warnings
 from .decomposition import Face, decompose
-from .features import downsample, edge_points, subsample, surface_mask, surface_points
+from .features import (
+    downsample,
+    edge_points,
+    occupied_points,
+    subsample,
+    surface_mask,
+    surface_points,
+)
 from .fitness import distance_map, fitness, lookup
 from .hypotheses import Hypothesis, dense_hypotheses, face_hypotheses, suppress_duplicates
 from .nonrigid import SideFields, to_plane
@@ -626,8 +633,10 @@ def align_maps(
 
     # ---- full resolution, in the winning direction (a -> b)
     t1 = time.perf_counter()
-    A3 = subsample(surface_points(a), p.max_points, p.seed)
-    edt3 = distance_map(surface_mask(b), return_indices=True)
+    # full resolution starts from a passed hypothesis: all occupied cells, as tuned on
+    # the Halmstad maps (their sensor walls are clouds whose inner cells carry the fit)
+    A3 = subsample(occupied_points(a), p.max_points, p.seed)
+    edt3 = distance_map(b == OCCUPIED, return_indices=True)
     known3 = cv2.dilate((b != UNKNOWN).astype(np.uint8), np.ones((7, 7), np.uint8)) > 0
     Mf3 = np.exp(-(edt3[0] ** 2) / (2 * p.fitness_sigma**2)).astype(np.float32)
     down = _scale(f2)
@@ -717,9 +726,9 @@ def align_maps(
         # polish the similarity on eq. 8 itself, in the winning direction (a -> b); only
         # against line-drawn plans: on a plan with real wall faces the surface fit above
         # is exact, and a 4 px wide fitness would be pulled by walls built a few px off
-        pa = subsample(surface_points(a), p.max_points, p.seed)
+        pa = subsample(occupied_points(a), p.max_points, p.seed)
         off_a, off_b = ((c0t, r0t), (c0s, r0s)) if reverse else ((c0s, r0s), (c0t, r0t))
-        d_b = distance_map(surface_mask(b))
+        d_b = distance_map(b == OCCUPIED)
         Mfd = np.exp(-(d_b**2) / (2 * p.direct_sigma**2)).astype(np.float32)
         S = np.linalg.inv(sim) if reverse else sim
         S = _shift(-off_b[0], -off_b[1]) @ S @ _shift(*off_a)
@@ -729,7 +738,7 @@ def align_maps(
     timings["surfaces"] = time.perf_counter() - t1
     S3f = subsample(surface_points(source), p.max_points, p.seed)
     Mf3f = np.zeros(target.shape, np.float32)  # eq. 8 fitness map of the whole target
-    d_t = distance_map(surface_mask(tgt)) if reverse else edt3[0]
+    d_t = distance_map(surface_mask(tgt))
     Mf3f[r0t:r1t, c0t:c1t] = np.exp(-(d_t**2) / (2 * p.fitness_sigma**2))
     anchored = "none"
     used = anchors
