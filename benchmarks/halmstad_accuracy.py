@@ -53,10 +53,11 @@ def main(argv=None) -> int:
         floor, sim, nonrigid = keypoint_residuals(
             data, src_name, tgt_name, src, tgt, res.map_points
         )
-        rows.append((floor, sim, nonrigid, dt))
+        warned = len(res.alignment.warnings)
+        rows.append((floor, sim, nonrigid, dt, warned))
         print(
             f"{src_name + '->' + tgt_name:<22s} {floor:6.1f} {sim:6.1f} {sim / floor:6.2f} "
-            f"{nonrigid:6.1f} {dt:5.1f}",
+            f"{nonrigid:6.1f} {dt:5.1f} {warned:4d}",
             flush=True,
         )
     if not rows:
@@ -67,7 +68,7 @@ def main(argv=None) -> int:
         f"{np.median(a[:, 1]):.1f} px, nonrigid {np.median(a[:, 2]):.1f} px; "
         f"within 30 px: {(a[:, 1] <= 30).sum()}/{len(a)}; similarity <= 1.5 x floor: "
         f"{(a[:, 1] <= 1.5 * a[:, 0]).sum()}/{len(a)}; median time {np.median(a[:, 3]):.1f} s, "
-        f"worst {a[:, 3].max():.1f} s"
+        f"worst {a[:, 3].max():.1f} s; with a warning: {(a[:, 4] > 0).sum()}/{len(a)}"
     )
     return 0
 

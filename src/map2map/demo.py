@@ -236,7 +236,10 @@ def stage_evaluate(ctx: DemoContext) -> None:
             ctx.wrote(f"evaluation {name}: {what.replace('_', ' ')}", p)
         e = ev.report["errors"][ev.chosen]
         ctx.evaluation[name] = e
-        line = f"evaluate {name}: mean {100 * e['mean_m']:.1f} cm, max {100 * e['max_m']:.1f} cm"
+        line = (
+            f"evaluate {name}: walls mean {100 * e['mean_m']:.1f} cm, max {100 * e['max_m']:.1f} "
+            f"cm; {e['unmatched_points']} of {e['points_all']} points match no plan wall"
+        )
         if truth is not None:
             X = ev.registration.X
             ch = ev.errors[ev.chosen]
@@ -244,6 +247,8 @@ def stage_evaluate(ctx: DemoContext) -> None:
             true = np.abs(((ch.X_rigid - (X - truth[r, c])) * ev.registration.normals).sum(1))
             true = true[ch.valid] * res
             line += f" (true: mean {100 * true.mean():.1f} cm, max {100 * true.max():.1f} cm)"
+        for w in ev.report["warnings"]:
+            line += f"\n  warning: {w}"
         print(line)
 
 

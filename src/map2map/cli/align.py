@@ -32,7 +32,24 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--resolution",
         type=float,
         metavar="R",
-        help="metres per pixel of picture inputs (ROS maps keep their own)",
+        help="metres per pixel of picture inputs, both maps (ROS maps keep their own)",
+    )
+    p.add_argument(
+        "--source-resolution",
+        type=float,
+        metavar="R",
+        help="metres per pixel of SOURCE only (wins over --resolution)",
+    )
+    p.add_argument(
+        "--target-resolution",
+        type=float,
+        metavar="R",
+        help="metres per pixel of TARGET only (wins over --resolution)",
+    )
+    p.add_argument(
+        "--strict",
+        action="store_true",
+        help="exit with status 3 when the result carries a warning (doubtful alignment)",
     )
     p.add_argument(
         "--no-auto-anchors",
@@ -43,11 +60,34 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def run(args: argparse.Namespace) -> int:
+def check_resolutions(args: argparse.Namespace) -> None:
+    """Every resolution flag given must be a positive number."""
+    from ..core.errors import InputError
+
+    for flag in ("resolution", "source_resolution", "target_resolution"):
+        v = getattr(args, flag, None)
+        if v is not None and not v > 0:
+            raise InputError("--" + flag.replace("_", "-"), f"must be > 0, got {v:g}")
+
+
+def report_warnings(warnings: list[str], strict: bool) -> int:
+    """Print each warning on stderr; the exit status: 3 with ``strict`` and a warning, else 0."""
     import sys
+
+    for w in warnings:
+        print(f"map2map: warning: {w}", file=sys.stderr)
+    if warnings and strict:
+        print(f"map2map: {len(warnings)} warning(s) and --strict: exit 3", file=sys.stderr)
+        return 3
+    return 0
+
+
+def run(args: argparse.Namespace) -> int:
+    import json
 
     from ..jobs.evaluate import run_align
 
+    check_resolutions(args)
     written = run_align(
         args.source,
         args.target,
@@ -55,14 +95,12 @@ def run(args: argparse.Namespace) -> int:
         anchors=args.anchors,
         points=args.points,
         resolution=args.resolution,
+        source_resolution=args.source_resolution,
+        target_resolution=args.target_resolution,
         auto_anchor=not args.no_auto_anchors,
         seed=args.seed,
     )
-    import json
-
     doc = json.loads(written["alignment"].read_text())
-    for w in doc.get("warnings", []):
-        print(f"map2map: warning: {w}", file=sys.stderr)
     print(
         f"aligned: scale {doc['scale']:.4f}, rotation {doc['rotation_deg']:.2f} deg, "
         f"translation ({doc['translation'][0]:.1f}, {doc['translation'][1]:.1f}) px, "
@@ -70,4 +108,4 @@ def run(args: argparse.Namespace) -> int:
     )
     for what, path in written.items():
         print(f"  {what:<10s} {path}")
-    return 0
+    return report_warnings(doc.get("warnings", []), args.strict)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -29,7 +28,24 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--resolution",
         type=float,
         metavar="R",
-        help="metres per pixel of picture inputs (ROS maps keep their own)",
+        help="metres per pixel of picture inputs, both maps (ROS maps keep their own)",
+    )
+    p.add_argument(
+        "--source-resolution",
+        type=float,
+        metavar="R",
+        help="metres per pixel of SLAM_MAP only (wins over --resolution)",
+    )
+    p.add_argument(
+        "--target-resolution",
+        type=float,
+        metavar="R",
+        help="metres per pixel of PLAN only (wins over --resolution)",
+    )
+    p.add_argument(
+        "--strict",
+        action="store_true",
+        help="exit with status 3 when the result carries a warning (doubtful alignment)",
     )
     p.add_argument(
         "--units",
@@ -46,14 +62,16 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..core.errors import InputError
     from ..jobs.evaluate import run_evaluate, run_pairs
+    from .align import check_resolutions, report_warnings
 
-    if args.resolution is not None and not args.resolution > 0:
-        raise InputError("--resolution", f"must be > 0, got {args.resolution:g}")
+    check_resolutions(args)
     if args.pairs:
         if args.slam or args.plan:
             raise InputError("--pairs", "give either SLAM_MAP PLAN or --pairs FILE, not both")
         if args.anchors:
             raise InputError("--anchors", "with --pairs, give anchors in the pairs file")
+        if args.source_resolution is not None or args.target_resolution is not None:
+            raise InputError("--pairs", "with --pairs, give one --resolution for all pictures")
         rows = run_pairs(
             args.pairs,
             args.out,
@@ -64,13 +82,16 @@ def run(args: argparse.Namespace) -> int:
             progress=not args.quiet,
         )
         unit = "px" if args.units == "px" else "m"
+        warnings = []
         for r in rows:
             print(
-                f"{r['pair']:<24s} {r['chosen_chain']:<8s} mean {r['mean_' + unit]:.4g} {unit}, "
-                f"max {r['max_' + unit]:.4g} {unit}"
+                f"{r['pair']:<24s} {r['chosen_chain']:<8s} wall mean {r['mean_' + unit]:.4g} "
+                f"{unit}, wall max {r['max_' + unit]:.4g} {unit}"
+                + ("  (WARNING)" if r["warnings"] else "")
             )
+            warnings += [f"{r['pair']}: {w}" for w in r["warnings"].split("; ") if w]
         print(f"wrote {args.out}/pairs.csv and {args.out}/errors_boxplot.png")
-        return 0
+        return report_warnings(warnings, args.strict)
     if not (args.slam and args.plan):
         raise InputError(None, "give SLAM_MAP and PLAN, or --pairs FILE")
     ev = run_evaluate(
@@ -79,18 +100,16 @@ def run(args: argparse.Namespace) -> int:
         args.out,
         anchors=args.anchors,
         resolution=args.resolution,
+        source_resolution=args.source_resolution,
+        target_resolution=args.target_resolution,
         units=args.units,
         auto_anchor=not args.no_auto_anchors,
         seed=args.seed,
     )
+    from ..evaluate.metric import summary_lines
+
     r = ev.report
-    for w in r["warnings"]:
-        print(f"map2map: warning: {w}", file=sys.stderr)
-    for chain in ("rigid", "nonrigid"):
-        e = r["errors"][chain]
-        metres = "" if e["mean_m"] is None else f" = {e['mean_m']:.3f} m, max {e['max_m']:.3f} m"
-        mark = "*" if chain == r["chosen_chain"] else " "
-        print(f"{mark} {chain:<8s} mean {e['mean_px']:.2f} px, max {e['max_px']:.2f} px{metres}")
-    print(f"chosen: {r['chosen_chain']} ({r['chosen_reason']})")
+    for line in summary_lines(r):
+        print(line)
     print(f"wrote report.json, overlay.png, error_map.png in {args.out}")
-    return 0
+    return report_warnings(r["warnings"], args.strict)

@@ -54,8 +54,16 @@ from scipy import ndimage, optimize
 from ..core.errors import InputError
 from ..core.grid import FREE, OCCUPIED, UNKNOWN
 from .anchors import Anchors, anchor, auto_anchors
+from .confidence import ConfidenceParams, alignment_warnings
 from .decomposition import Face, decompose
-from .features import downsample, edge_points, occupied_points, subsample
+from .features import (
+    downsample,
+    edge_points,
+    occupied_points,
+    subsample,
+    surface_mask,
+    surface_points,
+)
 from .fitness import distance_map, fitness, lookup
 from .hypotheses import Hypothesis, dense_hypotheses, face_hypotheses, suppress_duplicates
 from .nonrigid import SideFields, to_plane
@@ -115,6 +123,11 @@ class AlignParams:
     affine_line: bool = True
     direct_sigma: float | None = 4.0
     auto_anchor: bool = True
+    metric_scale: float | None = None
+    prior_tolerance: float = 0.1
+    prior_recheck: float = 0.35
+    distinct: int = 4
+    confidence: ConfidenceParams = field(default_factory=ConfidenceParams)
     max_points: int = 20000
     seed: int = 0
 
@@ -212,15 +225,21 @@ class _Level:
     def __init__(self, data: np.ndarray, factor: int, *, max_points: int, seed: int):
         self.factor = factor
         self.data = downsample(data, factor)
-        self.pts = subsample(occupied_points(self.data), max_points, seed)
+        self.surface = surface_mask(self.data)
+        self.pts = subsample(surface_points(self.data), max_points, seed)
         fr, fc = np.nonzero(self.data == FREE)
         self.free_pts = subsample(np.column_stack([fc + 0.5, fr + 0.5]), max_points, seed)
+        # free cells grown by one cell: free space of the other map may cross a thin wall
+        self.free_ok = (
+            cv2.dilate((self.data == FREE).astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
+        )
         self._edt: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def edt(self) -> tuple[np.ndarray, np.ndarray]:
+        """Distance transform (and nearest-cell indices) of the wall surfaces."""
         if self._edt is None:
-            self._edt = distance_map(self.data == OCCUPIED, return_indices=True)
+            self._edt = distance_map(self.surface, return_indices=True)
         return self._edt
 
     @property
@@ -371,12 +390,16 @@ def maximise_fitness(
 
 
 def _score(level_t: _Level, Mf: np.ndarray, pts: np.ndarray, free_pts: np.ndarray, T) -> float:
-    """Eq. 8 times the share of source free cells landing on known plan cells."""
+    """Eq. 8 of the wall surfaces times the share of source free cells on plan free cells.
+
+    Free space must land on free space: landing on the plan's unknown space (off
+    the plan) or inside its solid occupied blocks both count against the hypothesis.
+    """
     fit = fitness(Mf, apply(T, pts))
     if len(free_pts) == 0:
         return fit
-    known = lookup(level_t.data != UNKNOWN, apply(T, free_pts)).mean()
-    return fit * known
+    free = lookup(level_t.free_ok, apply(T, free_pts)).mean()
+    return fit * free
 
 
 def _dense(level_s: _Level, level_t: _Level, rotations, scales, sigma: float) -> list[Hypothesis]:
@@ -457,15 +480,25 @@ def _search(src: np.ndarray, tgt: np.ndarray, f1: int, f2: int, p: AlignParams) 
     T2 = _Level(tgt, f2, max_points=4000, seed=p.seed)
     up = _scale(f1 / f2)
     Mf2 = T2.fitness_map(1.0)
-    best, best_score = None, -1.0
-    for _, T in quick[:3]:
+    # the best few *distinct* solutions go on to level 2: the winner, and the best
+    # substantially different one it must beat clearly (see :func:`_runner_up`)
+    tol1 = _distinct_px(S1.pts)
+    chosen: list[np.ndarray] = []
+    for _, T in quick:
+        if all(_displacement(S1.pts, T, U) > tol1 for U in chosen):
+            chosen.append(T)
+        if len(chosen) >= p.distinct:
+            break
+    refined: list[tuple[float, np.ndarray]] = []
+    for T in chosen:
         T = up @ T @ np.linalg.inv(up)
         T = refine(S2.pts, T2.edt, T, sigmas=(3.0, 1.5, 1.0), iterations=6)
         if not lo <= decompose_similarity(T)[0] <= hi:
             continue
-        sc = _score(T2, Mf2, S2.pts, S2.free_pts, T)
-        if sc > best_score:
-            best, best_score = T, sc
+        refined.append((_score(T2, Mf2, S2.pts, S2.free_pts, T), T))
+    refined.sort(key=lambda st: -st[0])
+    best, best_score = (refined[0][1], refined[0][0]) if refined else (None, -1.0)
+    stats["runner_up"] = _runner_up(S2.pts, refined, _distinct_px(S2.pts))
     stats["refined"] = len(cands)
     timings["refine"] = time.perf_counter() - t1
     return _Search(
@@ -473,9 +506,64 @@ def _search(src: np.ndarray, tgt: np.ndarray, f1: int, f2: int, p: AlignParams) 
     )
 
 
+def _displacement(pts: np.ndarray, T: np.ndarray, U: np.ndarray) -> float:
+    """Mean distance (target px) between the images of ``pts`` under ``T`` and ``U``."""
+    return float(np.hypot(*(apply(T, pts) - apply(U, pts)).T).mean())
+
+
+def _distinct_px(pts: np.ndarray) -> float:
+    """Two placements are substantially different when they move the source's wall
+    points apart by more than 5% of the source's extent on average (at least 2 px)."""
+    if len(pts) == 0:
+        return 2.0
+    return max(2.0, 0.05 * float(np.ptp(pts, axis=0).max()))
+
+
+def _runner_up(pts: np.ndarray, refined: list[tuple[float, np.ndarray]], tol: float) -> dict:
+    """The best refined solution substantially different from the winner, and how it scores.
+
+    ``ratio`` is its score over the winner's: near 1, the maps fit (almost) as well in
+    two different placements (a symmetric building, a repetitive floor), and which one
+    is right cannot be told from the maps.
+    """
+    if not refined:
+        return {"ratio": 0.0}
+    s0, T0 = refined[0]
+    for s1, T1 in refined[1:]:
+        if _displacement(pts, T0, T1) > tol:
+            sc, ang, _, _ = decompose_similarity(T1 @ np.linalg.inv(T0))
+            return {
+                "ratio": float(s1 / max(s0, 1e-9)),
+                "rotation_deg": math.degrees(ang),
+                "scale": sc,
+                "displacement_px": _displacement(pts, T0, T1),
+            }
+    return {"ratio": 0.0}
+
+
+def _prior_band(p: AlignParams) -> tuple[float, float]:
+    """Scale range of the search: ``scale_range``, narrowed around ``metric_scale`` if known."""
+    lo, hi = p.scale_range
+    if p.metric_scale is None:
+        return lo, hi
+    m, t = p.metric_scale, 1.0 + p.prior_tolerance
+    return max(lo, min(m / t, hi)), min(hi, max(m * t, lo))
+
+
+def _search_both(src, tgt, f1, f2, p: AlignParams) -> tuple[_Search, _Search, bool]:
+    """The search source onto target and target onto source; whether the reverse won."""
+    fwd = _search(src, tgt, f1, f2, p)
+    bwd = _search(tgt, src, f1, f2, _invert_similarity_range(p))
+    reverse = bwd.T is not None and (fwd.T is None or bwd.score > fwd.score)
+    return fwd, bwd, reverse
+
+
 def _invert_similarity_range(p: AlignParams) -> AlignParams:
     lo, hi = p.scale_range
-    return replace(p, scale_range=(1.0 / hi, 1.0 / lo), rigid_scale=1.0 / p.rigid_scale)
+    m = None if p.metric_scale is None else 1.0 / p.metric_scale
+    return replace(
+        p, scale_range=(1.0 / hi, 1.0 / lo), rigid_scale=1.0 / p.rigid_scale, metric_scale=m
+    )
 
 
 def align_maps(
@@ -515,21 +603,38 @@ def align_maps(
     f1 = max(1, int(math.ceil(big / p.search_size)))
     f2 = min(f1, max(1, int(round(big / p.refine_size))))
 
-    fwd = _search(src, tgt, f1, f2, p)
+    prior = p.metric_scale
+    band = _prior_band(p)
+    fwd, bwd, reverse = _search_both(src, tgt, f1, f2, replace(p, scale_range=band))
+    if prior is not None and max(fwd.score, bwd.score) < p.prior_recheck:
+        # a poor fit at the metric scale: is it the resolutions that are wrong?
+        fwd2, bwd2, rev2 = _search_both(src, tgt, f1, f2, p)
+        free_best = bwd2 if rev2 else fwd2
+        s_free = decompose_similarity(free_best.T)[0] if free_best.T is not None else prior
+        at_prior = max(fwd.score, bwd.score)
+        if free_best.score > 1.25 * max(at_prior, 1e-9) and not (band[0] <= s_free <= band[1]):
+            fwd, bwd, reverse = fwd2, bwd2, rev2
+            warnings.append(
+                f"the maps fit far better at scale {s_free:.3f} (score {free_best.score:.2f}) "
+                f"than at the scale {prior:.3f} their resolutions give (score {at_prior:.2f}): "
+                "check the resolutions"
+            )
     pb = _invert_similarity_range(p)
-    bwd = _search(tgt, src, f1, f2, pb)
-    reverse = bwd.T is not None and (fwd.T is None or bwd.score > fwd.score)
     for k, v in fwd.timings.items():
         timings[k] = v + bwd.timings.get(k, 0.0)
     stats = dict(fwd.stats)
     stats["direction"] = "target->source" if reverse else "source->target"
     stats["score_source_to_target"] = fwd.score
     stats["score_target_to_source"] = bwd.score
+    stats["runner_up"] = (bwd if reverse else fwd).stats.get("runner_up", {"ratio": 0.0})
+    stats["scale_range"] = list(_prior_band(p)) if prior is not None else list(p.scale_range)
     srch, a, b, q = (bwd, tgt, src, pb) if reverse else (fwd, src, tgt, p)
     best = srch.T
 
     # ---- full resolution, in the winning direction (a -> b)
     t1 = time.perf_counter()
+    # full resolution starts from a passed hypothesis: all occupied cells, as tuned on
+    # the Halmstad maps (their sensor walls are clouds whose inner cells carry the fit)
     A3 = subsample(occupied_points(a), p.max_points, p.seed)
     edt3 = distance_map(b == OCCUPIED, return_indices=True)
     known3 = cv2.dilate((b != UNKNOWN).astype(np.uint8), np.ones((7, 7), np.uint8)) > 0
@@ -631,9 +736,9 @@ def align_maps(
         S = _shift(*off_b) @ S @ _shift(-off_a[0], -off_a[1])
         sim = np.linalg.inv(S) if reverse else S
     timings["surfaces"] = time.perf_counter() - t1
-    S3f = subsample(occupied_points(source), p.max_points, p.seed)
+    S3f = subsample(surface_points(source), p.max_points, p.seed)
     Mf3f = np.zeros(target.shape, np.float32)  # eq. 8 fitness map of the whole target
-    d_t = fields.walls[0] if reverse else edt3[0]
+    d_t = distance_map(surface_mask(tgt))
     Mf3f[r0t:r1t, c0t:c1t] = np.exp(-(d_t**2) / (2 * p.fitness_sigma**2))
     anchored = "none"
     used = anchors
@@ -663,13 +768,21 @@ def align_maps(
         timings["anchoring"] = time.perf_counter() - t1
 
     stats["passed"] = bool(passed)
+    fit_sim = fitness(Mf3f, apply(sim, S3f))
+    quality = _quality(source, target, sim, p, (r0s, r1s, c0s, c1s))
+    quality["runner_up_ratio"] = stats["runner_up"].get("ratio", 0.0)
+    if "rotation_deg" in stats["runner_up"]:
+        quality["runner_up_rotation_deg"] = stats["runner_up"]["rotation_deg"]
+        quality["runner_up_scale"] = stats["runner_up"]["scale"]
+    stats["quality"] = quality
+    warnings.extend(alignment_warnings(quality, p.confidence))
     timings["total"] = time.perf_counter() - t0
     theta_s, theta_t = fwd.theta
     return Alignment(
         similarity=sim,
         affine=aff,
         rigid=rig,
-        fitness=fitness(Mf3f, apply(sim, S3f)),
+        fitness=fit_sim,
         fitness_affine=fitness(Mf3f, apply(aff, S3f)),
         fitness_rigid=fitness(Mf3f, apply(rig, S3f)),
         anchored=anchored,
@@ -687,6 +800,61 @@ def align_maps(
         },
         timings=timings,
     )
+
+
+def _free_agreement(a: np.ndarray, b: np.ndarray, T: np.ndarray, n: int, seed: int) -> float:
+    """Share of ``a``'s free cells mapped by ``T`` onto ``b``'s free cells (grown by one
+    cell), of those landing on ``b``'s known cells (1 when none lands there)."""
+    r, c = np.nonzero(a == FREE)
+    pts = subsample(np.column_stack([c + 0.5, r + 0.5]), n, seed)
+    if len(pts) == 0:
+        return 1.0
+    q = apply(T, pts)
+    known = lookup(b != UNKNOWN, q) > 0
+    if not known.any():
+        return 1.0
+    free = cv2.dilate((b == FREE).astype(np.uint8), np.ones((3, 3), np.uint8))
+    return float(lookup(free, q[known]).mean())
+
+
+def _fitness_of(data: np.ndarray, sigma: float) -> np.ndarray:
+    """Eq. 8 fitness map of a map's wall surfaces, computed on its known content only."""
+    r0, r1, c0, c1 = check_map(data, None)
+    m = 4 + int(3 * sigma)
+    r0, c0 = max(0, r0 - m), max(0, c0 - m)
+    r1, c1 = min(data.shape[0], r1 + m), min(data.shape[1], c1 + m)
+    d = distance_map(surface_mask(data[r0:r1, c0:c1]))
+    out = np.zeros(data.shape, np.float32)
+    out[r0:r1, c0:c1] = np.exp(-(d**2) / (2 * sigma**2))
+    return out
+
+
+def _quality(source, target, sim, p: AlignParams, box_s) -> dict[str, Any]:
+    """The figures of :mod:`.confidence`: fitness both ways, free-space agreement, scale."""
+    r0, r1, c0, c1 = box_s
+    scale = decompose_similarity(sim)[0]
+    # the width of the agreement: 0.5% of the map's extent (at least fitness_sigma px),
+    # so that a large real map's wall noise is not read as disagreement
+    sig_t = max(p.fitness_sigma, 0.005 * max(r1 - r0, c1 - c0) * scale)
+    sig_s = sig_t / scale
+    S_pts = subsample(surface_points(source), p.max_points, p.seed)
+    T_pts = subsample(surface_points(target), p.max_points, p.seed)
+    Mf_t = _fitness_of(target, sig_t)
+    fit_st = fitness(Mf_t, apply(sim, S_pts))
+    fit_ts = fitness(_fitness_of(source, sig_s), apply(np.linalg.inv(sim), T_pts))
+    fa_st = _free_agreement(source, target, sim, p.max_points, p.seed)
+    fa_ts = _free_agreement(target, source, np.linalg.inv(sim), p.max_points, p.seed)
+    return {
+        "agreement_sigma_px": float(sig_t),
+        "fitness_source_to_target": float(fit_st),
+        "fitness_target_to_source": float(fit_ts),
+        "fitness": float(max(fit_st, fit_ts)),
+        "free_agreement": float(0.5 * (fa_st + fa_ts)),
+        "free_agreement_source_to_target": fa_st,
+        "free_agreement_target_to_source": fa_ts,
+        "scale": decompose_similarity(sim)[0],
+        "metric_scale": p.metric_scale,
+    }
 
 
 def _fallback_rigid(S1, T1, S3, edt3, p: AlignParams, theta_s, theta_t, f1, fit3) -> np.ndarray:

@@ -25,12 +25,41 @@ import numpy as np
 
 from ..core.grid import FREE, OCCUPIED, UNKNOWN
 
-__all__ = ["occupied_points", "edge_points", "downsample", "side_masks", "subsample"]
+__all__ = [
+    "occupied_points",
+    "surface_mask",
+    "surface_points",
+    "edge_points",
+    "downsample",
+    "side_masks",
+    "subsample",
+]
 
 
 def occupied_points(data: np.ndarray) -> np.ndarray:
     """(N, 2) (x, y) continuous pixel coordinates of the occupied cells' centres, row-major."""
     r, c = np.nonzero(data == OCCUPIED)
+    return np.column_stack([c + 0.5, r + 0.5])
+
+
+def surface_mask(data: np.ndarray) -> np.ndarray:
+    """Occupied cells with a free cell among their 8 neighbours: the walls' surfaces.
+
+    What a range sensor sees of a wall is its surface; the inside of a solid block
+    (a HouseExpo plan draws everything outside the rooms occupied, up to the bounding
+    box) is no evidence of where a wall is, and scoring it lets one block lie on
+    another at any scale. A map whose occupied cells touch no free cell (no free
+    space at all) keeps all its occupied cells.
+    """
+    occ = data == OCCUPIED
+    near_free = cv2.dilate((data == FREE).astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
+    surf = occ & near_free
+    return surf if surf.any() else occ
+
+
+def surface_points(data: np.ndarray) -> np.ndarray:
+    """(N, 2) (x, y) pixel centres of the cells of :func:`surface_mask`, row-major."""
+    r, c = np.nonzero(surface_mask(data))
     return np.column_stack([c + 0.5, r + 0.5])
 
 

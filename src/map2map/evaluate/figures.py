@@ -102,6 +102,9 @@ def overlay_figure(
     save_figure(fig, path)
 
 
+UNMATCHED_COLOUR = "#d01cc8"  # magenta: points that match no plan wall
+
+
 def error_map_figure(
     plan: OccupancyMap,
     points: np.ndarray,
@@ -110,14 +113,18 @@ def error_map_figure(
     *,
     resolution: float | None = None,
     excluded: np.ndarray | None = None,
+    unmatched: np.ndarray | None = None,
     title: str = "Local error of the SLAM walls (Algorithm 1)",
 ) -> None:
     """Each SLAM wall point at its rigidly aligned position, coloured by its error.
 
     The colour bar is in centimetres when ``resolution`` is known, else pixels;
-    points left out of the statistics (corners) are drawn small and grey.
+    points that match no plan wall (``unmatched``: clutter, unplanned structure) are
+    drawn in magenta, points left out as corners (``excluded``) small and grey.
+    Points are drawn at least 2.5 pt wide so that they stay visible in print.
     """
     import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
 
     pts = np.asarray(points, float).reshape(-1, 2)
     inside = (
@@ -133,20 +140,34 @@ def error_map_figure(
     bg[p == OCCUPIED] = 0.55
     unit, scale = ("cm", resolution * 100.0) if resolution else ("px", 1.0)
     e = np.asarray(errors_px, float) * scale
-    keep = np.ones(len(pts), bool) if excluded is None else ~np.asarray(excluded, bool)
+    n = len(pts)
+    corner = np.zeros(n, bool) if excluded is None else np.asarray(excluded, bool)
+    unm = np.zeros(n, bool) if unmatched is None else np.asarray(unmatched, bool)
+    corner = corner & ~unm
+    keep = ~corner & ~unm
     view = OccupancyMap(p.copy(), plan.resolution)
     fig, ax = new_figure(view, panel_inches=7.0)
     ax.imshow(bg, interpolation="antialiased", extent=(c0, c1, r1, r0))
-    size = max(0.5, 3000.0 / max(len(pts), 1))
-    if (~keep).any():
-        ax.scatter(pts[~keep, 0], pts[~keep, 1], s=size * 0.5, c="0.6", lw=0)
+    # marker area in pt^2: dense maps get smaller dots, never below ~2.5 pt across
+    size = float(np.clip(12000.0 / max(n, 1), 6.0, 36.0))
+    if corner.any():
+        ax.scatter(pts[corner, 0], pts[corner, 1], s=size * 0.6, c="0.55", lw=0)
+    if unm.any():
+        ax.scatter(pts[unm, 0], pts[unm, 1], s=size, c=UNMATCHED_COLOUR, marker="x", lw=0.8)
     vmax = float(np.percentile(e[keep], 99)) if keep.any() else 1.0
     sc = ax.scatter(
         pts[keep, 0], pts[keep, 1], s=size, c=e[keep], cmap="turbo", vmin=0.0,
         vmax=max(vmax, 1e-6), lw=0,
     )  # fmt: skip
     cb = fig.colorbar(sc, ax=ax, fraction=0.046, pad=0.02)
-    cb.set_label(f"error ({unit})")
+    cb.set_label(f"wall error ({unit})")
+    handles = [
+        Line2D([], [], ls="", marker="o", color="tab:blue", label=f"wall points ({keep.sum()})"),
+        Line2D([], [], ls="", marker="x", color=UNMATCHED_COLOUR,
+               label=f"match no plan wall ({unm.sum()})"),
+        Line2D([], [], ls="", marker="o", color="0.55", label=f"corners ({corner.sum()})"),
+    ]  # fmt: skip
+    ax.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.85)
     ax.set_xlim(c0, c1)
     ax.set_ylim(r1, r0)
     ax.set_title(title, fontsize=10)

@@ -29,9 +29,10 @@ from typing import Any
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..core.grid import FREE, OCCUPIED, OccupancyMap
+from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from .align import Alignment, AlignParams, align_maps, check_map
 from .anchors import Anchors
+from .confidence import evaluation_warnings
 from .features import edge_points, subsample
 from .icp import icp
 from .metric import ChainErrors, choose_chain, iou, local_errors
@@ -177,6 +178,12 @@ def _warp(Xa, na, Xo, fields, p: EvaluateParams, res: float) -> PiecewiseAffine 
         return None
 
 
+def _iou_known(warped: np.ndarray, plan: np.ndarray) -> float:
+    """IoU of the free space of two aligned maps over the cells both know."""
+    both = (warped != UNKNOWN) & (plan != UNKNOWN)
+    return iou((warped == FREE) & both, (plan == FREE) & both)
+
+
 @dataclass
 class Evaluation:
     """Everything ``map2map evaluate`` writes: the report and the arrays behind the figures."""
@@ -207,7 +214,13 @@ def evaluate_maps(
     p = params or EvaluateParams()
     if rigid_scale is not None:
         p = EvaluateParams(**{**p.__dict__})
-        p.align = AlignParams(**{**p.align.__dict__, "rigid_scale": float(rigid_scale)})
+        p.align = AlignParams(
+            **{
+                **p.align.__dict__,
+                "rigid_scale": float(rigid_scale),
+                "metric_scale": float(rigid_scale),
+            }
+        )
     t_all = time.perf_counter()
     reg = register(source, target, anchors=anchors, params=p, names=names)
     al = reg.alignment
@@ -217,9 +230,12 @@ def evaluate_maps(
     timings["rigid_chain"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     n_aff = transform_normals(al.affine, reg.normals)
+    # a point matches a plan wall when the optimisation brought it within 3 sigma_f of
+    # the last stage of a plan surface facing its way (the support of eq. 7's fitness)
+    match_px = 3.0 * _schedule(p.sigma_f, target.resolution)[-1]
     errors = {
-        "nonrigid": local_errors(Xr, reg.X_optimised, reg.fields, n_aff),
-        "rigid": local_errors(Xr, Xor, reg.fields, nr),
+        "nonrigid": local_errors(Xr, reg.X_optimised, reg.fields, n_aff, match_px=match_px),
+        "rigid": local_errors(Xr, Xor, reg.fields, nr, match_px=match_px),
     }
     chosen, reason = choose_chain(
         al.similarity, al.affine, p.align.rigid_scale, tolerance=p.chain_tolerance
@@ -275,7 +291,13 @@ def evaluate_maps(
         "iou": ious,
         "icp": icp_out,
         "edge_points": int(len(reg.X)),
-        "warnings": list(al.warnings),
+        "warnings": list(al.warnings)
+        + evaluation_warnings(
+            _iou_known(warped[chosen], target.data),
+            errors[chosen].summary(None)["unmatched_share"],
+            p.align.confidence,
+        ),
         "timings_s": {k: round(v, 4) for k, v in timings.items()},
     }
+    report["iou"][chosen]["free_known"] = _iou_known(warped[chosen], target.data)
     return Evaluation(reg, errors, chosen, report, warped)

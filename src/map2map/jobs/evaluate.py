@@ -8,7 +8,9 @@ before anything is written; every output goes through :func:`map2map.core._io.at
   ``overlay.png``, and with points ``points_aligned.csv``
   (``x_similarity, y_similarity, x_nonrigid, y_nonrigid`` in target pixels).
 * ``evaluate``: the same plus ``report.json`` (errors of both chains in px and m,
-  chosen chain, IoU, ICP, timings) and ``error_map.png``.
+  chosen chain, IoU, ICP, warnings, timings), ``error_map.png`` and ``points.csv``
+  (every SLAM wall point: ``x, y`` in plan pixels, ``error_px``, ``error_m``, ``class``
+  = wall / corner / unmatched).
 * ``evaluate --pairs``: one folder per pair, ``pairs.csv`` (one row per pair) and
   ``errors_boxplot.png``.
 """
@@ -99,6 +101,10 @@ def read_points(path: str | os.PathLike, shape: tuple[int, int] | None = None) -
     return np.array(pts, float)
 
 
+def _pick(own: float | None, shared: float | None) -> float | None:
+    return own if own is not None else shared
+
+
 def _anchors(path, src: MapInput, tgt: MapInput) -> Anchors | None:
     if path is None:
         return None
@@ -117,6 +123,8 @@ def _rigid_scale(src: MapInput, tgt: MapInput) -> float:
 def _params(src: MapInput, tgt: MapInput, seed: int, auto_anchor: bool) -> EvaluateParams:
     p = EvaluateParams(seed=seed)
     p.align.rigid_scale = _rigid_scale(src, tgt)
+    if src.resolution_known and tgt.resolution_known:  # the metric scale is known: a prior
+        p.align.metric_scale = p.align.rigid_scale
     p.align.seed = seed
     p.align.auto_anchor = auto_anchor
     return p
@@ -145,10 +153,16 @@ def run_align(
     resolution: float | None = None,
     auto_anchor: bool = True,
     seed: int = 0,
+    source_resolution: float | None = None,
+    target_resolution: float | None = None,
 ) -> dict[str, Path]:
-    """``map2map align``: returns ``{what: path}`` of the files written."""
-    src = load_input(source, resolution)
-    tgt = load_input(target, resolution)
+    """``map2map align``: returns ``{what: path}`` of the files written.
+
+    ``resolution`` applies to both inputs, ``source_resolution`` and
+    ``target_resolution`` to one each (they win over ``resolution``).
+    """
+    src = load_input(source, _pick(source_resolution, resolution))
+    tgt = load_input(target, _pick(target_resolution, resolution))
     anch = _anchors(anchors, src, tgt)
     pts = read_points(points) if points is not None else None
     out_dir = ensure_output_dir(out)
@@ -197,14 +211,21 @@ def write_evaluation(
 ) -> dict[str, Path]:
     """Write ``report.json``, ``overlay.png`` and ``error_map.png`` of an evaluation."""
     paths = {k: out_dir / f"{k}.{s}" for k, s in
-             (("report", "json"), ("overlay", "png"), ("error_map", "png"))}  # fmt: skip
+             (("report", "json"), ("overlay", "png"), ("error_map", "png"),
+              ("points", "csv"))}  # fmt: skip
     _write_json(paths["report"], ev.report)
     overlay_figure(plan, ev.warped[ev.chosen], paths["overlay"],
                    title=f"SLAM map aligned to the plan ({ev.chosen} chain)")  # fmt: skip
     e = ev.errors[ev.chosen]
     error_map_figure(plan, e.X_rigid, e.distances, paths["error_map"],
-                     resolution=resolution, excluded=e.corner,
+                     resolution=resolution, excluded=e.corner, unmatched=e.unmatched,
                      title=f"Local error, {ev.chosen} chain (Algorithm 1)")  # fmt: skip
+    with atomic_path(paths["points"]) as tmp, open(tmp, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["x", "y", "error_px", "error_m", "class"])
+        for (x, y), d, c in zip(e.X_rigid, e.distances, e.classes(), strict=True):
+            m = "" if resolution is None else f"{d * resolution:.4f}"
+            w.writerow([f"{x:.2f}", f"{y:.2f}", f"{d:.3f}", m, c])
     return paths
 
 
@@ -218,10 +239,16 @@ def run_evaluate(
     units: str = "m",
     auto_anchor: bool = True,
     seed: int = 0,
+    source_resolution: float | None = None,
+    target_resolution: float | None = None,
 ) -> Evaluation:
-    """``map2map evaluate`` for one pair; writes report.json, overlay.png, error_map.png."""
-    src = load_input(slam, resolution)
-    tgt = load_input(plan, resolution)
+    """``map2map evaluate`` for one pair; writes report.json, overlay.png, error_map.png.
+
+    ``resolution`` applies to both maps, ``source_resolution`` (the SLAM map) and
+    ``target_resolution`` (the plan) to one each.
+    """
+    src = load_input(slam, _pick(source_resolution, resolution))
+    tgt = load_input(plan, _pick(target_resolution, resolution))
     res = _metres_resolution(tgt, units)
     anch = _anchors(anchors, src, tgt)
     out_dir = ensure_output_dir(out)
@@ -313,6 +340,7 @@ def run_pairs(
             "icp_mean_px": ev.report["icp"]["from_identity"]["mean_px"],
             "fitness": ev.report["alignment"]["fitness"],
             "seconds": ev.report["timings_s"]["total"],
+            "warnings": "; ".join(ev.report["warnings"]),
         }
         rows.append(row)
         ch = ev.errors[ev.chosen]
