@@ -200,17 +200,18 @@ def _nearest_hit(mean, gx0, gy0, inv, free_back, hx, hy, ca, sa, kernel):
             cfx = cx + fx
             if cx < 0 or cx >= nx or cfx < 0 or cfx >= nx:
                 continue
+            # branch-free (the occupancy pattern is unpredictable, a mispredicted branch
+            # costs more than the arithmetic): a cell that is not occupied has a NaN
+            # mean, so its d2 is NaN and never below best; an occupied predecessor
+            # (non-NaN) vetoes the cell
             mux = mean[cy, cx, 0]
-            if mux != mux:  # NaN: not occupied
-                continue
-            if mean[cfy, cfx, 0] == mean[cfy, cfx, 0]:  # predecessor occupied
-                continue
             muy = mean[cy, cx, 1]
+            pred = mean[cfy, cfx, 0]
             d2 = (hx - mux) * (hx - mux) + (hy - muy) * (hy - muy)
-            if d2 < best:
-                best = d2
-                bx = mux
-                by = muy
+            take = (d2 < best) & (pred != pred)
+            best = d2 if take else best
+            bx = mux if take else bx
+            by = muy if take else by
     return best, bx, by
 
 
@@ -289,7 +290,9 @@ def hill_climb(
     From ``(px, py, pt)`` try the six moves (x +- lstep, y +- lstep, theta +- astep),
     keep the best; when no move improves, halve the steps (a *refinement*); stop
     after ``iterations`` refinements without improvement. Returns ``(x, y, theta,
-    score)`` -- the scan score of the best pose found.
+    score)`` -- the scan score of the best pose found. The reverse of the move just
+    taken is not tried again (it returns to the pose that move improved on, a
+    known lower score), which saves about one score in ten and changes nothing.
 
     ``prior`` is ``(mx, my, mt, wx, wy, wt)``: the climb maximises
     ``score - 0.5 (wx (x - mx)^2 + wy (y - my)^2 + wt (t - mt)^2)``, the motion-model
@@ -306,6 +309,7 @@ def hill_climb(
     best_score = -1.0
     ld, ad = lstep, astep
     refinement = 0
+    last = -1  # the move taken in the previous round (-1: none)
     while True:
         if best_score >= cur:
             refinement += 1
@@ -313,7 +317,12 @@ def hill_climb(
             ad *= 0.5
         best_score = cur
         bx, by, bt = cx, cy, ct
+        # the reverse of the move just taken leads back to the pose it improved on
+        skip = last ^ 1 if last >= 0 else -1
+        last = -1
         for move in range(6):
+            if move == skip:
+                continue
             tx, ty, tt = cx, cy, ct
             if move == 0:
                 tx += ld
@@ -343,6 +352,7 @@ def hill_climb(
             if sc > cur:
                 cur = sc
                 bx, by, bt = tx, ty, tt
+                last = move
         cx, cy, ct = bx, by, bt
         if not (cur > best_score or refinement < iterations):
             break
@@ -496,13 +506,20 @@ class CountGrid:
         n = int(math.ceil(2 * half_size / delta))
         return cls((n, n), x - n * delta / 2, y - n * delta / 2, delta)
 
-    def copy(self) -> CountGrid:
-        new = CountGrid.__new__(CountGrid)
-        new.hits = self.hits.copy()
-        new.visits = self.visits.copy()
-        new.sx = self.sx.copy()
-        new.sy = self.sy.copy()
-        new.mean = self.mean.copy()
+    def copy(self, out: CountGrid | None = None) -> CountGrid:
+        """A copy; with ``out`` (a grid no longer needed) into its arrays when the
+        shapes match, which saves allocating (and page-faulting) new ones."""
+        if out is None or out.shape != self.shape or out is self:
+            new = CountGrid.__new__(CountGrid)
+            new.hits = self.hits.copy()
+            new.visits = self.visits.copy()
+            new.sx = self.sx.copy()
+            new.sy = self.sy.copy()
+            new.mean = self.mean.copy()
+        else:
+            new = out
+            for name in ("hits", "visits", "sx", "sy", "mean"):
+                np.copyto(getattr(new, name), getattr(self, name))
         new.x0, new.y0, new.delta = self.x0, self.y0, self.delta
         return new
 
