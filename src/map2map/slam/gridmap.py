@@ -475,6 +475,30 @@ def occupancy_from_counts(hits, visits, occ_thresh):
     return out
 
 
+@nb.njit(cache=True)
+def _copy_tiles(src, dst, differ, th, tw):
+    """Copy the ``th x tw`` blocks of 2-D ``src`` flagged in ``differ`` to ``dst``."""
+    ny, nx = src.shape
+    for ty in range(differ.shape[0]):
+        for tx in range(differ.shape[1]):
+            if differ[ty, tx]:
+                y0, y1 = ty * th, min(ty * th + th, ny)
+                x0, x1 = tx * tw, min(tx * tw + tw, nx)
+                dst[y0:y1, x0:x1] = src[y0:y1, x0:x1]
+
+
+#: Side (cells) of the blocks that :meth:`CountGrid.copy` compares and copies.
+TILE = 32
+_next_tile_id = [1]  # ids are unique in the process: equal ids mean equal contents
+
+
+def _fresh_tile_ids(n_rows: int, n_cols: int) -> np.ndarray:
+    n = n_rows * n_cols
+    start = _next_tile_id[0]
+    _next_tile_id[0] += n
+    return np.arange(start, start + n, dtype=np.int64).reshape(n_rows, n_cols)
+
+
 # ------------------------------------------------------------------------ containers
 class CountGrid:
     """One GMapping occupancy grid (hits, visits, accumulated hit positions) that grows.
@@ -488,7 +512,7 @@ class CountGrid:
         Cell size in metres (GMapping's ``delta``).
     """
 
-    __slots__ = ("hits", "visits", "sx", "sy", "mean", "x0", "y0", "delta")
+    __slots__ = ("hits", "visits", "sx", "sy", "mean", "x0", "y0", "delta", "tile_id")
 
     def __init__(self, shape: tuple[int, int], x0: float, y0: float, delta: float):
         self.hits = np.zeros(shape, np.int32)
@@ -499,6 +523,17 @@ class CountGrid:
         self.x0 = float(x0)
         self.y0 = float(y0)
         self.delta = float(delta)
+        self._new_tile_ids()
+
+    def _new_tile_ids(self) -> None:
+        """Fresh content ids for every :data:`TILE` x :data:`TILE` block.
+
+        A block's id changes whenever a scan may have written into it, and is
+        handed on by copying, so two grids whose blocks carry the same id hold the
+        same contents there: :meth:`copy` copies only the blocks that differ.
+        """
+        ny, nx = self.shape
+        self.tile_id = _fresh_tile_ids(-(-ny // TILE), -(-nx // TILE))
 
     @classmethod
     def around(cls, x: float, y: float, half_size: float, delta: float) -> CountGrid:
@@ -508,18 +543,33 @@ class CountGrid:
 
     def copy(self, out: CountGrid | None = None) -> CountGrid:
         """A copy; with ``out`` (a grid no longer needed) into its arrays when the
-        shapes match, which saves allocating (and page-faulting) new ones."""
-        if out is None or out.shape != self.shape or out is self:
+        shapes match, which saves allocating (and page-faulting) new ones.
+
+        Into ``out``, only the blocks whose content ids differ are copied: after a
+        resampling, a dropped particle and the one copied into its grid share most
+        of their history, and a scan touches only the blocks within the usable range
+        (measured: about a fifth of the blocks of a 7-minute run's grids differ).
+        """
+        if out is self:
+            return self
+        if out is None or out.shape != self.shape or out.x0 != self.x0 or out.y0 != self.y0:
             new = CountGrid.__new__(CountGrid)
             new.hits = self.hits.copy()
             new.visits = self.visits.copy()
             new.sx = self.sx.copy()
             new.sy = self.sy.copy()
             new.mean = self.mean.copy()
+            new.tile_id = self.tile_id.copy()
         else:
             new = out
-            for name in ("hits", "visits", "sx", "sy", "mean"):
-                np.copyto(getattr(new, name), getattr(self, name))
+            differ = new.tile_id != self.tile_id
+            for name in ("hits", "visits", "sx", "sy"):
+                _copy_tiles(getattr(self, name), getattr(new, name), differ, TILE, TILE)
+            ny, nx = self.shape  # (ny, nx, 2) seen as (ny, 2 nx)
+            _copy_tiles(
+                self.mean.reshape(ny, 2 * nx), new.mean.reshape(ny, 2 * nx), differ, TILE, 2 * TILE
+            )
+            new.tile_id[...] = self.tile_id
         new.x0, new.y0, new.delta = self.x0, self.y0, self.delta
         return new
 
@@ -573,6 +623,7 @@ class CountGrid:
         self.mean = np.pad(self.mean, (*widths, (0, 0)), constant_values=np.nan)
         self.x0 -= left * self.delta
         self.y0 -= bottom * self.delta
+        self._new_tile_ids()  # the blocks moved
 
     def register_scan(
         self,
@@ -603,6 +654,15 @@ class CountGrid:
             float(max_range),
             bool(no_return_free),
         )
+        # every cell written lies within ``reach`` of the laser: new ids for those blocks
+        k = reach / self.delta + 2
+        cx = (lx - self.x0) / self.delta
+        cy = (ly - self.y0) / self.delta
+        nty, ntx = self.tile_id.shape
+        tx0, tx1 = max(0, int((cx - k) // TILE)), min(ntx, int((cx + k) // TILE) + 1)
+        ty0, ty1 = max(0, int((cy - k) // TILE)), min(nty, int((cy + k) // TILE) + 1)
+        if tx1 > tx0 and ty1 > ty0:
+            self.tile_id[ty0:ty1, tx0:tx1] = _fresh_tile_ids(ty1 - ty0, tx1 - tx0)
 
     def to_occupancy_map(self, occ_thresh: float = 0.25, meta: dict | None = None) -> OccupancyMap:
         """The ternary map (GMapping/slam_gmapping rule: occupied when hits/visits > occ_thresh)."""
