@@ -60,10 +60,10 @@ def plan_files(tmp: Path, n_renders: int) -> list[Path]:
     return files
 
 
-def run_one(plan: Path, out: Path, seed: int, mapper: str) -> dict:
+def run_one(plan: Path, out: Path, seed: int, mapper: str, src: Path) -> dict:
     """One ``map2map simulate`` process; its wall and CPU seconds and report."""
     env = dict(os.environ)
-    env["PYTHONPATH"] = str(ROOT / "src") + os.pathsep + env.get("PYTHONPATH", "")
+    env["PYTHONPATH"] = str(src) + os.pathsep + env.get("PYTHONPATH", "")
     cmd = [sys.executable, "-m", "map2map", "simulate", str(plan), "--out", str(out)]
     cmd += ["--seed", str(seed), "--mapper", mapper, "--quiet"]
     log = out.with_suffix(".stderr")
@@ -94,6 +94,13 @@ def main() -> None:
     ap.add_argument("--jobs", type=int, default=2, help="processes at a time (default 2)")
     ap.add_argument("--renders", type=int, default=6, help="HouseExpo renders to use")
     ap.add_argument("--mapper", default="rbpf", help="mapping backend (default rbpf)")
+    ap.add_argument(
+        "--src",
+        type=Path,
+        default=ROOT / "src",
+        help="package sources to run (default: this checkout's src; e.g. an older checkout's "
+        "src for a before/after comparison)",
+    )
     args = ap.parse_args()
     with tempfile.TemporaryDirectory(prefix="bench_sim_process_") as d:
         tmp = Path(d)
@@ -101,11 +108,14 @@ def main() -> None:
         print(
             f"{len(plans)} plans ({'HouseExpo' if HOUSEEXPO.is_dir() else 'apartments'}), "
             f"{args.runs} runs of `map2map simulate --mapper {args.mapper}`, "
-            f"{args.jobs} at a time; {os.cpu_count()} cores visible",
+            f"{args.jobs} at a time; {os.cpu_count()} cores visible; sources {args.src}",
             flush=True,
         )
-        run_one(plans[0], tmp / "warmup", 0, args.mapper)  # numba cache, OS file cache
-        jobs = [(plans[i % len(plans)], tmp / f"run{i}", i, args.mapper) for i in range(args.runs)]
+        src = args.src.resolve()
+        run_one(plans[0], tmp / "warmup", 0, args.mapper, src)  # numba cache, OS file cache
+        jobs = [
+            (plans[i % len(plans)], tmp / f"run{i}", i, args.mapper, src) for i in range(args.runs)
+        ]
         t0 = time.perf_counter()
         with ThreadPoolExecutor(max_workers=args.jobs) as pool:
             rows = list(pool.map(lambda j: run_one(*j), jobs))
