@@ -30,38 +30,11 @@ from matplotlib.axes import Axes  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
 from ._io import atomic_path  # noqa: E402
-from .grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap  # noqa: E402
+from .grid import OccupancyMap  # noqa: E402
+from .viz_raster import MAP_COLOURS, map_to_rgb  # noqa: E402  (colours shared with raster figures)
+from .viz_raster import nice_length as _nice_length  # noqa: E402
 
 __all__ = ["MAP_COLOURS", "map_to_rgb", "draw_map", "add_scale_bar", "new_figure", "save_figure"]
-
-#: RGB colours of the three cell states.
-MAP_COLOURS = {
-    FREE: (1.0, 1.0, 1.0),
-    OCCUPIED: (0.10, 0.10, 0.12),
-    UNKNOWN: (0.78, 0.82, 0.88),
-}
-
-
-def map_to_rgb(m: OccupancyMap | np.ndarray) -> np.ndarray:
-    """(H, W, 3) float image: free white, occupied near-black, unknown pale blue-grey."""
-    data = m.data if isinstance(m, OccupancyMap) else np.asarray(m)
-    rgb = np.empty((*data.shape, 3), float)
-    rgb[:] = MAP_COLOURS[UNKNOWN]
-    rgb[data == FREE] = MAP_COLOURS[FREE]
-    rgb[data == OCCUPIED] = MAP_COLOURS[OCCUPIED]
-    return rgb
-
-
-def _nice_length(target_m: float) -> float:
-    """A round length (1, 2, 5 x 10^k metres) close to ``target_m``."""
-    if target_m <= 0:
-        return 1.0
-    exp = np.floor(np.log10(target_m))
-    for step in (5.0, 2.0, 1.0):
-        if step * 10**exp <= target_m:
-            return float(step * 10**exp)
-    return float(10**exp)
-
 
 def add_scale_bar(ax: Axes, resolution: float, width_px: int, *, colour: str = "black") -> None:
     """Draw a metric scale bar (about a fifth of the width) in the lower-left corner."""

@@ -184,6 +184,7 @@ def write_carmen(
             all_params.update(params or {})
             for k, v in all_params.items():
                 f.write(f"PARAM {k} {_num(v) if isinstance(v, float) else v} 0.0 {hostname} 0.0\n")
+            fmts: dict[int, str] = {}  # "%.3f %.3f ..." per beam count: one % per scan
             for i, (odo, scan, truth) in enumerate(records):
                 t = _num(scan.t)
                 tail = f"{t} {hostname} {t}\n"
@@ -197,7 +198,8 @@ def write_carmen(
                 r = np.where(np.isfinite(r), r, scan.range_max)
                 n = r.shape[0]
                 span = scan.angle_increment * (n - 1)
-                ranges = " ".join(f"{v:.3f}" for v in r)
+                fmt = fmts.get(n) or fmts.setdefault(n, " ".join(["%.3f"] * n))
+                ranges = fmt % tuple(r.tolist())
                 f.write(
                     f"RAWLASER1 {SIMULATED_LASER} {_num(scan.angle_min)} {_num(span)} "
                     f"{_num(scan.angle_increment)} {_num(scan.range_max)} 0.01 0 "

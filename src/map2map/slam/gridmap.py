@@ -200,17 +200,18 @@ def _nearest_hit(mean, gx0, gy0, inv, free_back, hx, hy, ca, sa, kernel):
             cfx = cx + fx
             if cx < 0 or cx >= nx or cfx < 0 or cfx >= nx:
                 continue
+            # branch-free (the occupancy pattern is unpredictable, a mispredicted branch
+            # costs more than the arithmetic): a cell that is not occupied has a NaN
+            # mean, so its d2 is NaN and never below best; an occupied predecessor
+            # (non-NaN) vetoes the cell
             mux = mean[cy, cx, 0]
-            if mux != mux:  # NaN: not occupied
-                continue
-            if mean[cfy, cfx, 0] == mean[cfy, cfx, 0]:  # predecessor occupied
-                continue
             muy = mean[cy, cx, 1]
+            pred = mean[cfy, cfx, 0]
             d2 = (hx - mux) * (hx - mux) + (hy - muy) * (hy - muy)
-            if d2 < best:
-                best = d2
-                bx = mux
-                by = muy
+            take = (d2 < best) & (pred != pred)
+            best = d2 if take else best
+            bx = mux if take else bx
+            by = muy if take else by
     return best, bx, by
 
 
@@ -289,7 +290,9 @@ def hill_climb(
     From ``(px, py, pt)`` try the six moves (x +- lstep, y +- lstep, theta +- astep),
     keep the best; when no move improves, halve the steps (a *refinement*); stop
     after ``iterations`` refinements without improvement. Returns ``(x, y, theta,
-    score)`` -- the scan score of the best pose found.
+    score)`` -- the scan score of the best pose found. The reverse of the move just
+    taken is not tried again (it returns to the pose that move improved on, a
+    known lower score), which saves about one score in ten and changes nothing.
 
     ``prior`` is ``(mx, my, mt, wx, wy, wt)``: the climb maximises
     ``score - 0.5 (wx (x - mx)^2 + wy (y - my)^2 + wt (t - mt)^2)``, the motion-model
@@ -306,6 +309,7 @@ def hill_climb(
     best_score = -1.0
     ld, ad = lstep, astep
     refinement = 0
+    last = -1  # the move taken in the previous round (-1: none)
     while True:
         if best_score >= cur:
             refinement += 1
@@ -313,7 +317,12 @@ def hill_climb(
             ad *= 0.5
         best_score = cur
         bx, by, bt = cx, cy, ct
+        # the reverse of the move just taken leads back to the pose it improved on
+        skip = last ^ 1 if last >= 0 else -1
+        last = -1
         for move in range(6):
+            if move == skip:
+                continue
             tx, ty, tt = cx, cy, ct
             if move == 0:
                 tx += ld
@@ -343,6 +352,7 @@ def hill_climb(
             if sc > cur:
                 cur = sc
                 bx, by, bt = tx, ty, tt
+                last = move
         cx, cy, ct = bx, by, bt
         if not (cur > best_score or refinement < iterations):
             break
@@ -465,6 +475,30 @@ def occupancy_from_counts(hits, visits, occ_thresh):
     return out
 
 
+@nb.njit(cache=True)
+def _copy_tiles(src, dst, differ, th, tw):
+    """Copy the ``th x tw`` blocks of 2-D ``src`` flagged in ``differ`` to ``dst``."""
+    ny, nx = src.shape
+    for ty in range(differ.shape[0]):
+        for tx in range(differ.shape[1]):
+            if differ[ty, tx]:
+                y0, y1 = ty * th, min(ty * th + th, ny)
+                x0, x1 = tx * tw, min(tx * tw + tw, nx)
+                dst[y0:y1, x0:x1] = src[y0:y1, x0:x1]
+
+
+#: Side (cells) of the blocks that :meth:`CountGrid.copy` compares and copies.
+TILE = 32
+_next_tile_id = [1]  # ids are unique in the process: equal ids mean equal contents
+
+
+def _fresh_tile_ids(n_rows: int, n_cols: int) -> np.ndarray:
+    n = n_rows * n_cols
+    start = _next_tile_id[0]
+    _next_tile_id[0] += n
+    return np.arange(start, start + n, dtype=np.int64).reshape(n_rows, n_cols)
+
+
 # ------------------------------------------------------------------------ containers
 class CountGrid:
     """One GMapping occupancy grid (hits, visits, accumulated hit positions) that grows.
@@ -478,7 +512,7 @@ class CountGrid:
         Cell size in metres (GMapping's ``delta``).
     """
 
-    __slots__ = ("hits", "visits", "sx", "sy", "mean", "x0", "y0", "delta")
+    __slots__ = ("hits", "visits", "sx", "sy", "mean", "x0", "y0", "delta", "tile_id")
 
     def __init__(self, shape: tuple[int, int], x0: float, y0: float, delta: float):
         self.hits = np.zeros(shape, np.int32)
@@ -489,6 +523,17 @@ class CountGrid:
         self.x0 = float(x0)
         self.y0 = float(y0)
         self.delta = float(delta)
+        self._new_tile_ids()
+
+    def _new_tile_ids(self) -> None:
+        """Fresh content ids for every :data:`TILE` x :data:`TILE` block.
+
+        A block's id changes whenever a scan may have written into it, and is
+        handed on by copying, so two grids whose blocks carry the same id hold the
+        same contents there: :meth:`copy` copies only the blocks that differ.
+        """
+        ny, nx = self.shape
+        self.tile_id = _fresh_tile_ids(-(-ny // TILE), -(-nx // TILE))
 
     @classmethod
     def around(cls, x: float, y: float, half_size: float, delta: float) -> CountGrid:
@@ -496,13 +541,35 @@ class CountGrid:
         n = int(math.ceil(2 * half_size / delta))
         return cls((n, n), x - n * delta / 2, y - n * delta / 2, delta)
 
-    def copy(self) -> CountGrid:
-        new = CountGrid.__new__(CountGrid)
-        new.hits = self.hits.copy()
-        new.visits = self.visits.copy()
-        new.sx = self.sx.copy()
-        new.sy = self.sy.copy()
-        new.mean = self.mean.copy()
+    def copy(self, out: CountGrid | None = None) -> CountGrid:
+        """A copy; with ``out`` (a grid no longer needed) into its arrays when the
+        shapes match, which saves allocating (and page-faulting) new ones.
+
+        Into ``out``, only the blocks whose content ids differ are copied: after a
+        resampling, a dropped particle and the one copied into its grid share most
+        of their history, and a scan touches only the blocks within the usable range
+        (measured: about a fifth of the blocks of a 7-minute run's grids differ).
+        """
+        if out is self:
+            return self
+        if out is None or out.shape != self.shape or out.x0 != self.x0 or out.y0 != self.y0:
+            new = CountGrid.__new__(CountGrid)
+            new.hits = self.hits.copy()
+            new.visits = self.visits.copy()
+            new.sx = self.sx.copy()
+            new.sy = self.sy.copy()
+            new.mean = self.mean.copy()
+            new.tile_id = self.tile_id.copy()
+        else:
+            new = out
+            differ = new.tile_id != self.tile_id
+            for name in ("hits", "visits", "sx", "sy"):
+                _copy_tiles(getattr(self, name), getattr(new, name), differ, TILE, TILE)
+            ny, nx = self.shape  # (ny, nx, 2) seen as (ny, 2 nx)
+            _copy_tiles(
+                self.mean.reshape(ny, 2 * nx), new.mean.reshape(ny, 2 * nx), differ, TILE, 2 * TILE
+            )
+            new.tile_id[...] = self.tile_id
         new.x0, new.y0, new.delta = self.x0, self.y0, self.delta
         return new
 
@@ -556,6 +623,7 @@ class CountGrid:
         self.mean = np.pad(self.mean, (*widths, (0, 0)), constant_values=np.nan)
         self.x0 -= left * self.delta
         self.y0 -= bottom * self.delta
+        self._new_tile_ids()  # the blocks moved
 
     def register_scan(
         self,
@@ -586,6 +654,15 @@ class CountGrid:
             float(max_range),
             bool(no_return_free),
         )
+        # every cell written lies within ``reach`` of the laser: new ids for those blocks
+        k = reach / self.delta + 2
+        cx = (lx - self.x0) / self.delta
+        cy = (ly - self.y0) / self.delta
+        nty, ntx = self.tile_id.shape
+        tx0, tx1 = max(0, int((cx - k) // TILE)), min(ntx, int((cx + k) // TILE) + 1)
+        ty0, ty1 = max(0, int((cy - k) // TILE)), min(nty, int((cy + k) // TILE) + 1)
+        if tx1 > tx0 and ty1 > ty0:
+            self.tile_id[ty0:ty1, tx0:tx1] = _fresh_tile_ids(ty1 - ty0, tx1 - tx0)
 
     def to_occupancy_map(self, occ_thresh: float = 0.25, meta: dict | None = None) -> OccupancyMap:
         """The ternary map (GMapping/slam_gmapping rule: occupied when hits/visits > occ_thresh)."""

@@ -364,6 +364,7 @@ class GMappingRBPF:
         self._node_pose: list[np.ndarray] = []
         self._node_parent: list[np.ndarray] = []
         self._node_time: list[float] = []
+        self._n_nodes = 0
         self.leaf = np.full(n, -1, np.int64)
         self._frame = StartFrame()
         # particle poses and odometry at the last processed scan (motion prior anchor)
@@ -471,10 +472,11 @@ class GMappingRBPF:
             )
 
     def _add_nodes(self, t: float) -> None:
-        base = sum(len(a) for a in self._node_pose)
+        base = self._n_nodes  # nodes so far (a running count: summing the lists is O(T^2))
         self._node_pose.append(self.poses.copy())
         self._node_parent.append(self.leaf.copy())
         self._node_time.append(float(t))
+        self._n_nodes += self.poses.shape[0]
         self.leaf = base + np.arange(self.poses.shape[0])
 
     def _motion_priors(self, o: np.ndarray) -> np.ndarray:
@@ -572,12 +574,19 @@ class GMappingRBPF:
         self._register_all(ranges, angles, scan)
 
     def _resample(self, idx: np.ndarray) -> None:
-        """Keep particles ``idx``; copy a grid only when its particle is drawn again."""
+        """Keep particles ``idx``; copy a grid only when its particle is drawn again.
+
+        A copy goes into the arrays of a particle that was not drawn (as many are
+        dropped as are drawn twice), so resampling allocates no new grid: fresh
+        multi-megabyte arrays cost page faults, which cost more than the copy.
+        """
+        drawn = [int(j) for j in idx]
+        kept = set(drawn)
+        spare = [g for j, g in enumerate(self.grids) if j not in kept]
         taken: set[int] = set()
         grids = []
-        for j in idx:
-            j = int(j)
-            grids.append(self.grids[j] if j not in taken else self.grids[j].copy())
+        for j in drawn:
+            grids.append(self.grids[j] if j not in taken else self.grids[j].copy(out=spare.pop()))
             taken.add(j)
         self.grids = grids
         self.poses = self.poses[idx].copy()
