@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 
@@ -63,6 +64,8 @@ def run(args: argparse.Namespace) -> int:
     if args.out.exists() and not args.out.is_dir():
         raise InputError(args.out, "output path exists and is not a directory")
     log = load_log(args.log, args.format)  # every format problem is raised here, before output
+    for note in log.notes:
+        print(f"map2map: note: {args.log}: {note}", file=sys.stderr)
     res = run_slam(
         log,
         args.backend,
