@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ._mapargs import add_input_options, check_seed, read_options_from_args
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
@@ -39,6 +41,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--no-auto-anchors", action="store_true", help="do not look for anchor points")
     p.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    add_input_options(p, resolution=False, several=True)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
@@ -47,6 +50,7 @@ def run(args: argparse.Namespace) -> int:
     from ..errors import InputError
     from ..evaluate.outputs import run_evaluate, run_pairs
 
+    check_seed(args.seed)
     if args.resolution is not None and not args.resolution > 0:
         raise InputError("--resolution", f"must be > 0, got {args.resolution:g}")
     if args.pairs:
@@ -61,6 +65,7 @@ def run(args: argparse.Namespace) -> int:
             units=args.units,
             auto_anchor=not args.no_auto_anchors,
             seed=args.seed,
+            read_options=read_options_from_args(args),
             progress=not args.quiet,
         )
         unit = "px" if args.units == "px" else "m"
@@ -82,6 +87,7 @@ def run(args: argparse.Namespace) -> int:
         units=args.units,
         auto_anchor=not args.no_auto_anchors,
         seed=args.seed,
+        read_options=read_options_from_args(args),
     )
     r = ev.report
     for w in r["warnings"]:

@@ -7,7 +7,7 @@ import math
 from pathlib import Path
 
 from ..errors import InputError
-from ._mapargs import add_input_options, load_from_args
+from ._mapargs import add_input_options, check_seed, load_from_args
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -74,6 +74,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..errors import warnings_unless_error
     from ..sim.routes import read_route
     from ..sim.runner import save_run, simulate
 
@@ -81,35 +82,38 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--duration", f"duration must be > 0 seconds, got {args.duration:g}")
     if args.obstacles < 0 or args.people < 0:
         raise InputError("--obstacles/--people", "counts must be >= 0")
-    plan = load_from_args(args)
-    route, route_file = None, None
-    if args.waypoints or args.trajectory:
-        route_file = args.waypoints or args.trajectory
-        kind = "waypoints" if args.waypoints else "trajectory"
-        route = read_route(route_file, kind)
-        if Path(args.input).suffix.lower() == ".json":  # HouseExpo: y axis flipped
-            route = route.copy()
-            route[:, 1] *= -1
-            if route.shape[1] == 3:
-                route[:, 2] *= -1
-    start = tuple(args.start) if args.start else None
-    if start is not None and Path(args.input).suffix.lower() == ".json":
-        start = (start[0], -start[1], -start[2])
-    res = simulate(
-        plan,
-        seed=args.seed,
-        duration=args.duration,
-        fov=args.fov,
-        mapper=args.mapper,
-        route=route,
-        obstacles=args.obstacles,
-        people=args.people,
-        start=start,
-        frame_every=2.0 if args.gif else 0.0,
-        progress=not args.quiet,
-        source=args.input,
-        route_source=route_file,
-    )
+    check_seed(args.seed)
+    # a plan refused below (no free space...) is said in one line, without its warnings
+    with warnings_unless_error():
+        plan = load_from_args(args)
+        route, route_file = None, None
+        if args.waypoints or args.trajectory:
+            route_file = args.waypoints or args.trajectory
+            kind = "waypoints" if args.waypoints else "trajectory"
+            route = read_route(route_file, kind)
+            if Path(args.input).suffix.lower() == ".json":  # HouseExpo: y axis flipped
+                route = route.copy()
+                route[:, 1] *= -1
+                if route.shape[1] == 3:
+                    route[:, 2] *= -1
+        start = tuple(args.start) if args.start else None
+        if start is not None and Path(args.input).suffix.lower() == ".json":
+            start = (start[0], -start[1], -start[2])
+        res = simulate(
+            plan,
+            seed=args.seed,
+            duration=args.duration,
+            fov=args.fov,
+            mapper=args.mapper,
+            route=route,
+            obstacles=args.obstacles,
+            people=args.people,
+            start=start,
+            frame_every=2.0 if args.gif else 0.0,
+            progress=not args.quiet,
+            source=args.input,
+            route_source=route_file,
+        )
     paths = save_run(res, args.out, gif=args.gif)
     rep = res.report()
     print(

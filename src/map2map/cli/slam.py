@@ -54,7 +54,9 @@ def run(args: argparse.Namespace) -> int:
     from ..errors import InputError
     from ..slam.logs import load_log
     from ..slam.offline import run_slam, write_slam_outputs
+    from ._mapargs import check_seed
 
+    check_seed(args.seed)
     if args.particles is not None and args.particles < 1:
         raise InputError("--particles", f"must be >= 1, got {args.particles}")
     if not args.resolution > 0:
