@@ -2,7 +2,7 @@
 
 Usage::
 
-    python3 benchmarks/carmen_real.py                         # both logs, rbpf and graph
+    python3 benchmarks/carmen_real.py                   # both logs: oracle, rbpf, rbpf:30, graph
     python3 benchmarks/carmen_real.py --backends rbpf --logs aces
     python3 benchmarks/carmen_real.py --figure docs/carmen_real.png
 
@@ -58,7 +58,7 @@ def _at_times(log, times: np.ndarray) -> np.ndarray:
     return np.clip(np.searchsorted(t, times - 1e-6), 0, len(t) - 1)
 
 
-def evaluate_log(name, backend, particles=None, max_range=None, **options):
+def evaluate_log(name, backend, particles=None, max_range=None, seed=0, **options):
     from map2map.sim.carmen import replay
     from map2map.sim.mappers import make_mapper
     from map2map.slam.logs import load_log
@@ -83,7 +83,7 @@ def evaluate_log(name, backend, particles=None, max_range=None, **options):
         traj = relative_to_first(ref_poses)
         times = np.array([s.t for s in log.scans])
     else:
-        res = run_slam(log, backend, particles=particles, max_range=max_range, seed=0, **options)
+        res = run_slam(log, backend, particles=particles, max_range=max_range, seed=seed, **options)
         slam_map, traj, times = res.map, res.trajectory[:, 1:4], res.trajectory[:, 0]
     cpu = time.process_time() - t0
     start = ref_poses[0]  # every map frame starts at the first pose
@@ -142,7 +142,7 @@ def figure(results, path: Path) -> None:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--logs", default="aces,fhw")
-    ap.add_argument("--backends", default="oracle,rbpf,graph")
+    ap.add_argument("--backends", default="oracle,rbpf,rbpf:30,graph", help="rbpf:N = N particles")
     ap.add_argument("--particles", type=int, default=None)
     ap.add_argument("--max-range", type=float, default=None)
     ap.add_argument("--figure", type=Path, help="PNG of the maps over the references")
@@ -156,8 +156,10 @@ def main(argv=None) -> int:
     )
     results = []
     for name in args.logs.split(","):
-        for backend in args.backends.split(","):
-            r = evaluate_log(name, backend, args.particles, args.max_range)
+        for spec in args.backends.split(","):
+            backend, _, count = spec.partition(":")  # rbpf:30 = 30 particles
+            r = evaluate_log(name, backend, int(count) if count else args.particles, args.max_range)
+            r[0]["backend"] = spec
             results.append(r)
             row = r[0]
             print(

@@ -36,8 +36,9 @@ def register(subparsers) -> None:
         "--max-range",
         type=float,
         default=None,
-        help="usable laser range in m (rbpf: GMapping's maxUrange, default min(3.0, sensor "
-        "maximum); graph: default the sensor maximum)",
+        help="usable laser range in m (rbpf: GMapping's maxUrange, default 3 m for a 3.5 m "
+        "LDS-01, 80%% of a longer sensor's range up to 10 m; graph: default the sensor "
+        "maximum)",
     )
     p.add_argument("--seed", type=int, default=0, help="random seed of rbpf (default 0)")
     p.add_argument(
