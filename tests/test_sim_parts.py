@@ -188,7 +188,13 @@ def test_carmen_reads_classic_flaser(tmp_path):
         ("", "empty log"),
         ("ODOM 0 0 0 0 0 0 1 h 1\n", "no laser scans"),
         ("RAWLASER1 3 0 1 1 3.5 0.01 0 2 1.0 1.0 0 1 h 1\n", "no odometry"),
-        ("ODOM 0 0 0 0 0 0 1 h 1\nFOO 1 2 3\n", "line 2: unknown CARMEN message 'FOO'"),
+        ("ODOM 0 0 0 0 0 0 1 h 1\n3.5 1 2 3\n", "line 2: not a CARMEN message"),
+        ("ODOM 0 0 0 0 0 0 1 h 1\nFLASER 3 1.0 1.0 0 0 0 0 0 0 1 h 1\n", "line 2: corrupt FLASER"),
+        (
+            "PARAM robot_front_laser_max abc 0 h 0\nODOM 0 0 0 0 0 0 1 h 1\n"
+            "FLASER 2 1.0 1.0 0 0 0 0 0 0 1 h 1\n",
+            "robot_front_laser_max",
+        ),
         ("ODOM 0 0 x 0 0 0 1 h 1\n", "line 1: corrupt ODOM"),
         ("ODOM 0 0 0 0 0 0 1 h 1\nRAWLASER1 3 0 1 1 3.5 0.01 0 2 1.0\n", "line 2: truncated"),
         (
@@ -216,3 +222,63 @@ def test_write_rejects_nothing_half_written(tmp_path):
     with pytest.raises(RuntimeError):
         write_carmen(path, records())
     assert not path.exists() and not list(tmp_path.iterdir())
+
+
+def _flaser(pose, t, ranges="1.5 2.0 2.5"):
+    x, y, th = pose
+    return f"FLASER 3 {ranges} {x} {y} {th} {x} {y} {th} {t} pippo {t}"
+
+
+def test_carmen_skips_unused_messages_and_counts_them(tmp_path):
+    text = "\n".join(
+        [
+            "# CARMEN Logfile",
+            "PARAM robot_frontlaser_offset 0.0 nohost 0",
+            "NEFF 30",
+            "ODOM 0 0 0 0 0 0 1.0 h 1.0",
+            "SYNC tag 1.1 h 1.1",
+            "GPSNMEA garbage fields here",
+            _flaser((0.1, 0.0, 0.0), 1.2),
+            "NEFF 29.5",
+            "MYVENDOR_MSG 1 2 3",
+            _flaser((0.2, 0.0, 0.0), 1.4),
+        ]
+    )
+    (tmp_path / "a.log").write_text(text + "\n")
+    log = read_carmen(tmp_path / "a.log")
+    assert len(log) == 2
+    assert log.skipped == {"NEFF": 2, "SYNC": 1, "GPSNMEA": 1, "MYVENDOR_MSG": 1}
+    assert log.notes[0].startswith("skipped message types not used: 2 NEFF")
+    assert log.logged_poses is None  # not a corrected log: FLASER odometry is the odometry
+    assert log.odometry[1] == OdometryReading(1.4, 0.2, 0.0, 0.0)
+    s = log.scans[0]  # CARMEN's FLASER geometry: 3 beams over 180 degrees, 50 m default
+    assert s.angle_min == pytest.approx(-np.pi / 2) and s.angles[-1] == pytest.approx(np.pi / 2)
+    assert s.range_max == 50.0
+
+
+def test_carmen_corrected_log_odometry_from_odom_increments(tmp_path):
+    """A corrected log (GMapping's tools): FLASER poses are corrected, and an ODOM line with
+    the corrected pose and timestamp 0 re-anchors the odometry after every scan. The
+    odometry must be the wheel increments, never the corrected poses."""
+    lines = ["ODOM 0 0 0 0 0 0 1.0 pippo 1.0", "ODOM 1.0 0 0 0 0 0 2.0 pippo 2.0"]
+    lines += [_flaser((0.9, 0.1, 0.05), 2.0), "NEFF 30", "ODOM 0.9 0.1 0.05 0 0 0 0 pippo 0"]
+    # the wheels then move 1 m straight ahead, from the re-anchored pose
+    c, s = np.cos(0.05), np.sin(0.05)
+    lines += [f"ODOM {0.9 + c} {0.1 + s} 0.05 0 0 0 3.0 pippo 3.0"]
+    lines += [_flaser((2.0, 0.3, 0.1), 3.0), "NEFF 29", "ODOM 2.0 0.3 0.1 0 0 0 0 pippo 0"]
+    (tmp_path / "c.log").write_text("\n".join(lines) + "\n")
+    log = read_carmen(tmp_path / "c.log")
+    odo = np.array([(o.x, o.y, o.theta) for o in log.odometry])
+    np.testing.assert_allclose(odo, [[1.0, 0.0, 0.0], [2.0, 0.0, 0.0]], atol=1e-12)
+    np.testing.assert_array_equal(log.logged_poses, [[0.9, 0.1, 0.05], [2.0, 0.3, 0.1]])
+    assert any("corrected log: 2 ODOM lines re-anchor" in n for n in log.notes)
+
+
+def test_real_carmen_logs_load(shared_data):
+    for name in ("aces", "fhw"):
+        log = read_carmen(shared_data / "carmen" / f"{name}-corrected.log.gz")
+        assert len(log) > 400 and log.skipped == {"NEFF": len(log)}
+        assert log.logged_poses.shape == (len(log), 3)
+        o = np.array([(r.x, r.y, r.theta) for r in log.odometry])
+        # wheel odometry, not the corrected poses: it drifts away from them
+        assert np.abs(o[:, :2] - log.logged_poses[:, :2]).max() > 1.0

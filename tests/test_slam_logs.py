@@ -86,7 +86,7 @@ def _raw(t, n=360):
 
 
 BAD_LOGS = {
-    "unknown": (["# header", ODOM.format(x=0, t=0), "FOOBAR 1 2 3 0 host 0"], "line 3"),
+    "not_a_message": (["# header", ODOM.format(x=0, t=0), "12.5 1 2 3 0 host 0"], "line 3"),
     "corrupt": ([ODOM.format(x=0, t=0), _raw(0), "ODOM 0.1 zz 0 0 0 0 1 host 1"], "line 3"),
     "truncated": (
         [ODOM.format(x=0, t=0), "RAWLASER1 3 0.0 6.2 0.017 3.5 0.01 0 360 1.0"],
@@ -223,3 +223,23 @@ def test_demo_stage_maps_a_simulated_run(tmp_path):
         m = load_ros_map(tmp_path / "slam" / backend / "map.yaml")
         assert m.occupied.sum() > 100
     assert set(ctx.slam) == {"rbpf", "graph"}
+
+
+def test_slam_command_skips_unused_messages_with_one_note(tmp_path, run_records, capsys):
+    """Radish logs carry NEFF, SYNC, GPS... lines: skipped, counted, said once."""
+    write_carmen(tmp_path / "run.log", run_records[:40])
+    lines = (tmp_path / "run.log").read_text().splitlines()
+    extra = []
+    for line in lines:
+        extra.append(line)
+        if line.startswith("RAWLASER1"):
+            extra += ["NEFF 29.5", "SYNC tag 0 host 0"]
+    (tmp_path / "radish.log").write_text("\n".join(extra) + "\n")
+    out = tmp_path / "out"
+    rc = main(
+        ["slam", str(tmp_path / "radish.log"), "--out", str(out), "--quiet", "--backend", "graph"]
+    )
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 0 and (out / "map.yaml").is_file()
+    notes = [e for e in err if "skipped" in e]
+    assert len(notes) == 1 and "40 NEFF" in notes[0] and "40 SYNC" in notes[0], err

@@ -5,6 +5,6 @@
 True
 """
 
-from .core.errors import EXIT_BAD_INPUT, InputError
+from .core.errors import EXIT_BAD_INPUT, InputError, MapWarning, warnings_unless_error
 
-__all__ = ["EXIT_BAD_INPUT", "InputError"]
+__all__ = ["EXIT_BAD_INPUT", "InputError", "MapWarning", "warnings_unless_error"]

@@ -1,4 +1,10 @@
-"""Input-map options shared by the commands that read a map (``convert``, ``show``)."""
+"""Map-reading options shared by every command that reads a map.
+
+``convert``, ``prep``, ``show``, ``simulate``, ``deform``, ``align`` and ``evaluate``
+all take the same options (:func:`add_input_options`) and turn them into one
+:class:`map2map.maps.formats.MapReadOptions` (:func:`read_options_from_args`).
+``align``, ``evaluate`` and ``deform`` keep their own ``--resolution`` flag.
+"""
 
 from __future__ import annotations
 
@@ -9,19 +15,30 @@ from ..maps.dxf import UNITS
 from ..maps.ros import MODES
 
 
-def add_input_options(p: argparse.ArgumentParser) -> None:
-    """Add the options of :func:`map2map.maps.formats.load_map` to a parser."""
+def add_input_options(
+    p: argparse.ArgumentParser, *, resolution: bool = True, several: bool = False
+) -> None:
+    """Add the options of :func:`map2map.maps.formats.load_map` to a parser.
+
+    ``resolution=False`` leaves ``--resolution`` to the command itself; ``several``
+    says the command reads several maps (each option then applies to the inputs of
+    the formats it names).
+    """
     g = p.add_argument_group(
-        "reading the input",
-        "Options apply only to the formats named; others are refused.",
+        "reading the input maps" if several else "reading the input",
+        "Each option applies to the input formats it names; an option that applies to "
+        "no input is refused."
+        if several
+        else "Options apply only to the formats named; others are refused.",
     )
-    g.add_argument(
-        "--resolution",
-        type=float,
-        metavar="R",
-        help="metres per pixel for pictures, HouseExpo JSON and DXF (default: stored in "
-        "the picture, else 0.05)",
-    )
+    if resolution:
+        g.add_argument(
+            "--resolution",
+            type=float,
+            metavar="R",
+            help="metres per pixel for pictures, HouseExpo JSON and DXF (default: stored in "
+            "the picture, else 0.05)",
+        )
     g.add_argument(
         "--occupied-thresh",
         type=float,
@@ -53,8 +70,13 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
         metavar="T",
         help="DXF: wall thickness in metres (default 0.1)",
     )
+    # evaluate has its own --units (of the report): there only --dxf-units
+    flags = [f for f in ("--units", "--dxf-units") if f not in p._option_string_actions]
     g.add_argument(
-        "--units", choices=sorted(UNITS), help="DXF: drawing units (default: from $INSUNITS)"
+        *flags,
+        dest="dxf_units",
+        choices=sorted(UNITS),
+        help="DXF: drawing units (default: from $INSUNITS)",
     )
 
 
@@ -65,21 +87,28 @@ def _split_layers(values: list[str] | None) -> list[str] | None:
     return [name for name in names if name]
 
 
-def load_from_args(args: argparse.Namespace):
-    """Load ``args.input`` with the options of :func:`add_input_options`."""
-    from ..maps.formats import load_map
+def read_options_from_args(args: argparse.Namespace):
+    """The :class:`~map2map.maps.formats.MapReadOptions` of :func:`add_input_options`."""
+    from ..maps.formats import MapReadOptions
 
-    m = load_map(
-        args.input,
-        resolution=args.resolution,
+    layers = _split_layers(args.layers)
+    return MapReadOptions(
+        resolution=getattr(args, "resolution", None),
         occupied_thresh=args.occupied_thresh,
         free_thresh=args.free_thresh,
         negate=args.negate,
         mode=args.mode,
-        layers=_split_layers(args.layers),
+        layers=None if layers is None else tuple(layers),
         wall_thickness=args.wall_thickness,
-        units=args.units,
+        units=args.dxf_units,
     )
+
+
+def load_from_args(args: argparse.Namespace):
+    """Load ``args.input`` with the options of :func:`add_input_options`."""
+    from ..maps.formats import load_map
+
+    m = load_map(args.input, read_options_from_args(args))
     if m.meta.get("resolution_assumed"):
         print(
             f"map2map: note: {args.input}: no resolution given or stored; assuming "
@@ -101,3 +130,12 @@ def load_from_args(args: argparse.Namespace):
             file=sys.stderr,
         )
     return m
+
+
+def check_seed(seed: int, flag: str = "--seed") -> int:
+    """Refuse a seed numpy cannot take (negative, or 128 bits and more) with one line."""
+    from ..core.errors import InputError
+
+    if not 0 <= seed < 2**128:
+        raise InputError(flag, f"seed must be a non-negative integer, got {seed}")
+    return seed

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from ._mapargs import add_input_options, check_seed, read_options_from_args
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
@@ -57,6 +59,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="do not look for anchor points automatically",
     )
     p.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    add_input_options(p, resolution=False, several=True)
     p.set_defaults(func=run)
 
 
@@ -88,6 +91,7 @@ def run(args: argparse.Namespace) -> int:
     from ..jobs.evaluate import run_align
 
     check_resolutions(args)
+    check_seed(args.seed)
     written = run_align(
         args.source,
         args.target,
@@ -99,6 +103,7 @@ def run(args: argparse.Namespace) -> int:
         target_resolution=args.target_resolution,
         auto_anchor=not args.no_auto_anchors,
         seed=args.seed,
+        read_options=read_options_from_args(args),
     )
     doc = json.loads(written["alignment"].read_text())
     print(

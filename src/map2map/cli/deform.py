@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from pathlib import Path
 
 from ..core.errors import InputError
+from ._mapargs import add_input_options, check_seed, read_options_from_args
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -61,12 +63,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--resolution", type=float, metavar="R", help="metres per pixel, for pictures without one"
     )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_input_options(p, resolution=False)
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from ..jobs.deform import DeformJob, run_deform
 
+    check_seed(args.seed)
     if args.samples < 1:
         raise InputError("--samples", f"must be at least 1, got {args.samples}")
     sources = [
@@ -95,6 +99,7 @@ def run(args: argparse.Namespace) -> int:
         fov=args.fov,
         params=Path(args.params) if args.params else None,
         resolution=args.resolution,
+        read_options=dataclasses.replace(read_options_from_args(args), resolution=None),
     )
     written = run_deform(job, progress=not args.quiet)
     for folder, stats in written:

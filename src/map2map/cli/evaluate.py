@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from ._mapargs import add_input_options, check_seed, read_options_from_args
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
@@ -55,6 +57,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--no-auto-anchors", action="store_true", help="do not look for anchor points")
     p.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    add_input_options(p, resolution=False, several=True)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
@@ -65,6 +68,7 @@ def run(args: argparse.Namespace) -> int:
     from .align import check_resolutions, report_warnings
 
     check_resolutions(args)
+    check_seed(args.seed)
     if args.pairs:
         if args.slam or args.plan:
             raise InputError("--pairs", "give either SLAM_MAP PLAN or --pairs FILE, not both")
@@ -79,6 +83,7 @@ def run(args: argparse.Namespace) -> int:
             units=args.units,
             auto_anchor=not args.no_auto_anchors,
             seed=args.seed,
+            read_options=read_options_from_args(args),
             progress=not args.quiet,
         )
         unit = "px" if args.units == "px" else "m"
@@ -105,6 +110,7 @@ def run(args: argparse.Namespace) -> int:
         units=args.units,
         auto_anchor=not args.no_auto_anchors,
         seed=args.seed,
+        read_options=read_options_from_args(args),
     )
     from ..evaluate.metric import summary_lines
 

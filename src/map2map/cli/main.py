@@ -11,9 +11,10 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import warnings
 
 from .._version import __version__
-from ..core.errors import EXIT_BAD_INPUT, InputError
+from ..core.errors import EXIT_BAD_INPUT, InputError, MapWarning
 
 #: Command modules, in the order ``--help`` lists them.
 COMMANDS = [
@@ -64,7 +65,18 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return int(args.func(args) or 0)
+        with warnings.catch_warnings():
+            warnings.simplefilter("always", MapWarning)
+            shown = warnings.showwarning
+
+            def show(message, category, *rest, **kw):  # our warnings: one plain line
+                if issubclass(category, MapWarning):
+                    print(f"map2map: warning: {message}", file=sys.stderr)
+                else:
+                    shown(message, category, *rest, **kw)
+
+            warnings.showwarning = show
+            return int(args.func(args) or 0)
     except InputError as exc:
         if args.debug:
             raise

@@ -36,7 +36,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--figure", help="also save a picture with room labels and doors (.png/.pdf/.svg)"
     )
-    p.add_argument("--meta", help="also save the layout (rooms, doors, furniture) as .json")
+    p.add_argument(
+        "--meta",
+        help="also save the layout (rooms, doors, furniture) as .json; 'map2map convert' "
+        "reads it back as the plan (at any --resolution)",
+    )
     p.set_defaults(func=run)
 
 
@@ -44,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
     import json
 
     from ..core._io import atomic_path
-    from ..maps.floorplan import generate_floorplan, save_floorplan_figure
+    from ..maps.floorplan import generate_floorplan, plan_document, save_floorplan_figure
     from ..maps.formats import check_output_path, save_map
 
     plan = generate_floorplan(
@@ -64,7 +68,14 @@ def run(args: argparse.Namespace) -> int:
     written = [args.out]
     if args.meta:
         with atomic_path(args.meta) as tmp:
-            tmp.write_text(json.dumps(plan.meta, indent=1), encoding="utf-8")
+            doc = plan_document(
+                plan,
+                seed=args.seed,
+                kind=args.kind,
+                size=None if args.size is None else tuple(args.size),
+                furniture=args.furniture,
+            )
+            tmp.write_text(json.dumps(doc, indent=1), encoding="utf-8")
         written.append(args.meta)
     if args.figure:
         w, h = plan.meta["size_m"]

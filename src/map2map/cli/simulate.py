@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from ._mapargs import add_input_options, load_from_args
+from ..core.errors import warnings_unless_error
+from ._mapargs import add_input_options, check_seed, load_from_args
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -73,24 +74,27 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..jobs.simulate import SimulateSpec, simulate
 
-    run = simulate(
-        SimulateSpec(
-            plan=load_from_args(args),
-            plan_name=args.input,
-            out=args.out,
-            seed=args.seed,
-            duration=args.duration,
-            fov=args.fov,
-            mapper=args.mapper,
-            waypoints=args.waypoints,
-            trajectory=args.trajectory,
-            start=tuple(args.start) if args.start else None,
-            obstacles=args.obstacles,
-            people=args.people,
-            gif=args.gif,
-            progress=not args.quiet,
+    check_seed(args.seed)
+    # a plan refused below (no free space...) is said in one line, without its warnings
+    with warnings_unless_error():
+        run = simulate(
+            SimulateSpec(
+                plan=load_from_args(args),
+                plan_name=args.input,
+                out=args.out,
+                seed=args.seed,
+                duration=args.duration,
+                fov=args.fov,
+                mapper=args.mapper,
+                waypoints=args.waypoints,
+                trajectory=args.trajectory,
+                start=tuple(args.start) if args.start else None,
+                obstacles=args.obstacles,
+                people=args.people,
+                gif=args.gif,
+                progress=not args.quiet,
+            )
         )
-    )
     rep = run.result.report()
     print(
         f"simulated {rep['simulated_seconds']:.0f} s ({rep['stop_reason']}) in "

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 
@@ -35,8 +36,9 @@ def register(subparsers) -> None:
         "--max-range",
         type=float,
         default=None,
-        help="usable laser range in m (rbpf: GMapping's maxUrange, default min(3.0, sensor "
-        "maximum); graph: default the sensor maximum)",
+        help="usable laser range in m (rbpf: GMapping's maxUrange, default 3 m for a 3.5 m "
+        "LDS-01, 80%% of a longer sensor's range up to 10 m; graph: default the sensor "
+        "maximum)",
     )
     p.add_argument("--seed", type=int, default=0, help="random seed of rbpf (default 0)")
     p.add_argument(
@@ -51,7 +53,9 @@ def register(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..jobs.slam import SlamSpec, slam
+    from ._mapargs import check_seed
 
+    check_seed(args.seed)
     run = slam(
         SlamSpec(
             log=args.log,
@@ -65,6 +69,8 @@ def run(args: argparse.Namespace) -> int:
             progress=not args.quiet,
         )
     )
+    for note in run.notes:
+        print(f"map2map: note: {args.log}: {note}", file=sys.stderr)
     for p in run.written.values():
         print(p)
     return 0

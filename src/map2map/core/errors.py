@@ -8,9 +8,11 @@ corrupt or inconsistent, a parameter out of range). The command line prints
 
 from __future__ import annotations
 
+import contextlib
 import os
+import warnings
 
-__all__ = ["InputError", "EXIT_BAD_INPUT"]
+__all__ = ["InputError", "MapWarning", "EXIT_BAD_INPUT", "warnings_unless_error"]
 
 EXIT_BAD_INPUT = 2
 
@@ -28,3 +30,38 @@ class InputError(ValueError):
         self.source = None if source is None else os.fspath(source)
         self.problem = problem
         super().__init__(problem if self.source is None else f"{self.source}: {problem}")
+
+
+class MapWarning(UserWarning):
+    """A result the program is not sure of (e.g. a degenerate map read from a file).
+
+    Library functions issue it with :func:`warnings.warn`; the command line prints
+    it as one line ``map2map: warning: <file>: <problem>`` on stderr.
+    """
+
+
+@contextlib.contextmanager
+def warnings_unless_error():
+    """Hold the warnings issued inside the block; issue them only if it succeeds.
+
+    Reading a map and then refusing it would otherwise say two things (a warning
+    that the map looks degenerate, then the error): the error alone is the one line.
+
+    Examples
+    --------
+    >>> with warnings.catch_warnings(record=True) as seen:
+    ...     warnings.simplefilter("always")
+    ...     try:
+    ...         with warnings_unless_error():
+    ...             warnings.warn("odd map", MapWarning)
+    ...             raise InputError("m.png", "no free space")
+    ...     except InputError:
+    ...         pass
+    >>> len(seen)
+    0
+    """
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        yield
+    for w in caught:
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)

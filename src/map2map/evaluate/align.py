@@ -181,7 +181,11 @@ def check_map(data: np.ndarray, name: str | None) -> tuple[int, int, int, int]:
     content is smaller than :data:`MIN_MAP_SIZE` pixels on a side.
     """
     if not (data == OCCUPIED).any():
-        raise InputError(name, "map has no occupied pixels (no walls to align)")
+        raise InputError(
+            name,
+            "map has no occupied pixels (no walls to align; if its walls are grey, "
+            "read them with --occupied-thresh or --negate)",
+        )
     known = data != UNKNOWN
     rows = np.flatnonzero(known.any(axis=1))
     cols = np.flatnonzero(known.any(axis=0))
@@ -192,6 +196,8 @@ def check_map(data: np.ndarray, name: str | None) -> tuple[int, int, int, int]:
             f"map content is {box[3] - box[2]} x {box[1] - box[0]} px, too small to decompose "
             f"(at least {MIN_MAP_SIZE} x {MIN_MAP_SIZE} px needed)",
         )
+    if not (data == FREE).any():
+        raise InputError(name, "map has no free pixels (all walls or unknown): nothing to align")
     return box
 
 

@@ -23,7 +23,7 @@ from tqdm.auto import tqdm
 
 from .._version import __version__
 from ..core._io import ensure_output_dir
-from ..core.errors import InputError
+from ..core.errors import InputError, warnings_unless_error
 from ..core.grid import FREE, OccupancyMap
 from ..parametric.figures import deform_figure
 from ..parametric.params import ParametricParams, load_params, save_params
@@ -49,13 +49,15 @@ class DeformJob:
     fov: int | None = None
     params: Path | None = None
     resolution: float | None = None
+    read_options: object | None = None  # maps.formats.MapReadOptions
 
 
-def load_plan(path: Path, resolution: float | None = None) -> OccupancyMap:
-    """Read a plan with :func:`map2map.maps.formats.load_map` (any supported format)."""
+def load_plan(path: Path, resolution: float | None = None, options=None) -> OccupancyMap:
+    """Read a plan with :func:`map2map.maps.formats.load_map` (any supported format);
+    ``options`` is a :class:`~map2map.maps.formats.MapReadOptions` (thresholds...)."""
     from ..maps.formats import load_map
 
-    return load_map(path, resolution=resolution)
+    return load_map(path, options, resolution=resolution)
 
 
 def sample_rngs(seed: int) -> tuple[np.random.Generator, np.random.Generator]:
@@ -106,9 +108,10 @@ def run_deform(job: DeformJob, progress: bool = True) -> list[tuple[Path, dict]]
     params = load_params(job.params) if job.params else ParametricParams()
     if job.fov is not None:
         params = dataclasses.replace(params, fov_deg=float(job.fov))
-    plan = load_plan(job.plan, job.resolution)
-    if not plan.free.any():
-        raise InputError(job.plan, "the plan has no free space")
+    with warnings_unless_error():  # a refused plan: the error alone
+        plan = load_plan(job.plan, job.resolution, job.read_options)
+        if not plan.free.any():
+            raise InputError(job.plan, "the plan has no free space")
     waypoints = read_waypoints(job.waypoints) if job.waypoints else None
     recorded = None
     if job.trajectory:
@@ -159,6 +162,8 @@ def run_deform(job: DeformJob, progress: bool = True) -> list[tuple[Path, dict]]
         if job.resolution:
             run["resolution"] = job.resolution
             run["repeat"] += f" --resolution {job.resolution!r}"
+        if job.read_options is not None and job.read_options.to_args():
+            run["repeat"] += " " + " ".join(job.read_options.to_args())
         write_result(plan, res, folder, run)
         stats = res.field.stats(res.observed)
         stats.update(method=job.method, seconds=time.perf_counter() - t0)

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from ..core._io import atomic_path, ensure_output_dir
-from ..core.errors import InputError
+from ..core.errors import InputError, warnings_unless_error
 from ..core.grid import OccupancyMap
 from ..evaluate.align import check_map
 from ..evaluate.anchors import Anchors, read_anchors, validate_anchors
@@ -57,21 +57,40 @@ class MapInput:
     resolution_known: bool
 
 
-def load_input(path: str | os.PathLike, resolution: float | None = None) -> MapInput:
+def load_input(path: str | os.PathLike, resolution: float | None = None, options=None) -> MapInput:
     """Load a map with :func:`map2map.maps.formats.load_map` and check it can be aligned.
 
     ``resolution`` applies to formats without their own (pictures, HouseExpo, DXF);
-    a ROS map keeps the resolution of its yaml.
+    a ROS map keeps the resolution of its yaml. ``options``
+    (:class:`~map2map.maps.formats.MapReadOptions`: thresholds, ``negate``, DXF
+    layers...) apply where the file's format takes them.
     """
-    from ..maps.formats import load_map, map_kind
+    from ..maps.formats import MapReadOptions, load_map, map_kind
 
     p = Path(path)
     kind = map_kind(p)
     res = resolution if kind != "ros" else None
-    m = load_map(p, resolution=res)
-    check_map(m.data, str(p))
+    opts = (options or MapReadOptions()).applicable(kind)
+    with warnings_unless_error():  # a refused map: the error alone
+        m = load_map(p, opts, resolution=res)
+        check_map(m.data, str(p))
     known = not m.meta.get("resolution_assumed", False)
     return MapInput(p, m, known)
+
+
+def check_read_options(options, paths) -> None:
+    """Refuse a reading option that applies to none of the maps ``paths`` (one line)."""
+    from ..maps.formats import map_kind
+
+    if options is None:
+        return
+    kinds = [map_kind(p) for p in paths]
+    for name in options.given():
+        if name == "resolution":
+            continue
+        if not any(name in options.applicable(k).given() for k in kinds):
+            flag = "--" + name.replace("_", "-")
+            raise InputError(flag, f"does not apply to any input ({', '.join(map(str, paths))})")
 
 
 def read_points(path: str | os.PathLike, shape: tuple[int, int] | None = None) -> np.ndarray:
@@ -155,14 +174,18 @@ def run_align(
     seed: int = 0,
     source_resolution: float | None = None,
     target_resolution: float | None = None,
+    read_options=None,
 ) -> dict[str, Path]:
     """``map2map align``: returns ``{what: path}`` of the files written.
 
     ``resolution`` applies to both inputs, ``source_resolution`` and
     ``target_resolution`` to one each (they win over ``resolution``).
+    ``read_options`` (:class:`~map2map.maps.formats.MapReadOptions`) say how to read
+    both maps (e.g. ``occupied_thresh`` for grey walls).
     """
-    src = load_input(source, _pick(source_resolution, resolution))
-    tgt = load_input(target, _pick(target_resolution, resolution))
+    check_read_options(read_options, [source, target])
+    src = load_input(source, _pick(source_resolution, resolution), read_options)
+    tgt = load_input(target, _pick(target_resolution, resolution), read_options)
     anch = _anchors(anchors, src, tgt)
     pts = read_points(points) if points is not None else None
     out_dir = ensure_output_dir(out)
@@ -241,14 +264,17 @@ def run_evaluate(
     seed: int = 0,
     source_resolution: float | None = None,
     target_resolution: float | None = None,
+    read_options=None,
 ) -> Evaluation:
     """``map2map evaluate`` for one pair; writes report.json, overlay.png, error_map.png.
 
     ``resolution`` applies to both maps, ``source_resolution`` (the SLAM map) and
-    ``target_resolution`` (the plan) to one each.
+    ``target_resolution`` (the plan) to one each. ``read_options``
+    (:class:`~map2map.maps.formats.MapReadOptions`) say how to read both maps.
     """
-    src = load_input(slam, _pick(source_resolution, resolution))
-    tgt = load_input(plan, _pick(target_resolution, resolution))
+    check_read_options(read_options, [slam, plan])
+    src = load_input(slam, _pick(source_resolution, resolution), read_options)
+    tgt = load_input(plan, _pick(target_resolution, resolution), read_options)
     res = _metres_resolution(tgt, units)
     anch = _anchors(anchors, src, tgt)
     out_dir = ensure_output_dir(out)
@@ -303,15 +329,17 @@ def run_pairs(
     auto_anchor: bool = True,
     seed: int = 0,
     progress: bool = True,
+    read_options=None,
 ) -> list[dict[str, Any]]:
     """``map2map evaluate --pairs``: every pair checked first, then evaluated in turn."""
     from tqdm.auto import tqdm
 
     pairs = read_pairs(pairs_file)
+    check_read_options(read_options, [x for pair in pairs for x in pair[:2]])
     loaded = []
     for slam, plan, anchors in pairs:
-        src = load_input(slam, resolution)
-        tgt = load_input(plan, resolution)
+        src = load_input(slam, resolution, read_options)
+        tgt = load_input(plan, resolution, read_options)
         res = _metres_resolution(tgt, units)
         loaded.append((src, tgt, _anchors(anchors, src, tgt), res))
     out_dir = ensure_output_dir(out)

@@ -123,7 +123,8 @@ def _write_csv(path: Path, times, poses) -> None:
         with open(tmp, "w", encoding="ascii") as f:
             f.write("t,x,y,theta\n")
             for t, (x, y, th) in zip(times, poses, strict=True):
-                f.write(f"{t!r},{float(x)!r},{float(y)!r},{float(th)!r}\n")
+                # float(): a numpy scalar's repr is "np.float64(0.0)", not a CSV number
+                f.write(f"{float(t)!r},{float(x)!r},{float(y)!r},{float(th)!r}\n")
 
 
 def plan_with_world(res: SimResult) -> OccupancyMap:

@@ -24,7 +24,7 @@ Examples
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -58,6 +58,8 @@ class SlamRun:
 
     written: dict[str, Path]
     result: SlamResult
+    #: What the log reader said once (message types skipped, odometry rebuilt, ...).
+    notes: list[str] = field(default_factory=list)
 
 
 def slam(spec: SlamSpec) -> SlamRun:
@@ -83,7 +85,7 @@ def slam(spec: SlamSpec) -> SlamRun:
         res, out, title=f"{Path(spec.log).name}: {spec.backend}", figures=spec.figures
     )
     names = ["map", "map_pgm", "trajectory", "figure"]
-    return SlamRun(dict(zip(names, paths, strict=False)), res)
+    return SlamRun(dict(zip(names, paths, strict=False)), res, list(log.notes))
 
 
 def _figure(res: SlamResult, path: Path, title: str) -> None:

@@ -168,10 +168,14 @@ def _validate(doc: Any, source) -> tuple[np.ndarray, tuple[float, float, float, 
 def load_houseexpo(
     path: str | os.PathLike,
     *,
-    resolution: float = DEFAULT_RESOLUTION,
+    resolution: float | None = None,
     margin: float = DEFAULT_MARGIN,
 ) -> OccupancyMap:
     """Read a HouseExpo JSON plan and rasterise it (see :func:`rasterise_houseexpo`).
+
+    ``resolution`` defaults to :data:`DEFAULT_RESOLUTION`. The layout JSON that
+    ``map2map plan --meta`` writes is recognised and rebuilt as that plan
+    (:func:`map2map.maps.floorplan.plan_from_document`, default its own resolution).
 
     Raises
     ------
@@ -188,6 +192,13 @@ def load_houseexpo(
         raise InputError(p, f"cannot read file ({exc})") from None
     except json.JSONDecodeError as exc:
         raise InputError(p, f"not valid JSON (line {exc.lineno}: {exc.msg})") from None
+    if isinstance(doc, dict) and "verts" not in doc and "regenerate" in doc:
+        # the layout that ``map2map plan --meta`` writes: rebuild that plan
+        from .floorplan import plan_from_document
+
+        return plan_from_document(doc, resolution=resolution, source=p)
+    if resolution is None:
+        resolution = DEFAULT_RESOLUTION
     return rasterise_houseexpo(doc, resolution=resolution, margin=margin, source=p)
 
 

@@ -16,12 +16,34 @@ Messages written by :func:`write_carmen` (one triple per scan):
   ``maximum_range`` (the CARMEN convention) and read back as ``inf``.
 
 :func:`read_carmen` also reads the old ``FLASER num_readings [ranges] x y theta
-odom_x odom_y odom_theta`` (180 degrees starting at -90 degrees) and
-``ROBOTLASER1`` messages, accepts gzip (``.gz``), keeps ``PARAM`` lines and
-ignores the other documented message types (``SYNC``, ``RAWLASER2-4``, ``RLASER``,
-GPS, ...). Unknown messages, corrupt lines, logs without odometry or scans and a
-beam count that changes mid-log are bad input (:class:`~map2map.core.errors.InputError`
-naming the line).
+odom_x odom_y odom_theta`` and ``ROBOTLASER1`` messages, accepts gzip (``.gz``) and
+keeps ``PARAM`` lines. The format is open-ended (``SYNC``, ``NEFF``, ``GPS``,
+``RLASER``, ``RAWLASER2-4``, vendors' own messages...): every message type it does
+not use is skipped and counted (:attr:`CarmenLog.skipped`, said once in
+:attr:`CarmenLog.notes`). A corrupt line of a type it uses, a log without odometry or
+scans and a beam count that changes mid-log are bad input
+(:class:`~map2map.core.errors.InputError` naming the line).
+
+``FLASER`` geometry follows CARMEN's own reader (``readlog.c``,
+``carmen_laser_guess_fov`` / ``carmen_laser_guess_angle_increment``): the first
+beam at -90 degrees, 1 degree apart for 180 or 181 readings, 0.5 degree for 360 or
+361, 0.25 degree for 400 or 401, else 180 degrees over ``n - 1`` steps; ranges in
+metres. The maximum range is the ``robot_front_laser_max`` (or
+``laser_front_laser_max_range``) ``PARAM``, else 50 m: GMapping's CARMEN reader
+uses 50 m, and the Radish logs write no-returns as 50.0-51.1 m (``ranges >=`` the
+maximum read as ``inf``).
+
+**Corrected logs.** Radish's ``*-corrected.log`` / ``*.gfs.log`` files are written
+by GMapping's log tools: the pose fields of each laser line are the SLAM-corrected
+pose, and right after each scan an ``ODOM`` line with that corrected pose and
+timestamp 0 re-anchors the odometry stream, whose later lines continue from it by
+the wheel-odometry increments. Feeding those poses to a SLAM backend would hand it
+the answer. So when the ``ODOM`` stream re-anchors (a timestamp running
+backwards), the odometry of each scan is rebuilt from the ``ODOM`` increments with
+the re-anchoring jumps left out (the raw wheel odometry, in its own frame), and the
+laser lines' poses are kept in :attr:`CarmenLog.logged_poses` (a reference, never
+shown to a backend). Otherwise the laser line's odometry fields are the odometry,
+as CARMEN defines them.
 
 Numbers are written so that they read back bit-exactly (poses and times with
 Python's shortest round-trip ``repr``, ranges in millimetres, which is the
@@ -55,7 +77,7 @@ from ..core._io import atomic_path
 from ..core.errors import InputError
 from .base import LaserScan, Mapper, OdometryReading
 
-__all__ = ["CarmenLog", "write_carmen", "read_carmen", "replay"]
+__all__ = ["CarmenLog", "write_carmen", "read_carmen", "replay", "flaser_angle_increment"]
 
 HEADER = """\
 # CARMEN Logfile
@@ -78,31 +100,14 @@ HEADER = """\
 #: CARMEN laser_type of a simulated laser.
 SIMULATED_LASER = 3
 
-#: Message names that are valid CARMEN but carry nothing a 2-D SLAM run needs.
-_IGNORED = {
-    "SYNC",
-    "RAWLASER2",
-    "RAWLASER3",
-    "RAWLASER4",
-    "ROBOTLASER2",
-    "RLASER",
-    "LASER3",
-    "LASER4",
-    "REAR_LASER",
-    "NMEAGGA",
-    "NMEARMC",
-    "SONAR",
-    "BUMPER",
-    "SCANMARK",
-    "POSITIONLASER",
-    "VECTORMOVE",
-    "ROBOTVELOCITY",
-    "FOLLOWTRAJECTORY",
-    "BASEVELOCITY",
-    "ARM",
-    "GPSNMEA",
-    "IMU",
-}
+#: Message names read; every other well-formed message name is skipped and counted.
+USED_MESSAGES = ("PARAM", "ODOM", "TRUEPOS", "RAWLASER1", "FLASER", "ROBOTLASER1")
+
+#: FLASER maximum range when the log names none (GMapping's CARMEN reader; the
+#: Radish logs write no-returns as 50.0-51.1 m).
+FLASER_DEFAULT_MAX_RANGE = 50.0
+
+_NAME_CHARS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_-")
 
 
 @dataclass
@@ -119,12 +124,24 @@ class CarmenLog:
         Ground truth per scan from ``TRUEPOS`` lines, when the log has them.
     params : dict
         ``PARAM`` name -> value strings.
+    logged_poses : (N, 3) array or None
+        The pose fields ``x y theta`` of each ``FLASER``/``ROBOTLASER1`` line when
+        the log is a corrected one (see the module docstring): the SLAM-corrected
+        laser poses, a reference map's poses. Never given to a backend.
+    skipped : dict
+        Message name -> number of lines skipped as not used (``NEFF``, ``SYNC``...).
+    notes : list of str
+        What a user should be told once about how the log was read (skipped
+        messages, the odometry source, assumed laser geometry).
     """
 
     odometry: list[OdometryReading]
     scans: list[LaserScan]
     true_poses: np.ndarray | None = None
     params: dict[str, str] = field(default_factory=dict)
+    logged_poses: np.ndarray | None = None
+    skipped: dict[str, int] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
 
     def __len__(self) -> int:
         return len(self.scans)
@@ -230,24 +247,37 @@ def read_carmen(path: str | os.PathLike, *, range_min: float = 0.0) -> CarmenLog
     range_min : float
         Minimum valid range stored in the scans (CARMEN logs do not record it).
 
+    Returns
+    -------
+    CarmenLog
+        Scans, odometry, ``PARAM`` values; for corrected logs the logged poses;
+        counts of the skipped message types and notes to show the user.
+
     Raises
     ------
     InputError
-        Missing file, unknown or corrupt lines (with the line number), no odometry,
-        no scans, an empty log, or a beam count changing mid-log.
+        Missing file, a corrupt line of a message type it reads or a line that is
+        not a message at all (with the line number), no odometry, no scans, an
+        empty log, or a beam count changing mid-log.
     """
     path = Path(path)
     if not path.is_file():
         raise InputError(path, "log file not found")
     params: dict[str, str] = {}
-    odometry: list[OdometryReading] = []
+    skipped: dict[str, int] = {}
+    # scans and, per scan: its laser-line odometry (or None), the laser-line pose,
+    # the number of ODOM lines before it, the latest TRUEPOS
     scans: list[LaserScan] = []
+    line_odo: list[OdometryReading | None] = []
+    line_pose: list[tuple[float, float, float] | None] = []
+    n_odom_before: list[int] = []
     truths: list[tuple[float, float, float] | None] = []
-    last_odom: OdometryReading | None = None
+    # ODOM stream: (t, x, y, theta) as logged, and whether the line re-anchors
+    odoms: list[tuple[float, float, float, float]] = []
+    anchors: list[bool] = []
     last_true: tuple[float, float, float] | None = None
-    pending: list[int] = []  # scans waiting for a first ODOM
     n_beams: int | None = None
-    any_odom = False
+    flaser_geometry: tuple[int, float, float, float] | None = None
     try:
         f = _open_text(path, "r")
         lines = f.read().splitlines()
@@ -265,7 +295,7 @@ def read_carmen(path: str | os.PathLike, *, range_min: float = 0.0) -> CarmenLog
         except ValueError:
             raise InputError(path, "PARAM robot_frontlaser_* is not a number") from None
 
-    def add_scan(lineno, t, ranges, a0, inc, rmax, odo):
+    def add_scan(lineno, t, ranges, a0, inc, rmax, odo, pose):
         nonlocal n_beams
         if n_beams is None:
             n_beams = len(ranges)
@@ -276,14 +306,9 @@ def read_carmen(path: str | os.PathLike, *, range_min: float = 0.0) -> CarmenLog
         r = np.asarray(ranges, np.float32)
         r = np.where(r >= np.float32(rmax), np.float32(np.inf), r)
         scans.append(LaserScan(t, r, a0, inc, range_min, rmax, offset()))
-        if odo is None:
-            if last_odom is None:
-                pending.append(len(odometry))
-                odometry.append(OdometryReading(t, 0.0, 0.0, 0.0))
-            else:
-                odometry.append(OdometryReading(t, last_odom.x, last_odom.y, last_odom.theta))
-        else:
-            odometry.append(odo)
+        line_odo.append(odo)
+        line_pose.append(pose)
+        n_odom_before.append(len(odoms))
         truths.append(last_true)
 
     for lineno, line in enumerate(lines, 1):
@@ -295,17 +320,13 @@ def read_carmen(path: str | os.PathLike, *, range_min: float = 0.0) -> CarmenLog
             if len(rest) >= 2:
                 params[rest[0]] = rest[1]
             continue
-        if name in _IGNORED:
-            continue
         if name == "ODOM":
             vals, tail = _take(path, lineno, rest, 6, name)
             x, y, th = _floats(path, lineno, vals[:3], name)[:3]
             t = _stamp(path, lineno, tail, name)
-            last_odom = OdometryReading(t, x, y, th)
-            any_odom = True
-            for k in pending:
-                odometry[k] = OdometryReading(odometry[k].t, x, y, th)
-            pending.clear()
+            # a corrected log re-anchors the stream with timestamp-0 lines
+            anchors.append(bool(odoms) and t < odoms[-1][0])
+            odoms.append((t, x, y, th))
         elif name == "TRUEPOS":
             vals, tail = _take(path, lineno, rest, 6, name)
             v = _floats(path, lineno, vals, name)
@@ -313,38 +334,138 @@ def read_carmen(path: str | os.PathLike, *, range_min: float = 0.0) -> CarmenLog
         elif name == "RAWLASER1":
             h, ranges, tail = _laser_block(path, lineno, rest, name)
             t = _stamp(path, lineno, tail, name)
-            add_scan(lineno, t, ranges, h[1], h[3], h[4], None)
+            add_scan(lineno, t, ranges, h[1], h[3], h[4], None, None)
         elif name == "FLASER":
             head, rest2 = _take(path, lineno, rest, 1, name)
             n = _count(path, lineno, _floats(path, lineno, head, name)[0], name)
             vals, tail = _take(path, lineno, rest2, n + 6, name)
             v = _floats(path, lineno, vals, name)
             t = _stamp(path, lineno, tail, name)
-            inc = math.pi / (n - 1) if n % 2 == 1 else math.pi / max(n, 1)
-            rmax = float(params.get("robot_front_laser_max", 81.9))
+            inc = flaser_angle_increment(n)
+            rmax = _flaser_max_range(path, params)
+            flaser_geometry = (n, inc, rmax, inc * (n - 1))
             odo = OdometryReading(t, v[n + 3], v[n + 4], v[n + 5])
-            any_odom = True
-            add_scan(lineno, t, v[:n], -math.pi / 2, inc, rmax, odo)
+            add_scan(lineno, t, v[:n], -math.pi / 2, inc, rmax, odo, (v[n], v[n + 1], v[n + 2]))
         elif name == "ROBOTLASER1":
             h, ranges, rest4 = _laser_block(path, lineno, rest, name)
             vals, tail = _take(path, lineno, rest4, 11, name)
             v = _floats(path, lineno, vals, name)
             t = _stamp(path, lineno, tail, name)
-            any_odom = True
-            add_scan(lineno, t, ranges, h[1], h[3], h[4], OdometryReading(t, v[3], v[4], v[5]))
+            odo = OdometryReading(t, v[3], v[4], v[5])
+            add_scan(lineno, t, ranges, h[1], h[3], h[4], odo, (v[0], v[1], v[2]))
+        elif set(name) <= _NAME_CHARS:
+            skipped[name] = skipped.get(name, 0) + 1
         else:
-            raise InputError(path, f"line {lineno}: unknown CARMEN message '{name[:40]}'")
+            raise InputError(
+                path, f"line {lineno}: not a CARMEN message (starts with {name[:20]!r})"
+            )
 
-    if not scans and not any_odom:
+    if not scans and not odoms:
         raise InputError(path, "empty log: no ODOM or laser messages")
     if not scans:
         raise InputError(path, "log has no laser scans (RAWLASER1, FLASER or ROBOTLASER1)")
-    if not any_odom:
-        raise InputError(path, "log has no odometry (ODOM, FLASER or ROBOTLASER1)")
+    notes: list[str] = []
+    if skipped:
+        listed = ", ".join(f"{n} {k}" for k, n in sorted(skipped.items(), key=lambda kv: -kv[1]))
+        notes.append(f"skipped message types not used: {listed}")
+    corrected = any(anchors)
+    logged_poses = None
+    if corrected:
+        odometry = _odometry_from_stream(odoms, anchors, scans, n_odom_before)
+        logged_poses = np.array([p if p is not None else (np.nan,) * 3 for p in line_pose], float)
+        notes.append(
+            f"corrected log: {sum(anchors)} ODOM lines re-anchor the odometry at corrected "
+            "poses (timestamp running backwards); odometry rebuilt from the ODOM increments "
+            "without those jumps, the laser lines' corrected poses kept only as a reference"
+        )
+    else:
+        odometry = []
+        for k, odo in enumerate(line_odo):
+            if odo is None:  # RAWLASER1: the latest ODOM before it (else the first after)
+                if not odoms:
+                    raise InputError(path, "log has no odometry (ODOM, FLASER or ROBOTLASER1)")
+                j = max(n_odom_before[k] - 1, 0)
+                _, x, y, th = odoms[j]
+                odo = OdometryReading(scans[k].t, x, y, th)
+            odometry.append(odo)
+    if flaser_geometry is not None:
+        n, inc, rmax, span = flaser_geometry
+        how = "PARAM" if _max_range_param(params) is not None else "default"
+        notes.append(
+            f"FLASER: {n} beams from -90 deg, {math.degrees(inc):.3g} deg apart "
+            f"(field of view {math.degrees(span):.4g} deg), maximum range {rmax:g} m ({how}); "
+            "readings at or beyond it are no-returns"
+        )
     true_poses = None
     if all(tp is not None for tp in truths):
         true_poses = np.array(truths, float)
-    return CarmenLog(odometry, scans, true_poses, params)
+    return CarmenLog(odometry, scans, true_poses, params, logged_poses, skipped, notes)
+
+
+def flaser_angle_increment(n: int) -> float:
+    """Beam spacing of an old-format ``FLASER`` line of ``n`` readings (CARMEN's guess).
+
+    Examples
+    --------
+    >>> [round(math.degrees(flaser_angle_increment(n)), 3) for n in (180, 181, 361, 401, 90)]
+    [1.0, 1.0, 0.5, 0.25, 2.022]
+    """
+    if n in (180, 181):
+        return math.pi / 180
+    if n in (360, 361):
+        return math.pi / 360
+    if n in (400, 401):
+        return math.pi / 720
+    return math.pi / max(n - 1, 1)
+
+
+def _max_range_param(params: dict[str, str]) -> str | None:
+    for key in ("robot_front_laser_max", "laser_front_laser_max_range"):
+        if key in params:
+            return key
+    return None
+
+
+def _flaser_max_range(path, params: dict[str, str]) -> float:
+    key = _max_range_param(params)
+    if key is None:
+        return FLASER_DEFAULT_MAX_RANGE
+    try:
+        v = float(params[key])
+    except ValueError:
+        v = float("nan")
+    if not (math.isfinite(v) and v > 0):
+        raise InputError(path, f"PARAM {key} {params[key]!r} is not a positive number")
+    return v
+
+
+def _odometry_from_stream(odoms, anchors, scans, n_odom_before) -> list[OdometryReading]:
+    """Raw wheel odometry at each scan from an ODOM stream with re-anchoring lines.
+
+    The chain starts at the first ODOM pose; each later non-anchor line adds its
+    increment over the line before it (in that line's frame); an anchor line adds
+    nothing and becomes the new reference for the increments that follow. The
+    odometry of a scan is the chain at the latest ODOM line before it.
+    """
+    raw = np.asarray([o[1:] for o in odoms], float)
+    prev = raw[:-1]
+    dx, dy = raw[1:, 0] - prev[:, 0], raw[1:, 1] - prev[:, 1]
+    c, s_ = np.cos(prev[:, 2]), np.sin(prev[:, 2])
+    keep = ~np.asarray(anchors[1:], bool)
+    fwd = np.where(keep, c * dx + s_ * dy, 0.0)  # increments in the previous line's frame
+    side = np.where(keep, -s_ * dx + c * dy, 0.0)
+    dth = np.where(keep, np.angle(np.exp(1j * (raw[1:, 2] - prev[:, 2]))), 0.0)
+    th = raw[0, 2] + np.concatenate([[0.0], np.cumsum(dth)])
+    ct, st = np.cos(th[:-1]), np.sin(th[:-1])
+    x = raw[0, 0] + np.concatenate([[0.0], np.cumsum(ct * fwd - st * side)])
+    y = raw[0, 1] + np.concatenate([[0.0], np.cumsum(st * fwd + ct * side)])
+    chain = np.column_stack([x, y, np.angle(np.exp(1j * th))])
+    out = []
+    for k, scan in enumerate(scans):
+        j = max(n_odom_before[k] - 1, 0)
+        x, y, th = chain[j]
+        out.append(OdometryReading(scan.t, float(x), float(y), float(th)))
+    return out
 
 
 def _count(path, lineno, v, name, zero_ok=False) -> int:

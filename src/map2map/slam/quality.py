@@ -28,7 +28,13 @@ from scipy import ndimage
 from ..core.geometry import apply, fit_rigid
 from ..core.grid import OccupancyMap
 
-__all__ = ["ate_rmse", "wall_error", "map_to_plan_points"]
+__all__ = [
+    "ate_rmse",
+    "wall_error",
+    "wall_distances",
+    "map_to_plan_points",
+    "scan_endpoint_map",
+]
 
 
 def ate_rmse(est: np.ndarray, true: np.ndarray, align: bool = True) -> float:
@@ -71,9 +77,30 @@ def wall_error(
     >>> round(wall_error(plan, plan, (0.0, 0.1, 0.0), align=True), 3)
     0.0
     """
+    d = wall_distances(slam_map, plan, start_pose, align=align)
+    return float(np.mean(d)) if len(d) else float("nan")
+
+
+def wall_distances(
+    slam_map: OccupancyMap, plan: OccupancyMap, start_pose, align: bool = False
+) -> np.ndarray:
+    """Distance (m) of every occupied cell of ``slam_map`` to the nearest wall of ``plan``.
+
+    The placement and the optional rigid refinement are those of :func:`wall_error`
+    (which is the mean of this array); with ``align`` the refinement is kept only if
+    it lowers the mean.
+
+    Examples
+    --------
+    >>> from map2map.core.grid import OccupancyMap
+    >>> d = np.full((40, 40), 255, np.uint8); d[20, 5:35] = 0
+    >>> plan = OccupancyMap(d, 0.05)
+    >>> round(float(np.median(wall_distances(plan, plan, (0.0, 0.1, 0.0)))), 6)
+    0.1
+    """
     pts = map_to_plan_points(slam_map, start_pose)
     if len(pts) == 0:
-        return float("nan")
+        return np.zeros(0)
     dist = ndimage.distance_transform_edt(~plan.occupied) * plan.resolution
 
     def lookup(q):
@@ -81,8 +108,9 @@ def wall_error(
         # bilinear; outside the plan counts as the distance at the nearest border
         return ndimage.map_coordinates(dist, [r, c], order=1, mode="nearest")
 
+    placed = lookup(pts)
     if not align:
-        return float(np.mean(lookup(pts)))
+        return placed
     from scipy.optimize import least_squares
 
     centre = pts.mean(0)
@@ -102,4 +130,67 @@ def wall_error(
         diff_step=[1e-3, 1e-3, 1e-4],
         x_scale=[0.05, 0.05, 0.01],
     )
-    return float(min(np.mean(lookup(moved(sol.x))), np.mean(lookup(pts))))
+    aligned = lookup(moved(sol.x))
+    return aligned if np.mean(aligned) < np.mean(placed) else placed
+
+
+def scan_endpoint_map(
+    scans, poses, resolution: float = 0.05, *, max_range: float | None = None, min_hits: int = 1
+) -> OccupancyMap:
+    """Raster of the scan endpoints at given poses: the reference map of a corrected log.
+
+    Every valid reading (:attr:`~map2map.robotlog.base.LaserScan.valid`, and below
+    ``max_range`` when given) of scan ``k`` is placed at ``poses[k]`` composed with
+    the scan's sensor offset; a cell hit at least ``min_hits`` times is occupied,
+    every other cell unknown (no free space: the endpoints say nothing about it).
+
+    Parameters
+    ----------
+    scans : sequence of LaserScan
+    poses : (N, 3) array
+        Robot poses ``x, y, theta`` (world metres, radians), one per scan.
+    resolution : float
+        Metres per pixel.
+    max_range : float, optional
+        Leave out readings at or beyond this range.
+    min_hits : int
+        Hits a cell needs to count as a wall.
+
+    Returns
+    -------
+    OccupancyMap
+        Occupied (0) endpoint cells, the rest unknown (127), in the poses' frame.
+
+    Examples
+    --------
+    >>> from map2map.robotlog.base import LaserScan
+    >>> s = LaserScan(0.0, np.full(90, 1.0, np.float32), 0.0, np.deg2rad(1.0), 0.1, 5.0)
+    >>> m = scan_endpoint_map([s], np.zeros((1, 3)))
+    >>> int(m.occupied.sum()) > 10, m.resolution
+    (True, 0.05)
+    """
+    poses = np.asarray(poses, float)
+    xs, ys = [], []
+    for scan, (px, py, pth) in zip(scans, poses, strict=True):
+        ok = scan.valid
+        if max_range is not None:
+            ok &= np.asarray(scan.ranges, float) < max_range
+        r = np.asarray(scan.ranges, float)[ok]
+        ox, oy, oth = scan.sensor_offset
+        sx = px + np.cos(pth) * ox - np.sin(pth) * oy
+        sy = py + np.sin(pth) * ox + np.cos(pth) * oy
+        a = pth + oth + scan.angles[ok]
+        xs.append(sx + r * np.cos(a))
+        ys.append(sy + r * np.sin(a))
+    x = np.concatenate(xs) if xs else np.zeros(0)
+    y = np.concatenate(ys) if ys else np.zeros(0)
+    if len(x) == 0:
+        return OccupancyMap(np.full((1, 1), 127, np.uint8), resolution)
+    x0, y0 = x.min() - 5 * resolution, y.min() - 5 * resolution
+    w = int(np.ceil((x.max() - x0) / resolution)) + 5
+    h = int(np.ceil((y.max() - y0) / resolution)) + 5
+    col = ((x - x0) / resolution).astype(np.int64)
+    row = h - 1 - ((y - y0) / resolution).astype(np.int64)
+    hits = np.bincount(row * w + col, minlength=h * w).reshape(h, w)
+    data = np.where(hits >= min_hits, 0, 127).astype(np.uint8)
+    return OccupancyMap(data, resolution, (float(x0), float(y0), 0.0))
