@@ -27,6 +27,7 @@ COMMANDS = [
     "slam",
     "align",
     "evaluate",
+    "dataset",
 ]
 
 
