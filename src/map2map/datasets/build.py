@@ -256,6 +256,12 @@ def build_dataset(
     if max_attempts < 1:
         raise InputError("max_attempts", f"must be >= 1, got {max_attempts}")
     params = params or BuildParams()
+    from ..sim.mappers import available_mappers
+
+    if params.mapper not in available_mappers():
+        raise InputError(
+            "mapper", f"unknown mapper {params.mapper!r} ({', '.join(available_mappers())})"
+        )
     src = plans if isinstance(plans, PlanSource) else PlanSource.from_arg(
         plans, resolution, plan_resolution)  # fmt: skip
     ds = Path(out)

@@ -77,7 +77,7 @@ def run_dask(
     try:
         if scheduler == "local":
             cluster = LocalCluster(n_workers=max(1, int(workers)), threads_per_worker=1,
-                                   processes=True, dashboard_address=None)  # fmt: skip
+                                   processes=True, dashboard_address=":0")  # fmt: skip
             client = Client(cluster)
         else:
             _probe(scheduler)
