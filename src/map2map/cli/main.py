@@ -28,6 +28,7 @@ COMMANDS = [
     "slam",
     "align",
     "evaluate",
+    "dataset",
 ]
 
 

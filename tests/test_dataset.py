@@ -1,0 +1,365 @@
+"""map2map dataset: build (deterministic, resumable, local/Dask, failures), features,
+cleaner, export. Tiny plans and short simulations keep it fast."""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import signal
+import socket
+import sqlite3
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from map2map.core.errors import InputError
+from map2map.core.grid import OccupancyMap
+from map2map.datasets.build import build_dataset, dataset_status, split_for_plan
+from map2map.datasets.clean import apply_cleaner, clean_dataset, load_cleaner, read_labels
+from map2map.datasets.export import export_dataset
+from map2map.datasets.features import (
+    FEATURE_NAMES,
+    count_holes,
+    grey_white_neighbours,
+    pair_features,
+)
+from map2map.datasets.packed import load_packed
+from map2map.datasets.pair import BuildParams, run_pair
+from map2map.maps.ros import save_ros_map
+
+REPO = Path(__file__).resolve().parents[1]
+PARAMS = BuildParams(source="both", duration=12.0, size=32, fov=360.0)
+COUNT = 6
+
+
+def _room(w_px: int, h_px: int, door: bool = True) -> OccupancyMap:
+    d = np.full((h_px + 8, w_px + 8), 127, np.uint8)
+    d[2:-2, 2:-2] = 0
+    d[4:-4, 4:-4] = 255
+    mid = (w_px + 8) // 2
+    d[4:-4, mid] = 0  # a divider wall ...
+    if door:
+        d[8:26, mid] = 255  # ... with a 0.9 m opening
+    return OccupancyMap(d, 0.05)
+
+
+@pytest.fixture(scope="module")
+def plans(tmp_path_factory) -> Path:
+    folder = tmp_path_factory.mktemp("plans")
+    save_ros_map(_room(70, 50), folder / "a_room.yaml")
+    save_ros_map(_room(60, 40), folder / "b_room.yaml")
+    save_ros_map(_room(80, 44), folder / "c_room.yaml")
+    return folder
+
+
+@pytest.fixture(scope="module")
+def reference(plans, tmp_path_factory) -> Path:
+    """The uninterrupted, in-process build every other build must equal byte for byte."""
+    ds = tmp_path_factory.mktemp("ref") / "DS"
+    s = build_dataset(ds, str(plans), COUNT, 5, PARAMS, workers=0, progress=False)
+    assert s.done == COUNT and s.failed == 0
+    return ds
+
+
+def _tree(ds: Path) -> dict[str, bytes]:
+    root = ds / "pairs"
+    return {str(p.relative_to(root)): p.read_bytes() for p in sorted(root.rglob("*"))
+            if p.is_file()}  # fmt: skip
+
+
+def _assert_same(ds: Path, ref: Path) -> None:
+    a, b = _tree(ds), _tree(ref)
+    assert sorted(a) == sorted(b)
+    diff = [k for k in a if a[k] != b[k]]
+    assert not diff, f"files differ: {diff[:5]}"
+
+
+# ------------------------------------------------------------------ features
+def test_features_on_hand_made_maps():
+    cad = np.full((10, 10), 255, np.uint8)
+    cad[0, :] = cad[-1, :] = cad[:, 0] = cad[:, -1] = 0  # 36 wall pixels, 64 free
+    cad[4, 4] = 0  # one hole (a column)
+    slam = cad.copy()
+    slam[1:9, 6:9] = 127  # 24 unknown: the right part unexplored
+    slam[2, 2] = 0  # another column seen
+    f = dict(zip(FEATURE_NAMES, pair_features(cad, slam).tolist(), strict=True))
+    assert (f["cad_black"], f["cad_grey"], f["cad_white"]) == (37, 0, 63)
+    assert (f["slam_black"], f["slam_grey"], f["slam_white"]) == (38, 24, 38)
+    assert (f["diff_black"], f["diff_grey"], f["diff_white"]) == (1, 24, -25)
+    assert f["diff_ratio_black_white"] == pytest.approx(38 / 38 - 37 / 63)
+    assert f["diff_ratio_grey_white"] == pytest.approx(24 / 38 - 0)
+    assert f["diff_ratio_black_grey"] == pytest.approx(38 / 24 - 37 / 1)  # 0 grey counts as 1
+    assert count_holes(cad) == 1 and count_holes(slam) == 2
+    assert f["diff_holes"] == 1
+    # the unknown block's border with free space: 8 pixels along column 5
+    assert f["slam_grey_white_nb"] == 8 and f["cad_grey_white_nb"] == 0
+    assert f["diff_grey_white_nb"] == 8
+
+
+def test_holes_by_boundary_tracing():
+    m = np.full((12, 12), 255, np.uint8)
+    m[2:4, 2:4] = 0  # hole 1
+    m[6:9, 6:9] = 127  # hole 2 (unknown counts: not white)
+    m[7, 7] = 255  # an island inside hole 2 is not a hole
+    m[0:3, 10:12] = 0  # touches the border: not a hole
+    assert count_holes(m) == 2
+    assert count_holes(np.zeros((5, 5), np.uint8)) == 0
+    assert grey_white_neighbours(np.array([[127, 255], [255, 255]], np.uint8)) == 2
+
+
+# --------------------------------------------------------------------- build
+def test_reference_build_contents(reference):
+    st = dataset_status(reference)
+    assert st["counts"] == {"done": COUNT}
+    folder = reference / "pairs" / "000001"  # a parametric pair
+    names = sorted(p.name for p in folder.iterdir())
+    assert names == ["A.pgm", "A.png", "A.yaml", "B.pgm", "B.png", "B.yaml", "displacement.npz",
+                     "meta.json"]  # fmt: skip
+    assert "displacement.npz" not in os.listdir(reference / "pairs" / "000000")
+    with np.load(folder / "displacement.npz") as z:
+        assert z["dx"].dtype == np.float32
+    rows = (
+        sqlite3.connect(reference / "manifest.sqlite")
+        .execute("SELECT plan_id, split, coverage, stop_reason, wall_seconds FROM pairs")
+        .fetchall()
+    )
+    for plan_id, split, cov, stop, secs in rows:
+        assert split == split_for_plan(plan_id)
+        assert 0 <= cov <= 1 and stop and secs > 0
+    assert (reference / "figures" / "contact_sheet.png").stat().st_size > 0
+    assert (reference / "figures" / "histograms.png").stat().st_size > 0
+
+
+def test_same_pairs_with_two_workers(plans, reference, tmp_path):
+    # fork: quicker to start; the command-line builds of the kill test use spawn
+    build_dataset(tmp_path / "DS", str(plans), COUNT, 5, PARAMS, workers=2, progress=False,
+                  figures=False, start_method="fork")  # fmt: skip
+    _assert_same(tmp_path / "DS", reference)
+
+
+def _cli(*args: str) -> list[str]:
+    return [sys.executable, "-m", "map2map", *args]
+
+
+def _env() -> dict[str, str]:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(REPO / "src") + os.pathsep + env.get("PYTHONPATH", "")
+    return env
+
+
+def test_resume_after_kill_9(plans, reference, tmp_path):
+    ds = tmp_path / "DS"
+    args = _cli("dataset", "build", "--out", str(ds), "--plans", str(plans), "--count",
+                str(COUNT), "--seed", "5", "--source", "both", "--duration", "12", "--size",
+                "32", "--fov", "360", "--workers", "1", "--quiet", "--no-figures")  # fmt: skip
+    kills = 0
+    for _ in range(2):  # kill it twice, each time once at least one more pair is in
+        before = _done(ds)
+        proc = subprocess.Popen(args, env=_env(), start_new_session=True,
+                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)  # fmt: skip
+        deadline = time.monotonic() + 120
+        while proc.poll() is None and _done(ds) <= before and time.monotonic() < deadline:
+            time.sleep(0.05)
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)  # the build and its worker, mid-pair
+            kills += 1
+        proc.wait(30)
+    assert kills >= 1 and _done(ds) < COUNT
+    done = subprocess.run(args, env=_env(), capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    _assert_same(ds, reference)
+    assert dataset_status(ds)["counts"] == {"done": COUNT}
+    # the same command again: nothing left to do, nothing changes
+    again = subprocess.run(args, env=_env(), capture_output=True, text=True, timeout=300)
+    assert again.returncode == 0 and "this run: 0 made" in again.stdout
+    # other settings on the same dataset are refused, with one line and exit 2
+    bad = subprocess.run([*args[:-1], "--fov", "180"], env=_env(), capture_output=True,
+                         text=True, timeout=300)  # fmt: skip
+    assert bad.returncode == 2 and "fov 360.0 -> 180.0" in bad.stderr
+    assert "Traceback" not in bad.stderr
+
+
+def _done(ds: Path) -> int:
+    db = ds / "manifest.sqlite"
+    if not db.exists():
+        return 0
+    try:
+        with sqlite3.connect(db, timeout=5) as con:
+            return con.execute("SELECT COUNT(*) FROM pairs WHERE status='done'").fetchone()[0]
+    except sqlite3.OperationalError:
+        return 0
+
+
+def test_bad_plans_fail_and_the_build_goes_on(plans, tmp_path):
+    folder = tmp_path / "plans"
+    folder.mkdir()
+    save_ros_map(_room(60, 40), folder / "good.yaml")
+    save_ros_map(OccupancyMap(np.zeros((40, 40), np.uint8), 0.05), folder / "solid.yaml")
+    tiny = np.full((12, 12), 0, np.uint8)
+    tiny[5:7, 5:7] = 255  # free, but no room for the robot
+    save_ros_map(OccupancyMap(tiny, 0.05), folder / "tiny.yaml")
+    (folder / "broken.png").write_bytes(b"not a png")
+    p = BuildParams(source="simulate", duration=8.0, size=32, fov=360.0)
+    s = build_dataset(tmp_path / "DS", str(folder), 4, 0, p, workers=0, progress=False,
+                      figures=False)  # fmt: skip
+    assert (s.done, s.failed) == (1, 3)
+    reasons = {plan: why for _, plan, why in dataset_status(tmp_path / "DS")["failed"]}
+    assert "broken" in reasons and "solid" in reasons and "tiny" in reasons
+    assert "no free space" in reasons["solid"]
+    assert "too small for the robot" in reasons["tiny"]
+    out = subprocess.run(_cli("dataset", "status", str(tmp_path / "DS")), env=_env(),
+                         capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert out.returncode == 0 and out.stdout.count("failed ") >= 3
+
+
+def crashing_task(spec):
+    """Pair 1 kills its worker once (os._exit), pair 2 segfaults every time."""
+    marker = Path(os.environ["M2M_CRASH_DIR"]) / f"crashed-{spec.index}"
+    if spec.index == 1 and not marker.exists():
+        marker.touch()
+        os._exit(3)
+    if spec.index == 2:
+        import faulthandler
+
+        faulthandler.disable()  # pytest's handler would print the crash in the log
+        ctypes.string_at(0)  # SIGSEGV
+    return run_pair(spec)
+
+
+def test_dead_workers_are_retried_then_recorded(plans, reference, tmp_path, monkeypatch):
+    monkeypatch.setenv("M2M_CRASH_DIR", str(tmp_path))
+    s = build_dataset(tmp_path / "DS", str(plans), 4, 5, PARAMS, workers=2, progress=False,
+                      figures=False, task=crashing_task, max_attempts=2,
+                      start_method="fork")  # fmt: skip
+    assert (s.done, s.failed) == (3, 1)
+    st = dataset_status(tmp_path / "DS")
+    ((idx, _, why),) = st["failed"]
+    assert idx == 2 and "SIGSEGV" in why and "2 attempts" in why
+    ref = _tree(reference)
+    got = _tree(tmp_path / "DS")
+    assert got and all(got[k] == ref[k] for k in got)  # pair 1, retried, is byte-identical
+    assert any(k.startswith("000001/") for k in got)
+
+
+# ---------------------------------------------------------------------- dask
+def test_dask_local_cluster_gives_the_same_pairs(plans, reference, tmp_path):
+    pytest.importorskip("distributed")
+    build_dataset(tmp_path / "DS", str(plans), COUNT, 5, PARAMS, workers=2, scheduler="local",
+                  progress=False, figures=False)  # fmt: skip
+    _assert_same(tmp_path / "DS", reference)
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_dask_separate_scheduler_and_worker(plans, reference, tmp_path):
+    pytest.importorskip("distributed")
+    port = _free_port()
+    addr = f"tcp://127.0.0.1:{port}"
+    procs = []
+    try:
+        procs.append(subprocess.Popen(
+            [sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
+             "--port", str(port), "--no-dashboard"],
+            env=_env(), start_new_session=True, stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL))  # fmt: skip
+        procs.append(subprocess.Popen(
+            [sys.executable, "-m", "distributed.cli.dask_worker", addr, "--nthreads", "1",
+             "--nworkers", "1", "--no-dashboard", "--host", "127.0.0.1"],
+            env=_env(), start_new_session=True, stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL))  # fmt: skip
+        from distributed import Client
+
+        with Client(addr, timeout="60s") as c:
+            c.wait_for_workers(1, timeout=60)
+        out = subprocess.run(
+            _cli("dataset", "build", "--out", str(tmp_path / "DS"), "--plans", str(plans),
+                 "--count", str(COUNT), "--seed", "5", "--source", "both", "--duration", "12",
+                 "--size", "32", "--fov", "360", "--scheduler", addr, "--quiet",
+                 "--no-figures"),
+            env=_env(), capture_output=True, text=True, timeout=240)  # fmt: skip
+        assert out.returncode == 0, out.stderr
+        _assert_same(tmp_path / "DS", reference)
+    finally:
+        for p in procs:
+            if p.poll() is None:
+                os.killpg(p.pid, signal.SIGTERM)
+        for p in procs:
+            try:
+                p.wait(20)
+            except subprocess.TimeoutExpired:
+                os.killpg(p.pid, signal.SIGKILL)
+                p.wait(10)
+
+
+def test_unreachable_scheduler_is_one_line(plans, tmp_path):
+    pytest.importorskip("distributed")
+    out = subprocess.run(
+        _cli("dataset", "build", "--out", str(tmp_path / "DS"), "--plans", str(plans),
+             "--count", "1", "--scheduler", f"tcp://127.0.0.1:{_free_port()}", "--quiet"),
+        env=_env(), capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert out.returncode == 2 and "cannot reach" in out.stderr and "Traceback" not in out.stderr
+
+
+# ------------------------------------------------------------- clean, export
+def test_clean_and_export(reference, tmp_path):
+    import shutil
+
+    ds = tmp_path / "DS"
+    shutil.copytree(reference, ds)
+    with pytest.raises(InputError, match="not been cleaned"):
+        export_dataset(ds, "packed", progress=False)
+    labels = tmp_path / "labels.csv"
+    labels.write_text("index,label\n" + "".join(
+        f"{i},{'complete' if i % 2 else 'partial'}\n" for i in range(COUNT)))  # fmt: skip
+    assert read_labels(labels)["1"] == 1
+    rep = clean_dataset(ds, labels)
+    assert rep.n_labelled == COUNT and rep.n_complete == COUNT // 2
+    assert set(rep.importances) == set(FEATURE_NAMES)
+    assert (ds / "cleaner.skops").is_file() and rep.figure.is_file()
+    st = dataset_status(ds)
+    assert sum(st["clean"].values()) == COUNT
+    model = load_cleaner(ds / "cleaner.skops")
+    assert model.n_estimators == 100 and model.max_features == 11
+    kept = st["clean"].get("complete", 0)
+    # exports
+    res = export_dataset(ds, "packed", everything=True, progress=False)
+    assert res.path == ds / "packed.npz"
+    pk = load_packed(res.path)
+    assert pk.a.shape == (COUNT, 32, 32) and set(pk.meta["indices"]) == set(range(COUNT))
+    for plan in set(pk.plan_id):
+        assert len(set(pk.split[pk.plan_id == plan])) == 1  # no plan in two splits
+    pix = export_dataset(ds, "pix2pix", everything=True, progress=False)
+    import cv2
+
+    img = cv2.imread(str(next(pix.path.rglob("*.png"))), cv2.IMREAD_GRAYSCALE)
+    assert img.shape == (32, 64)
+    fold = export_dataset(ds, "folders", everything=True, progress=False)
+    a_names = sorted(p.relative_to(fold.path / "A") for p in (fold.path / "A").rglob("*.png"))
+    b_names = sorted(p.relative_to(fold.path / "B") for p in (fold.path / "B").rglob("*.png"))
+    assert a_names == b_names and len(a_names) == COUNT
+    # the saved cleaner applies to a folder of pairs (the folders export)
+    decisions = apply_cleaner(ds / "cleaner.skops", fold.path)
+    assert len(decisions) == COUNT and all(0 <= d["p_complete"] <= 1 for d in decisions)
+    if kept:  # by default only the pairs the cleaner kept
+        assert export_dataset(ds, "folders", tmp_path / "kept", progress=False).count == kept
+
+
+def test_cleaner_refuses_one_class_and_bad_labels(reference, tmp_path):
+    import shutil
+
+    ds = tmp_path / "DS"
+    shutil.copytree(reference, ds)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("index,label\n0,maybe\n")
+    with pytest.raises(InputError, match="line 2"):
+        clean_dataset(ds, bad)
+    with pytest.raises(InputError, match="one class"):
+        clean_dataset(ds, coverage_threshold=1e-9)  # every pair complete
