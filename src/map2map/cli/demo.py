@@ -29,5 +29,7 @@ def run(args: argparse.Namespace) -> int:
     figures = [str(p) for _, p in ctx.written if p.suffix in {".png", ".gif"}]
     if figures:
         print("pictures: " + ", ".join(figures))
+    print(f"index of the folder (what each step did, its numbers, its files): "
+          f"{ctx.out / 'index.html'} and README.md")  # fmt: skip
     sys.stdout.flush()
     return 0

@@ -149,6 +149,28 @@ class CarmenLog:
     def __iter__(self) -> Iterator[tuple[OdometryReading, LaserScan]]:
         return iter(zip(self.odometry, self.scans, strict=True))
 
+    def plan_start_pose(self) -> tuple[float, float, float] | None:
+        """Pose of the odometry (and SLAM map) frame in the plan frame, or None.
+
+        ``map2map simulate`` writes the robot's true start pose as ``PARAM
+        map2map_start_x``, ``_y``, ``_theta``: a map built from the log (whose frame
+        is the first pose) is placed on the plan by it. A recorded log has none.
+
+        Examples
+        --------
+        >>> CarmenLog([], [], params={"map2map_start_x": "1.5", "map2map_start_y": "2",
+        ...                           "map2map_start_theta": "0.25"}).plan_start_pose()
+        (1.5, 2.0, 0.25)
+        >>> CarmenLog([], []).plan_start_pose() is None
+        True
+        """
+        keys = ("map2map_start_x", "map2map_start_y", "map2map_start_theta")
+        try:
+            pose = tuple(float(self.params[k]) for k in keys)
+        except (KeyError, ValueError):
+            return None
+        return pose if all(math.isfinite(v) for v in pose) else None
+
 
 def _num(v: float) -> str:
     v = float(v)
