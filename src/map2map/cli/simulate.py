@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from ..core.errors import warnings_unless_error
-from ._mapargs import add_input_options, check_seed, load_from_args
+from ._mapargs import add_input_options, load_from_args
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -74,7 +74,6 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..jobs.simulate import SimulateSpec, simulate
 
-    check_seed(args.seed)
     # a plan refused below (no free space...) is said in one line, without its warnings
     with warnings_unless_error():
         run = simulate(

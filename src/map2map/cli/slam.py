@@ -53,9 +53,7 @@ def register(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..jobs.slam import SlamSpec, slam
-    from ._mapargs import check_seed
 
-    check_seed(args.seed)
     run = slam(
         SlamSpec(
             log=args.log,

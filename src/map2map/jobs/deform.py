@@ -319,9 +319,7 @@ def deform(spec: DeformSpec) -> DeformRun:
         waypoints = plan_poses_to_world(waypoints)
     recorded = None
     if spec.trajectory:
-        recorded = read_trajectory(
-            spec.trajectory, v_max=params.v_max, omega_max=params.omega_max
-        )
+        recorded = read_trajectory(spec.trajectory, v_max=params.v_max, omega_max=params.omega_max)
         if flip:
             recorded = _flip_trajectory(recorded)
         _check_trajectory(plan, recorded, spec.trajectory)
