@@ -130,12 +130,3 @@ def load_from_args(args: argparse.Namespace):
             file=sys.stderr,
         )
     return m
-
-
-def check_seed(seed: int, flag: str = "--seed") -> int:
-    """Refuse a seed numpy cannot take (negative, or 128 bits and more) with one line."""
-    from ..core.errors import InputError
-
-    if not 0 <= seed < 2**128:
-        raise InputError(flag, f"seed must be a non-negative integer, got {seed}")
-    return seed
