@@ -58,10 +58,14 @@ def _left(folder) -> list[str]:
 def _specs(files, out):
     plan = files["plan"]
     return {
-        "simulate": (jsim.simulate, jsim.SimulateSpec(plan, out, duration=4, mapper="oracle",
-                                                      progress=False)),  # fmt: skip
-        "deform": (jdeform.deform, jdeform.DeformSpec(plan, out, start=(0.5, 0.5), goal=(4.0, 2.0),
-                                                      progress=False)),  # fmt: skip
+        "simulate": (
+            jsim.simulate,
+            jsim.SimulateSpec(plan, out, duration=4, mapper="oracle", progress=False),
+        ),  # fmt: skip
+        "deform": (
+            jdeform.deform,
+            jdeform.DeformSpec(plan, out, start=(0.5, 0.5), goal=(4.0, 2.0), progress=False),
+        ),  # fmt: skip
         "slam": (jslam.slam, jslam.SlamSpec(files["run"], out, backend="graph", progress=False)),
         "align": (jeval.align, jeval.AlignSpec(plan, plan, out)),
         "evaluate": (jeval.evaluate, jeval.EvaluateSpec(plan, plan, out)),

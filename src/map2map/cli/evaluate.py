@@ -15,7 +15,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "measure the local error of every wall point (Algorithm 1), in pixels and metres; "
         "write report.json (both chains, the chosen one, IoU, vanilla ICP, timings), "
         "overlay.png and error_map.png. With --pairs, evaluate every pair of a CSV list "
-        "(header slam,plan[,anchors]) and write pairs.csv and errors_boxplot.png.",
+        "(header slam,plan[,anchors]) and write pairs.csv and errors_boxplot.png. The --out "
+        "folder is written whole at the end (an existing one is replaced).",
     )
     p.add_argument("slam", metavar="SLAM_MAP", nargs="?", help="the SLAM (as-built) map")
     p.add_argument("plan", metavar="PLAN", nargs="?", help="the floor plan (as-planned)")
