@@ -31,8 +31,6 @@ def test_docstring_examples(name):
 NO_EXAMPLE_NEEDED = {
     "map2map._version",
     "map2map.demo",
-    "map2map.jobs.deform",
-    "map2map.jobs.evaluate",
 }
 
 

@@ -105,13 +105,20 @@ def read_options_from_args(args: argparse.Namespace):
 
 
 def load_from_args(args: argparse.Namespace):
-    """Load ``args.input`` with the options of :func:`add_input_options`."""
+    """Load ``args.input`` with the options of :func:`add_input_options` and say how it
+    was read (:func:`say_how_read`)."""
     from ..maps.formats import load_map
 
     m = load_map(args.input, read_options_from_args(args))
+    say_how_read(args.input, m)
+    return m
+
+
+def say_how_read(path, m) -> None:
+    """Print what reading ``path`` assumed or left out (from the map's ``meta``)."""
     if m.meta.get("resolution_assumed"):
         print(
-            f"map2map: note: {args.input}: no resolution given or stored; assuming "
+            f"map2map: note: {path}: no resolution given or stored; assuming "
             f"{m.resolution:g} m/px (use --resolution)",
             file=sys.stderr,
         )
@@ -120,22 +127,11 @@ def load_from_args(args: argparse.Namespace):
         left = ", ".join(f"{n} {k}" for k, n in sorted(m.meta.get("skipped_entities", {}).items()))
         layers = m.meta.get("layers", [])
         print(
-            f"read {args.input}: {drawn} on layer{'s' if len(layers) > 1 else ''} "
+            f"read {path}: {drawn} on layer{'s' if len(layers) > 1 else ''} "
             f"{', '.join(layers)}" + (f"; ignored {left}" if left else "")
         )
     if m.meta.get("units_assumed"):
         print(
-            f"map2map: note: {args.input}: the drawing has no units; reading it as metres "
-            "(use --units)",
+            f"map2map: note: {path}: the drawing has no units; reading it as metres (use --units)",
             file=sys.stderr,
         )
-    return m
-
-
-def check_seed(seed: int, flag: str = "--seed") -> int:
-    """Refuse a seed numpy cannot take (negative, or 128 bits and more) with one line."""
-    from ..core.errors import InputError
-
-    if not 0 <= seed < 2**128:
-        raise InputError(flag, f"seed must be a non-negative integer, got {seed}")
-    return seed

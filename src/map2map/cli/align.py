@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ._mapargs import add_input_options, check_seed, read_options_from_args
+from ._mapargs import add_input_options, read_options_from_args
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -15,7 +15,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "decomposition and the fitness of eq. 8, refine it (affine, rigid, nonrigid warp) and "
         "write alignment.json: 3x3 matrices similarity/affine/rigid mapping SOURCE pixel "
         "coordinates (x = column, y = row, origin top-left) to TARGET pixel coordinates, plus "
-        "overlay.png. Any rotation, translation and scale between 0.5 and 2.",
+        "overlay.png. Any rotation, translation and scale between 0.5 and 2. The --out "
+        "folder is written whole at the end (an existing one is replaced).",
     )
     p.add_argument("source", metavar="SOURCE", help="map to align (ROS yaml, picture, JSON, DXF)")
     p.add_argument("target", metavar="TARGET", help="reference map (e.g. the floor plan)")
@@ -63,16 +64,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def check_resolutions(args: argparse.Namespace) -> None:
-    """Every resolution flag given must be a positive number."""
-    from ..core.errors import InputError
-
-    for flag in ("resolution", "source_resolution", "target_resolution"):
-        v = getattr(args, flag, None)
-        if v is not None and not v > 0:
-            raise InputError("--" + flag.replace("_", "-"), f"must be > 0, got {v:g}")
-
-
 def report_warnings(warnings: list[str], strict: bool) -> int:
     """Print each warning on stderr; the exit status: 3 with ``strict`` and a warning, else 0."""
     import sys
@@ -86,31 +77,29 @@ def report_warnings(warnings: list[str], strict: bool) -> int:
 
 
 def run(args: argparse.Namespace) -> int:
-    import json
+    from ..jobs.evaluate import AlignSpec, align
 
-    from ..jobs.evaluate import run_align
-
-    check_resolutions(args)
-    check_seed(args.seed)
-    written = run_align(
-        args.source,
-        args.target,
-        args.out,
-        anchors=args.anchors,
-        points=args.points,
-        resolution=args.resolution,
-        source_resolution=args.source_resolution,
-        target_resolution=args.target_resolution,
-        auto_anchor=not args.no_auto_anchors,
-        seed=args.seed,
-        read_options=read_options_from_args(args),
+    run = align(
+        AlignSpec(
+            args.source,
+            args.target,
+            args.out,
+            anchors=args.anchors,
+            points=args.points,
+            resolution=args.resolution,
+            source_resolution=args.source_resolution,
+            target_resolution=args.target_resolution,
+            auto_anchor=not args.no_auto_anchors,
+            seed=args.seed,
+            read_options=read_options_from_args(args),
+        )
     )
-    doc = json.loads(written["alignment"].read_text())
+    doc = run.report
     print(
         f"aligned: scale {doc['scale']:.4f}, rotation {doc['rotation_deg']:.2f} deg, "
         f"translation ({doc['translation'][0]:.1f}, {doc['translation'][1]:.1f}) px, "
         f"fitness {doc['fitness']:.3f}"
     )
-    for what, path in written.items():
+    for what, path in run.written.items():
         print(f"  {what:<10s} {path}")
-    return report_warnings(doc.get("warnings", []), args.strict)
+    return report_warnings(run.warnings, args.strict)

@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
-from ._mapargs import add_input_options, load_from_args
+from ._mapargs import add_input_options, read_options_from_args, say_how_read
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -26,14 +25,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..maps.formats import check_output_path, save_map
+    from ..jobs.maps import ConvertSpec, convert
     from ..maps.render import map_summary
 
-    check_output_path(args.output)  # before reading: fail fast, write nothing
-    m = load_from_args(args)
-    save_map(m, args.output)
-    written = str(args.output)
-    if Path(args.output).suffix.lower() in (".yaml", ".yml"):
-        written += f" and {Path(args.output).with_suffix('.pgm')}"
-    print(f"wrote {written}: {map_summary(m)}")
+    run = convert(ConvertSpec(args.input, args.output, read_options_from_args(args)))
+    say_how_read(args.input, run.map)
+    print(f"wrote {' and '.join(map(str, run.written.values()))}: {map_summary(run.map)}")
     return 0

@@ -7,8 +7,7 @@ import dataclasses
 import sys
 from pathlib import Path
 
-from ..core.errors import InputError
-from ._mapargs import add_input_options, check_seed, read_options_from_args
+from ._mapargs import add_input_options, read_options_from_args
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -25,8 +24,11 @@ def register(sub: argparse._SubParsersAction) -> None:
             "right, y = rows down), trajectory.csv (t,x,y,theta,v,omega), params.yaml "
             "(everything needed to repeat the run) and figure.png. With --samples K > 1 "
             "they go to sample_000/, sample_001/, ...; sample k uses seed N + k. "
-            "Coordinates (--start, --goal, waypoints, trajectories) are world metres in "
-            "the plan's ROS frame, headings radians counter-clockwise."
+            "Coordinates (--start, --goal, waypoints, trajectories) are metres in the "
+            "plan's frame (ROS maps: the ROS world frame; HouseExpo JSON: HouseExpo's x, "
+            "y, as simulate takes them; see --route-frame), headings radians "
+            "counter-clockwise. The --out folder is written whole at the end (an "
+            "existing one is replaced)."
         ),
     )
     p.add_argument(
@@ -62,50 +64,45 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--resolution", type=float, metavar="R", help="metres per pixel, for pictures without one"
     )
+    p.add_argument(
+        "--route-frame",
+        choices=["plan", "world"],
+        default="plan",
+        help="frame of --start/--goal/--waypoints/--trajectory: the plan's own (default; for "
+        "a HouseExpo JSON plan HouseExpo's x, y with y down, as simulate takes them) or the "
+        "map's ROS world frame (what a sample's trajectory.csv is written in)",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     add_input_options(p, resolution=False)
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..jobs.deform import DeformJob, run_deform
+    from ..jobs.deform import DeformSpec, deform
 
-    check_seed(args.seed)
-    if args.samples < 1:
-        raise InputError("--samples", f"must be at least 1, got {args.samples}")
-    sources = [
-        args.start is not None or args.goal is not None,
-        bool(args.waypoints),
-        bool(args.trajectory),
-    ]
-    if sum(sources) > 1:
-        raise InputError(None, "use only one of --start/--goal, --waypoints, --trajectory")
-    if (args.start is None) != (args.goal is None):
-        raise InputError(
-            "--start" if args.goal is None else "--goal", "give both --start and --goal"
+    run = deform(
+        DeformSpec(
+            plan=Path(args.plan),
+            out=Path(args.out),
+            method=args.method,
+            seed=args.seed,
+            samples=args.samples,
+            start=tuple(args.start) if args.start else None,
+            goal=tuple(args.goal) if args.goal else None,
+            waypoints=Path(args.waypoints) if args.waypoints else None,
+            trajectory=Path(args.trajectory) if args.trajectory else None,
+            fov=args.fov,
+            params=Path(args.params) if args.params else None,
+            resolution=args.resolution,
+            read_options=dataclasses.replace(read_options_from_args(args), resolution=None),
+            route_frame=args.route_frame,
+            progress=not args.quiet,
         )
-    if args.resolution is not None and not args.resolution > 0:
-        raise InputError("--resolution", f"must be > 0, got {args.resolution}")
-    job = DeformJob(
-        plan=Path(args.plan),
-        out=Path(args.out),
-        method=args.method,
-        seed=args.seed,
-        samples=args.samples,
-        start=tuple(args.start) if args.start else None,
-        goal=tuple(args.goal) if args.goal else None,
-        waypoints=Path(args.waypoints) if args.waypoints else None,
-        trajectory=Path(args.trajectory) if args.trajectory else None,
-        fov=args.fov,
-        params=Path(args.params) if args.params else None,
-        resolution=args.resolution,
-        read_options=dataclasses.replace(read_options_from_args(args), resolution=None),
     )
-    written = run_deform(job, progress=not args.quiet)
-    for folder, stats in written:
+    for s in run.samples:
         print(
-            f"{folder}: |d| mean {stats['mean']:.2f} px, max {stats['max']:.2f} px "
-            f"({stats['method']}, {stats['seconds']:.1f} s)"
+            f"{s.folder}: |d| mean {s.stats['mean']:.2f} px, max {s.stats['max']:.2f} px "
+            f"({s.stats['method']}, {s.stats['seconds']:.1f} s)"
         )
     sys.stdout.flush()
     return 0

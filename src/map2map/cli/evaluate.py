@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ._mapargs import add_input_options, check_seed, read_options_from_args
+from ._mapargs import add_input_options, read_options_from_args
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -15,7 +15,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "measure the local error of every wall point (Algorithm 1), in pixels and metres; "
         "write report.json (both chains, the chosen one, IoU, vanilla ICP, timings), "
         "overlay.png and error_map.png. With --pairs, evaluate every pair of a CSV list "
-        "(header slam,plan[,anchors]) and write pairs.csv and errors_boxplot.png.",
+        "(header slam,plan[,anchors]) and write pairs.csv and errors_boxplot.png. The --out "
+        "folder is written whole at the end (an existing one is replaced).",
     )
     p.add_argument("slam", metavar="SLAM_MAP", nargs="?", help="the SLAM (as-built) map")
     p.add_argument("plan", metavar="PLAN", nargs="?", help="the floor plan (as-planned)")
@@ -63,59 +64,38 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..core.errors import InputError
-    from ..jobs.evaluate import run_evaluate, run_pairs
-    from .align import check_resolutions, report_warnings
+    from ..evaluate.metric import summary_lines
+    from ..jobs.evaluate import EvaluateSpec, evaluate
+    from .align import report_warnings
 
-    check_resolutions(args)
-    check_seed(args.seed)
-    if args.pairs:
-        if args.slam or args.plan:
-            raise InputError("--pairs", "give either SLAM_MAP PLAN or --pairs FILE, not both")
-        if args.anchors:
-            raise InputError("--anchors", "with --pairs, give anchors in the pairs file")
-        if args.source_resolution is not None or args.target_resolution is not None:
-            raise InputError("--pairs", "with --pairs, give one --resolution for all pictures")
-        rows = run_pairs(
-            args.pairs,
+    run = evaluate(
+        EvaluateSpec(
+            args.slam,
+            args.plan,
             args.out,
+            pairs=args.pairs,
+            anchors=args.anchors,
             resolution=args.resolution,
+            source_resolution=args.source_resolution,
+            target_resolution=args.target_resolution,
             units=args.units,
             auto_anchor=not args.no_auto_anchors,
             seed=args.seed,
             read_options=read_options_from_args(args),
             progress=not args.quiet,
         )
+    )
+    if args.pairs:
         unit = "px" if args.units == "px" else "m"
-        warnings = []
-        for r in rows:
+        for r in run.rows:
             print(
                 f"{r['pair']:<24s} {r['chosen_chain']:<8s} wall mean {r['mean_' + unit]:.4g} "
                 f"{unit}, wall max {r['max_' + unit]:.4g} {unit}"
                 + ("  (WARNING)" if r["warnings"] else "")
             )
-            warnings += [f"{r['pair']}: {w}" for w in r["warnings"].split("; ") if w]
         print(f"wrote {args.out}/pairs.csv and {args.out}/errors_boxplot.png")
-        return report_warnings(warnings, args.strict)
-    if not (args.slam and args.plan):
-        raise InputError(None, "give SLAM_MAP and PLAN, or --pairs FILE")
-    ev = run_evaluate(
-        args.slam,
-        args.plan,
-        args.out,
-        anchors=args.anchors,
-        resolution=args.resolution,
-        source_resolution=args.source_resolution,
-        target_resolution=args.target_resolution,
-        units=args.units,
-        auto_anchor=not args.no_auto_anchors,
-        seed=args.seed,
-        read_options=read_options_from_args(args),
-    )
-    from ..evaluate.metric import summary_lines
-
-    r = ev.report
-    for line in summary_lines(r):
+        return report_warnings(run.warnings, args.strict)
+    for line in summary_lines(run.evaluation.report):
         print(line)
     print(f"wrote report.json, overlay.png, error_map.png in {args.out}")
-    return report_warnings(r["warnings"], args.strict)
+    return report_warnings(run.warnings, args.strict)

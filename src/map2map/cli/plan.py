@@ -45,46 +45,24 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    import json
+    from ..jobs.maps import PlanSpec, plan
 
-    from ..core._io import atomic_path
-    from ..maps.floorplan import generate_floorplan, plan_document, save_floorplan_figure
-    from ..maps.formats import check_output_path, save_map
-
-    plan = generate_floorplan(
-        args.seed,
-        kind=args.kind,
-        size=None if args.size is None else tuple(args.size),
-        resolution=args.resolution,
-        furniture=args.furniture,
+    run = plan(
+        PlanSpec(
+            args.out,
+            seed=args.seed,
+            kind=args.kind,
+            size=None if args.size is None else tuple(args.size),
+            resolution=args.resolution,
+            furniture=args.furniture,
+            figure=args.figure,
+            meta=args.meta,
+        )
     )
-    # check every destination before writing anything
-    check_output_path(args.out)
-    if args.figure:
-        check_output_path(args.figure, (".png", ".pdf", ".svg"))
-    if args.meta:
-        check_output_path(args.meta, (".json",))
-    save_map(plan, args.out)
-    written = [args.out]
-    if args.meta:
-        with atomic_path(args.meta) as tmp:
-            doc = plan_document(
-                plan,
-                seed=args.seed,
-                kind=args.kind,
-                size=None if args.size is None else tuple(args.size),
-                furniture=args.furniture,
-            )
-            tmp.write_text(json.dumps(doc, indent=1), encoding="utf-8")
-        written.append(args.meta)
-    if args.figure:
-        w, h = plan.meta["size_m"]
-        title = f"{args.kind} {w:g} x {h:g} m, seed {args.seed}"
-        save_floorplan_figure(plan, args.figure, title=title)
-        written.append(args.figure)
-    rooms = plan.meta["rooms"]
+    m = run.plan
+    written = [args.out] + [f for f in (args.meta, args.figure) if f]
     print(
-        f"{args.kind}: {len(rooms)} rooms, {len(plan.meta['doors'])} doors, "
-        f"{plan.width}x{plan.height} px at {plan.resolution:g} m/px -> {', '.join(written)}"
+        f"{args.kind}: {len(m.meta['rooms'])} rooms, {len(m.meta['doors'])} doors, "
+        f"{m.width}x{m.height} px at {m.resolution:g} m/px -> {', '.join(written)}"
     )
     return 0

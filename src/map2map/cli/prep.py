@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ._mapargs import add_input_options, load_from_args
+from ._mapargs import add_input_options, read_options_from_args, say_how_read
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -40,25 +40,21 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..core.errors import InputError
-    from ..maps.formats import check_output_path, save_map
-    from ..maps.preprocess import preprocess, save_preprocess_figure
+    from ..jobs.maps import PrepSpec, prep
     from ..maps.render import map_summary
 
-    if args.size < 1:
-        raise InputError("--size", f"output size must be >= 1 pixel, got {args.size}")
-    if args.thicken < 0:
-        raise InputError("--thicken", f"K must be >= 0, got {args.thicken}")
-    if args.margin < 0:
-        raise InputError("--margin", f"margin must be >= 0, got {args.margin}")
-    check_output_path(args.output)  # before reading: fail fast, write nothing
-    if args.figure:
-        check_output_path(args.figure, (".png", ".pdf", ".svg"))
-    m = load_from_args(args)
-    out = preprocess(m, size=args.size, thicken=args.thicken, crop=args.crop, margin=args.margin)
-    save_map(out, args.output)
-    if args.figure:
-        steps = f"size {args.size}, thicken {args.thicken}" + (", crop" if args.crop else "")
-        save_preprocess_figure(m, out, args.figure, title=f"{args.input}: {steps}")
-    print(f"{args.input}: {map_summary(m)}\n -> {args.output}: {map_summary(out)}")
+    run = prep(
+        PrepSpec(
+            args.input,
+            args.output,
+            size=args.size,
+            thicken=args.thicken,
+            crop=args.crop,
+            margin=args.margin,
+            figure=args.figure,
+            read_options=read_options_from_args(args),
+        )
+    )
+    say_how_read(args.input, run.map)
+    print(f"{args.input}: {map_summary(run.map)}\n -> {args.output}: {map_summary(run.result)}")
     return 0

@@ -4,9 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ._mapargs import add_input_options, load_from_args
-
-FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
+from ._mapargs import add_input_options, read_options_from_args, say_how_read
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -26,11 +24,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..maps.formats import check_output_path
-    from ..maps.render import map_summary, save_map_figure
+    from ..jobs.maps import ShowSpec, show
+    from ..maps.render import map_summary
 
-    check_output_path(args.out, FIGURE_SUFFIXES)
-    m = load_from_args(args)
-    save_map_figure(m, args.out, title=args.title)
-    print(f"wrote {args.out}: {map_summary(m)}")
+    run = show(ShowSpec(args.input, args.out, args.title, read_options_from_args(args)))
+    say_how_read(args.input, run.map)
+    print(f"wrote {args.out}: {map_summary(run.map)}")
     return 0

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from ..core.errors import warnings_unless_error
-from ._mapargs import add_input_options, check_seed, load_from_args
+from ._mapargs import add_input_options, load_from_args
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -22,7 +22,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "plan's frame, trajectory_true.csv, trajectory_estimated.csv (t,x,y,theta in the "
         "plan frame), run.log (CARMEN: ODOM, TRUEPOS, RAWLASER1), report.json and "
         "figure.png to --out. Route coordinates are in the plan's world frame (for a "
-        "HouseExpo JSON plan: HouseExpo's own x, y, theta, as its trajectory files).",
+        "HouseExpo JSON plan: HouseExpo's own x, y, theta, as its trajectory files). The "
+        "--out folder is written whole at the end (an existing one is replaced).",
         epilog="example: map2map simulate plan.yaml --out run1 --seed 3 --fov 180 --gif",
     )
     p.add_argument("input", metavar="PLAN", help="floor plan (any format convert reads)")
@@ -74,7 +75,6 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..jobs.simulate import SimulateSpec, simulate
 
-    check_seed(args.seed)
     # a plan refused below (no free space...) is said in one line, without its warnings
     with warnings_unless_error():
         run = simulate(

@@ -13,7 +13,8 @@ def register(subparsers) -> None:
         help="build a map from a recorded run (CARMEN log, simulator run, BreezySLAM log)",
         description="Replay a recorded run through a SLAM backend (GMapping-style particle "
         "filter or Karto-style graph SLAM) and write the map (ROS yaml + pgm), the estimated "
-        "trajectory (CSV) and a figure. Only odometry and scans are used, never ground truth.",
+        "trajectory (CSV) and a figure. Only odometry and scans are used, never ground truth. "
+        "The --out folder is written whole at the end (an existing one is replaced).",
     )
     p.add_argument(
         "log",
@@ -53,9 +54,7 @@ def register(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..jobs.slam import SlamSpec, slam
-    from ._mapargs import check_seed
 
-    check_seed(args.seed)
     run = slam(
         SlamSpec(
             log=args.log,

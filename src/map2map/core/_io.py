@@ -14,7 +14,7 @@ from pathlib import Path
 
 from .errors import InputError
 
-__all__ = ["atomic_path", "atomic_paths", "ensure_output_dir"]
+__all__ = ["atomic_path", "atomic_paths", "atomic_dir", "check_output_dir", "ensure_output_dir"]
 
 
 def ensure_output_dir(path: str | os.PathLike, *, is_dir: bool = True) -> Path:
@@ -76,3 +76,115 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     """Single-file form of :func:`atomic_paths`."""
     with atomic_paths(path) as (tmp,):
         yield tmp
+
+
+def check_output_dir(path: str | os.PathLike, *, protect: tuple = ()) -> Path:
+    """Check, before any work, that folder ``path`` can be written as a whole.
+
+    Nothing is created. The folder may exist (it will be replaced, see
+    :func:`atomic_dir`) or not (its nearest existing ancestor must be a writable
+    folder). Refused with :class:`InputError`: a path that is a file, under a file,
+    in a folder that is not writable, the current folder or one of its ancestors, or
+    a folder holding one of the ``protect`` paths (the job's own inputs).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> check_output_dir(d / "new" / "run") == d / "new" / "run"
+    True
+    >>> (d / "f").write_text("x") and None
+    >>> check_output_dir(d / "f")
+    Traceback (most recent call last):
+    ...
+    map2map.core.errors.InputError: ...: output path exists and is not a directory
+    """
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise InputError(p, "output path exists and is not a directory")
+    full = p.resolve()
+    if full == Path.cwd().resolve() or full in Path.cwd().resolve().parents:
+        raise InputError(p, "the output folder is replaced whole: it cannot be the "
+                         "current folder or one of its parents")  # fmt: skip
+    if p.is_dir():
+        for q in protect:
+            if q is None or not isinstance(q, str | os.PathLike):
+                continue
+            try:
+                Path(q).resolve().relative_to(full)
+            except ValueError:
+                continue
+            raise InputError(p, f"the output folder is replaced whole and holds the input {q}")
+    anc = full.parent
+    while not anc.exists():
+        anc = anc.parent
+    if not anc.is_dir():
+        raise InputError(p, f"cannot create the output folder: {anc} is not a directory")
+    if not os.access(anc, os.W_OK | os.X_OK):
+        raise InputError(p, f"output folder cannot be created: {anc} is not writable")
+    return p
+
+
+@contextlib.contextmanager
+def atomic_dir(path: str | os.PathLike, *, protect: tuple = ()) -> Iterator[Path]:
+    """Yield a temporary sibling folder of ``path``; on success it becomes ``path`` whole.
+
+    A folder of outputs exists complete or not at all: the caller writes everything
+    into the yielded folder (``.NAME.tmp-XXXX`` beside ``path``); when the block ends
+    without an exception it is renamed to ``path``. An exception or Ctrl-C inside the
+    block removes the temporary folder (``finally``) and leaves ``path`` as it was.
+
+    The rule for an existing ``path``: it is **replaced** as a whole, atomically
+    enough that no reader ever sees a mixture: the old folder is renamed away
+    (``.NAME.old-XXXX``), the new one renamed in, then the old one deleted. Old files
+    that the new run does not write do not survive. :func:`check_output_dir` (called
+    first) refuses the current folder, its parents and a folder holding ``protect``.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> with atomic_dir(d / "run") as tmp:
+    ...     _ = (tmp / "a.txt").write_text("hello")
+    >>> sorted(p.name for p in d.iterdir()), (d / "run" / "a.txt").read_text()
+    (['run'], 'hello')
+    >>> try:
+    ...     with atomic_dir(d / "run2") as tmp:
+    ...         _ = (tmp / "half.txt").write_text("...")
+    ...         raise RuntimeError("interrupted")
+    ... except RuntimeError:
+    ...     pass
+    >>> sorted(p.name for p in d.iterdir())
+    ['run']
+    """
+    import shutil
+
+    final = check_output_dir(path, protect=protect)
+    parent = final.parent if str(final.parent) else Path(".")
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.tmp-", dir=parent))
+    except OSError as exc:
+        raise InputError(final, f"output folder cannot be created ({exc.strerror})") from None
+    old: Path | None = None
+    try:
+        yield tmp
+        os.chmod(tmp, 0o755 & ~_umask())
+        if final.exists():
+            old = Path(tempfile.mkdtemp(prefix=f".{final.name}.old-", dir=parent))
+            os.replace(final, old / final.name)
+        os.replace(tmp, final)
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp, ignore_errors=True)
+        if old is not None:
+            if not final.exists() and (old / final.name).exists():  # put the old one back
+                with contextlib.suppress(OSError):
+                    os.replace(old / final.name, final)
+            shutil.rmtree(old, ignore_errors=True)
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask

@@ -33,12 +33,12 @@ Examples
 from __future__ import annotations
 
 import os
-import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from ..core._io import atomic_dir, check_output_dir
 from ..core.errors import InputError
 
 __all__ = ["FORMATS", "ExportResult", "select_rows", "export_dataset"]
@@ -120,7 +120,8 @@ def export_dataset(
     fmt : {"pix2pix", "folders", "packed"}
         Output format (module docstring).
     out : path-like, optional
-        Output folder of ``pix2pix``/``folders`` (default ``DS/export/<fmt>``); the
+        Output folder of ``pix2pix``/``folders`` (default ``DS/export/<fmt>``; checked
+        before any work, written whole and replacing an existing one); the
         packed file is always ``DS/packed.npz``.
     everything, include_review : bool
         Export every done pair / also the pairs the cleaner left for review.
@@ -144,6 +145,9 @@ def export_dataset(
     if fmt not in FORMATS:
         raise InputError("format", f"must be one of {', '.join(FORMATS)}, got {fmt!r}")
     ds = Path(ds)
+    if fmt != "packed":  # an unwritable output is found before any work
+        path = Path(out) if out else ds / "export" / fmt
+        check_output_dir(path, protect=(ds,))
     with open_dataset(ds) as man:
         rows = select_rows(man, everything=everything, include_review=include_review)
         if not rows:
@@ -167,11 +171,7 @@ def export_dataset(
                 a, b, np.array([r["plan_id"] for r in rows]),
                 np.array([r["split"] for r in rows]), meta))  # fmt: skip
         else:
-            path = Path(out) if out else ds / "export" / fmt
-            tmp = path.parent / f".tmp-{path.name}-{os.getpid()}"
-            if tmp.exists():
-                shutil.rmtree(tmp)
-            try:
+            with atomic_dir(path, protect=(ds,)) as tmp:
                 for r in bar:
                     a, b = _load(ds, r["idx"])
                     name = f"{r['idx']:06d}.png"
@@ -184,13 +184,6 @@ def export_dataset(
                             d = tmp / side / r["split"]
                             d.mkdir(parents=True, exist_ok=True)
                             _png(d / name, img)
-                if path.exists():
-                    shutil.rmtree(path)
-                path.parent.mkdir(parents=True, exist_ok=True)
-                os.rename(tmp, path)
-            finally:
-                if tmp.exists():
-                    shutil.rmtree(tmp, ignore_errors=True)
         bar.close()
         exports = man.get_info("exports", {})
         exports[fmt] = {"path": str(path), "count": len(rows), "splits": splits}

@@ -1,20 +1,42 @@
-"""Running the parametric model on files: what ``map2map deform`` does, as a library call.
+"""``map2map deform`` as a job: read the plan and route, run the parametric model, write.
 
-Everything is validated (plan, parameters, trajectory source, every sample's trajectory)
-before the first file is written; each file is written atomically.
+:func:`deform` takes a :class:`DeformSpec` and returns a :class:`DeformRun`: the files
+written (``written``, name -> path) and, per sample, the in-memory
+:class:`~map2map.parametric.pipeline.DeformResult` (thesis sec. 3.2). Everything is
+validated (plan, parameters, route, every sample's trajectory, the output folder)
+before any work; the outputs go to a temporary folder renamed whole at the end
+(:func:`map2map.core._io.atomic_dir`: an existing output folder is replaced).
 
 Seeds: sample ``k`` of a run with ``--seed N`` uses seed ``N + k``, split into two
 independent streams (:class:`numpy.random.SeedSequence`): one plans the trajectory, the
 other draws the model. So ``map2map deform PLAN --seed S --params params.yaml
 --trajectory trajectory.csv`` with a sample's own files and seed repeats it byte for
 byte (the recipe is written into its ``params.yaml``).
+
+Coordinates (``start``, ``goal``, ``waypoints``, ``trajectory``) are in the plan's own
+frame: for a HouseExpo JSON plan HouseExpo's (y down), converted by
+:func:`map2map.maps.houseexpo.plan_poses_to_world` as ``map2map simulate`` does;
+``route_frame="world"`` takes them in the map's ROS frame as they are (what a sample's
+own ``trajectory.csv`` is written in).
+
+Examples
+--------
+>>> import numpy as np, tempfile, pathlib
+>>> from map2map.core.grid import OccupancyMap
+>>> data = np.full((60, 100), 255, np.uint8); data[[0, -1], :] = 0; data[:, [0, -1]] = 0
+>>> out = pathlib.Path(tempfile.mkdtemp()) / "m"
+>>> run = deform(DeformSpec(OccupancyMap(data, 0.05), out, start=(0.5, 0.5),
+...                         goal=(4.0, 2.0), figures=False, progress=False))
+>>> sorted(run.written), run.results[0].method
+(['displacement', 'params', 'slam_map', 'slam_map_pgm', 'trajectory'], 'additive')
 """
 
 from __future__ import annotations
 
 import dataclasses
+import os
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -22,34 +44,114 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from .._version import __version__
-from ..core._io import ensure_output_dir
+from ..core._io import atomic_dir, check_output_dir, ensure_output_dir
 from ..core.errors import InputError, warnings_unless_error
 from ..core.grid import FREE, OccupancyMap
 from ..parametric.figures import deform_figure
 from ..parametric.params import ParametricParams, load_params, save_params
-from ..parametric.pipeline import DeformResult, deform, make_trajectory
+from ..parametric.pipeline import DeformResult, make_trajectory
+from ..parametric.pipeline import deform as run_model
 from ..trajectory.timing import Trajectory, read_trajectory, read_waypoints
+from ._common import check_positive, check_seed, final_paths
 
-__all__ = ["DeformJob", "load_plan", "sample_rngs", "write_result", "run_deform"]
+__all__ = [
+    "DeformSpec",
+    "DeformSample",
+    "DeformRun",
+    "DeformJob",
+    "deform",
+    "run_deform",
+    "load_plan",
+    "sample_rngs",
+    "write_result",
+]
+
+ROUTE_FRAMES = ("plan", "world")
 
 
 @dataclass
-class DeformJob:
-    """Arguments of ``map2map deform``."""
+class DeformSpec:
+    """What ``map2map deform`` is asked to do.
 
-    plan: Path
-    out: Path
+    Parameters
+    ----------
+    plan : path-like or OccupancyMap
+        The floor plan: a file (any format :func:`map2map.maps.formats.load_map` reads,
+        with ``read_options`` and ``resolution``) or a map in memory.
+    out : path-like
+        Output folder (replaced whole if it exists).
+    method : {"additive", "ekf"}
+        Odometry-to-map conversion (thesis eqs. 3.81-3.90 or 3.54-3.80).
+    seed, samples : int
+        Seed of sample 0; number of maps (sample ``k`` uses ``seed + k``; with more than
+        one, each goes to ``sample_KKK/``).
+    start, goal : (x, y) or None
+        Route end points [m]; both or neither.
+    waypoints, trajectory : path-like or None
+        A waypoints file or a recorded trajectory CSV (at most one route source).
+    fov : float or None
+        LIDAR field of view in degrees (default from the parameters: 360).
+    params : path-like or None
+        Model parameters YAML overriding the defaults.
+    resolution : float or None
+        Metres per pixel of a plan without its own.
+    read_options : MapReadOptions or None
+        How to read the plan file.
+    route_frame : {"plan", "world"}
+        Frame of the route coordinates: the plan's own (HouseExpo: y down, converted)
+        or the map's ROS world frame as given.
+    figures, progress : bool
+        Write ``figure.png`` per sample; show a tqdm bar.
+    plan_name : str or None
+        Names an in-memory plan in messages and ``params.yaml``.
+    """
+
+    plan: str | os.PathLike | OccupancyMap
+    out: str | os.PathLike
     method: str = "additive"
     seed: int = 0
     samples: int = 1
     start: tuple[float, float] | None = None
     goal: tuple[float, float] | None = None
-    waypoints: Path | None = None
-    trajectory: Path | None = None
-    fov: int | None = None
-    params: Path | None = None
+    waypoints: str | os.PathLike | None = None
+    trajectory: str | os.PathLike | None = None
+    fov: float | None = None
+    params: str | os.PathLike | None = None
     resolution: float | None = None
-    read_options: object | None = None  # maps.formats.MapReadOptions
+    read_options: Any = None  # maps.formats.MapReadOptions
+    route_frame: str = "plan"
+    figures: bool = True
+    progress: bool = True
+    plan_name: str | os.PathLike | None = None
+
+
+#: The old name of :class:`DeformSpec`.
+DeformJob = DeformSpec
+
+
+@dataclass
+class DeformSample:
+    """One modelled map: its folder, seed, files, the model's result and field statistics."""
+
+    folder: Path
+    seed: int
+    written: dict[str, Path]
+    result: DeformResult
+    stats: dict[str, Any]
+
+
+@dataclass
+class DeformRun:
+    """What :func:`deform` wrote (name -> path; ``sample_KKK/name`` with several samples)
+    and every sample in memory."""
+
+    written: dict[str, Path]
+    samples: list[DeformSample] = field(default_factory=list)
+
+    @property
+    def results(self) -> list[DeformResult]:
+        """The :class:`~map2map.parametric.pipeline.DeformResult` of every sample."""
+        return [s.result for s in self.samples]
 
 
 def load_plan(path: Path, resolution: float | None = None, options=None) -> OccupancyMap:
@@ -79,13 +181,22 @@ def _check_trajectory(plan: OccupancyMap, traj: Trajectory, source: Path) -> Non
         )
 
 
+_NAMES = ("slam_map", "slam_map_pgm", "displacement", "trajectory", "params", "figure")
+
+
 def write_result(
     plan: OccupancyMap,
     res: DeformResult,
     folder: Path,
     run: dict[str, Any],
+    *,
+    figures: bool = True,
 ) -> list[Path]:
-    """Write one sample's files into ``folder``; returns their paths."""
+    """Write one sample's files into ``folder``; returns their paths.
+
+    ``slam_map.yaml`` + ``.pgm``, ``displacement.npz``, ``trajectory.csv``,
+    ``params.yaml`` (with ``run``) and, with ``figures``, ``figure.png``.
+    """
     from ..maps.ros import save_ros_map
 
     folder = ensure_output_dir(folder)
@@ -95,78 +206,161 @@ def write_result(
     res.field.save_npz(paths[1])
     res.trajectory.to_csv(paths[2])
     save_params(res.params, paths[3], run=run, drawn=res.drawn)
+    if not figures:
+        return [paths[0], Path(pgm), *paths[1:4]]
     deform_figure(
         plan, res, paths[4], title=f"Modelled SLAM map ({res.method}, seed {run['seed']})"
     )
     return [paths[0], Path(pgm), *paths[1:]]
 
 
-def run_deform(job: DeformJob, progress: bool = True) -> list[tuple[Path, dict]]:
-    """Run ``map2map deform``; returns (folder, field statistics) per sample."""
-    if job.samples < 1:
-        raise InputError("samples", f"must be at least 1, got {job.samples}")
-    params = load_params(job.params) if job.params else ParametricParams()
-    if job.fov is not None:
-        params = dataclasses.replace(params, fov_deg=float(job.fov))
+def _flip_trajectory(traj: Trajectory) -> Trajectory:
+    """A trajectory given in a HouseExpo plan's frame (y down) in the map's ROS frame."""
+    from ..maps.houseexpo import plan_poses_to_world
+
+    xyt = plan_poses_to_world(np.column_stack([traj.x, traj.y, traj.theta]))
+    return dataclasses.replace(traj, x=xyt[:, 0], y=xyt[:, 1], theta=xyt[:, 2], omega=-traj.omega)
+
+
+def _check_spec(spec: DeformSpec) -> None:
+    check_seed(spec.seed)
+    if spec.samples < 1:
+        raise InputError("samples", f"must be at least 1, got {spec.samples}")
+    if spec.method not in ("additive", "ekf"):
+        raise InputError("method", f"must be additive or ekf, got {spec.method!r}")
+    if spec.route_frame not in ROUTE_FRAMES:
+        raise InputError("route_frame", f"must be plan or world, got {spec.route_frame!r}")
+    sources = [
+        spec.start is not None or spec.goal is not None,
+        spec.waypoints is not None,
+        spec.trajectory is not None,
+    ]
+    if sum(sources) > 1:
+        raise InputError(None, "use only one of start/goal, waypoints, trajectory")
+    if (spec.start is None) != (spec.goal is None):
+        raise InputError("start" if spec.start is None else "goal", "give both start and goal")
+    check_positive(spec.resolution, "resolution")
+
+
+def _run_record(spec: DeformSpec, plan_name, seed: int, k: int, houseexpo: bool) -> dict:
+    if spec.trajectory:
+        source = str(spec.trajectory)
+    elif spec.waypoints:
+        source = str(spec.waypoints)
+    elif spec.start:
+        source = f"start {list(spec.start)} goal {list(spec.goal)}"
+    else:
+        source = "random start and goal"
+    run = {
+        "map2map_version": __version__,
+        "plan": str(plan_name),
+        "method": spec.method,
+        "seed": seed,
+        "sample": k,
+        "trajectory_source": source,
+        "repeat": (
+            f"map2map deform {plan_name} --out OUT --method {spec.method} --seed {seed} "
+            f"--params params.yaml --trajectory trajectory.csv"
+        ),
+    }
+    if houseexpo:  # trajectory.csv is in the map's ROS frame, not HouseExpo's
+        run["repeat"] += " --route-frame world"
+    if spec.resolution:
+        run["resolution"] = spec.resolution
+        run["repeat"] += f" --resolution {spec.resolution!r}"
+    if spec.read_options is not None and spec.read_options.to_args():
+        run["repeat"] += " " + " ".join(spec.read_options.to_args())
+    return run
+
+
+def deform(spec: DeformSpec) -> DeformRun:
+    """Run ``map2map deform``: every input and the output folder checked before any work.
+
+    Parameters
+    ----------
+    spec : DeformSpec
+        The plan, route, model parameters and output folder.
+
+    Returns
+    -------
+    DeformRun
+        ``written`` (name -> path, ``sample_KKK/name`` with several samples) and every
+        sample's :class:`~map2map.parametric.pipeline.DeformResult` and statistics.
+
+    Raises
+    ------
+    InputError
+        A bad parameter, plan, route or output folder (nothing is written).
+    """
+    from ..maps.houseexpo import is_houseexpo, plan_poses_to_world
+
+    _check_spec(spec)
+    inputs = (None if isinstance(spec.plan, OccupancyMap) else spec.plan,
+              spec.waypoints, spec.trajectory, spec.params)  # fmt: skip
+    check_output_dir(spec.out, protect=inputs)
+    params = load_params(spec.params) if spec.params else ParametricParams()
+    if spec.fov is not None:
+        params = dataclasses.replace(params, fov_deg=float(spec.fov))
+    plan_name = spec.plan_name if isinstance(spec.plan, OccupancyMap) else spec.plan
     with warnings_unless_error():  # a refused plan: the error alone
-        plan = load_plan(job.plan, job.resolution, job.read_options)
+        if isinstance(spec.plan, OccupancyMap):
+            plan = spec.plan
+        else:
+            plan = load_plan(spec.plan, spec.resolution, spec.read_options)
         if not plan.free.any():
-            raise InputError(job.plan, "the plan has no free space")
-    waypoints = read_waypoints(job.waypoints) if job.waypoints else None
+            raise InputError(plan_name, "the plan has no free space")
+    flip = is_houseexpo(plan) and spec.route_frame == "plan"  # HouseExpo's y points down
+    start, goal = spec.start, spec.goal
+    if flip and start is not None:
+        start, goal = (tuple(map(float, plan_poses_to_world(np.array([p], float))[0]))
+                       for p in (start, goal))  # fmt: skip
+    waypoints = read_waypoints(spec.waypoints) if spec.waypoints else None
+    if flip and waypoints is not None:
+        waypoints = plan_poses_to_world(waypoints)
     recorded = None
-    if job.trajectory:
-        recorded = read_trajectory(job.trajectory, v_max=params.v_max, omega_max=params.omega_max)
-        _check_trajectory(plan, recorded, job.trajectory)
+    if spec.trajectory:
+        recorded = read_trajectory(spec.trajectory, v_max=params.v_max, omega_max=params.omega_max)
+        if flip:
+            recorded = _flip_trajectory(recorded)
+        _check_trajectory(plan, recorded, spec.trajectory)
     # plan every sample's trajectory first: bad start/goal/waypoints fail before writing
     plans: list[tuple[int, Trajectory, np.random.Generator]] = []
-    for k in range(job.samples):
-        seed = job.seed + k
+    for k in range(spec.samples):
+        seed = spec.seed + k
         traj_rng, model_rng = sample_rngs(seed)
         if recorded is not None:
             traj = recorded
         else:
             try:
                 traj, _ = make_trajectory(
-                    plan, params, traj_rng, start=job.start, goal=job.goal, waypoints=waypoints
+                    plan, params, traj_rng, start=start, goal=goal, waypoints=waypoints
                 )
             except InputError as exc:  # name the file the bad point is checked against
-                raise InputError(job.waypoints or job.plan, exc.problem) from None
+                raise InputError(spec.waypoints or plan_name, exc.problem) from None
         plans.append((seed, traj, model_rng))
-    ensure_output_dir(job.out)
-    out: list[tuple[Path, dict]] = []
-    bar = tqdm(plans, desc=f"deform ({job.method})", unit="map", disable=not progress)
-    for k, (seed, traj, model_rng) in enumerate(bar):
-        t0 = time.perf_counter()
-        res = deform(plan, traj, job.method, params, model_rng)
-        folder = job.out if job.samples == 1 else job.out / f"sample_{k:03d}"
-        if job.trajectory:
-            source = str(job.trajectory)
-        elif job.waypoints:
-            source = str(job.waypoints)
-        elif job.start:
-            source = f"start {list(job.start)} goal {list(job.goal)}"
-        else:
-            source = "random start and goal"
-        run = {
-            "map2map_version": __version__,
-            "plan": str(job.plan),
-            "method": job.method,
-            "seed": seed,
-            "sample": k,
-            "trajectory_source": source,
-            "repeat": (
-                f"map2map deform {job.plan} --out OUT --method {job.method} --seed {seed} "
-                f"--params params.yaml --trajectory trajectory.csv"
-            ),
-        }
-        if job.resolution:
-            run["resolution"] = job.resolution
-            run["repeat"] += f" --resolution {job.resolution!r}"
-        if job.read_options is not None and job.read_options.to_args():
-            run["repeat"] += " " + " ".join(job.read_options.to_args())
-        write_result(plan, res, folder, run)
-        stats = res.field.stats(res.observed)
-        stats.update(method=job.method, seconds=time.perf_counter() - t0)
-        out.append((folder, stats))
-    bar.close()
-    return out
+    samples: list[DeformSample] = []
+    written: dict[str, Path] = {}
+    with atomic_dir(spec.out, protect=inputs) as tmp:
+        bar = tqdm(plans, desc=f"deform ({spec.method})", unit="map", disable=not spec.progress)
+        for k, (seed, traj, model_rng) in enumerate(bar):
+            t0 = time.perf_counter()
+            res = run_model(plan, traj, spec.method, params, model_rng)
+            sub = "" if spec.samples == 1 else f"sample_{k:03d}"
+            run = _run_record(spec, plan_name, seed, k, is_houseexpo(plan))
+            paths = write_result(plan, res, tmp / sub, run, figures=spec.figures)
+            names = {(f"{sub}/{n}" if sub else n): p
+                     for n, p in zip(_NAMES, paths, strict=False)}  # fmt: skip
+            stats = res.field.stats(res.observed)
+            stats.update(method=spec.method, seconds=time.perf_counter() - t0)
+            folder = Path(spec.out) / sub if sub else Path(spec.out)
+            files = final_paths(names, tmp, spec.out)
+            samples.append(DeformSample(folder, seed, files, res, stats))
+            written.update(files)
+        bar.close()
+    return DeformRun(written, samples)
+
+
+def run_deform(job: DeformSpec, progress: bool = True) -> list[tuple[Path, dict]]:
+    """The old entry point: :func:`deform`, returning (folder, field statistics) per sample."""
+    run = deform(dataclasses.replace(job, progress=progress))
+    return [(s.folder, s.stats) for s in run.samples]

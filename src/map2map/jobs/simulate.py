@@ -28,13 +28,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core._io import atomic_path, ensure_output_dir
+from ..core._io import atomic_dir, atomic_path, check_output_dir, ensure_output_dir
 from ..core.errors import InputError
 from ..core.grid import OccupancyMap
 from ..maps.formats import save_map
 from ..robotlog.carmen import write_carmen
 from ..sim.runner import SimResult
 from ..sim.runner import simulate as run_simulation
+from ._common import check_seed, final_paths
 
 __all__ = ["SimulateSpec", "SimulateRun", "simulate", "save_run", "save_figure_png", "save_gif"]
 
@@ -78,11 +79,36 @@ class SimulateRun:
 
 
 def simulate(spec: SimulateSpec) -> SimulateRun:
-    """Run ``map2map simulate``: every input checked before the first file is written."""
+    """Run ``map2map simulate``: every input and the output folder checked before any work.
+
+    Parameters
+    ----------
+    spec : SimulateSpec
+        Plan, route, robot and mapper settings, output folder.
+
+    Returns
+    -------
+    SimulateRun
+        ``written`` (name -> path under ``spec.out``) and the
+        :class:`~map2map.sim.runner.SimResult`.
+
+    Raises
+    ------
+    InputError
+        A bad parameter, plan, route or output folder (nothing is written). The
+        outputs go to a temporary folder renamed whole at the end
+        (:func:`map2map.core._io.atomic_dir`: an existing folder is replaced).
+    """
     from ..maps.formats import load_map
     from ..maps.houseexpo import is_houseexpo, plan_poses_to_world
     from ..sim.routes import read_route
 
+    check_seed(spec.seed)
+    if spec.waypoints is not None and spec.trajectory is not None:
+        raise InputError(None, "use only one of waypoints, trajectory")
+    inputs = (spec.plan_name if isinstance(spec.plan, OccupancyMap) else spec.plan,
+              spec.waypoints, spec.trajectory)  # fmt: skip
+    check_output_dir(spec.out, protect=inputs)
     if not (math.isfinite(spec.duration) and spec.duration > 0):
         raise InputError("duration", f"duration must be > 0 seconds, got {spec.duration:g}")
     if spec.obstacles < 0 or spec.people < 0:
@@ -114,8 +140,9 @@ def simulate(spec: SimulateSpec) -> SimulateRun:
         source=source,
         route_source=route_file,
     )
-    written = save_run(res, spec.out, gif=spec.gif, figures=spec.figures)
-    return SimulateRun(written, res)
+    with atomic_dir(spec.out, protect=inputs) as tmp:
+        written = save_run(res, tmp, gif=spec.gif, figures=spec.figures)
+    return SimulateRun(final_paths(written, tmp, spec.out), res)
 
 
 def _write_csv(path: Path, times, poses) -> None:

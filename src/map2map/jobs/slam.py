@@ -35,10 +35,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core._io import atomic_path, ensure_output_dir
-from ..core.errors import InputError
+from ..core._io import atomic_dir, atomic_path, check_output_dir, ensure_output_dir
 from ..core.grid import OccupancyMap
 from ..slam.offline import SlamResult, check_options, run_slam
+from ._common import check_seed, final_paths
 
 __all__ = ["SlamSpec", "SlamRun", "slam", "write_slam_outputs", "plan_frame_grid", "figure_frame"]
 
@@ -70,14 +70,32 @@ class SlamRun:
 
 
 def slam(spec: SlamSpec) -> SlamRun:
-    """Run ``map2map slam``: the log and every parameter are checked before writing."""
+    """Run ``map2map slam``: every parameter, the output folder and the log checked first.
+
+    Parameters
+    ----------
+    spec : SlamSpec
+        Log, backend and its options, output folder.
+
+    Returns
+    -------
+    SlamRun
+        ``written`` (name -> path), the :class:`~map2map.slam.offline.SlamResult` and
+        the reader's notes.
+
+    Raises
+    ------
+    InputError
+        A bad parameter, log or output folder (nothing is written). The outputs go
+        to a temporary folder renamed whole at the end
+        (:func:`map2map.core._io.atomic_dir`: an existing folder is replaced).
+    """
     from ..robotlog.logs import load_log
 
+    check_seed(spec.seed)
     kw = dict(particles=spec.particles, resolution=spec.resolution, max_range=spec.max_range)
     check_options(spec.backend, **kw)  # before reading the log: fail fast
-    out = Path(spec.out)
-    if out.exists() and not out.is_dir():
-        raise InputError(out, "output path exists and is not a directory")
+    out = check_output_dir(spec.out, protect=(spec.log,))
     log = load_log(spec.log, spec.format)  # every format problem is raised here, before output
     res = run_slam(
         log,
@@ -88,15 +106,17 @@ def slam(spec: SlamSpec) -> SlamRun:
         max_range=spec.max_range,
         progress=spec.progress,
     )
-    paths = write_slam_outputs(
-        res,
-        out,
-        title=f"{Path(spec.log).name}: {spec.backend}",
-        figures=spec.figures,
-        frame=log.plan_start_pose(),
-    )
+    with atomic_dir(out, protect=(spec.log,)) as tmp:
+        paths = write_slam_outputs(
+            res,
+            tmp,
+            title=f"{Path(spec.log).name}: {spec.backend}",
+            figures=spec.figures,
+            frame=log.plan_start_pose(),
+        )
     names = ["map", "map_pgm", "trajectory", "figure"]
-    return SlamRun(dict(zip(names, paths, strict=False)), res, list(log.notes))
+    written = final_paths(dict(zip(names, paths, strict=False)), tmp, out)
+    return SlamRun(written, res, list(log.notes))
 
 
 def plan_frame_grid(m: OccupancyMap, frame) -> OccupancyMap:
