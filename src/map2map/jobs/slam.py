@@ -80,6 +80,7 @@ def slam(spec: SlamSpec) -> SlamRun:
         seed=spec.seed,
         max_range=spec.max_range,
         progress=spec.progress,
+        source=spec.log,
     )
     paths = write_slam_outputs(
         res, out, title=f"{Path(spec.log).name}: {spec.backend}", figures=spec.figures
