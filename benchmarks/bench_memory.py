@@ -18,7 +18,8 @@ drawing is). Each command runs as its own ``python3 -m map2map`` process with
 ``VmHWM`` at exit (``/proc/self/status``). ``align``/``evaluate`` compare the plan
 with a copy of itself turned 90 degrees; ``simulate`` drives ``--duration 20`` simulated seconds;
 ``slam`` replays the 500 px run's CARMEN log at a resolution giving about that many
-pixels across (``--resolution``); ``convert`` writes a PNG, ``prep`` resizes to 512 px.
+pixels across (``--resolution``); ``convert`` writes a PNG, ``prep`` resizes to 512 px,
+``show`` draws the figure.
 
 Printed: one row per command and side (megapixels, peak RSS MB, wall s), then per
 command the least-squares fit ``peak = base + per_pixel * pixels`` (bytes/pixel)
@@ -41,7 +42,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 _HAS_OVERRIDE = True
-COMMANDS = ["convert", "prep", "align", "evaluate", "deform", "simulate", "slam"]
+COMMANDS = ["convert", "prep", "show", "align", "evaluate", "deform", "simulate", "slam"]
 
 
 def _env() -> dict:
@@ -131,6 +132,8 @@ def command_argv(cmd: str, n: int, maps, tmp: Path, log: Path | None) -> list[st
         return ["convert", str(plan), str(tmp / f"conv_{n}.png"), *common]
     if cmd == "prep":
         return ["prep", str(plan), str(tmp / f"prep_{n}.png"), "--size", "512", *common]
+    if cmd == "show":
+        return ["show", str(plan), "--out", str(tmp / f"show_{n}.png"), *common]
     if cmd == "align":
         return ["align", str(turned), str(plan), "--out", str(out), *common]
     if cmd == "evaluate":

@@ -90,17 +90,18 @@ class MemoryModel:
         return self.base_mb * 2**20 + self.bytes_per_pixel * float(pixels)
 
 
-#: Measured models (``benchmarks/bench_memory.py``, least-squares fit over
-#: 0.25-16 MP, rounded up ~20 %); see ``docs/memory.md`` for the raw table.
+#: Measured models (``benchmarks/bench_memory.py``: least-squares fit of the peak
+#: RSS over 0.25-16 MP, slopes rounded up ~10 %, bases to 20 MB; ``docs/memory.md``
+#: has the raw table). ``align`` shares ``evaluate``'s model (the same alignment).
 MODELS: dict[str, MemoryModel] = {
-    "convert": MemoryModel(250, 12),
-    "prep": MemoryModel(250, 12),
-    "show": MemoryModel(300, 40),
-    "align": MemoryModel(400, 200),
-    "evaluate": MemoryModel(400, 200),
-    "deform": MemoryModel(400, 100),
-    "simulate": MemoryModel(400, 100),
-    "slam": MemoryModel(400, 100),
+    "convert": MemoryModel(60, 6),
+    "prep": MemoryModel(60, 9),
+    "show": MemoryModel(300, 4),
+    "align": MemoryModel(240, 236),
+    "evaluate": MemoryModel(240, 236),
+    "deform": MemoryModel(400, 195),
+    "simulate": MemoryModel(240, 128),
+    "slam": MemoryModel(300, 85),
 }
 
 
