@@ -92,7 +92,9 @@ class MemoryModel:
 
 #: Measured models (``benchmarks/bench_memory.py``: least-squares fit of the peak
 #: RSS over 0.25-16 MP, slopes rounded up ~10 %, bases to 20 MB; ``docs/memory.md``
-#: has the raw table). ``align`` shares ``evaluate``'s model (the same alignment).
+#: has the raw table). ``align`` shares ``evaluate``'s model (the same alignment);
+#: ``simulate``'s is its default 7-minute exploration, ``slam``'s per pixel of
+#: :func:`map2map.slam.offline.map_shape_estimate` with the default 30 particles.
 MODELS: dict[str, MemoryModel] = {
     "convert": MemoryModel(60, 6),
     "prep": MemoryModel(60, 9),
@@ -100,8 +102,8 @@ MODELS: dict[str, MemoryModel] = {
     "align": MemoryModel(240, 236),
     "evaluate": MemoryModel(240, 236),
     "deform": MemoryModel(400, 195),
-    "simulate": MemoryModel(240, 128),
-    "slam": MemoryModel(300, 85),
+    "simulate": MemoryModel(240, 240),
+    "slam": MemoryModel(300, 400),
 }
 
 
