@@ -70,6 +70,13 @@ def add_input_options(
         metavar="T",
         help="DXF: wall thickness in metres (default 0.1)",
     )
+    g.add_argument(
+        "--max-pixels",
+        type=int,
+        metavar="N",
+        help="largest map (pixels) to accept; default: what the command's memory budget "
+        "allows (docs/memory.md); 0: no limit",
+    )
     # evaluate has its own --units (of the report): there only --dxf-units
     flags = [f for f in ("--units", "--dxf-units") if f not in p._option_string_actions]
     g.add_argument(

@@ -15,6 +15,7 @@ import warnings
 
 from .._version import __version__
 from ..core.errors import EXIT_BAD_INPUT, InputError, MapWarning
+from ..core.limits import for_command
 
 #: Command modules, in the order ``--help`` lists them.
 COMMANDS = [
@@ -65,8 +66,9 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser()
     args = parser.parse_args(argv)
+    budget = for_command(args.command, getattr(args, "max_pixels", None))  # core.limits
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), budget:
             warnings.simplefilter("always", MapWarning)
             shown = warnings.showwarning
 

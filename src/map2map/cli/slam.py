@@ -49,6 +49,13 @@ def register(subparsers) -> None:
         help="log format (default: detected from the content)",
     )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--max-pixels",
+        type=int,
+        metavar="N",
+        help="largest map (pixels) to build; "
+        "default: the memory budget's (docs/memory.md); 0: no limit",
+    )
     p.set_defaults(func=run)
 
 

@@ -220,10 +220,15 @@ def coherent_motion(
     blurred = [cv2.GaussianBlur(a.astype(np.float32), (0, 0), s) for a in acc]
     # sample back with bilinear interpolation at the points' continuous grid coordinates
     g = (pts - lo) / h - 0.5
-    mx = g[:, 0].astype(np.float32).reshape(-1, 1)
-    my = g[:, 1].astype(np.float32).reshape(-1, 1)
+    n = len(g)
+    # cv2.remap takes maps of under 32767 rows and columns: a column of n points up
+    # to 32766 (as before), else rows of 4096 (more points than that: large maps)
+    cols = 1 if n < 32767 else 4096
+    pad = -n % cols
+    mx = np.pad(g[:, 0].astype(np.float32), (0, pad)).reshape(-1, cols)
+    my = np.pad(g[:, 1].astype(np.float32), (0, pad)).reshape(-1, cols)
     vals = [
-        cv2.remap(b, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)[:, 0]
+        cv2.remap(b, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).ravel()[:n]
         for b in blurred
     ]
     den = np.maximum(vals[2].astype(np.float64), 1e-12)

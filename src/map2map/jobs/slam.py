@@ -105,6 +105,7 @@ def slam(spec: SlamSpec) -> SlamRun:
         seed=spec.seed,
         max_range=spec.max_range,
         progress=spec.progress,
+        source=spec.log,
     )
     with atomic_dir(out, protect=(spec.log,)) as tmp:
         paths = write_slam_outputs(

@@ -64,6 +64,7 @@ from shapely.geometry import LineString, Point, Polygon
 
 from ..core.errors import InputError
 from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from ..core.limits import check_map_size
 from .rasterize import fill_exact, thin_parts, trace
 
 __all__ = [
@@ -374,6 +375,8 @@ def load_dxf(
             f"{(hi[0] - lo[0]) / scale:.4g} x {(hi[1] - lo[1]) / scale:.4g} units of "
             f"{scale:g} m); give the right --units or a coarser --resolution",
         )
+
+    check_map_size((h, w), p)  # the running command's budget (core.limits)
 
     def to_px(pts: np.ndarray) -> np.ndarray:
         """Drawing units -> continuous pixel coordinates (u = column, v = row)."""

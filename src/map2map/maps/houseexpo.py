@@ -65,6 +65,7 @@ from shapely.geometry import Polygon, box
 
 from ..core.errors import InputError
 from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from ..core.limits import check_map_size
 from .rasterize import fill_exact, thin_parts, trace
 
 __all__ = [
@@ -267,6 +268,7 @@ def rasterise_houseexpo(
     w_in = max(1, int(math.ceil((x1 - x0) / res - 1e-9)))
     h_in = max(1, int(math.ceil((y1 - y0) / res - 1e-9)))
     h, w = h_in + 2 * pad, w_in + 2 * pad
+    check_map_size((h, w), src)  # before any allocation of the map's size
 
     free = fill_exact((h, w), [_to_px(verts, x0, y0, res, pad)])
     inside_box = np.zeros((h, w), bool)

@@ -28,6 +28,7 @@ import numpy as np
 
 from ..core._io import atomic_path
 from ..core.errors import InputError
+from ..core.limits import check_map_size
 
 __all__ = [
     "RasterImage",
@@ -108,6 +109,38 @@ def _pnm_maxval(head: bytes) -> int | None:
     return value if 0 < value < 65536 else None
 
 
+def header_shape(head: bytes) -> tuple[int, int] | None:
+    """(rows, columns) declared by a PGM/PPM or PNG header, else None.
+
+    Read from the first bytes of the file, so that a map too large for the command
+    (:func:`map2map.core.limits.check_map_size`) is refused before it is decoded.
+
+    >>> header_shape(b"P5\\n# comment\\n50000 40000\\n255\\n")
+    (40000, 50000)
+    >>> import struct
+    >>> png = b"\\x89PNG\\r\\n\\x1a\\n" + struct.pack(">I", 13) + b"IHDR"
+    >>> header_shape(png + struct.pack(">II", 7, 3))
+    (3, 7)
+    >>> header_shape(b"GIF89a") is None
+    True
+    """
+    if head[:8] == b"\x89PNG\r\n\x1a\n" and head[12:16] == b"IHDR" and len(head) >= 24:
+        w, h = int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
+        return h, w
+    if len(head) < 2 or head[:1] != b"P" or head[1:2] not in b"123456":
+        return None
+    tokens: list[bytes] = []
+    for line in head[2:].split(b"\n"):
+        tokens += line.split(b"#", 1)[0].split()
+        if len(tokens) >= 2:
+            break
+    try:
+        w, h = int(tokens[0]), int(tokens[1])
+    except (IndexError, ValueError):
+        return None
+    return h, w
+
+
 def read_image(path: str | os.PathLike, *, referenced_by: str | os.PathLike | None = None):
     """Read an image file as :class:`RasterImage`, raising :class:`InputError` on failure.
 
@@ -130,6 +163,9 @@ def read_image(path: str | os.PathLike, *, referenced_by: str | os.PathLike | No
         raise InputError(p, f"cannot read image file ({exc.strerror}){via}") from None
     if raw.size == 0:
         raise InputError(p, f"image file is empty{via}")
+    declared = header_shape(raw[:512].tobytes())
+    if declared is not None:  # refuse a map too large for the command before decoding
+        check_map_size(declared, p)
     with _quiet_opencv():
         try:
             img = cv2.imdecode(raw, cv2.IMREAD_UNCHANGED)
@@ -137,6 +173,8 @@ def read_image(path: str | os.PathLike, *, referenced_by: str | os.PathLike | No
             img = None
     if img is None or img.size == 0:
         raise InputError(p, f"not a readable image (corrupt or unsupported format){via}")
+    if declared is None:
+        check_map_size(img.shape[:2], p)
     if img.dtype == np.uint8:
         maxval = 255
     elif img.dtype == np.uint16:

@@ -32,6 +32,7 @@ import numpy as np
 
 from ..core.errors import InputError
 from ..core.grid import OccupancyMap
+from ..core.limits import check_map_size
 from ..robotlog.base import Mapper
 from ..robotlog.carmen import CarmenLog
 
@@ -108,6 +109,25 @@ def default_usable_range(sensor_max: float) -> float:
     return float(min(sensor_max, max(3.0, min(10.0, 0.8 * sensor_max))))
 
 
+def map_shape_estimate(log: CarmenLog, resolution: float, reach: float) -> tuple[int, int]:
+    """Rows and columns of the map ``log`` would build: odometry extent +- ``reach`` metres.
+
+    The odometry's bounding box (the SLAM map frame differs from it only by the drift
+    the filter corrects), widened by the usable range on every side, at
+    ``resolution`` metres per pixel: what :func:`run_slam` checks against the memory
+    budget (:func:`map2map.core.limits.check_map_size`) before building anything.
+
+    >>> from map2map.robotlog.base import OdometryReading
+    >>> log = CarmenLog([OdometryReading(0, 0, 0, 0), OdometryReading(1, 9, 4, 0)], [])
+    >>> map_shape_estimate(log, 0.05, 3.0)
+    (200, 300)
+    """
+    xy = np.array([(r.x, r.y) for r in log.odometry], float).reshape(-1, 2)
+    span = (xy.max(0) - xy.min(0)) if len(xy) else np.zeros(2)
+    w, h = (np.ceil((span + 2 * reach) / resolution)).astype(int)
+    return int(h), int(w)
+
+
 def run_slam(
     log: CarmenLog,
     backend: str = "rbpf",
@@ -117,6 +137,7 @@ def run_slam(
     seed: int = 0,
     max_range: float | None = None,
     progress: bool = False,
+    source=None,
     **options,
 ) -> SlamResult:
     """Replay ``log`` through the backend registered as ``backend``; no ground truth is used.
@@ -127,7 +148,9 @@ def run_slam(
     Radish logs); the graph backend's ``max_range``, default the sensor maximum.
     ``rbpf`` matches every beam of a scanner of at most 200 beams (``lskip`` 0:
     the default ``lskip`` 1 is for the LDS-01's 360). Other keyword options go to
-    the backend's parameters.
+    the backend's parameters. A map too large for the memory budget (its extent
+    from :func:`map_shape_estimate`) is refused before any grid is allocated, naming
+    ``source`` (the log file).
     """
     from tqdm.auto import tqdm
 
@@ -144,6 +167,13 @@ def run_slam(
             options.setdefault("lskip", 0)
     elif backend == "graph":
         options.setdefault("max_range", max_range or sensor_max)
+    reach = options.get("max_urange", options.get("max_range", sensor_max))
+    check_map_size(
+        map_shape_estimate(log, resolution, float(reach)),
+        source if source is not None else "log",
+        "slam",
+        way_out="give a coarser --resolution",
+    )
     mapper = make_mapper(backend, resolution=resolution, seed=seed, **options)
     for odo, scan in tqdm(
         log, total=len(log), desc=f"slam ({backend})", unit="scan", disable=not progress
