@@ -29,8 +29,8 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
+from ..core.geometry import apply, fit_similarity
 from ..core.grid import OccupancyMap, ternarize
-from .transforms import apply, fit_similarity
 
 __all__ = [
     "load_halmstad",

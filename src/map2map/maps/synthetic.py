@@ -30,9 +30,8 @@ from dataclasses import dataclass, replace
 import cv2
 import numpy as np
 
-from ..core.geometry import invert_displacement
+from ..core.geometry import apply, invert_displacement
 from ..core.grid import FREE, OCCUPIED, UNKNOWN
-from .transforms import apply
 
 __all__ = [
     "Wall",
