@@ -50,6 +50,20 @@ def ternarize(values: np.ndarray, occupied_below: int = 64, free_above: int = 19
     Values ``<= occupied_below`` become :data:`OCCUPIED`, values ``>= free_above``
     become :data:`FREE` and everything between becomes :data:`UNKNOWN`.
 
+    Parameters
+    ----------
+    values : ndarray
+        Grey values of any shape (any numeric dtype).
+    occupied_below : int
+        Values ``<=`` this are occupied.
+    free_above : int
+        Values ``>=`` this are free.
+
+    Returns
+    -------
+    ndarray of uint8
+        Same shape, values 0, 127 or 255 only.
+
     Examples
     --------
     >>> ternarize(np.array([0, 60, 127, 200, 255], np.uint8)).tolist()

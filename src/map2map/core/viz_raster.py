@@ -56,6 +56,16 @@ _SMALL_PX = 12
 def map_to_rgb(m: OccupancyMap | np.ndarray) -> np.ndarray:
     """(H, W, 3) float image: free white, occupied near-black, unknown pale blue-grey.
 
+    Parameters
+    ----------
+    m : OccupancyMap or (H, W) uint8 array
+        A map or its cell values (0, 127, 255).
+
+    Returns
+    -------
+    (H, W, 3) ndarray of float
+        RGB in [0, 1] (:data:`MAP_COLOURS`).
+
     Examples
     --------
     >>> map_to_rgb(np.array([[0, 127, 255]], np.uint8))[0, :, 0].round(2).tolist()
@@ -71,6 +81,16 @@ def map_to_rgb(m: OccupancyMap | np.ndarray) -> np.ndarray:
 
 def nice_length(target_m: float) -> float:
     """A round length (1, 2, 5 x 10^k metres) close to ``target_m``, not above it.
+
+    Parameters
+    ----------
+    target_m : float
+        Wanted length in metres (> 0).
+
+    Returns
+    -------
+    float
+        1, 2 or 5 times a power of ten, at most ``target_m``.
 
     Examples
     --------
@@ -312,7 +332,26 @@ def save_panels(
     panels: Sequence[Panel], path: str | os.PathLike, *, title: str | None = None
 ) -> None:
     """Lay panels out in a row with their titles (and an overall ``title``) and write a
-    PNG atomically."""
+    PNG atomically.
+
+    Parameters
+    ----------
+    panels : sequence of Panel
+        Drawn left to right, top-aligned.
+    path : path-like
+        The PNG file (written through a temporary name).
+    title : str, optional
+        Drawn above all panels.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "panels.png"
+    >>> img = map_to_rgb(np.full((20, 30), 255, np.uint8))
+    >>> save_panels([Panel(img, title="a"), Panel(img, title="b")], path, title="two")
+    >>> path.read_bytes()[1:4]
+    b'PNG'
+    """
     from PIL import Image, ImageDraw
 
     pad = 12
