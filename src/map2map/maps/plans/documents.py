@@ -44,6 +44,24 @@ def plan_document(
     :func:`plan_from_document` (what ``map2map convert apt.json`` calls) either
     rebuilds exactly the map that was saved or refuses.
 
+    Parameters
+    ----------
+    plan : OccupancyMap
+        A map from :func:`~map2map.maps.floorplan.generate_floorplan`.
+    seed : int
+        The seed it was generated with.
+    kind : {"apartment", "office"}
+        Its building kind.
+    size : (W, H) in metres, optional
+        The size asked for (None: drawn by the generator).
+    furniture : bool
+        Whether it was furnished.
+
+    Returns
+    -------
+    dict
+        JSON-ready layout document.
+
     Examples
     --------
     >>> m = generate_floorplan(4, size=(6, 5))
@@ -70,6 +88,31 @@ def plan_from_document(doc: dict, resolution: float | None = None, source=None) 
     resolution the layout must keep its room count and size. A document written
     by a map2map whose generator made a different plan from the same arguments is
     refused (:class:`InputError`) rather than read as a different building.
+
+    Parameters
+    ----------
+    doc : dict
+        A document from :func:`plan_document` (read from JSON).
+    resolution : float, optional
+        Metres per pixel of the rebuilt map; default the saved one.
+    source : path-like, optional
+        The file the document came from, named in error messages.
+
+    Returns
+    -------
+    OccupancyMap
+        The rebuilt plan with its ``meta``.
+
+    Raises
+    ------
+    InputError
+        No or corrupt generator arguments, or a plan that differs from the saved one.
+
+    Examples
+    --------
+    >>> m = generate_floorplan(4, size=(6, 5))
+    >>> plan_from_document(plan_document(m, seed=4, size=(6, 5)), resolution=0.1).resolution
+    0.1
     """
     args = doc.get("regenerate")
     if not isinstance(args, dict):

@@ -28,6 +28,17 @@ def draw_floorplan(ax, m: OccupancyMap, *, title: str | None = None, doors: bool
 
     Works for the generator's plans and for rasterised HouseExpo plans (room
     boxes in ``meta["rooms"]`` or ``meta["room_category"]``, HouseExpo frame).
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Where to draw (pixel coordinates, as :func:`map2map.core.viz.draw_map`).
+    m : OccupancyMap
+        The plan; room boxes and doors come from ``m.meta``.
+    title : str, optional
+        Axes title.
+    doors : bool
+        Mark door centres (red squares).
     """
     from ...core.viz import draw_map
 
@@ -66,6 +77,15 @@ def draw_floorplan(ax, m: OccupancyMap, *, title: str | None = None, doors: bool
 
 def save_floorplan_figure(m: OccupancyMap, path, title: str | None = None) -> None:
     """Save a figure of a plan with room labels and door marks (format from the suffix, atomic).
+
+    Parameters
+    ----------
+    m : OccupancyMap
+        The plan.
+    path : path-like
+        Output figure; the format comes from the suffix.
+    title : str, optional
+        First title line (a summary of the map follows).
 
     Examples
     --------
