@@ -169,7 +169,23 @@ def _read(path: Path):
 
 
 def dxf_layers(path: str | os.PathLike) -> list[str]:
-    """Names of the layers defined in a DXF file."""
+    """Names of the layers defined in a DXF file.
+
+    Parameters
+    ----------
+    path : path-like
+        The ``.dxf`` file.
+
+    Returns
+    -------
+    list of str
+        Sorted.
+
+    Raises
+    ------
+    InputError
+        File missing or not DXF.
+    """
     doc = _read(Path(path))
     return sorted(layer.dxf.name for layer in doc.layers)
 
@@ -543,6 +559,23 @@ def occupied_polygons(m: OccupancyMap):
     Runs of occupied cells along each row become rectangles whose coverage union
     (``shapely.coverage_union_all``) is the occupied region; its outline follows the
     cell edges exactly.
+
+    Parameters
+    ----------
+    m : OccupancyMap
+        The map.
+
+    Returns
+    -------
+    shapely Polygon or MultiPolygon
+        In continuous pixel coordinates ``(u = column, v = row)``; empty when nothing
+        is occupied.
+
+    Examples
+    --------
+    >>> data = np.full((4, 5), 255, np.uint8); data[1, 1:4] = 0
+    >>> occupied_polygons(OccupancyMap(data, 0.05)).bounds
+    (1.0, 1.0, 4.0, 2.0)
     """
     padded = np.pad(m.occupied, ((0, 0), (1, 1))).astype(np.int8)
     step = np.diff(padded, axis=1)
@@ -565,6 +598,15 @@ def save_dxf(m: OccupancyMap, path: str | os.PathLike, *, layer: str = "WALLS") 
     reads it back on the same grid: the occupied cells come back unchanged, and free
     space is re-derived as the space the walls enclose (unknown cells inside the
     walls come back free, free cells open to the outside come back unknown).
+
+    Parameters
+    ----------
+    m : OccupancyMap
+        The map; only its occupied cells are drawn.
+    path : path-like
+        The ``.dxf`` file, written atomically.
+    layer : str
+        Layer of the hatch.
 
     Examples
     --------
