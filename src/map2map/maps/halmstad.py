@@ -60,6 +60,17 @@ def load_halmstad(root: str | Path, name: str) -> OccupancyMap:
     """A sensor map (``E5_01``) or layout (``E5_layout``) as an :class:`OccupancyMap`.
 
     The RGBA layout is thresholded (about 128 unknown, 255 free, 0 wall).
+
+    Parameters
+    ----------
+    root : path-like
+        The data folder (``$HALMSTAD_ROOT``).
+    name : str
+        Map name.
+
+    Returns
+    -------
+    OccupancyMap
     """
     path = _map_path(Path(root), name)
     img = np.asarray(Image.open(path))
@@ -70,20 +81,59 @@ def load_halmstad(root: str | Path, name: str) -> OccupancyMap:
 
 
 def load_keypoints(root: str | Path, name: str, height: int) -> np.ndarray:
-    """(N, 2) keypoints of a map in this package's pixel frame (origin top-left)."""
+    """(N, 2) keypoints of a map in this package's pixel frame (origin top-left).
+
+    Parameters
+    ----------
+    root : path-like
+        The data folder.
+    name : str
+        Map name.
+    height : int
+        The map's height in pixels (the file's y axis points up).
+
+    Returns
+    -------
+    (N, 2) float array
+        ``(x, y)`` pixels, y down.
+    """
     k = np.load(Path(root) / "annotations" / f"keypoints_{name}.npy").astype(float)
     return np.column_stack([k[:, 0], height - k[:, 1]])
 
 
 def load_association(root: str | Path, a: str, b: str) -> np.ndarray:
-    """(K, 2) int index pairs (row of A's keypoints, row of B's), ``None`` rows dropped."""
+    """(K, 2) int index pairs (row of A's keypoints, row of B's), ``None`` rows dropped.
+
+    Parameters
+    ----------
+    root : path-like
+        The data folder.
+    a, b : str
+        Map names.
+
+    Returns
+    -------
+    (K, 2) int array
+    """
     raw = np.load(Path(root) / "annotations" / f"association_{a}_{b}.npy", allow_pickle=True)
     rows = [r for r in raw if r is not None and all(v is not None for v in r)]
     return np.array(rows, dtype=np.int64).reshape(-1, 2)
 
 
 def halmstad_pairs(root: str | Path, *, both_ways: bool = True) -> Iterator[tuple[str, str]]:
-    """(source, target) names: every sensor map to its layout (and back with ``both_ways``)."""
+    """(source, target) names: every sensor map to its layout (and back with ``both_ways``).
+
+    Parameters
+    ----------
+    root : path-like
+        The data folder.
+    both_ways : bool
+        Also yield (layout, sensor map).
+
+    Yields
+    ------
+    (str, str)
+    """
     root = Path(root)
     for env in ("E5", "HIH"):
         for p in sorted((root / "maps" / env / "pseudo_occupancy").glob(f"{env}_*.png")):
@@ -95,7 +145,33 @@ def halmstad_pairs(root: str | Path, *, both_ways: bool = True) -> Iterator[tupl
 def robust_similarity(
     src: np.ndarray, dst: np.ndarray, *, rounds: int = 3, factor: float = 3.0, min_px: float = 10.0
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Least-squares similarity with outlier rejection (residual > max(factor x median, min_px))."""
+    """Least-squares similarity with outlier rejection (residual > max(factor x median, min_px)).
+
+    Parameters
+    ----------
+    src, dst : (N, 2) float arrays
+        Corresponding points, N >= 3.
+    rounds : int
+        Refits at most.
+    factor : float
+        Outlier threshold as a multiple of the inliers' median residual.
+    min_px : float
+        Threshold floor, pixels.
+
+    Returns
+    -------
+    T : (3, 3) array
+        The similarity ``src -> dst``.
+    inliers : (N,) bool array
+
+    Examples
+    --------
+    >>> src = np.array([[0.0, 0.0], [10, 0], [0, 10], [10, 10], [5, 5]])
+    >>> dst = src + 2.0; dst[4] += 40
+    >>> T, inl = robust_similarity(src, dst)
+    >>> inl.tolist(), T[:2, 2].round(6).tolist()
+    ([True, True, True, True, False], [2.0, 2.0])
+    """
     inl = np.ones(len(src), bool)
     T = fit_similarity(src, dst)
     for _ in range(rounds):
@@ -115,6 +191,23 @@ def keypoint_residuals(
 
     ``mapper(points) -> (similarity_points, nonrigid_points)`` maps source pixels to
     target pixels. Residuals are averaged over the inliers of the robust floor fit.
+
+    Parameters
+    ----------
+    root : path-like
+        The data folder.
+    src_name, tgt_name : str
+        Map names.
+    src, tgt : OccupancyMap
+        The maps as loaded by :func:`load_halmstad`.
+    mapper : callable
+        Source pixels -> (similarity, nonrigid) target pixels.
+
+    Returns
+    -------
+    floor, similarity, nonrigid : float
+        Mean residuals in target pixels: the best similarity of the keypoints
+        themselves (the floor), then the two mappings.
     """
     assoc = load_association(root, src_name, tgt_name)
     ks = load_keypoints(root, src_name, src.height)[assoc[:, 0]]

@@ -86,6 +86,24 @@ def office_walls(
     the two room partitions (x, px); the walls attached to them follow (they are
     lengthened or shortened), as in a building built with walls out of place.
     Walls are in a fixed order: outline (4), corridor (2), partitions (4).
+
+    Parameters
+    ----------
+    width, height : int
+        Image size in pixels.
+    margin : int
+        Distance of the outline from the image border, pixels.
+    thickness : int
+        Wall thickness, pixels.
+    corridor_shift : (float, float)
+        Moves of the two corridor walls along y, pixels.
+    partition_shift : (float, float)
+        Moves of the two room partitions along x, pixels.
+
+    Returns
+    -------
+    list of Wall
+        10 walls in the order above.
     """
     x0, y0, x1, y1 = margin, margin, width - margin, height - margin
     # deliberately asymmetric: a symmetric plan has several equally good alignments
@@ -132,7 +150,19 @@ def _wall_mask(shape: tuple[int, int], w: Wall) -> np.ndarray:
 
 
 def draw_walls(shape: tuple[int, int], walls: list[Wall]) -> np.ndarray:
-    """Occupancy map (0/127/255) of walls: free inside the outline, unknown outside."""
+    """Occupancy map (0/127/255) of walls: free inside the outline, unknown outside.
+
+    Parameters
+    ----------
+    shape : (H, W)
+        Image size.
+    walls : list of Wall
+        From :func:`office_walls` (outline walls marked ``outer``).
+
+    Returns
+    -------
+    (H, W) uint8 array
+    """
     outer = [w for w in walls if w.outer]
     data = np.full(shape, UNKNOWN, np.uint8)
     if outer:
@@ -151,6 +181,25 @@ def wall_displacement(shape: tuple[int, int], planned: list[Wall], built: list[W
     Wall ``i`` of ``built`` is wall ``i`` of ``planned`` moved perpendicular to
     itself; its cells carry that move (lengthening along the wall is not an
     error). Where walls cross, the least-moved one wins.
+
+    Parameters
+    ----------
+    shape : (H, W)
+        Image size.
+    planned, built : list of Wall
+        The same walls (same order) as planned and as built.
+
+    Returns
+    -------
+    (H, W, 2) float array
+        Zero off the walls.
+
+    Examples
+    --------
+    >>> u = wall_displacement((240, 300), office_walls(300, 240),
+    ...                       office_walls(300, 240, corridor_shift=(4, 0)))
+    >>> float(np.abs(u[..., 1]).max())
+    4.0
     """
     u = np.zeros((*shape, 2))
     best = np.full(shape, np.inf)
@@ -168,7 +217,29 @@ def gaussian_field(
     amplitude: tuple[float, float],
     sigma: float,
 ) -> np.ndarray:
-    """(H, W, 2) smooth field ``amplitude * exp(-|p - centre|^2 / 2 sigma^2)`` at cell centres."""
+    """(H, W, 2) smooth field ``amplitude * exp(-|p - centre|^2 / 2 sigma^2)`` at cell centres.
+
+    Parameters
+    ----------
+    shape : (H, W)
+        Image size.
+    centre : (x, y)
+        Centre of the bump, pixels.
+    amplitude : (ax, ay)
+        Displacement at the centre, pixels.
+    sigma : float
+        Width, pixels.
+
+    Returns
+    -------
+    (H, W, 2) float array
+
+    Examples
+    --------
+    >>> f = gaussian_field((50, 60), (30.5, 25.5), (2.0, -1.0), 8.0)  # cell (25, 30) centre
+    >>> f[25, 30].tolist()
+    [2.0, -1.0]
+    """
     H, W = shape
     yy, xx = np.mgrid[0:H, 0:W] + 0.5
     g = np.exp(-((xx - centre[0]) ** 2 + (yy - centre[1]) ** 2) / (2 * sigma**2))
@@ -186,6 +257,21 @@ def deform(
     centre of the cell of ``data`` it was copied from to its own centre (whole
     pixels, as nearest-neighbour resampling realises the field) — the true error of
     every cell of the deformed map.
+
+    Parameters
+    ----------
+    data : (H, W) uint8 array
+        The map values.
+    field : (H, W, 2) float array
+        Forward displacement ``u`` (x, y) in pixels.
+    iterations : int
+        Fixed-point iterations of the inverse mapping.
+
+    Returns
+    -------
+    deformed : (H, W) uint8 array
+    carried : (H, W, 2) float array
+        Displacement (x, y) each deformed cell carries, whole pixels.
     """
     H, W = data.shape
     yy, xx = np.mgrid[0:H, 0:W].astype(np.float32) + 0.5
@@ -266,6 +352,28 @@ def true_errors(
     ``X - u`` itself is not the truth: nearest-neighbour resampling of a field that
     varies across a wall thins or thickens the wall, and the face cell of the
     deformed map can be copied from inside the plan's wall, one pixel from its face.
+
+    Parameters
+    ----------
+    X : (N, 2) float array
+        Wall points (cell centres) of the deformed map, pixels.
+    normals : (N, 2) float array
+        Their unit normals towards free space (zero rows: none).
+    T : (3, 3) array
+        Transform aligning the deformed map to the plan.
+    plan : (H, W) uint8 array
+        The plan's values.
+    u : (H, W, 2) float array
+        Displacement every deformed cell carries.
+    field : (H, W, 2) float array, optional
+        The forward field given to :func:`deform`.
+    max_steps : int
+        Cells searched across the wall for the plan face.
+
+    Returns
+    -------
+    (N,) float array
+        Signed errors in pixels.
     """
     X = np.asarray(X, float)
     n = np.asarray(normals, float)

@@ -71,6 +71,25 @@ def integrate_scan(L, T, x0, y0, angles, dists, hits, l_free, l_free_far, l_occ,
     must not carve free space behind it, while a wall that really went away (a
     person who walked off) still fades after a few beams.
     ``lims = (lmin, lmax, occ_thr, free_thr, block_thr)``.
+
+    Parameters
+    ----------
+    L : (H, W) float32 array
+        Log-odds grid, updated in place.
+    T : (H, W) array
+        Per-cell observation counter, updated in place.
+    x0, y0 : float
+        Sensor position in pixels.
+    angles, dists : float arrays
+        Beam directions (pixel frame) and lengths (pixels).
+    hits : bool array
+        Beam ended on an obstacle.
+    l_free, l_free_far, l_occ : float
+        Log-odds increments.
+    lims : tuple of float
+        ``(lmin, lmax, occ_thr, free_thr, block_thr)``.
+    margin : float
+        Pixels before the end point left uncleared.
     """
     h, w = L.shape
     lmin, lmax, occ_thr, free_thr, block_thr = lims[0], lims[1], lims[2], lims[3], lims[4]
@@ -285,6 +304,20 @@ def resample_to_frame(m: OccupancyMap, frame_pose, target: OccupancyMap) -> Occu
     ``frame_pose`` is the pose of ``m``'s world frame in ``target``'s world frame
     (for a SLAM map: the robot's true start pose in the plan). Nearest-neighbour,
     cells outside ``m`` are unknown.
+
+    Parameters
+    ----------
+    m : OccupancyMap
+        The map to move.
+    frame_pose : (x, y, theta)
+        Pose of ``m``'s world frame in ``target``'s.
+    target : OccupancyMap
+        The grid to resample onto.
+
+    Returns
+    -------
+    OccupancyMap
+        ``target``'s shape, resolution and origin, ``m``'s content.
 
     Examples
     --------

@@ -78,7 +78,26 @@ WAFFLE_PI = RobotParams()
 
 
 def arc_step(pose, ds: float, dth: float) -> tuple[float, float, float]:
-    """Pose after moving ``ds`` along an arc turning by ``dth`` (exact integration)."""
+    """Pose after moving ``ds`` along an arc turning by ``dth`` (exact integration).
+
+    Parameters
+    ----------
+    pose : (x, y, theta)
+        Start pose.
+    ds : float
+        Arc length, metres.
+    dth : float
+        Heading change, radians.
+
+    Returns
+    -------
+    (x, y, theta)
+
+    Examples
+    --------
+    >>> [round(v, 6) for v in arc_step((0.0, 0.0, 0.0), 1.0, 0.0)]
+    [1.0, 0.0, 0.0]
+    """
     x, y, th = pose
     if abs(dth) < 1e-9:
         mid = th + dth / 2

@@ -142,7 +142,27 @@ class SimResult:
 
 def choose_start(world: World, radius: float, rng: np.random.Generator):
     """A random start pose with room around it, in the largest region the robot can
-    reach keeping :data:`REACH_MARGIN` from walls."""
+    reach keeping :data:`REACH_MARGIN` from walls.
+
+    Parameters
+    ----------
+    world : World
+        The plan with its clearance.
+    radius : float
+        Robot radius, metres.
+    rng : numpy.random.Generator
+        Source of the draw.
+
+    Returns
+    -------
+    (x, y, theta)
+        Plan frame.
+
+    Raises
+    ------
+    InputError
+        No place with enough clearance.
+    """
     from scipy import ndimage
 
     ok = world.clearance >= radius + 0.15
@@ -166,7 +186,28 @@ def choose_start(world: World, radius: float, rng: np.random.Generator):
 
 
 def validate_route(world: World, waypoints, radius: float, source) -> np.ndarray:
-    """Check a route against the plan: finite, >= 1 point, every segment clear of walls."""
+    """Check a route against the plan: finite, >= 1 point, every segment clear of walls.
+
+    Parameters
+    ----------
+    world : World
+        The plan with its clearance.
+    waypoints : array-like
+        ``(N, 2)`` or ``(N, 3)`` points, plan frame.
+    radius : float
+        Clearance the robot needs, metres.
+    source : path-like or str
+        Named in errors.
+
+    Returns
+    -------
+    (N, 2) or (N, 3) float array
+
+    Raises
+    ------
+    InputError
+        Malformed route, a point or segment outside the plan or through a wall.
+    """
     try:
         wp = np.asarray(waypoints, float)
     except (TypeError, ValueError):

@@ -220,7 +220,24 @@ class World:
 
 
 def check_start(world: World, start, radius: float, source) -> None:
-    """Raise InputError if the robot cannot stand at ``start``."""
+    """Raise InputError if the robot cannot stand at ``start``.
+
+    Parameters
+    ----------
+    world : World
+        The plan with its clearance.
+    start : (x, y, theta)
+        Start pose, plan frame.
+    radius : float
+        Robot radius, metres.
+    source : path-like or str
+        Named in errors.
+
+    Raises
+    ------
+    InputError
+        Outside the plan, or too close to a wall.
+    """
     x, y = float(start[0]), float(start[1])
     r, c = world.plan.world_to_pixel(x, y)
     if not world.plan.contains(r, c):

@@ -61,6 +61,18 @@ def connectivity(m: OccupancyMap, robot_radius: float = ROBOT_RADIUS) -> Connect
     ``r`` would declare every rectangular room unreachable, while a pocket
     behind a gap narrower than the robot still fails.
 
+    Parameters
+    ----------
+    m : OccupancyMap
+        The map.
+    robot_radius : float
+        Disc radius, metres.
+
+    Returns
+    -------
+    Connectivity
+        Component count and the unreachable free pixels.
+
     Examples
     --------
     >>> data = np.zeros((40, 60), np.uint8)

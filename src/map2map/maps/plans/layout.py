@@ -357,6 +357,13 @@ class _Builder:
 
 
 def px_ceil(metres: float, res: float) -> int:
+    """Pixels that hold ``metres`` (rounded up, exact multiples kept).
+
+    Examples
+    --------
+    >>> px_ceil(0.5, 0.05), px_ceil(0.51, 0.05)
+    (10, 11)
+    """
     return math.ceil(metres / res - 1e-9)
 
 
