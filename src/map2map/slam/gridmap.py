@@ -134,6 +134,30 @@ def register_scan(
     maxRange" for drivers that report a no-return at the sensor's maximum range.
     Beams longer than ``usable_range`` are cropped to it and mark only free space;
     the others mark free space up to the endpoint cell and a hit in it.
+
+    Parameters
+    ----------
+    hits, visits : (H, W) int arrays
+        Per-cell counts, updated in place.
+    sx, sy : (H, W) float arrays
+        Sums of the hit points' world x and y per cell, updated in place.
+    mean : (H, W, 2) float array
+        Mean hit point of each cell (NaN where the cell is not occupied enough),
+        updated in place.
+    gx0, gy0 : float
+        World position of cell (0, 0).
+    delta : float
+        Cell size, metres.
+    lx, ly, lt : float
+        Laser pose.
+    ranges, angles : float arrays
+        The scan's readings (metres) and beam angles in the laser frame.
+    usable_range : float
+        GMapping's ``maxUrange``.
+    max_range : float
+        GMapping's ``maxRange``.
+    no_return_free : bool
+        Let no-return beams clear up to ``usable_range``.
     """
     cx0 = int(math.floor((lx - gx0) / delta))
     cy0 = int(math.floor((ly - gy0) / delta))
@@ -249,7 +273,31 @@ def _score_core(mean, gx0, gy0, delta, px, py, pt, beams, kernel, sigma, lsigma)
 
 @nb.njit(cache=True)
 def gmapping_score(mean, gx0, gy0, delta, px, py, pt, off, ranges, angles, kernel, sigma, lsigma):
-    """GMapping's scan score and log-likelihood at one pose; see :func:`_score_core`."""
+    """GMapping's scan score and log-likelihood at one pose; see :func:`_score_core`.
+
+    Parameters
+    ----------
+    mean : (H, W, 2) float array
+        Mean hit point of each cell (NaN: none), GMapping's likelihood reference.
+    gx0, gy0 : float
+        World position of the grid's cell (0, 0).
+    delta : float
+        Cell size, metres.
+    px, py, pt : float
+        Robot pose.
+    off : (3,) float array
+        Laser offset on the robot.
+    ranges, angles : float arrays
+        The scan's readings (metres) and beam angles in the laser frame.
+    kernel : int
+        Search half-width (cells) for the nearest hit.
+    sigma, lsigma : float
+        Score and likelihood standard deviations, metres.
+
+    Returns
+    -------
+    score, loglik : float
+    """
     beams = _beam_vectors(ranges, angles, off)
     return _score_core(
         mean,
@@ -300,6 +348,35 @@ def hill_climb(
     proportional to the scan likelihood *times* the odometry motion model). All
     weights zero is GMapping's code, which drops that factor; along a featureless
     corridor the score is flat and the match then slides freely.
+
+    Parameters
+    ----------
+    mean : (H, W, 2) float array
+        Mean hit point of each cell (NaN: none), GMapping's likelihood reference.
+    gx0, gy0 : float
+        World position of the grid's cell (0, 0).
+    delta : float
+        Cell size, metres.
+    px, py, pt : float
+        Start pose.
+    off : (3,) float array
+        Laser offset on the robot.
+    ranges, angles : float arrays
+        The scan's readings (metres) and beam angles in the laser frame.
+    kernel : int
+        Search half-width (cells) for the nearest hit.
+    sigma : float
+        Score standard deviation, metres.
+    lstep, astep : float
+        Initial linear (m) and angular (rad) steps.
+    iterations : int
+        Refinements allowed without improvement.
+    prior : (6,) float array
+        Motion-model prior (see above).
+
+    Returns
+    -------
+    x, y, theta, score : float
     """
     beams = _beam_vectors(ranges, angles, off)
     cx, cy, ct = px, py, pt
@@ -398,6 +475,33 @@ def sample_likelihood(
     is the importance-weight increment of the improved proposal. Each beam is
     matched (:func:`_nearest_hit`) once at the centre pose and keeps that match for
     all samples (they lie within ``lrange`` of it, well inside one cell).
+
+    Parameters
+    ----------
+    mean : (H, W, 2) float array
+        Mean hit point of each cell (NaN: none), GMapping's likelihood reference.
+    gx0, gy0 : float
+        World position of the grid's cell (0, 0).
+    delta : float
+        Cell size, metres.
+    px, py, pt : float
+        Matched pose.
+    off : (3,) float array
+        Laser offset on the robot.
+    ranges, angles : float arrays
+        The scan's readings (metres) and beam angles in the laser frame.
+    kernel : int
+        Search half-width (cells) for the nearest hit.
+    sigma, lsigma : float
+        Score and likelihood standard deviations, metres.
+    lrange, lstep_, arange_, astep_ : float
+        Sampling ranges and steps (metres, radians).
+
+    Returns
+    -------
+    log_eta : float
+    mean : (3,) float array
+    cov : (3, 3) float array
     """
     beams = _beam_vectors(ranges, angles, off)
     nb_ = beams.shape[1]
@@ -459,7 +563,25 @@ def sample_likelihood(
 
 @nb.njit(cache=True)
 def occupancy_from_counts(hits, visits, occ_thresh):
-    """Image-order (row 0 = top = largest y) uint8 map: 0 occupied, 255 free, 127 unknown."""
+    """Image-order (row 0 = top = largest y) uint8 map: 0 occupied, 255 free, 127 unknown.
+
+    Parameters
+    ----------
+    hits, visits : (H, W) int arrays
+        Per-cell counts (row 0 = smallest y).
+    occ_thresh : float
+        Hit ratio above which a visited cell is occupied.
+
+    Returns
+    -------
+    (H, W) uint8 array
+
+    Examples
+    --------
+    >>> hits = np.array([[0, 3, 0]]); visits = np.array([[0, 4, 5]])
+    >>> occupancy_from_counts(hits, visits, 0.25).tolist()
+    [[127, 0, 255]]
+    """
     ny, nx = visits.shape
     out = np.empty((ny, nx), np.uint8)
     for iy in range(ny):
@@ -634,7 +756,21 @@ class CountGrid:
         max_range: float = np.inf,
         no_return_free: bool = False,
     ) -> None:
-        """Integrate a scan from the world laser pose ``(x, y, theta)`` (grows if needed)."""
+        """Integrate a scan from the world laser pose ``(x, y, theta)`` (grows if needed).
+
+        Parameters
+        ----------
+        laser_pose : (x, y, theta)
+            World pose of the laser.
+        ranges, angles : float arrays
+            The scan's readings (metres) and beam angles in the laser frame.
+        usable_range : float
+            GMapping's ``maxUrange``.
+        max_range : float
+            GMapping's ``maxRange``.
+        no_return_free : bool
+            Let no-return beams clear up to ``usable_range``.
+        """
         lx, ly, lt = (float(v) for v in laser_pose)
         r = np.asarray(ranges, np.float64)
         a = np.asarray(angles, np.float64)
@@ -676,6 +812,19 @@ def likelihood_field(occupied: np.ndarray, delta: float, sigma: float) -> np.nda
     ``occupied`` is a boolean grid; the distance transform is OpenCV's exact
     Euclidean one (``cv2.DIST_L2``, ``DIST_MASK_PRECISE``). Returns float32 in
     ``[0, 1]``, 1 on occupied cells.
+
+    Parameters
+    ----------
+    occupied : (H, W) bool array
+        Hit cells.
+    delta : float
+        Cell size, metres.
+    sigma : float
+        Standard deviation, metres.
+
+    Returns
+    -------
+    (H, W) float32 array
 
     Examples
     --------
