@@ -204,8 +204,8 @@ def deform(
     trajectory : Trajectory
         Robot trajectory in the plan's world frame.
     method : {"additive", "ekf"}
-        Conversion of odometry error to map error: ref. [58] (eqs. 3.81-3.90) or EKF-SLAM
-        (eqs. 3.54-3.80).
+        Conversion of odometry error to map error: ref. [58] (thesis eqs. 3.81-3.90) or EKF-SLAM
+        (thesis eqs. 3.54-3.80).
     params : ParametricParams
         Model parameters (defaults if None).
     rng : numpy.random.Generator
@@ -236,7 +236,7 @@ def deform(
     )
     observed = vis.observed_mask()
     timings["visibility"] = time.perf_counter() - t0
-    # LIDAR model (eqs. 3.8-3.30)
+    # LIDAR model (thesis eqs. 3.8-3.30)
     t1 = time.perf_counter()
     lcoef = draw_lidar_coefficients(p, rng)
     ocoef = draw_odometry_coefficients(p, rng)
@@ -247,7 +247,7 @@ def deform(
         D, alpha, heading = _geometry_range_angle(vis, poses_px, res, p.range_max)
     lf = lidar_field(D, alpha, lcoef, p, pm, rng, heading)
     timings["lidar"] = time.perf_counter() - t1
-    # odometry model (eqs. 3.31-3.53) on metric image-frame key poses
+    # odometry model (thesis eqs. 3.31-3.53) on metric image-frame key poses
     t2 = time.perf_counter()
     metric = poses_px.copy()
     metric[:, :2] *= res

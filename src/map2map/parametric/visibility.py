@@ -11,7 +11,7 @@ least 1 px), so no pixel of the visible region is skipped. Unknown plan pixels
 
 The result is a compressed sparse row structure: the pixels seen from pose ``k`` are
 ``pixels[indptr[k]:indptr[k + 1]]`` (flat indices ``row * W + col``, each once per pose).
-This is the per-pose field-of-view *mask* of eqs. 3.83-3.90, in a form that costs
+This is the per-pose field-of-view *mask* of thesis eqs. 3.83-3.90, in a form that costs
 memory proportional to what is seen rather than ``K * H * W``.
 
 Examples
