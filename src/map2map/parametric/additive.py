@@ -53,22 +53,85 @@ __all__ = [
 
 
 def linear_error(dl, sigma, gain=0.09):
-    """Thesis eq. 3.81: ``E_lin(Delta l) = 0.09 Delta l + sigma``."""
+    """Thesis eq. 3.81: ``E_lin(Delta l) = 0.09 Delta l + sigma``.
+
+    Parameters
+    ----------
+    dl : float or ndarray
+        Distance travelled, metres.
+    sigma : float or ndarray
+        Linear error term.
+    gain : float
+        0.09 in the thesis.
+
+    Returns
+    -------
+    float or ndarray
+
+    Examples
+    --------
+    >>> round(linear_error(1.0, 0.01), 6)
+    0.1
+    """
     return gain * dl + sigma
 
 
 def angular_error(dtheta, alpha, gain=0.095):
-    """Thesis eq. 3.82: ``E_ang(Delta theta) = 0.095 Delta theta + alpha``."""
+    """Thesis eq. 3.82: ``E_ang(Delta theta) = 0.095 Delta theta + alpha``.
+
+    Parameters
+    ----------
+    dtheta : float or ndarray
+        Heading change, radians.
+    alpha : float or ndarray
+        Angular error term.
+    gain : float
+        0.095 in the thesis.
+
+    Returns
+    -------
+    float or ndarray
+    """
     return gain * dtheta + alpha
 
 
 def map_range_error(z_meas, eta, e_lin, noise=0.0):
-    """Thesis eq. 3.83: ``sigma_mz = z_meas(mask) eta + E_lin(Delta l) + N(0, eps_lin)``."""
+    """Thesis eq. 3.83: ``sigma_mz = z_meas(mask) eta + E_lin(Delta l) + N(0, eps_lin)``.
+
+    Parameters
+    ----------
+    z_meas : float or ndarray
+        Measured ranges of the pose's pixels, metres.
+    eta : float
+        Range gain.
+    e_lin : float
+        ``E_lin`` of the step.
+    noise : float or ndarray
+        ``N(0, eps_lin)`` draw.
+
+    Returns
+    -------
+    float or ndarray
+    """
     return z_meas * eta + e_lin + noise
 
 
 def map_angle_error(beta, e_ang, noise=0.0):
-    """Thesis eq. 3.84: ``sigma_mtheta = beta / 2 + E_ang(Delta theta) + N(0, eps_ang)``."""
+    """Thesis eq. 3.84: ``sigma_mtheta = beta / 2 + E_ang(Delta theta) + N(0, eps_ang)``.
+
+    Parameters
+    ----------
+    beta : float
+        Beam aperture, radians.
+    e_ang : float
+        ``E_ang`` of the step.
+    noise : float or ndarray
+        ``N(0, eps_ang)`` draw.
+
+    Returns
+    -------
+    float or ndarray
+    """
     return beta / 2.0 + e_ang + noise
 
 
@@ -76,6 +139,17 @@ def beam_frame_error(s_mz, s_mtheta):
     """Thesis eqs. 3.85-3.86: ``sigma_mx = sigma_mz cos(sigma_mtheta)``,
     ``sigma_my = sigma_mz sin(...)``.
 
+    Parameters
+    ----------
+    s_mz, s_mtheta : float or ndarray
+        Range and angle errors.
+
+    Returns
+    -------
+    s_mx, s_my : float or ndarray
+
+    Examples
+    --------
     >>> [round(float(v), 6) for v in beam_frame_error(2.0, np.pi / 6)]
     [1.732051, 1.0]
     """
@@ -84,12 +158,45 @@ def beam_frame_error(s_mz, s_mtheta):
 
 def map_frame_error(s_mx, s_my, cos_b, sin_b):
     """Thesis eqs. 3.87-3.88: ``d_m = sigma_m`` in the map frame, i.e. rotated by the beam's
-    bearing ``b`` from the pose to the pixel (given as ``cos b``, ``sin b``)."""
+    bearing ``b`` from the pose to the pixel (given as ``cos b``, ``sin b``).
+
+    Parameters
+    ----------
+    s_mx, s_my : float or ndarray
+        Beam-frame errors.
+    cos_b, sin_b : float or ndarray
+        Bearing of each pixel from the pose.
+
+    Returns
+    -------
+    d_x, d_y : float or ndarray
+    """
     return cos_b * s_mx - sin_b * s_my, sin_b * s_mx + cos_b * s_my
 
 
 def accumulate(d_o, mask, d_m):
-    """Thesis eqs. 3.89-3.90: ``d_O(mask) = d_O(mask) + d_m`` (in place, flat indices ``mask``)."""
+    """Thesis eqs. 3.89-3.90: ``d_O(mask) = d_O(mask) + d_m`` (in place, flat indices ``mask``).
+
+    Parameters
+    ----------
+    d_o : (N,) ndarray
+        Flat field, updated in place.
+    mask : int array
+        Flat indices of the pixels seen.
+    d_m : ndarray
+        Their displacement.
+
+    Returns
+    -------
+    ndarray
+        ``d_o``.
+
+    Examples
+    --------
+    >>> d = np.zeros(4)
+    >>> accumulate(d, np.array([1, 3]), np.array([0.5, 1.0])).tolist()
+    [0.0, 0.5, 0.0, 1.0]
+    """
     d_o[mask] += d_m
     return d_o
 
@@ -157,6 +264,11 @@ def additive_field(
         Pixels per metre.
     rng : numpy.random.Generator
         Source of the N(0, eps) terms (drawn only when eps > 0).
+
+    Returns
+    -------
+    d_xO, d_yO : (H, W) float arrays
+        Pixels.
     """
     h, w = vis.shape
     k = vis.n_poses

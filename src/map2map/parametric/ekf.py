@@ -85,7 +85,17 @@ __all__ = [
 
 
 def heading_change(sigma_t):
-    """Thesis eq. 3.54: ``Delta theta = sigma_theta`` (the heading increment of the prediction)."""
+    """Thesis eq. 3.54: ``Delta theta = sigma_theta`` (the heading increment of the prediction).
+
+    Parameters
+    ----------
+    sigma_t : float or ndarray
+        Heading error terms.
+
+    Returns
+    -------
+    ndarray
+    """
     return np.asarray(sigma_t, float)
 
 
@@ -93,6 +103,19 @@ def thrust(dx_inc, dy_inc, theta):
     """Thesis eq. 3.55: ``Delta thrust = Delta y / sin(theta)`` (``Delta x / cos(theta)`` where
     ``|sin theta| < |cos theta|``, the same quantity better conditioned).
 
+    Parameters
+    ----------
+    dx_inc, dy_inc : float or ndarray
+        Position increments.
+    theta : float or ndarray
+        Heading, radians.
+
+    Returns
+    -------
+    ndarray
+
+    Examples
+    --------
     >>> round(float(thrust(0.0, 0.5, np.pi / 2)), 6), round(float(thrust(0.5, 0.0, 0.0)), 6)
     (0.5, 0.5)
     """
@@ -102,17 +125,59 @@ def thrust(dx_inc, dy_inc, theta):
 
 def jacobian_terms(length, angle):
     """Thesis eqs. 3.56-3.57 (and the terms of 3.74): ``Delta x = l sin(angle)``,
-    ``Delta y = l cos(angle)``."""
+    ``Delta y = l cos(angle)``.
+
+    Parameters
+    ----------
+    length : float or ndarray
+        Distance ``l``.
+    angle : float or ndarray
+        Angle, radians.
+
+    Returns
+    -------
+    dx, dy : ndarray
+
+    Examples
+    --------
+    >>> [round(float(v), 6) for v in jacobian_terms(2.0, 0.0)]
+    [0.0, 2.0]
+    """
     return length * np.sin(angle), length * np.cos(angle)
 
 
 def initial_covariance(sigma: dict) -> np.ndarray:
-    """Thesis eqs. 3.58-3.59: the initial ``P = P^rr`` from the first step's error terms."""
+    """Thesis eqs. 3.58-3.59: the initial ``P = P^rr`` from the first step's error terms.
+
+    Parameters
+    ----------
+    sigma : dict
+        Error terms ``x``, ``y``, ``t`` (arrays; the first step is used).
+
+    Returns
+    -------
+    (3, 3) ndarray
+    """
     return process_noise({k: np.asarray(v).ravel()[:1] for k, v in sigma.items()})[0]
 
 
 def motion_jacobian(dx: float, dy: float) -> np.ndarray:
-    """Thesis eq. 3.60: ``A = [[1, 0, -Delta x], [0, 1, Delta y], [0, 0, 1]]``."""
+    """Thesis eq. 3.60: ``A = [[1, 0, -Delta x], [0, 1, Delta y], [0, 0, 1]]``.
+
+    Parameters
+    ----------
+    dx, dy : float
+        Terms of :func:`jacobian_terms`.
+
+    Returns
+    -------
+    (3, 3) ndarray
+
+    Examples
+    --------
+    >>> motion_jacobian(0.5, 0.25)[:2].tolist()
+    [[1.0, 0.0, -0.5], [0.0, 1.0, 0.25]]
+    """
     return np.array([[1.0, 0.0, -dx], [0.0, 1.0, dy], [0.0, 0.0, 1.0]])
 
 
@@ -121,6 +186,16 @@ def process_noise(sigma: dict) -> np.ndarray:
     3).
 
     Projected on the positive semi-definite cone (negative eigenvalues set to zero).
+
+    Parameters
+    ----------
+    sigma : dict
+        Error terms ``x``, ``y``, ``t`` per step, arrays (N,).
+
+    Returns
+    -------
+    (N, 3, 3) ndarray
+        Positive semi-definite.
     """
     sx, sy, st = (np.asarray(sigma[k], float) for k in ("x", "y", "t"))
     sxy, sxt, syt = (np.asarray(sigma[k], float) for k in ("xy", "xt", "yt"))
@@ -135,7 +210,19 @@ def process_noise(sigma: dict) -> np.ndarray:
 
 def predict_covariance(P: np.ndarray, n: int, A: np.ndarray, Q: np.ndarray) -> None:
     """Thesis eqs. 3.62-3.63 in place on the active ``n x n`` block: ``P^rr = A P^rr A^T + Q``,
-    ``P^ri = A P^ri`` (and ``P^ir`` its transpose)."""
+    ``P^ri = A P^ri`` (and ``P^ir`` its transpose).
+
+    Parameters
+    ----------
+    P : (S, S) ndarray
+        Full covariance buffer, updated in place.
+    n : int
+        Active size (3 + 2 x landmarks).
+    A : (3, 3) ndarray
+        Motion Jacobian.
+    Q : (3, 3) ndarray
+        Process noise.
+    """
     P[:3, :3] = A @ P[:3, :3] @ A.T + Q
     if n > 3:
         P[:3, 3:n] = A @ P[:3, 3:n]
@@ -145,7 +232,20 @@ def predict_covariance(P: np.ndarray, n: int, A: np.ndarray, Q: np.ndarray) -> N
 def measurement(r_true, b_true, coeffs: LidarCoefficients):
     """Thesis eqs. 3.64-3.66: ``z = (r, delta) = (z_meas, alpha_meas)`` of landmarks at true range
     ``r_true`` [m] and bearing ``b_true`` [rad], through the LIDAR model (thesis eqs. 3.9-3.12,
-    3.29-3.30)."""
+    3.29-3.30).
+
+    Parameters
+    ----------
+    r_true, b_true : float or ndarray
+        True range [m] and bearing [rad] of the landmarks.
+    coeffs : LidarCoefficients
+        The drawn LIDAR calibration.
+
+    Returns
+    -------
+    r, delta : ndarray
+        Measured range and bearing.
+    """
     dD = range_error(r_true, coeffs.a0, coeffs.a1)
     da = angle_error(b_true, r_true, coeffs.b)
     dx_hit, dy_hit = polar_displacement(r_true, b_true, dD, da, 1.0)
@@ -154,7 +254,22 @@ def measurement(r_true, b_true, coeffs: LidarCoefficients):
 
 def measurement_noise(r, delta, a1: float, b1: float, r_min: float, b_min: float) -> np.ndarray:
     """Thesis eqs. 3.67-3.69: ``c = a1``, ``d = b1``, ``R = diag(r c, delta d)`` per landmark (M,
-    2)."""
+    2).
+
+    Parameters
+    ----------
+    r, delta : (M,) arrays
+        Measured ranges [m] and bearings [rad].
+    a1, b1 : float
+        Scale coefficients ``c`` and ``d``.
+    r_min, b_min : float
+        Variance floors.
+
+    Returns
+    -------
+    (M, 2) ndarray
+        Diagonal of ``R`` per landmark.
+    """
     c, d = a1, b1
     return np.stack(
         [np.maximum(np.abs(r * c), r_min), np.maximum(np.abs(delta * d), b_min)], axis=-1
@@ -163,7 +278,20 @@ def measurement_noise(r, delta, a1: float, b1: float, r_min: float, b_min: float
 
 def measurement_jacobian(x, y, lx, ly):
     """Thesis eqs. 3.70-3.71 per landmark: robot block ``H^{2x3}`` (M, 2, 3) and landmark block
-    ``H^k = -H^{2x2}`` (M, 2, 2), with the range normalisation of ref. [57]."""
+    ``H^k = -H^{2x2}`` (M, 2, 2), with the range normalisation of ref. [57].
+
+    Parameters
+    ----------
+    x, y : float
+        Robot position.
+    lx, ly : (M,) arrays
+        Landmark positions.
+
+    Returns
+    -------
+    hr : (M, 2, 3) ndarray
+    hl : (M, 2, 2) ndarray
+    """
     ddx, ddy = x - lx, y - ly
     r2 = np.maximum(ddx * ddx + ddy * ddy, 1e-12)
     r = np.sqrt(r2)
@@ -179,6 +307,23 @@ def kalman_update(X, P, n, cols, hr, hl, innovation, rdiag) -> None:
 
     ``cols`` are the state columns of each landmark's x (M,), ``hr``/``hl`` the blocks of
     :func:`measurement_jacobian`, ``innovation`` (M, 2), ``rdiag`` (M, 2).
+
+    Parameters
+    ----------
+    X : (S,) ndarray
+        State buffer, updated in place.
+    P : (S, S) ndarray
+        Covariance buffer, updated in place.
+    n : int
+        Active size.
+    cols : (M,) int array
+        State column of each landmark's x.
+    hr, hl : ndarrays
+        Jacobian blocks.
+    innovation : (M, 2) ndarray
+        ``z - h``.
+    rdiag : (M, 2) ndarray
+        Diagonal of ``R``.
     """
     m = cols.size
     Pa = P[:n, :n]
@@ -203,7 +348,20 @@ def kalman_update(X, P, n, cols, hr, hl, innovation, rdiag) -> None:
 def landmark_jacobians(r, angle) -> tuple[np.ndarray, np.ndarray]:
     """Thesis eqs. 3.74-3.75 per new landmark at range ``r`` and absolute angle ``theta + delta``:
     ``J_xr = [[1, 0, -Delta x], [0, 1, Delta y]]`` (M, 2, 3) and
-    ``J_z = [[cos, -r sin], [sin, r cos]]`` (M, 2, 2)."""
+    ``J_z = [[cos, -r sin], [sin, r cos]]`` (M, 2, 2).
+
+    Parameters
+    ----------
+    r : (M,) array
+        Measured ranges.
+    angle : (M,) array
+        Absolute angles ``theta + delta``.
+
+    Returns
+    -------
+    jxr : (M, 2, 3) ndarray
+    jz : (M, 2, 2) ndarray
+    """
     dx, dy = jacobian_terms(r, angle)
     m = np.size(r)
     jxr = np.zeros((m, 2, 3))
@@ -222,6 +380,22 @@ def augment_covariance(P, n, jxr, jz, rdiag) -> int:
     ``P^{r,N+1} = P^rr J_xr^T`` (3.77-3.78), landmark-landmark
     ``P^{N+1,i} = J_xr P^{ri}`` (3.79-3.80); cross terms between the new landmarks follow
     from the same product.
+
+    Parameters
+    ----------
+    P : (S, S) ndarray
+        Covariance buffer, updated in place.
+    n : int
+        Active size before.
+    jxr, jz : ndarrays
+        From :func:`landmark_jacobians`.
+    rdiag : (M, 2) ndarray
+        Diagonal of ``R``.
+
+    Returns
+    -------
+    int
+        ``n + 2 M``.
     """
     m = jxr.shape[0]
     G = jxr.reshape(2 * m, 3)
@@ -244,6 +418,20 @@ def choose_landmarks(walls: np.ndarray, max_landmarks: int) -> np.ndarray:
     One pixel (the first in raster order) per ``s x s`` block, with the smallest stride
     ``s`` that leaves at most ``max_landmarks``.
 
+    Parameters
+    ----------
+    walls : (H, W) bool array
+        Landmark candidates.
+    max_landmarks : int
+        Upper bound on the count.
+
+    Returns
+    -------
+    (M,) int64 array
+        Flat indices, M <= ``max_landmarks``.
+
+    Examples
+    --------
     >>> w = np.zeros((10, 10), bool); w[0, :] = True
     >>> choose_landmarks(w, 5).tolist()
     [0, 2, 4, 6, 8]
@@ -302,6 +490,12 @@ def ekf_field(
         ``ekf_max_landmarks``, ``ekf_range_var_min``, ``ekf_bearing_var_min``.
     resolution : float
         Metres per pixel.
+
+    Returns
+    -------
+    EkfResult
+        Landmarks, their field and the field interpolated to every pixel, and the
+        robot's estimate error per key pose.
     """
     h, w = vis.shape
     lm_pix = choose_landmarks(walls_observed, int(p.ekf_max_landmarks))

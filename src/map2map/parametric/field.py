@@ -107,6 +107,23 @@ def invert_field(
     (Where the field jumps, e.g. at the edge of what a pose saw, or folds, there is no
     exact inverse and the iteration keeps oscillating there.)
 
+    Parameters
+    ----------
+    field : DisplacementField
+        Forward displacement.
+    iterations : int
+        Most fixed-point steps.
+    tol : float
+        Movement (pixels) below which a pixel counts as settled.
+    settled : float
+        Fraction of settled pixels that stops the iteration.
+
+    Returns
+    -------
+    px, py : (H, W) float32 arrays
+
+    Examples
+    --------
     >>> f = DisplacementField(np.full((3, 4), 1.5, np.float32), np.zeros((3, 4), np.float32))
     >>> px, py = invert_field(f)
     >>> px[0].tolist()
@@ -126,6 +143,10 @@ def warp_map(plan: np.ndarray, field: DisplacementField, observed: np.ndarray) -
         Displacement of every plan pixel.
     observed : (H, W) bool
         Plan pixels the LIDAR saw; only they appear in the output.
+
+    Returns
+    -------
+    (H, W) uint8 array
     """
     plan = np.ascontiguousarray(plan, np.uint8)
     h, w = plan.shape

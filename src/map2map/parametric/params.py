@@ -201,14 +201,50 @@ def _finite(v: Any) -> bool:
 
 
 def params_to_dict(p: ParametricParams) -> dict[str, Any]:
-    """Plain-YAML-friendly dict of every parameter."""
+    """Plain-YAML-friendly dict of every parameter.
+
+    Parameters
+    ----------
+    p : ParametricParams
+
+    Returns
+    -------
+    dict
+
+    Examples
+    --------
+    >>> params_to_dict(ParametricParams())["lin_gain"]
+    0.09
+    """
     d = asdict(p)
     d["z_weights"] = [float(x) for x in p.z_weights]
     return d
 
 
 def params_from_dict(d: dict[str, Any], source: str = "parameters") -> ParametricParams:
-    """Build parameters from a mapping, rejecting unknown keys, NaN and bad values."""
+    """Build parameters from a mapping, rejecting unknown keys, NaN and bad values.
+
+    Parameters
+    ----------
+    d : dict
+        Parameter names to values.
+    source : str
+        Named in errors (a file).
+
+    Returns
+    -------
+    ParametricParams
+
+    Raises
+    ------
+    InputError
+        Unknown key, wrong type or value out of range.
+
+    Examples
+    --------
+    >>> params_from_dict({"lin_gain": 0.1}).lin_gain
+    0.1
+    """
     if not isinstance(d, dict):
         raise InputError(source, "parameter file must hold a mapping of name: value")
     names = {f.name: f for f in fields(ParametricParams)}
@@ -241,7 +277,22 @@ def params_from_dict(d: dict[str, Any], source: str = "parameters") -> Parametri
 
 
 def load_params(path: str | os.PathLike) -> ParametricParams:
-    """Read a parameter YAML file (flat, or a ``params.yaml`` written by ``map2map deform``)."""
+    """Read a parameter YAML file (flat, or a ``params.yaml`` written by ``map2map deform``).
+
+    Parameters
+    ----------
+    path : path-like
+        The YAML file.
+
+    Returns
+    -------
+    ParametricParams
+
+    Raises
+    ------
+    InputError
+        Missing file, not YAML, bad keys or values.
+    """
     source = os.fspath(path)
     try:
         with open(path, encoding="utf-8") as fh:
@@ -266,7 +317,25 @@ def save_params(
     run: dict[str, Any] | None = None,
     drawn: dict[str, Any] | None = None,
 ) -> None:
-    """Write ``parameters`` (and informational ``run`` / ``drawn`` sections) atomically."""
+    """Write ``parameters`` (and informational ``run`` / ``drawn`` sections) atomically.
+
+    Parameters
+    ----------
+    p : ParametricParams
+        Parameters written under ``parameters``.
+    path : path-like
+        The YAML file.
+    run, drawn : dict, optional
+        Informational sections (run settings, drawn coefficients).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "params.yaml"
+    >>> save_params(ParametricParams(eta=0.02), path)
+    >>> load_params(path).eta
+    0.02
+    """
     doc: dict[str, Any] = {}
     if run:
         doc["run"] = run

@@ -87,6 +87,21 @@ def keyframe_indices(
     The turn is measured on the (unwrapped) heading averaged over ``smooth`` samples, so
     that the jitter of recorded grid paths (headings jumping by pi/4 at every stair step)
     does not make every sample a key pose; a real, lasting turn passes the filter.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        The trajectory.
+    distance : float
+        Metres between key poses.
+    angle : float
+        Radians between key poses.
+    smooth : int
+        Samples averaged for the heading.
+
+    Returns
+    -------
+    (K,) int array
     """
     keep = [0]
     x, y = traj.x, traj.y
@@ -107,14 +122,45 @@ def keyframe_indices(
 
 def trajectory_to_pixels(plan: OccupancyMap, x, y, theta) -> np.ndarray:
     """World poses -> pixel poses ``(x = column, y = row, angle)``, the angle in the image
-    frame (y down, so a world heading ``theta`` becomes ``-(theta - yaw)``)."""
+    frame (y down, so a world heading ``theta`` becomes ``-(theta - yaw)``).
+
+    Parameters
+    ----------
+    plan : OccupancyMap
+        The plan whose grid is used.
+    x, y, theta : array-like
+        World poses.
+
+    Returns
+    -------
+    (N, 3) float array
+    """
     rows, cols = plan.world_to_pixel_float(x, y)
     ang = wrap_angle(-(np.asarray(theta, float) - plan.origin[2]))
     return np.stack([cols, rows, ang], 1)
 
 
 def check_point(plan: OccupancyMap, x: float, y: float, what: str) -> np.ndarray:
-    """Pixel ``(x, y)`` of a world point that must lie in the plan's free space."""
+    """Pixel ``(x, y)`` of a world point that must lie in the plan's free space.
+
+    Parameters
+    ----------
+    plan : OccupancyMap
+        The plan.
+    x, y : float
+        World point, metres.
+    what : str
+        Name of the point in errors (``"start"``, ``"goal"``...).
+
+    Returns
+    -------
+    (2,) float array
+
+    Raises
+    ------
+    InputError
+        Outside the plan or not on free space.
+    """
     r, c = plan.world_to_pixel([x], [y])
     name = f"{what} ({x:g}, {y:g}) m"
     if not plan.contains(r, c)[0]:
@@ -144,6 +190,26 @@ def make_trajectory(
     and ``goal`` (world metres) it joins them; otherwise it joins two random roadmap
     nodes, or, with ``tour`` > 2, tours that many roadmap nodes spread over the plan.
     Raises :class:`InputError` for points outside the free space or not connected.
+
+    Parameters
+    ----------
+    plan : OccupancyMap
+        The plan.
+    p : ParametricParams
+        Roadmap and robot parameters.
+    rng : numpy.random.Generator
+        Source of the roadmap and the random ends.
+    start, goal : (x, y), optional
+        World metres.
+    waypoints : (W, 2) array, optional
+        World metres.
+    tour : int
+        Number of spread-out nodes to tour.
+
+    Returns
+    -------
+    trajectory : Trajectory
+    roadmap : Roadmap
     """
     if not plan.free.any():
         raise InputError(None, "the plan has no free space")
@@ -210,6 +276,22 @@ def deform(
         Model parameters (defaults if None).
     rng : numpy.random.Generator
         All random draws; the same generator state gives the same bytes.
+
+    Returns
+    -------
+    DeformResult
+        The modelled map, the total, LIDAR and odometry fields, the observed pixels
+        and the trajectory.
+
+    Examples
+    --------
+    >>> from map2map.maps.floorplan import generate_floorplan
+    >>> plan = generate_floorplan(1, size=(6, 5), resolution=0.1)
+    >>> rng = np.random.default_rng(0)
+    >>> traj, _ = make_trajectory(plan, ParametricParams(), rng)
+    >>> res = deform(plan, traj, rng=rng)
+    >>> res.map.shape == plan.shape
+    True
     """
     if method not in METHODS:
         raise InputError("method", f"unknown method {method!r} (use additive or ekf)")

@@ -184,6 +184,17 @@ def visible_pixels(
         Cells that neither stop rays nor are marked seen.
     beam_spacing_px : float
         Largest gap between neighbouring rays at full range.
+
+    Returns
+    -------
+    Visibility
+
+    Examples
+    --------
+    >>> occ = np.zeros((20, 20), bool); occ[:, 12] = True
+    >>> vis = visible_pixels(occ, np.array([[5.0, 10.0, 0.0]]), 0.0, 30.0)
+    >>> bool((vis.seen_from(0) % 20 > 12).any())
+    False
     """
     occ = np.ascontiguousarray(occupancy, dtype=np.uint8)
     if unknown is not None:
