@@ -57,6 +57,16 @@ class DisplacementField:
 
     @classmethod
     def zeros(cls, shape: tuple[int, int]) -> DisplacementField:
+        """A zero field of ``shape``.
+
+        Parameters
+        ----------
+        shape : (H, W)
+
+        Returns
+        -------
+        DisplacementField
+        """
         return cls(np.zeros(shape, np.float32), np.zeros(shape, np.float32))
 
     @property
@@ -72,23 +82,57 @@ class DisplacementField:
         return DisplacementField(self.dx + other.dx, self.dy + other.dy)
 
     def masked(self, mask: np.ndarray) -> DisplacementField:
-        """Zero outside ``mask``."""
+        """Zero outside ``mask``.
+
+        Parameters
+        ----------
+        mask : (H, W) bool array
+
+        Returns
+        -------
+        DisplacementField
+        """
         return DisplacementField(np.where(mask, self.dx, 0), np.where(mask, self.dy, 0))
 
     def stats(self, mask: np.ndarray | None = None) -> dict[str, float]:
-        """Mean and maximum ``|d|`` [px] (over ``mask`` if given)."""
+        """Mean and maximum ``|d|`` [px] (over ``mask`` if given).
+
+        Parameters
+        ----------
+        mask : (H, W) bool array, optional
+
+        Returns
+        -------
+        dict
+            ``mean`` and ``max``.
+        """
         mag = self.magnitude if mask is None else self.magnitude[mask]
         if mag.size == 0:
             return {"mean": 0.0, "max": 0.0}
         return {"mean": float(mag.mean()), "max": float(mag.max())}
 
     def save_npz(self, path: str | os.PathLike) -> None:
-        """Write ``dx`` and ``dy`` (float32, pixels) to an ``.npz`` atomically."""
+        """Write ``dx`` and ``dy`` (float32, pixels) to an ``.npz`` atomically.
+
+        Parameters
+        ----------
+        path : path-like
+        """
         with atomic_path(path) as tmp, open(tmp, "wb") as fh:
             np.savez(fh, dx=self.dx, dy=self.dy)
 
     @classmethod
     def load_npz(cls, path: str | os.PathLike) -> DisplacementField:
+        """Read a field written by :meth:`save_npz` (:class:`InputError` if unreadable).
+
+        Parameters
+        ----------
+        path : path-like
+
+        Returns
+        -------
+        DisplacementField
+        """
         try:
             with np.load(path) as z:
                 return cls(z["dx"], z["dy"])

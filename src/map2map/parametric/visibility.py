@@ -48,17 +48,36 @@ class Visibility:
         return self.indptr.size - 1
 
     def seen_from(self, k: int) -> np.ndarray:
-        """Flat indices of the pixels seen from pose ``k``."""
+        """Flat indices of the pixels seen from pose ``k``.
+
+        Parameters
+        ----------
+        k : int
+
+        Returns
+        -------
+        int32 array
+        """
         return self.pixels[self.indptr[k] : self.indptr[k + 1]]
 
     def observed_mask(self) -> np.ndarray:
-        """Pixels seen from at least one pose."""
+        """Pixels seen from at least one pose.
+
+        Returns
+        -------
+        (H, W) bool array
+        """
         m = np.zeros(self.shape[0] * self.shape[1], bool)
         m[self.pixels] = True
         return m.reshape(self.shape)
 
     def first_seen(self) -> np.ndarray:
-        """(H, W) int32: index of the first pose that saw each pixel, -1 if never seen."""
+        """(H, W) int32: index of the first pose that saw each pixel, -1 if never seen.
+
+        Returns
+        -------
+        (H, W) int32 array
+        """
         first = np.full(self.shape[0] * self.shape[1], -1, np.int32)
         pose = np.repeat(np.arange(self.n_poses, dtype=np.int32), np.diff(self.indptr))
         # reversed assignment keeps the earliest pose for duplicated indices
@@ -66,7 +85,12 @@ class Visibility:
         return first.reshape(self.shape)
 
     def counts(self) -> np.ndarray:
-        """(H, W) int32: how many poses saw each pixel."""
+        """(H, W) int32: how many poses saw each pixel.
+
+        Returns
+        -------
+        (H, W) int32 array
+        """
         c = np.bincount(self.pixels, minlength=self.shape[0] * self.shape[1])
         return c.astype(np.int32).reshape(self.shape)
 

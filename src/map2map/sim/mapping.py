@@ -218,7 +218,15 @@ class LogOddsGrid:
         self.ox, self.oy = nx0 * res, ny0 * res
 
     def integrate(self, sensor_pose, scan: LaserScan) -> None:
-        """Add one scan taken from ``sensor_pose`` (x, y, theta) in this grid's frame."""
+        """Add one scan taken from ``sensor_pose`` (x, y, theta) in this grid's frame.
+
+        Parameters
+        ----------
+        sensor_pose : (x, y, theta)
+            Sensor pose, this grid's frame.
+        scan : LaserScan
+            The scan.
+        """
         x, y, th = (float(v) for v in sensor_pose)
         rmax = float(scan.range_max)
         self._ensure(x - rmax, x + rmax, y - rmax, y + rmax)
@@ -250,7 +258,12 @@ class LogOddsGrid:
         )
 
     def to_map(self) -> OccupancyMap:
-        """The ternary map (a copy) with its frame."""
+        """The ternary map (a copy) with its frame.
+
+        Returns
+        -------
+        OccupancyMap
+        """
         if not self.T.size:
             return OccupancyMap(np.full((1, 1), UNKNOWN, np.uint8), self.resolution)
         return OccupancyMap(self.T.copy(), self.resolution, (self.ox, self.oy, 0.0))
@@ -278,10 +291,30 @@ class OracleMapper:
         self._pose = (0.0, 0.0, 0.0)
 
     def observe_truth(self, pose) -> None:
-        """The true pose (any fixed world frame) at the next scan."""
+        """The true pose (any fixed world frame) at the next scan.
+
+        Parameters
+        ----------
+        pose : (x, y, theta)
+            True pose.
+        """
         self._truth = tuple(float(v) for v in pose)
 
     def update(self, odom: OdometryReading, scan: LaserScan) -> None:
+        """Integrate ``scan`` at the pose given to :meth:`observe_truth`.
+
+        Parameters
+        ----------
+        odom : OdometryReading
+            Ignored (the oracle uses the true pose).
+        scan : LaserScan
+            Integrated at the true pose.
+
+        Raises
+        ------
+        RuntimeError
+            No :meth:`observe_truth` since the last update.
+        """
         if self._truth is None:
             raise RuntimeError("OracleMapper needs observe_truth(pose) before each update")
         if self._start is None:
@@ -292,9 +325,22 @@ class OracleMapper:
         self._truth = None
 
     def pose(self) -> np.ndarray:
+        """The current pose in the map frame (exact).
+
+        Returns
+        -------
+        (3,) ndarray
+            The last true pose relative to the first one (the map frame).
+        """
         return np.array(self._pose)
 
     def get_map(self) -> OccupancyMap:
+        """The map built from the true poses.
+
+        Returns
+        -------
+        OccupancyMap
+        """
         return self.grid.to_map()
 
 

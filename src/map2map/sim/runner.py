@@ -123,7 +123,12 @@ class SimResult:
     info: dict[str, Any] = field(default_factory=dict)
 
     def report(self) -> dict[str, Any]:
-        """The contents of ``report.json``."""
+        """The contents of ``report.json``.
+
+        Returns
+        -------
+        dict
+        """
         err = self.estimated_poses[:, :2] - self.true_poses[:, :2]
         return {
             "coverage": round(self.coverage, 6),

@@ -82,11 +82,29 @@ class Roadmap:
     factor: int
 
     def to_work(self, xy: np.ndarray) -> np.ndarray:
-        """Plan pixel (x, y) -> working-grid continuous indices (x, y)."""
+        """Plan pixel (x, y) -> working-grid continuous indices (x, y).
+
+        Parameters
+        ----------
+        xy : (N, 2) array
+
+        Returns
+        -------
+        (N, 2) float array
+        """
         return (np.asarray(xy, float) - (self.factor - 1) / 2.0) / self.factor
 
     def to_plan(self, xy: np.ndarray) -> np.ndarray:
-        """Working-grid indices (x, y) -> plan pixel (x, y)."""
+        """Working-grid indices (x, y) -> plan pixel (x, y).
+
+        Parameters
+        ----------
+        xy : (N, 2) array
+
+        Returns
+        -------
+        (N, 2) float array
+        """
         return np.asarray(xy, float) * self.factor + (self.factor - 1) / 2.0
 
 

@@ -121,7 +121,13 @@ class Trajectory:
 
     def to_csv(self, path: str | os.PathLike) -> None:
         """Write ``t,x,y,theta,v,omega`` (header line, one row per sample, full precision so
-        that reading it back gives the same numbers) atomically."""
+        that reading it back gives the same numbers) atomically.
+
+        Parameters
+        ----------
+        path : path-like
+            Output file.
+        """
         buf = io.StringIO()
         buf.write("t,x,y,theta,v,omega\n")
         np.savetxt(
