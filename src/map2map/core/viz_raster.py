@@ -277,7 +277,12 @@ class Panel:
             self._overlays.append(lambda: self._legend(list(entries)))
 
     def finish(self) -> np.ndarray:
-        """Draw the overlays (scale bar, legend) and return the panel image."""
+        """Draw the overlays (scale bar, legend) and return the panel image.
+
+        Returns
+        -------
+        (H, W, 3) uint8 array
+        """
         for draw in self._overlays:
             draw()
         self._overlays = []

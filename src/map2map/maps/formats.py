@@ -114,11 +114,20 @@ mode=None, layers=None, wall_thickness=None, units=None)
     units: str | None = None
 
     def given(self) -> list[str]:
-        """Names of the options set (not ``None``)."""
+        """Names of the options set (not ``None``).
+
+        Returns
+        -------
+        list of str
+        """
         return [f.name for f in fields(self) if getattr(self, f.name) is not None]
 
     def to_args(self) -> list[str]:
         """The command-line flags that give these options (to repeat a run).
+
+        Returns
+        -------
+        list of str
 
         Examples
         --------
@@ -141,7 +150,17 @@ mode=None, layers=None, wall_thickness=None, units=None)
 
     def applicable(self, kind: str) -> MapReadOptions:
         """A copy without the options that do not apply to a ``kind`` file (see
-        :func:`map_kind`), for commands reading several maps of different formats."""
+        :func:`map_kind`), for commands reading several maps of different formats.
+
+        Parameters
+        ----------
+        kind : str
+            A :func:`map_kind` result.
+
+        Returns
+        -------
+        MapReadOptions
+        """
         drop = {n: None for n in self.given() if kind not in _OPTION_KINDS[n]}
         return replace(self, **drop)
 

@@ -65,7 +65,17 @@ class Wall:
         return abs(self.x1 - self.x0) < abs(self.y1 - self.y0)
 
     def moved(self, shift: float) -> Wall:
-        """The wall moved perpendicular to itself by ``shift`` px (+x or +y)."""
+        """The wall moved perpendicular to itself by ``shift`` px (+x or +y).
+
+        Parameters
+        ----------
+        shift : float
+            Pixels.
+
+        Returns
+        -------
+        Wall
+        """
         if self.vertical:
             return replace(self, x0=self.x0 + shift, x1=self.x1 + shift)
         return replace(self, y0=self.y0 + shift, y1=self.y1 + shift)

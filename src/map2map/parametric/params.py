@@ -144,7 +144,12 @@ class ParametricParams:
             raise ValueError(problem)
 
     def zero_error(self) -> ParametricParams:
-        """The same parameters with every error source switched off (field must be zero)."""
+        """The same parameters with every error source switched off (field must be zero).
+
+        Returns
+        -------
+        ParametricParams
+        """
         zero = {
             f.name: 0.0
             for f in fields(self)

@@ -528,7 +528,20 @@ class PathController:
         return d0 + float(np.hypot(*np.diff(p, axis=0).T).sum()) if len(p) > 1 else d0
 
     def command(self, pose, scan: LaserScan | None) -> tuple[float, float, bool]:
-        """``(v, w, blocked)`` to follow the path from ``pose``; ``(0, 0, False)`` at the end."""
+        """``(v, w, blocked)`` to follow the path from ``pose``; ``(0, 0, False)`` at the end.
+
+        Parameters
+        ----------
+        pose : (x, y, theta)
+            Pose estimate, map frame.
+        scan : LaserScan or None
+            Latest scan (stops the robot before an obstacle).
+
+        Returns
+        -------
+        v, w : float
+        blocked : bool
+        """
         if not len(self.path):
             return 0.0, 0.0, False
         x, y, th = pose
@@ -750,7 +763,23 @@ class Explorer:
 
     # -- control -------------------------------------------------------------
     def command(self, t: float, pose, mapper, scan: LaserScan | None) -> tuple[float, float]:
-        """Velocity command at time ``t`` from the mapper's pose estimate ``pose``."""
+        """Velocity command at time ``t`` from the mapper's pose estimate ``pose``.
+
+        Parameters
+        ----------
+        t : float
+            Simulated time, seconds.
+        pose : (x, y, theta)
+            Pose estimate, map frame.
+        mapper : Mapper
+            Asked for its map when replanning.
+        scan : LaserScan or None
+            Latest scan.
+
+        Returns
+        -------
+        v, w : float
+        """
         cfg = self.cfg
         dt = 0.0 if self._last_t is None else t - self._last_t
         self._last_t = t

@@ -500,7 +500,12 @@ class GraphSLAM:
         return self._map_cache
 
     def trajectory(self) -> np.ndarray:
-        """``(K, 4)`` rows ``t, x, y, theta`` of the optimised keyframes."""
+        """``(K, 4)`` rows ``t, x, y, theta`` of the optimised keyframes.
+
+        Returns
+        -------
+        (K, 4) ndarray
+        """
         return np.array([(k.t, *k.pose) for k in self.keyframes], float).reshape(-1, 4)
 
     # ---------------------------------------------------------------- internals

@@ -659,7 +659,21 @@ class CountGrid:
 
     @classmethod
     def around(cls, x: float, y: float, half_size: float, delta: float) -> CountGrid:
-        """A square grid of side ``2 * half_size`` metres centred on ``(x, y)``."""
+        """A square grid of side ``2 * half_size`` metres centred on ``(x, y)``.
+
+        Parameters
+        ----------
+        x, y : float
+            Centre, metres.
+        half_size : float
+            Half the side, metres.
+        delta : float
+            Cell size, metres.
+
+        Returns
+        -------
+        CountGrid
+        """
         n = int(math.ceil(2 * half_size / delta))
         return cls((n, n), x - n * delta / 2, y - n * delta / 2, delta)
 
@@ -671,6 +685,15 @@ class CountGrid:
         resampling, a dropped particle and the one copied into its grid share most
         of their history, and a scan touches only the blocks within the usable range
         (measured: about a fifth of the blocks of a 7-minute run's grids differ).
+
+        Parameters
+        ----------
+        out : CountGrid, optional
+            A grid whose arrays may be reused.
+
+        Returns
+        -------
+        CountGrid
         """
         if out is self:
             return self
@@ -700,7 +723,12 @@ class CountGrid:
         return self.visits.shape  # type: ignore[return-value]
 
     def arrays(self):
-        """``(hits, visits, sx, sy, mean, x0, y0, delta)``: leading arguments of the update."""
+        """``(hits, visits, sx, sy, mean, x0, y0, delta)``: leading arguments of the update.
+
+        Returns
+        -------
+        tuple
+        """
         return self.hits, self.visits, self.sx, self.sy, self.mean, self.x0, self.y0, self.delta
 
     def match_arrays(self):
@@ -709,11 +737,20 @@ class CountGrid:
         ``mean[iy, ix]`` is the mean hit position of an occupied cell (hits/visits
         above GMapping's fullness threshold 0.1) and NaN elsewhere; it is kept up to
         date by the map update, so the matcher reads one compact array.
+
+        Returns
+        -------
+        tuple
         """
         return self.mean, self.x0, self.y0, self.delta
 
     def extent(self) -> tuple[float, float, float, float]:
-        """World ``(xmin, xmax, ymin, ymax)`` covered by the grid."""
+        """World ``(xmin, xmax, ymin, ymax)`` covered by the grid.
+
+        Returns
+        -------
+        (xmin, xmax, ymin, ymax) : float
+        """
         ny, nx = self.shape
         return self.x0, self.x0 + nx * self.delta, self.y0, self.y0 + ny * self.delta
 
@@ -722,6 +759,17 @@ class CountGrid:
 
         A side that must grow grows by at least a quarter of the grid's size, so
         growth (a copy of every array) stays rare.
+
+        Parameters
+        ----------
+        xmin, xmax, ymin, ymax : float
+            Box to fit, metres.
+        margin : float
+            Extra room, metres.
+
+        Returns
+        -------
+        (left, right, bottom, top) or None
         """
         gx0, gx1, gy0, gy1 = self.extent()
         need = (
@@ -736,7 +784,13 @@ class CountGrid:
         return tuple(int(math.ceil(max(n, step) / self.delta)) if n > 0 else 0 for n in need)
 
     def pad(self, left: int, right: int, bottom: int, top: int) -> None:
-        """Grow in place by whole cells (rows ``iy`` grow upwards with y)."""
+        """Grow in place by whole cells (rows ``iy`` grow upwards with y).
+
+        Parameters
+        ----------
+        left, right, bottom, top : int
+            Cells added on each side.
+        """
         widths = ((bottom, top), (left, right))
         self.hits = np.pad(self.hits, widths)
         self.visits = np.pad(self.visits, widths)
@@ -801,7 +855,19 @@ class CountGrid:
             self.tile_id[ty0:ty1, tx0:tx1] = _fresh_tile_ids(ty1 - ty0, tx1 - tx0)
 
     def to_occupancy_map(self, occ_thresh: float = 0.25, meta: dict | None = None) -> OccupancyMap:
-        """The ternary map (GMapping/slam_gmapping rule: occupied when hits/visits > occ_thresh)."""
+        """The ternary map (GMapping/slam_gmapping rule: occupied when hits/visits > occ_thresh).
+
+        Parameters
+        ----------
+        occ_thresh : float
+            Hit ratio above which a visited cell is occupied.
+        meta : dict, optional
+            Copied into the map.
+
+        Returns
+        -------
+        OccupancyMap
+        """
         data = occupancy_from_counts(self.hits, self.visits, float(occ_thresh))
         return OccupancyMap(data, self.delta, (self.x0, self.y0, 0.0), dict(meta or {}))
 

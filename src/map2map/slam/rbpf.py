@@ -476,7 +476,15 @@ class GMappingRBPF:
 
     # ---------------------------------------------------------------- Mapper API
     def update(self, odom: OdometryReading, scan: LaserScan) -> None:
-        """Feed one odometry reading and its scan (see module docstring for the steps)."""
+        """Feed one odometry reading and its scan (see module docstring for the steps).
+
+        Parameters
+        ----------
+        odom : OdometryReading
+            Raw odometry at the scan's time.
+        scan : LaserScan
+            The scan.
+        """
         p = self.params
         o = self._frame.accept(odom, scan)  # odometry in the map frame
         ranges, angles = prepare_scan(scan)
@@ -514,11 +522,21 @@ class GMappingRBPF:
         self.n_updates += 1
 
     def pose(self) -> np.ndarray:
-        """Pose of the best particle (highest accumulated log weight)."""
+        """Pose of the best particle (highest accumulated log weight).
+
+        Returns
+        -------
+        (3,) ndarray
+        """
         return self.poses[self.best_index()].copy()
 
     def get_map(self) -> OccupancyMap:
-        """The best particle's occupancy map (cached between filter updates)."""
+        """The best particle's occupancy map (cached between filter updates).
+
+        Returns
+        -------
+        OccupancyMap
+        """
         if self._map_cache is None:
             if not self.grids:
                 raise RuntimeError("no scan integrated yet")
@@ -531,7 +549,12 @@ class GMappingRBPF:
         return int(np.argmax(self.log_w_sum))
 
     def trajectory(self) -> np.ndarray:
-        """``(T, 4)`` rows ``t, x, y, theta`` of the best particle at each processed scan."""
+        """``(T, 4)`` rows ``t, x, y, theta`` of the best particle at each processed scan.
+
+        Returns
+        -------
+        (T, 4) ndarray
+        """
         if not self._node_pose:
             return np.zeros((0, 4))
         poses = np.concatenate(self._node_pose)
