@@ -202,7 +202,21 @@ class Panel:
         dashed: bool = False,
         alpha: float = 1.0,
     ) -> None:
-        """A polyline through image coordinates ``(rows, cols)``; NaN points break it."""
+        """A polyline through image coordinates ``(rows, cols)``; NaN points break it.
+
+        Parameters
+        ----------
+        rows, cols : array-like
+            Image coordinates (fractional allowed) of the vertices.
+        colour : (r, g, b)
+            Floats in [0, 1].
+        width : float
+            Line width, panel pixels.
+        dashed : bool
+            Dashed line.
+        alpha : float
+            Opacity.
+        """
         pts = self._xy(rows, cols)
         ok = np.isfinite(pts).all(axis=1)
         # runs of finite points
@@ -224,7 +238,21 @@ class Panel:
     def markers(
         self, rows, cols, *, colour: Colour, marker: str = "o", size: float = 5.0, width: int = 2
     ) -> None:
-        """Filled discs (``"o"``) or crosses (``"x"``) of diameter ``size`` panel pixels."""
+        """Filled discs (``"o"``) or crosses (``"x"``) of diameter ``size`` panel pixels.
+
+        Parameters
+        ----------
+        rows, cols : array-like
+            Image coordinates of the markers.
+        colour : (r, g, b)
+            Floats in [0, 1].
+        marker : {"o", "x"}
+            Disc or cross.
+        size : float
+            Diameter, panel pixels.
+        width : float
+            Stroke width of a cross, panel pixels.
+        """
         pts = self._xy(rows, cols)
         pts = pts[np.isfinite(pts).all(axis=1)]
         col = _rgb255(colour)
@@ -241,7 +269,19 @@ class Panel:
                 cv2.circle(self.image, tuple(c), r, col, -1, cv2.LINE_AA, _SUB)
 
     def text(self, x: float, y: float, s: str, *, size: int = _SMALL_PX, colour=(0, 0, 0)):
-        """Text with its top-left corner at panel pixel ``(x, y)``."""
+        """Text with its top-left corner at panel pixel ``(x, y)``.
+
+        Parameters
+        ----------
+        x, y : float
+            Panel pixels.
+        s : str
+            The text.
+        size : int
+            Text height, pixels.
+        colour : (r, g, b)
+            Floats in [0, 1] or 0-255 integers.
+        """
         self.texts.append((x, y, s, size, _rgb255(colour)))
 
     def _box(self, x0: int, y0: int, x1: int, y1: int, alpha: float = 0.8) -> None:
@@ -272,7 +312,13 @@ class Panel:
 
     def legend(self, entries: Sequence[tuple[str, Colour, str]]) -> None:
         """A legend box in the upper-right corner: ``(label, colour, style)`` with style
-        ``"-"`` (line), ``"--"`` (dashed line), ``"o"`` or ``"x"`` (marker)."""
+        ``"-"`` (line), ``"--"`` (dashed line), ``"o"`` or ``"x"`` (marker).
+
+        Parameters
+        ----------
+        entries : sequence of (label, colour, style)
+            One row each.
+        """
         if entries:
             self._overlays.append(lambda: self._legend(list(entries)))
 

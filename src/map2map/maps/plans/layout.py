@@ -359,6 +359,17 @@ class _Builder:
 def px_ceil(metres: float, res: float) -> int:
     """Pixels that hold ``metres`` (rounded up, exact multiples kept).
 
+    Parameters
+    ----------
+    metres : float
+        Length.
+    res : float
+        Metres per pixel.
+
+    Returns
+    -------
+    int
+
     Examples
     --------
     >>> px_ceil(0.5, 0.05), px_ceil(0.51, 0.05)
