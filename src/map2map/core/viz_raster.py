@@ -280,7 +280,7 @@ class Panel:
         size : int
             Text height, pixels.
         colour : (r, g, b)
-            Floats in [0, 1] or 0-255 integers.
+            Floats in [0, 1].
         """
         self.texts.append((x, y, s, size, _rgb255(colour)))
 
