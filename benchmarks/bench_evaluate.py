@@ -45,7 +45,7 @@ def _upscale(path: Path, size: int, out: Path) -> Path:
 
 
 def _generated(tmp: Path, size: int) -> tuple[Path, Path]:
-    from map2map.evaluate.synthetic import deform, draw_walls, gaussian_field, office_walls
+    from map2map.maps.synthetic import deform, draw_walls, gaussian_field, office_walls
 
     plan = draw_walls((size, size), office_walls(size, size, margin=size // 8, thickness=5))
     field = gaussian_field(plan.shape, (0.7 * size, 0.6 * size), (size / 150, 0.0), size / 5)

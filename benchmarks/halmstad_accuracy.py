@@ -24,8 +24,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
-from map2map.evaluate.halmstad import halmstad_pairs, keypoint_residuals, load_halmstad  # noqa: E402
 from map2map.evaluate.pipeline import register  # noqa: E402
+from map2map.maps.halmstad import halmstad_pairs, keypoint_residuals, load_halmstad  # noqa: E402
 
 
 def main(argv=None) -> int:

@@ -25,7 +25,7 @@ sys.path.insert(0, str(ROOT / "src"))
 
 from map2map.core.grid import OccupancyMap  # noqa: E402
 from map2map.evaluate.pipeline import evaluate_maps  # noqa: E402
-from map2map.evaluate.synthetic import (  # noqa: E402
+from map2map.maps.synthetic import (  # noqa: E402
     deform,
     draw_walls,
     gaussian_field,

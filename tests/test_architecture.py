@@ -50,8 +50,15 @@ LAYERS: dict[str, float] = {
     "__init__": 10,  # the package root re-exports the public API (lazily)
 }
 
-#: Old module paths that only re-export :mod:`map2map.core`; map2map itself never uses them.
-SHIMS = {"map2map.errors", "map2map._io", "map2map.viz", "map2map.maps.grid"}
+#: Old module paths that only re-export a moved module; map2map itself never uses them.
+SHIMS = {
+    "map2map.errors",
+    "map2map._io",
+    "map2map.viz",
+    "map2map.maps.grid",
+    "map2map.evaluate.halmstad",
+    "map2map.evaluate.synthetic",
+}
 
 #: Heavy dependency -> packages allowed to import it.
 HEAVY = {"torch": {"learn"}, "dask": {"learn", "datasets"}}

@@ -20,7 +20,8 @@ from map2map.evaluate.icp import icp
 from map2map.evaluate.metric import choose_chain, local_errors
 from map2map.evaluate.nonrigid import PiecewiseAffine, SideFields, coherent_motion, warp_image
 from map2map.evaluate.pipeline import evaluate_maps, register
-from map2map.evaluate.synthetic import (
+from map2map.evaluate.transforms import apply, decompose_similarity, similarity_matrix
+from map2map.maps.synthetic import (
     deform,
     draw_walls,
     gaussian_field,
@@ -28,7 +29,6 @@ from map2map.evaluate.synthetic import (
     true_errors,
     wall_displacement,
 )
-from map2map.evaluate.transforms import apply, decompose_similarity, similarity_matrix
 
 W, H = 320, 240
 
@@ -418,7 +418,7 @@ def test_cli_anchors_are_used(plan, tmp_path, capsys):
 
 # ----------------------------------------------------------------------- Halmstad
 def test_halmstad_pair_within_floor(shared_data):
-    from map2map.evaluate.halmstad import keypoint_residuals, load_halmstad
+    from map2map.maps.halmstad import keypoint_residuals, load_halmstad
 
     root = shared_data / "halmstad"
     src, tgt = load_halmstad(root, "E5_05"), load_halmstad(root, "E5_layout")

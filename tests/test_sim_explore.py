@@ -167,3 +167,17 @@ def test_any_mapper_instance_drives_the_explorer(monkeypatch):
     mappers.register_mapper("odometry-test", lambda resolution, seed: OdometryOnlyMapper())
     again = simulate(m, seed=2, duration=40, mapper="odometry-test", progress=False)
     np.testing.assert_array_equal(again.true_poses, res.true_poses)
+
+
+def test_config_value_runs_like_the_keywords():
+    from map2map.sim.runner import SimConfig
+
+    m = two_rooms()
+    kw = dict(mapper="oracle", seed=4, duration=8, progress=False)
+    a = simulate(m, **kw)
+    b = simulate(m, config=SimConfig(**kw))
+    assert np.array_equal(a.true_poses, b.true_poses) and a.slam_map == b.slam_map
+    # a keyword other than its default overrides the config; a default one does not
+    c = simulate(m, seed=5, config=SimConfig(**kw))
+    d = simulate(m, seed=0, config=SimConfig(**kw))
+    assert (c.info["seed"], d.info["seed"]) == (5, 4)

@@ -15,9 +15,9 @@ from map2map.evaluate.align import AlignParams, align_maps
 from map2map.evaluate.metric import local_errors, summary_lines
 from map2map.evaluate.nonrigid import SideFields
 from map2map.evaluate.pipeline import evaluate_maps
-from map2map.evaluate.synthetic import draw_walls, office_walls
 from map2map.evaluate.transforms import decompose_similarity, similarity_matrix
 from map2map.maps.irregular import irregular_plan
+from map2map.maps.synthetic import draw_walls, office_walls
 
 
 def transformed_copy(data: np.ndarray, scale: float, angle_deg: float) -> np.ndarray:

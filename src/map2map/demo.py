@@ -329,7 +329,7 @@ def _maps_to_evaluate(ctx: DemoContext) -> list[tuple[str, OccupancyMap, Occupan
 
 def _known_errors(plan: OccupancyMap, seed: int) -> tuple[OccupancyMap, np.ndarray]:
     """The plan bent by a smooth known field (about 0.3 m at its peak)."""
-    from .evaluate.synthetic import deform, gaussian_field
+    from .maps.synthetic import deform, gaussian_field
 
     rng = np.random.default_rng(seed)
     h, w = plan.shape
@@ -355,7 +355,7 @@ def stage_evaluate(ctx: DemoContext) -> None:
 
     plan = ctx.plan
     if plan is None:
-        from .evaluate.synthetic import draw_walls, office_walls
+        from .maps.synthetic import draw_walls, office_walls
 
         plan = OccupancyMap(draw_walls((280, 360), office_walls(360, 280, thickness=4)), 0.05)
     maps = _maps_to_evaluate(ctx) if ctx.plan is not None else []

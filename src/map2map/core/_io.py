@@ -22,6 +22,31 @@ def ensure_output_dir(path: str | os.PathLike, *, is_dir: bool = True) -> Path:
 
     ``path`` is the output folder itself (``is_dir=True``) or a file whose parent
     folder must be writable. Raises :class:`InputError` naming the folder otherwise.
+
+    Parameters
+    ----------
+    path : path-like
+        The output folder (``is_dir=True``) or an output file.
+    is_dir : bool
+        Whether ``path`` is the folder itself or a file in it.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path`` as a Path; its folder now exists and is writable.
+
+    Raises
+    ------
+    InputError
+        The folder cannot be created or is not writable; ``path`` is a file where a
+        folder is expected.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> out = ensure_output_dir(pathlib.Path(tempfile.mkdtemp()) / "run" / "maps")
+    >>> out.is_dir(), out.name
+    (True, 'maps')
     """
     p = Path(path)
     folder = p if is_dir else (p.parent if str(p.parent) else Path("."))
@@ -39,6 +64,17 @@ def ensure_output_dir(path: str | os.PathLike, *, is_dir: bool = True) -> Path:
 @contextlib.contextmanager
 def atomic_paths(*paths: str | os.PathLike) -> Iterator[list[Path]]:
     """Yield temporary paths beside each target; rename them all into place on success.
+
+    Parameters
+    ----------
+    *paths : path-like
+        The files to write; missing folders are created.
+
+    Yields
+    ------
+    list of pathlib.Path
+        One temporary path per target, in the same order; nothing is renamed (and
+        the temporary files are removed) when the block raises.
 
     Examples
     --------
@@ -73,7 +109,27 @@ def atomic_paths(*paths: str | os.PathLike) -> Iterator[list[Path]]:
 
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
-    """Single-file form of :func:`atomic_paths`."""
+    """Single-file form of :func:`atomic_paths`.
+
+    Parameters
+    ----------
+    path : path-like
+        The file to write.
+
+    Yields
+    ------
+    pathlib.Path
+        A temporary path beside ``path``, renamed onto it when the block ends without error.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> target = pathlib.Path(tempfile.mkdtemp()) / "b.txt"
+    >>> with atomic_path(target) as tmp:
+    ...     _ = tmp.write_text("x")
+    >>> target.read_text()
+    'x'
+    """
     with atomic_paths(path) as (tmp,):
         yield tmp
 

@@ -177,6 +177,16 @@ def relative_pose(a, b):
 def invert_pose(a):
     """The inverse pose ``a^-1`` (so that ``compose_pose(a, invert_pose(a))`` is the identity).
 
+    Parameters
+    ----------
+    a : (x, y, theta) tuple, or array of shape (..., 3)
+        Pose(s), angle in radians.
+
+    Returns
+    -------
+    tuple of float or ndarray
+        The inverse pose(s), shaped like ``a`` (see :func:`relative_pose`).
+
     Examples
     --------
     >>> [round(v, 12) + 0.0 for v in invert_pose((1.0, 0.0, math.pi / 2))]
@@ -190,6 +200,18 @@ def invert_pose(a):
 def apply(T: np.ndarray, pts: np.ndarray) -> np.ndarray:
     """Apply a 3x3 transform to (N, 2) points ``(x, y)``; returns (N, 2) floats.
 
+    Parameters
+    ----------
+    T : (3, 3) array-like
+        Homogeneous 2-D transform (similarity, rigid or affine).
+    pts : (N, 2) array-like
+        Points ``(x, y)``.
+
+    Returns
+    -------
+    (N, 2) ndarray of float
+        ``T`` applied to every point.
+
     Examples
     --------
     >>> apply(np.eye(3), [[1, 2]]).tolist()
@@ -202,6 +224,19 @@ def apply(T: np.ndarray, pts: np.ndarray) -> np.ndarray:
 def similarity_matrix(scale: float, angle: float, tx: float, ty: float) -> np.ndarray:
     """``[[s cos, -s sin, tx], [s sin, s cos, ty], [0, 0, 1]]`` (angle in radians).
 
+    Parameters
+    ----------
+    scale : float
+        Isotropic scale ``s``.
+    angle : float
+        Rotation in radians.
+    tx, ty : float
+        Translation.
+
+    Returns
+    -------
+    (3, 3) ndarray
+
     Examples
     --------
     >>> similarity_matrix(1.0, 0.0, 2.0, 3.0)[:2, 2].tolist()
@@ -213,6 +248,16 @@ def similarity_matrix(scale: float, angle: float, tx: float, ty: float) -> np.nd
 
 def decompose_similarity(T: np.ndarray) -> tuple[float, float, float, float]:
     """(scale, angle, tx, ty) of the similarity closest to ``T`` (its linear part's mean).
+
+    Parameters
+    ----------
+    T : (3, 3) array-like
+        A similarity, or a transform close to one.
+
+    Returns
+    -------
+    scale, angle, tx, ty : float
+        Angle in radians.
 
     Examples
     --------
@@ -291,6 +336,18 @@ def fit_similarity(
 def fit_rigid(src: np.ndarray, dst: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
     """Weighted least-squares Euclidean transform (rotation + translation), ``ET`` of paper eq. 2.
 
+    Parameters
+    ----------
+    src, dst : (N, 2) array-like
+        Corresponding points, ``dst ~ R src + t``.
+    weights : (N,) array-like, optional
+        Non-negative weights; default equal.
+
+    Returns
+    -------
+    (3, 3) ndarray
+        The rigid transform (scale fixed to 1) minimising the weighted squared residuals.
+
     Examples
     --------
     >>> P = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
@@ -302,6 +359,18 @@ def fit_rigid(src: np.ndarray, dst: np.ndarray, weights: np.ndarray | None = Non
 
 def fit_affine(src: np.ndarray, dst: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
     """Weighted least-squares affine ``dst ~ A src + t`` (needs 3 non-collinear points).
+
+    Parameters
+    ----------
+    src, dst : (N, 2) array-like
+        Corresponding points, N >= 3 and not collinear.
+    weights : (N,) array-like, optional
+        Non-negative weights; default equal.
+
+    Returns
+    -------
+    (3, 3) ndarray
+        The affine transform minimising the weighted squared residuals.
 
     Examples
     --------
@@ -326,6 +395,15 @@ def affine_distortion(T: np.ndarray) -> tuple[float, float, float]:
     minus one; ``shear`` is |cos| of the angle between the transformed axes. A
     similarity gives ``(s, 0, 0)``.
 
+    Parameters
+    ----------
+    T : (3, 3) array-like
+        A 2-D affine transform.
+
+    Returns
+    -------
+    scale, anisotropy, shear : float
+
     Examples
     --------
     >>> [round(v, 9) for v in affine_distortion(similarity_matrix(2.0, 0.3, 0, 0))]
@@ -342,6 +420,18 @@ def affine_distortion(T: np.ndarray) -> tuple[float, float, float]:
 
 def transform_normals(T: np.ndarray, normals: np.ndarray) -> np.ndarray:
     """Unit normals (N, 2) carried by ``T`` (inverse transpose); zero rows stay zero.
+
+    Parameters
+    ----------
+    T : (3, 3) array-like
+        The transform that carries the points.
+    normals : (N, 2) array-like
+        Normals at those points; zero rows mean "no normal".
+
+    Returns
+    -------
+    (N, 2) ndarray
+        Unit normals after ``T``.
 
     Examples
     --------

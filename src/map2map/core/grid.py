@@ -50,6 +50,20 @@ def ternarize(values: np.ndarray, occupied_below: int = 64, free_above: int = 19
     Values ``<= occupied_below`` become :data:`OCCUPIED`, values ``>= free_above``
     become :data:`FREE` and everything between becomes :data:`UNKNOWN`.
 
+    Parameters
+    ----------
+    values : ndarray
+        Grey values of any shape (any numeric dtype).
+    occupied_below : int
+        Values ``<=`` this are occupied.
+    free_above : int
+        Values ``>=`` this are free.
+
+    Returns
+    -------
+    ndarray of uint8
+        Same shape, values 0, 127 or 255 only.
+
     Examples
     --------
     >>> ternarize(np.array([0, 60, 127, 200, 255], np.uint8)).tolist()
@@ -125,7 +139,19 @@ class OccupancyMap:
         return self.width * self.resolution, self.height * self.resolution
 
     def copy(self, data: np.ndarray | None = None, **changes: Any) -> OccupancyMap:
-        """A copy, optionally with new data (same frame) or other fields changed."""
+        """A copy, optionally with new data (same frame) or other fields changed.
+
+        Parameters
+        ----------
+        data : (H, W) uint8 array, optional
+            New cell values (same frame).
+        **changes
+            Other fields to replace (``resolution``, ``origin``, ``meta``).
+
+        Returns
+        -------
+        OccupancyMap
+        """
         new = replace(
             self,
             data=self.data.copy() if data is None else data,
@@ -176,7 +202,23 @@ class OccupancyMap:
         origin: tuple[float, float, float] = (0.0, 0.0, 0.0),
         meta: dict[str, Any] | None = None,
     ) -> OccupancyMap:
-        """Build a map from boolean masks; occupied wins where both are set, the rest is unknown."""
+        """Build a map from boolean masks; occupied wins where both are set, the rest is unknown.
+
+        Parameters
+        ----------
+        free, occupied : (H, W) bool arrays
+            Cell masks.
+        resolution : float
+            Metres per pixel.
+        origin : (x, y, yaw)
+            ROS origin.
+        meta : dict, optional
+            Copied into the map.
+
+        Returns
+        -------
+        OccupancyMap
+        """
         data = np.full(np.shape(free), UNKNOWN, np.uint8)
         data[np.asarray(free, bool)] = FREE
         data[np.asarray(occupied, bool)] = OCCUPIED
@@ -188,6 +230,16 @@ class OccupancyMap:
 
         Integer indices give pixel centres; fractional indices are interpolated
         linearly (``row = r`` is the centre of row ``r``).
+
+        Parameters
+        ----------
+        rows, cols : array-like
+            Pixel indices (row 0 = top).
+
+        Returns
+        -------
+        x, y : ndarray
+            Metres.
         """
         r = np.asarray(rows, float)
         c = np.asarray(cols, float)
@@ -200,7 +252,17 @@ class OccupancyMap:
         return ox + cs * lx - sn * ly, oy + sn * lx + cs * ly
 
     def world_to_pixel_float(self, x, y) -> tuple[np.ndarray, np.ndarray]:
-        """Fractional (row, col) of world points; the inverse of :meth:`pixel_to_world`."""
+        """Fractional (row, col) of world points; the inverse of :meth:`pixel_to_world`.
+
+        Parameters
+        ----------
+        x, y : array-like
+            World points, metres.
+
+        Returns
+        -------
+        rows, cols : ndarray of float
+        """
         ox, oy, yaw = self.origin
         dx = np.asarray(x, float) - ox
         dy = np.asarray(y, float) - oy
@@ -212,12 +274,32 @@ class OccupancyMap:
         return row, col
 
     def world_to_pixel(self, x, y) -> tuple[np.ndarray, np.ndarray]:
-        """Integer (row, col) of the pixels containing world points (may lie outside the grid)."""
+        """Integer (row, col) of the pixels containing world points (may lie outside the grid).
+
+        Parameters
+        ----------
+        x, y : array-like
+            World points, metres.
+
+        Returns
+        -------
+        rows, cols : ndarray of int64
+        """
         row, col = self.world_to_pixel_float(x, y)
         return np.floor(row + 0.5).astype(np.int64), np.floor(col + 0.5).astype(np.int64)
 
     def contains(self, rows, cols) -> np.ndarray:
-        """Whether integer pixel indices lie inside the grid."""
+        """Whether integer pixel indices lie inside the grid.
+
+        Parameters
+        ----------
+        rows, cols : array-like of int
+            Pixel indices.
+
+        Returns
+        -------
+        ndarray of bool
+        """
         r = np.asarray(rows)
         c = np.asarray(cols)
         return (r >= 0) & (r < self.height) & (c >= 0) & (c < self.width)
@@ -232,6 +314,15 @@ class OccupancyMap:
     # --------------------------------------------------------- crop and pad
     def crop(self, row0: int, row1: int, col0: int, col1: int) -> OccupancyMap:
         """Rows ``row0:row1`` and columns ``col0:col1``, origin kept on the same world point.
+
+        Parameters
+        ----------
+        row0, row1, col0, col1 : int
+            Half-open ranges of rows and columns.
+
+        Returns
+        -------
+        OccupancyMap
 
         Examples
         --------
@@ -251,7 +342,19 @@ class OccupancyMap:
     def pad(
         self, top: int = 0, bottom: int = 0, left: int = 0, right: int = 0, value: int = UNKNOWN
     ) -> OccupancyMap:
-        """Pad with ``value`` (unknown by default), keeping every cell at its world position."""
+        """Pad with ``value`` (unknown by default), keeping every cell at its world position.
+
+        Parameters
+        ----------
+        top, bottom, left, right : int
+            Cells added on each side.
+        value : int
+            Value of the new cells.
+
+        Returns
+        -------
+        OccupancyMap
+        """
         if min(top, bottom, left, right) < 0:
             raise ValueError("padding must be non-negative")
         data = np.pad(
@@ -261,7 +364,13 @@ class OccupancyMap:
         return self.copy(data=data, origin=origin)
 
     def content_bbox(self) -> tuple[int, int, int, int] | None:
-        """(row0, row1, col0, col1) of the known (non-unknown) cells, or None if all unknown."""
+        """(row0, row1, col0, col1) of the known (non-unknown) cells, or None if all unknown.
+
+        Returns
+        -------
+        (row0, row1, col0, col1) or None
+            Half-open ranges.
+        """
         known = ~self.unknown
         rows = np.flatnonzero(known.any(axis=1))
         if rows.size == 0:

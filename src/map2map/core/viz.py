@@ -37,7 +37,19 @@ from .viz_raster import nice_length as _nice_length  # noqa: E402
 __all__ = ["MAP_COLOURS", "map_to_rgb", "draw_map", "add_scale_bar", "new_figure", "save_figure"]
 
 def add_scale_bar(ax: Axes, resolution: float, width_px: int, *, colour: str = "black") -> None:
-    """Draw a metric scale bar (about a fifth of the width) in the lower-left corner."""
+    """Draw a metric scale bar (about a fifth of the width) in the lower-left corner.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes showing the map in pixel coordinates.
+    resolution : float
+        Metres per pixel.
+    width_px : int
+        Width of the map in pixels (the bar is about a fifth of it).
+    colour : str
+        Bar and label colour.
+    """
     from matplotlib.offsetbox import AnchoredOffsetbox, AuxTransformBox, TextArea, VPacker
     from matplotlib.patches import Rectangle
 
@@ -61,7 +73,21 @@ def draw_map(
     scale_bar: bool = True,
     alpha: float = 1.0,
 ) -> None:
-    """Show a map in pixel coordinates with the three-state colours and a scale bar."""
+    """Show a map in pixel coordinates with the three-state colours and a scale bar.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Where to draw.
+    m : OccupancyMap
+        The map (free white, occupied dark, unknown grey).
+    title : str, optional
+        Axes title.
+    scale_bar : bool
+        Draw a metric scale bar (:func:`add_scale_bar`).
+    alpha : float
+        Opacity of the image.
+    """
     ax.imshow(map_to_rgb(m), interpolation="nearest", alpha=alpha)
     ax.set_xlim(-0.5, m.width - 0.5)
     ax.set_ylim(m.height - 0.5, -0.5)
@@ -74,7 +100,30 @@ def draw_map(
 
 
 def new_figure(m: OccupancyMap | None = None, ncols: int = 1, panel_inches: float = 5.0):
-    """A figure with ``ncols`` panels sized to the map's aspect ratio."""
+    """A figure with ``ncols`` panels sized to the map's aspect ratio.
+
+    Parameters
+    ----------
+    m : OccupancyMap, optional
+        Map whose aspect ratio (clipped to 0.3-3) sizes the panels; square when None.
+    ncols : int
+        Number of panels side by side.
+    panel_inches : float
+        Width of one panel in inches.
+
+    Returns
+    -------
+    fig : matplotlib.figure.Figure
+    axes : Axes or array of Axes
+        One Axes when ``ncols == 1``, else an array of ``ncols``.
+
+    Examples
+    --------
+    >>> fig, axes = new_figure(ncols=2)
+    >>> len(axes)
+    2
+    >>> import matplotlib.pyplot as plt; plt.close(fig)
+    """
     aspect = 1.0 if m is None else m.height / max(m.width, 1)
     aspect = float(np.clip(aspect, 0.3, 3.0))
     fig, axes = plt.subplots(
@@ -85,7 +134,17 @@ def new_figure(m: OccupancyMap | None = None, ncols: int = 1, panel_inches: floa
 
 
 def save_figure(fig: Figure, path: str | os.PathLike, dpi: int = 120) -> None:
-    """Save atomically as PNG (by the path's suffix) and close the figure."""
+    """Save atomically as PNG (by the path's suffix) and close the figure.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure (closed afterwards).
+    path : path-like
+        Output file; the format comes from its suffix (PNG when none).
+    dpi : int
+        Resolution of raster formats.
+    """
     try:
         fig.tight_layout()
     except Exception:  # noqa: BLE001 - layout is cosmetic

@@ -56,6 +56,16 @@ _SMALL_PX = 12
 def map_to_rgb(m: OccupancyMap | np.ndarray) -> np.ndarray:
     """(H, W, 3) float image: free white, occupied near-black, unknown pale blue-grey.
 
+    Parameters
+    ----------
+    m : OccupancyMap or (H, W) uint8 array
+        A map or its cell values (0, 127, 255).
+
+    Returns
+    -------
+    (H, W, 3) ndarray of float
+        RGB in [0, 1] (:data:`MAP_COLOURS`).
+
     Examples
     --------
     >>> map_to_rgb(np.array([[0, 127, 255]], np.uint8))[0, :, 0].round(2).tolist()
@@ -71,6 +81,16 @@ def map_to_rgb(m: OccupancyMap | np.ndarray) -> np.ndarray:
 
 def nice_length(target_m: float) -> float:
     """A round length (1, 2, 5 x 10^k metres) close to ``target_m``, not above it.
+
+    Parameters
+    ----------
+    target_m : float
+        Wanted length in metres (> 0).
+
+    Returns
+    -------
+    float
+        1, 2 or 5 times a power of ten, at most ``target_m``.
 
     Examples
     --------
@@ -182,7 +202,21 @@ class Panel:
         dashed: bool = False,
         alpha: float = 1.0,
     ) -> None:
-        """A polyline through image coordinates ``(rows, cols)``; NaN points break it."""
+        """A polyline through image coordinates ``(rows, cols)``; NaN points break it.
+
+        Parameters
+        ----------
+        rows, cols : array-like
+            Image coordinates (fractional allowed) of the vertices.
+        colour : (r, g, b)
+            Floats in [0, 1].
+        width : float
+            Line width, panel pixels.
+        dashed : bool
+            Dashed line.
+        alpha : float
+            Opacity.
+        """
         pts = self._xy(rows, cols)
         ok = np.isfinite(pts).all(axis=1)
         # runs of finite points
@@ -204,7 +238,21 @@ class Panel:
     def markers(
         self, rows, cols, *, colour: Colour, marker: str = "o", size: float = 5.0, width: int = 2
     ) -> None:
-        """Filled discs (``"o"``) or crosses (``"x"``) of diameter ``size`` panel pixels."""
+        """Filled discs (``"o"``) or crosses (``"x"``) of diameter ``size`` panel pixels.
+
+        Parameters
+        ----------
+        rows, cols : array-like
+            Image coordinates of the markers.
+        colour : (r, g, b)
+            Floats in [0, 1].
+        marker : {"o", "x"}
+            Disc or cross.
+        size : float
+            Diameter, panel pixels.
+        width : float
+            Stroke width of a cross, panel pixels.
+        """
         pts = self._xy(rows, cols)
         pts = pts[np.isfinite(pts).all(axis=1)]
         col = _rgb255(colour)
@@ -221,7 +269,19 @@ class Panel:
                 cv2.circle(self.image, tuple(c), r, col, -1, cv2.LINE_AA, _SUB)
 
     def text(self, x: float, y: float, s: str, *, size: int = _SMALL_PX, colour=(0, 0, 0)):
-        """Text with its top-left corner at panel pixel ``(x, y)``."""
+        """Text with its top-left corner at panel pixel ``(x, y)``.
+
+        Parameters
+        ----------
+        x, y : float
+            Panel pixels.
+        s : str
+            The text.
+        size : int
+            Text height, pixels.
+        colour : (r, g, b)
+            Floats in [0, 1].
+        """
         self.texts.append((x, y, s, size, _rgb255(colour)))
 
     def _box(self, x0: int, y0: int, x1: int, y1: int, alpha: float = 0.8) -> None:
@@ -252,12 +312,23 @@ class Panel:
 
     def legend(self, entries: Sequence[tuple[str, Colour, str]]) -> None:
         """A legend box in the upper-right corner: ``(label, colour, style)`` with style
-        ``"-"`` (line), ``"--"`` (dashed line), ``"o"`` or ``"x"`` (marker)."""
+        ``"-"`` (line), ``"--"`` (dashed line), ``"o"`` or ``"x"`` (marker).
+
+        Parameters
+        ----------
+        entries : sequence of (label, colour, style)
+            One row each.
+        """
         if entries:
             self._overlays.append(lambda: self._legend(list(entries)))
 
     def finish(self) -> np.ndarray:
-        """Draw the overlays (scale bar, legend) and return the panel image."""
+        """Draw the overlays (scale bar, legend) and return the panel image.
+
+        Returns
+        -------
+        (H, W, 3) uint8 array
+        """
         for draw in self._overlays:
             draw()
         self._overlays = []
@@ -312,7 +383,26 @@ def save_panels(
     panels: Sequence[Panel], path: str | os.PathLike, *, title: str | None = None
 ) -> None:
     """Lay panels out in a row with their titles (and an overall ``title``) and write a
-    PNG atomically."""
+    PNG atomically.
+
+    Parameters
+    ----------
+    panels : sequence of Panel
+        Drawn left to right, top-aligned.
+    path : path-like
+        The PNG file (written through a temporary name).
+    title : str, optional
+        Drawn above all panels.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "panels.png"
+    >>> img = map_to_rgb(np.full((20, 30), 255, np.uint8))
+    >>> save_panels([Panel(img, title="a"), Panel(img, title="b")], path, title="two")
+    >>> path.read_bytes()[1:4]
+    b'PNG'
+    """
     from PIL import Image, ImageDraw
 
     pad = 12

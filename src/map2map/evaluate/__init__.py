@@ -18,19 +18,21 @@ data flow:
 :mod:`.pipeline`       :func:`register` (align) and :func:`evaluate_maps` (evaluate)
 :mod:`.figures`        overlay, error heat map, batch box plot
 :mod:`.outputs`        the files of ``map2map align`` / ``map2map evaluate``
-:mod:`.synthetic`      maps with known errors (walls moved, smooth fields)
-:mod:`.halmstad`       reader of the Halmstad annotated maps (accuracy benchmark)
 =====================  ===================================================================
 
 Pixel coordinates are ``x`` = column, ``y`` = row, origin at the top-left corner,
 continuous (the centre of pixel ``(r, c)`` is ``(c + 0.5, r + 0.5)``); every 3x3
 matrix maps source (SLAM) pixels to target (plan) pixels.
 
+Maps with known errors (:mod:`map2map.maps.synthetic`) and the reader of the
+Halmstad annotated maps (:mod:`map2map.maps.halmstad`) live in ``maps``: any layer
+may build test maps or read the data.
+
 Examples
 --------
 >>> from map2map.core.grid import OccupancyMap
 >>> from map2map.evaluate import evaluate_maps
->>> from map2map.evaluate.synthetic import draw_walls, office_walls
+>>> from map2map.maps.synthetic import draw_walls, office_walls
 >>> plan = OccupancyMap(draw_walls((240, 300), office_walls(300, 240)), 0.05)
 >>> moved = office_walls(300, 240, corridor_shift=(4, 0))
 >>> built = OccupancyMap(draw_walls((240, 300), moved), 0.05)

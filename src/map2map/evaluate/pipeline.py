@@ -9,7 +9,7 @@ the aligned maps and the vanilla ICP baseline (``map2map evaluate``).
 Examples
 --------
 >>> from map2map.core.grid import OccupancyMap
->>> from map2map.evaluate.synthetic import draw_walls, office_walls
+>>> from map2map.maps.synthetic import draw_walls, office_walls
 >>> plan = draw_walls((240, 300), office_walls(300, 240))
 >>> built = draw_walls((240, 300), office_walls(300, 240, partition_shift=(6.0, 0.0)))
 >>> ev = evaluate_maps(OccupancyMap(built, 0.05), OccupancyMap(plan, 0.05), resolution=0.05)

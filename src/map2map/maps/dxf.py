@@ -54,6 +54,7 @@ import math
 import os
 from collections import Counter
 from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -169,7 +170,23 @@ def _read(path: Path):
 
 
 def dxf_layers(path: str | os.PathLike) -> list[str]:
-    """Names of the layers defined in a DXF file."""
+    """Names of the layers defined in a DXF file.
+
+    Parameters
+    ----------
+    path : path-like
+        The ``.dxf`` file.
+
+    Returns
+    -------
+    list of str
+        Sorted.
+
+    Raises
+    ------
+    InputError
+        File missing or not DXF.
+    """
     doc = _read(Path(path))
     return sorted(layer.dxf.name for layer in doc.layers)
 
@@ -264,13 +281,81 @@ def load_dxf(
     min_free_width : float
         Enclosed pockets narrower than this (metres) are wall.
 
+    Returns
+    -------
+    OccupancyMap
+        Walls occupied, the space they enclose free, the outside unknown; origin at the
+        lower-left corner of the margin, in drawing metres. ``meta`` holds ``source``,
+        ``units`` (``units_assumed`` when ``$INSUNITS`` was unset), the ``layers`` drawn,
+        ``entities`` / ``skipped_entities`` counts per DXF type, ``wall_thickness`` and
+        ``metres_per_unit``.
+
     Raises
     ------
     InputError
         File missing or not DXF, unknown layer or unit, no drawable entity on the
         chosen layers, parameters out of range, raster too large.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib, ezdxf
+    >>> doc = ezdxf.new(units=6)
+    >>> _ = doc.modelspace().add_lwpolyline([(0, 0), (3, 0), (3, 2), (0, 2)], close=True)
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "room.dxf"
+    >>> doc.saveas(path)
+    >>> m = load_dxf(path, margin=0.2)
+    >>> m.meta["units"], m.meta["entities"], round(float(m.free.sum()) * 0.05**2, 1)
+    ('m', {'LWPOLYLINE': 1}, 5.5)
     """
     p = Path(path)
+    _check_numbers(resolution, wall_thickness, margin, close_gaps, min_free_width, units)
+    doc = _read(p)
+    frame = _stored_frame(doc)
+    if resolution is None:
+        resolution = frame[0] if frame is not None else DEFAULT_RESOLUTION
+    scale, meta = _drawing_units(doc, units, p)
+    meta = {"source": str(p), **meta}
+    wanted = _wanted_layers(doc, layers, p)
+    drawing = _collect(doc, wanted, resolution / scale, scale, wall_thickness, p)
+    ox, oy, w, h = _grid_frame(drawing, scale, resolution, margin, wall_thickness, frame, p)
+
+    def to_px(pts: np.ndarray) -> np.ndarray:
+        """Drawing units -> continuous pixel coordinates (u = column, v = row)."""
+        return np.stack(
+            [(pts[:, 0] * scale - ox) / resolution, h - (pts[:, 1] * scale - oy) / resolution],
+            axis=1,
+        )
+
+    px_strokes = [to_px(s_) for s_ in drawing.strokes]
+    px_fills = [[to_px(f) for f in loops] for loops in drawing.fills]
+    wall, outlines = _walls((h, w), px_strokes, drawing.widths, px_fills, resolution)
+    wall, free = _inside(wall, outlines, close_gaps, min_free_width, resolution)
+    data = np.full((h, w), UNKNOWN, np.uint8)
+    data[free] = FREE
+    data[wall] = OCCUPIED
+    meta.update(
+        {
+            "layers": sorted(drawing.used_layers),
+            "entities": dict(drawing.counts),
+            "skipped_entities": dict(drawing.skipped),
+            "wall_thickness": float(wall_thickness),
+            "metres_per_unit": float(scale),
+        }
+    )
+    return OccupancyMap(data, float(resolution), (float(ox), float(oy), 0.0), meta)
+
+
+def _check_numbers(resolution, wall_thickness, margin, close_gaps, min_free_width, units) -> None:
+    """Refuse non-finite or out-of-range parameters of :func:`load_dxf` (InputError).
+
+    Examples
+    --------
+    >>> _check_numbers(None, 0.1, 0.5, 1.0, 0.3, "cm")
+    >>> _check_numbers(0.05, -1, 0.5, 1.0, 0.3, None)
+    Traceback (most recent call last):
+    ...
+    map2map.core.errors.InputError: ...wall thickness must be > 0, got -1
+    """
     for name, v, positive in (
         ("resolution", DEFAULT_RESOLUTION if resolution is None else resolution, True),
         ("wall_thickness", wall_thickness, True),
@@ -284,82 +369,96 @@ def load_dxf(
             raise InputError(name, f"{what} must be {'> 0' if positive else '>= 0'}, got {v!r}")
     if units is not None and units not in UNITS:
         raise InputError("units", f"units must be one of {', '.join(UNITS)}, got {units!r}")
-    doc = _read(p)
 
+
+def _drawing_units(doc, units: str | None, p: Path) -> tuple[float, dict[str, Any]]:
+    """(metres per drawing unit, ``units`` metadata) from ``units`` or ``$INSUNITS``."""
     import ezdxf.units
 
-    frame = _stored_frame(doc)
-    if resolution is None:
-        resolution = frame[0] if frame is not None else DEFAULT_RESOLUTION
-    meta: dict[str, Any] = {"source": str(p)}
     if units is not None:
-        scale = UNITS[units]
-        meta["units"] = units
-    else:
-        code = int(doc.header.get("$INSUNITS", 0) or 0)
-        if code == 0:
-            scale = 1.0
-            meta["units"] = "m"
-            meta["units_assumed"] = True
-        else:
-            try:
-                scale = ezdxf.units.conversion_factor(code, ezdxf.units.InsertUnits.Meters)
-            except Exception:  # noqa: BLE001 - unknown code
-                raise InputError(p, f"unknown $INSUNITS code {code}; give the units") from None
-            meta["units"] = ezdxf.units.decode(code) if hasattr(ezdxf.units, "decode") else code
+        return UNITS[units], {"units": units}
+    code = int(doc.header.get("$INSUNITS", 0) or 0)
+    if code == 0:
+        return 1.0, {"units": "m", "units_assumed": True}
+    try:
+        scale = ezdxf.units.conversion_factor(code, ezdxf.units.InsertUnits.Meters)
+    except Exception:  # noqa: BLE001 - unknown code
+        raise InputError(p, f"unknown $INSUNITS code {code}; give the units") from None
+    return scale, {"units": ezdxf.units.decode(code) if hasattr(ezdxf.units, "decode") else code}
 
+
+def _wanted_layers(doc, layers: Iterable[str] | None, p: Path) -> set[str] | None:
+    """Lower-case names of the chosen layers (None: all); an unknown name is refused."""
+    if layers is None:
+        return None
     available = {layer.dxf.name.lower(): layer.dxf.name for layer in doc.layers}
-    wanted = None
-    if layers is not None:
-        wanted = {str(name).lower() for name in layers}
-        missing = sorted(n for n in wanted if n not in available)
-        if missing:
-            raise InputError(
-                p,
-                f"no layer named {', '.join(missing)} "
-                f"(layers: {', '.join(sorted(available.values()))})",
-            )
+    wanted = {str(name).lower() for name in layers}
+    missing = sorted(n for n in wanted if n not in available)
+    if missing:
+        raise InputError(
+            p,
+            f"no layer named {', '.join(missing)} "
+            f"(layers: {', '.join(sorted(available.values()))})",
+        )
+    return wanted
 
-    res_units = resolution / scale  # one pixel in drawing units
-    strokes: list[np.ndarray] = []  # widened to walls
-    widths: list[float] = []  # their wall thickness, metres
-    fills: list[list[np.ndarray]] = []  # loops of each filled entity (even-odd inside)
-    counts: Counter = Counter()
-    skipped: Counter = Counter()
-    used_layers: set[str] = set()
+
+@dataclass
+class _Drawing:
+    """What :func:`_collect` found: strokes (drawing units) to widen, filled loops, tallies."""
+
+    strokes: list[np.ndarray] = field(default_factory=list)  # widened to walls
+    widths: list[float] = field(default_factory=list)  # their wall thickness, metres
+    fills: list[list[np.ndarray]] = field(default_factory=list)  # loops of each filled entity
+    counts: Counter = field(default_factory=Counter)
+    skipped: Counter = field(default_factory=Counter)
+    used_layers: set[str] = field(default_factory=set)
+
+
+def _collect(doc, wanted, res_units: float, scale: float, wall_thickness: float, p) -> _Drawing:
+    """Every drawable entity of the chosen layers as polylines (INSERTs expanded)."""
+    out = _Drawing()
     for e, layer in _walk(doc.modelspace()):
         kind = e.dxftype()
         if wanted is not None and layer.lower() not in wanted:
             continue
         if kind not in _LINEAR and kind not in _FILLED:
-            skipped[kind] += 1
+            out.skipped[kind] += 1
             continue
         try:
             pieces, filled = _polylines(e, res_units / 4)
         except Exception:  # noqa: BLE001 - degenerate or unsupported geometry
-            skipped[kind] += 1
+            out.skipped[kind] += 1
             continue
         if not pieces:
-            skipped[kind] += 1
+            out.skipped[kind] += 1
             continue
-        counts[kind] += 1
-        used_layers.add(layer)
+        out.counts[kind] += 1
+        out.used_layers.add(layer)
         if filled:
-            fills.append(pieces)
+            out.fills.append(pieces)
         else:
-            strokes.extend(pieces)
-            widths.extend([max(wall_thickness, _drawn_width(e) * scale)] * len(pieces))
-    if not strokes and not fills:
+            out.strokes.extend(pieces)
+            out.widths.extend([max(wall_thickness, _drawn_width(e) * scale)] * len(pieces))
+    if not out.strokes and not out.fills:
         chosen = "the chosen layers" if wanted is not None else "any layer"
         raise InputError(
             p,
             "no drawable entities (LINE, LWPOLYLINE, POLYLINE, ARC, CIRCLE, HATCH, ...) "
             f"on {chosen}",
         )
+    return out
 
-    allpts = np.concatenate(strokes + [loop for loops in fills for loop in loops]) * scale
+
+def _grid_frame(d: _Drawing, scale, resolution, margin, wall_thickness, frame, p):
+    """(origin x, origin y, width, height) of the raster around the drawing.
+
+    A map2map export (:func:`save_dxf` stored its frame) goes back onto the grid it was
+    written from; a raster over :data:`MAX_PIXELS` is refused.
+    """
+    allpts = np.concatenate(d.strokes + [loop for loops in d.fills for loop in loops]) * scale
     lo, hi = allpts.min(axis=0), allpts.max(axis=0)
-    border = margin + 0.5 * max([wall_thickness, resolution, *widths])
+    border = margin + 0.5 * max([wall_thickness, resolution, *d.widths])
     ox, oy = lo[0] - border, lo[1] - border
     quarter_turns = frame is not None and abs(math.remainder(frame[3], math.pi / 2)) < 1e-9
     if quarter_turns and frame[0] == resolution and scale == 1.0:
@@ -375,22 +474,27 @@ def load_dxf(
             f"{(hi[0] - lo[0]) / scale:.4g} x {(hi[1] - lo[1]) / scale:.4g} units of "
             f"{scale:g} m); give the right --units or a coarser --resolution",
         )
-
     check_map_size((h, w), p)  # the running command's budget (core.limits)
+    return ox, oy, w, h
 
-    def to_px(pts: np.ndarray) -> np.ndarray:
-        """Drawing units -> continuous pixel coordinates (u = column, v = row)."""
-        return np.stack(
-            [(pts[:, 0] * scale - ox) / resolution, h - (pts[:, 1] * scale - oy) / resolution],
-            axis=1,
-        )
 
-    # walls: every stroke widened to its thickness (square caps close corners), exact at
-    # pixel centres (nonzero rule: the union of the widened strokes), plus the stroke
-    # itself traced through every pixel it crosses so that no wall has a hole whatever
-    # its width; fills (hatches, solids) by the even-odd rule, outlines traced
-    px_strokes = [to_px(s_) for s_ in strokes]
-    wall = np.zeros((h, w), bool)
+def _walls(shape, px_strokes, widths, px_fills, resolution):
+    """(wall mask, outlines for gap sealing) of the strokes and fills, in pixels.
+
+    Every stroke is widened to its thickness (square caps close corners), exact at pixel
+    centres (nonzero rule: the union of the widened strokes), plus the stroke itself
+    traced through every pixel it crosses so that no wall has a hole whatever its
+    width; fills (hatches, solids) by the even-odd rule, outlines traced.
+
+    Examples
+    --------
+    >>> stroke = np.array([[2.0, 5.0], [18.0, 5.0]])
+    >>> wall, outlines = _walls((10, 20), [stroke], [0.1], [], 0.05)
+    >>> int(wall.sum()), len(outlines)
+    (36, 1)
+    """
+    wall = np.zeros(shape, bool)
+    outlines = list(px_strokes)
     if px_strokes:
         lines = [LineString(s_) if len(s_) > 1 else Point(s_[0]) for s_ in px_strokes]
         half = 0.5 * np.asarray(widths) / resolution
@@ -398,27 +502,42 @@ def load_dxf(
             shapely.buffer(lines, half, cap_style="square", join_style="mitre", mitre_limit=2.0)
         )
         rings = [np.asarray(r.coords) for r in _polygon_rings(bodies)]
-        wall = fill_exact((h, w), rings, rule="nonzero") | trace((h, w), px_strokes)
-    if fills:
+        wall = fill_exact(shape, rings, rule="nonzero") | trace(shape, px_strokes)
+    if px_fills:
         # each entity even-odd (holes), all of them together as a union; only parts
         # thinner than two pixels are traced, so solid walls keep their true width
-        region = shapely.union_all([_even_odd_region([to_px(f) for f in loops]) for loops in fills])
+        region = shapely.union_all([_even_odd_region(loops) for loops in px_fills])
         region_rings = [
             np.asarray(r.coords) for r in _polygon_rings(shapely.orient_polygons(region))
         ]
-        wall |= fill_exact((h, w), region_rings, rule="nonzero")
+        wall |= fill_exact(shape, region_rings, rule="nonzero")
         thin = [np.asarray(r.coords) for r in _polygon_rings(thin_parts(region, 2.0))]
-        wall |= trace((h, w), thin, closed=True)
-        px_strokes += region_rings  # their outlines count for gap sealing
+        wall |= trace(shape, thin, closed=True)
+        outlines += region_rings  # their outlines count for gap sealing
+    return wall, outlines
 
-    # inside vs outside: flood the outside, with openings narrower than close_gaps sealed
-    barrier = wall | trace((h, w), _gap_seals(px_strokes, close_gaps / resolution))
+
+def _inside(wall, outlines, close_gaps: float, min_free_width: float, resolution: float):
+    """(wall, free) masks: the space the walls enclose, narrow pockets made wall.
+
+    The outside is flooded from the border with openings narrower than ``close_gaps``
+    sealed; free components that vanish under erosion by a disk of diameter
+    ``min_free_width`` (cavities of double-line walls, small columns) become wall.
+
+    Examples
+    --------
+    >>> wall = np.zeros((20, 20), bool)
+    >>> wall[2, 2:18] = wall[17, 2:18] = wall[2:18, 2] = wall[2:18, 17] = True
+    >>> wall2, free = _inside(wall, [], 1.0, 0.3, 0.05)
+    >>> int(free.sum())
+    196
+    """
+    shape = wall.shape
+    barrier = wall | trace(shape, _gap_seals(outlines, close_gaps / resolution))
     n, labels = cv2.connectedComponents((~barrier).astype(np.uint8), connectivity=4)
     rim = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
     outside = np.isin(labels, rim[rim > 0])
     free = ~wall & ~outside
-    # pockets too narrow to be space (cavities of double-line walls, small columns): the
-    # free components that vanish under erosion by a disk of diameter min_free_width
     d = int(round(min_free_width / resolution))
     if d >= 2 and free.any():
         n_free, flabels = cv2.connectedComponents(free.astype(np.uint8), connectivity=8)
@@ -427,21 +546,9 @@ def load_dxf(
         roomy = np.zeros(n_free, bool)
         roomy[np.unique(flabels[core])] = True
         pockets = free & ~roomy[flabels]
-        free &= ~pockets
-        wall |= pockets
-    data = np.full((h, w), UNKNOWN, np.uint8)
-    data[free] = FREE
-    data[wall] = OCCUPIED
-    meta.update(
-        {
-            "layers": sorted(used_layers),
-            "entities": dict(counts),
-            "skipped_entities": dict(skipped),
-            "wall_thickness": float(wall_thickness),
-            "metres_per_unit": float(scale),
-        }
-    )
-    return OccupancyMap(data, float(resolution), (float(ox), float(oy), 0.0), meta)
+        free = free & ~pockets
+        wall = wall | pockets
+    return wall, free
 
 
 # --------------------------------------------------------------------------- writing
@@ -454,6 +561,23 @@ def occupied_polygons(m: OccupancyMap):
     Runs of occupied cells along each row become rectangles whose coverage union
     (``shapely.coverage_union_all``) is the occupied region; its outline follows the
     cell edges exactly.
+
+    Parameters
+    ----------
+    m : OccupancyMap
+        The map.
+
+    Returns
+    -------
+    shapely Polygon or MultiPolygon
+        In continuous pixel coordinates ``(u = column, v = row)``; empty when nothing
+        is occupied.
+
+    Examples
+    --------
+    >>> data = np.full((4, 5), 255, np.uint8); data[1, 1:4] = 0
+    >>> occupied_polygons(OccupancyMap(data, 0.05)).bounds
+    (1.0, 1.0, 4.0, 2.0)
     """
     padded = np.pad(m.occupied, ((0, 0), (1, 1))).astype(np.int8)
     step = np.diff(padded, axis=1)
@@ -476,6 +600,15 @@ def save_dxf(m: OccupancyMap, path: str | os.PathLike, *, layer: str = "WALLS") 
     reads it back on the same grid: the occupied cells come back unchanged, and free
     space is re-derived as the space the walls enclose (unknown cells inside the
     walls come back free, free cells open to the outside come back unknown).
+
+    Parameters
+    ----------
+    m : OccupancyMap
+        The map; only its occupied cells are drawn.
+    path : path-like
+        The ``.dxf`` file, written atomically.
+    layer : str
+        Layer of the hatch.
 
     Examples
     --------

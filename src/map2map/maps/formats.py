@@ -114,11 +114,20 @@ mode=None, layers=None, wall_thickness=None, units=None)
     units: str | None = None
 
     def given(self) -> list[str]:
-        """Names of the options set (not ``None``)."""
+        """Names of the options set (not ``None``).
+
+        Returns
+        -------
+        list of str
+        """
         return [f.name for f in fields(self) if getattr(self, f.name) is not None]
 
     def to_args(self) -> list[str]:
         """The command-line flags that give these options (to repeat a run).
+
+        Returns
+        -------
+        list of str
 
         Examples
         --------
@@ -141,13 +150,43 @@ mode=None, layers=None, wall_thickness=None, units=None)
 
     def applicable(self, kind: str) -> MapReadOptions:
         """A copy without the options that do not apply to a ``kind`` file (see
-        :func:`map_kind`), for commands reading several maps of different formats."""
+        :func:`map_kind`), for commands reading several maps of different formats.
+
+        Parameters
+        ----------
+        kind : str
+            A :func:`map_kind` result.
+
+        Returns
+        -------
+        MapReadOptions
+        """
         drop = {n: None for n in self.given() if kind not in _OPTION_KINDS[n]}
         return replace(self, **drop)
 
 
 def map_kind(path: str | os.PathLike) -> str:
-    """``"ros"``, ``"image"``, ``"houseexpo"`` or ``"dxf"`` from the file's suffix."""
+    """``"ros"``, ``"image"``, ``"houseexpo"`` or ``"dxf"`` from the file's suffix.
+
+    Parameters
+    ----------
+    path : path-like
+        A map file name.
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    InputError
+        Unknown suffix.
+
+    Examples
+    --------
+    >>> map_kind("plan.YAML"), map_kind("floor.dxf")
+    ('ros', 'dxf')
+    """
     p = Path(path)
     kind = _KINDS.get(p.suffix.lower())
     if kind is None:
@@ -187,6 +226,12 @@ def load_map(
         Overrides a ROS yaml's mode.
     layers, wall_thickness, units : optional
         DXF options (see :func:`map2map.maps.dxf.load_dxf`).
+
+    Returns
+    -------
+    OccupancyMap
+        The map in the internal convention (occupied 0, free 255, unknown 127, ROS
+        origin); ``meta`` says where it came from and what was assumed.
 
     Raises
     ------
@@ -276,6 +321,23 @@ def check_plausible(m: OccupancyMap, source=None) -> list[str]:
     metres read as millimetres, a wrong ``--resolution``, or a picture read with
     the wrong thresholds all look like this.
 
+    Parameters
+    ----------
+    m : OccupancyMap
+        A map just read.
+    source : path-like, optional
+        Its file, named in the warning or error.
+
+    Returns
+    -------
+    list of str
+        The warnings issued (empty for a plausible map).
+
+    Raises
+    ------
+    InputError
+        Every pixel is unknown.
+
     Examples
     --------
     >>> import numpy as np, warnings
@@ -318,6 +380,28 @@ def check_output_path(path: str | os.PathLike, suffixes: Iterable[str] = WRITE_S
 
     The suffix must be one of ``suffixes`` and the nearest existing folder above
     ``path`` must be a writable directory. Raises :class:`InputError` otherwise.
+
+    Parameters
+    ----------
+    path : path-like
+        The map file to write.
+    suffixes : iterable of str
+        Accepted suffixes, lower case with the dot.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path`` as a Path.
+
+    Raises
+    ------
+    InputError
+        Unknown suffix, ``path`` is a directory, or no writable folder above it.
+
+    Examples
+    --------
+    >>> check_output_path("out/map.yaml").name
+    'map.yaml'
     """
     p = Path(path)
     suffixes = tuple(suffixes)
@@ -345,6 +429,28 @@ def save_map(m: OccupancyMap, path: str | os.PathLike) -> None:
     picture, ``.dxf`` as a CAD drawing of the walls (:func:`map2map.maps.dxf.save_dxf`).
 
     Every file is written atomically; on error nothing is left half-written.
+
+    Parameters
+    ----------
+    m : OccupancyMap
+        The map.
+    path : path-like
+        Output file; the suffix selects the format.
+
+    Raises
+    ------
+    InputError
+        Unknown suffix or unwritable folder (checked before anything is written).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> import numpy as np
+    >>> m = OccupancyMap(np.full((10, 20), 255, np.uint8), 0.05)
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "m.yaml"
+    >>> save_map(m, path)
+    >>> load_map(path) == m
+    True
     """
     p = check_output_path(path)
     if p.suffix.lower() in (".yaml", ".yml"):

@@ -89,6 +89,18 @@ def houseexpo_to_world(x, y, theta=None):
 
     The conversion is its own inverse.
 
+    Parameters
+    ----------
+    x, y : float or array-like
+        Plan coordinates (y down).
+    theta : float or array-like, optional
+        Headings in radians.
+
+    Returns
+    -------
+    tuple
+        ``(x, -y)``, or ``(x, -y, -theta)`` when ``theta`` is given.
+
     Examples
     --------
     >>> houseexpo_to_world(1.0, 2.0, 0.5)
@@ -105,6 +117,14 @@ def houseexpo_to_world(x, y, theta=None):
 def is_houseexpo(m: OccupancyMap) -> bool:
     """Whether ``m`` was read from a HouseExpo JSON plan (its coordinates have y down).
 
+    Parameters
+    ----------
+    m : OccupancyMap
+
+    Returns
+    -------
+    bool
+
     Examples
     --------
     >>> doc = {"verts": [[0, 0], [2, 0], [2, 1], [0, 1]], "bbox": {"min": [0, 0], "max": [2, 1]}}
@@ -119,6 +139,16 @@ def plan_poses_to_world(poses: np.ndarray) -> np.ndarray:
 
     What a user gives for a HouseExpo plan (start, goal, waypoints, a trajectory) is in
     HouseExpo's own coordinates, as its trajectory files are; every job converts it here.
+
+    Parameters
+    ----------
+    poses : (N, 2) or (N, 3) array-like
+        Points or poses in HouseExpo plan coordinates.
+
+    Returns
+    -------
+    ndarray
+        Same shape, world coordinates.
 
     Examples
     --------
@@ -178,6 +208,22 @@ def load_houseexpo(
     ``map2map plan --meta`` writes is recognised and rebuilt as that plan
     (:func:`map2map.maps.floorplan.plan_from_document`, default its own resolution).
 
+    Parameters
+    ----------
+    path : path-like
+        The JSON plan.
+    resolution : float, optional
+        Metres per pixel.
+    margin : float
+        Unknown border around the outline, metres.
+
+    Returns
+    -------
+    OccupancyMap
+        Walls occupied, the polygon's inside free, outside unknown; ``meta`` as
+        :func:`rasterise_houseexpo` (``source``, ``houseexpo_id``, ``room_num``,
+        ``room_category``, ``rooms``, ``frame``).
+
     Raises
     ------
     InputError
@@ -221,7 +267,21 @@ def _rings(geom) -> list[np.ndarray]:
 
 
 def thin_wall_parts(polygon: Polygon, bounds, resolution: float):
-    """The parts of the wall region (bounds minus polygon) thinner than two pixels."""
+    """The parts of the wall region (bounds minus polygon) thinner than two pixels.
+
+    Parameters
+    ----------
+    polygon : shapely Polygon
+        The plan's free region, in metres.
+    bounds : (minx, miny, maxx, maxy)
+        The canvas in the same coordinates.
+    resolution : float
+        Metres per pixel: parts thinner than ``2 * resolution`` are returned.
+
+    Returns
+    -------
+    shapely geometry
+    """
     return thin_parts(box(*bounds).difference(polygon), 2.0 * resolution)
 
 
@@ -322,6 +382,16 @@ def room_labels(m: OccupancyMap) -> tuple[np.ndarray, list[str]]:
     whose category is ``names[k - 1]``. Where room boxes overlap (they do in
     HouseExpo), the smaller box wins. Works on cropped or padded maps too: boxes are
     placed through the map's world frame.
+
+    Parameters
+    ----------
+    m : OccupancyMap
+        A plan read by :func:`load_houseexpo` (or a crop of it).
+
+    Returns
+    -------
+    labels : (H, W) int32 array
+    names : list of str
     """
     rooms = m.meta.get("rooms") or []
     labels = np.zeros(m.shape, np.int32)

@@ -76,6 +76,20 @@ def image_to_grid(
 ) -> np.ndarray:
     """Our three values from a picture's pixels (rule in the module docstring).
 
+    Parameters
+    ----------
+    img : RasterImage
+        A picture from :func:`map2map.maps.raster.read_image`.
+    occupied_thresh, free_thresh : float
+        map_server thresholds on the darkness ``p = (maxval - value) / maxval``.
+    negate : bool
+        Read white as occupied.
+
+    Returns
+    -------
+    (H, W) uint8 array
+        0, 127 or 255.
+
     Examples
     --------
     >>> from map2map.maps.raster import RasterImage
@@ -158,6 +172,11 @@ def load_image_map(
     occupied_thresh, free_thresh, negate : optional
         map_server thresholds (default 0.65, 0.196, False).
 
+    Returns
+    -------
+    OccupancyMap
+        ``meta`` records the source and what was assumed.
+
     Raises
     ------
     InputError
@@ -189,6 +208,22 @@ def save_image_map(m: OccupancyMap, path: str | os.PathLike) -> None:
     """Write ``m`` as an 8-bit grey PNG or PGM in our values (0 / 127 / 255), atomically.
 
     The resolution and origin go into a PNG text chunk or a PGM comment.
+
+    Parameters
+    ----------
+    m : OccupancyMap
+        The map.
+    path : path-like
+        ``.png`` or ``.pgm`` file.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> m = OccupancyMap(np.full((10, 20), 255, np.uint8), 0.1, (1.0, 2.0, 0.0))
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "m.png"
+    >>> save_image_map(m, path)
+    >>> load_image_map(path) == m
+    True
     """
     p = Path(path)
     suffix = p.suffix.lower()

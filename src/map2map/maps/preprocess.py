@@ -90,6 +90,22 @@ def harmonise(
     Returns the same kind of object it was given (an OccupancyMap is returned
     as a copy, its frame unchanged).
 
+    Parameters
+    ----------
+    m : OccupancyMap or ndarray
+        A map, or an image (H, W), (H, W, 3) or (H, W, 4) of any integer values.
+    occupied_below : int
+        Values ``<=`` this are occupied.
+    free_above : int
+        Values ``>=`` this are free.
+    unknown_values : tuple of int
+        Exact codes that mean unknown.
+
+    Returns
+    -------
+    OccupancyMap or (H, W) uint8 array
+        Same kind as ``m``, values 0, 127, 255 only.
+
     Examples
     --------
     >>> harmonise(np.array([[0, 30, 128, 205, 230, 255]], np.uint8)).tolist()
@@ -139,6 +155,18 @@ def square_resize(m: OccupancyMap | np.ndarray, size: int = 256) -> OccupancyMap
     The resolution becomes ``resolution * side / size`` and the origin is the
     padded square's lower-left corner, so each world point keeps its content.
 
+    Parameters
+    ----------
+    m : OccupancyMap or (H, W) uint8 array
+        Map values in {0, 127, 255}.
+    size : int
+        Output side in pixels.
+
+    Returns
+    -------
+    OccupancyMap or (size, size) uint8 array
+        Same kind as ``m``.
+
     Examples
     --------
     >>> m = OccupancyMap(np.full((50, 100), 255, np.uint8), 0.1)
@@ -169,11 +197,25 @@ def square_resize(m: OccupancyMap | np.ndarray, size: int = 256) -> OccupancyMap
 
 
 def thicken(m: OccupancyMap | np.ndarray, k: int, *, into_unknown: bool = False):
-    """Thicken occupied edges by ``k`` pixels (square dilation, thesis 4.1).
+    """Thicken occupied edges by ``k`` pixels (square dilation, thesis sec. 4.1).
 
     Walls grow by ``k`` pixels on each side into free space. By default they do
     not grow into unknown cells, so the building outline and the unknown
     outside stay where they were (``into_unknown=True`` grows everywhere).
+
+    Parameters
+    ----------
+    m : OccupancyMap or (H, W) uint8 array
+        Map values in {0, 127, 255}.
+    k : int
+        Pixels added on each side of every wall (0: unchanged).
+    into_unknown : bool
+        Let walls grow into unknown cells too.
+
+    Returns
+    -------
+    OccupancyMap or (H, W) uint8 array
+        Same kind as ``m``.
 
     Examples
     --------
@@ -202,6 +244,18 @@ def crop_to_content(m: OccupancyMap | np.ndarray, margin_px: int = 0):
     The margin is exact: the map is padded with unknown where the content is
     closer to the border than ``margin_px``. The origin moves so every kept
     cell stays at its world position. An all-unknown map is returned unchanged.
+
+    Parameters
+    ----------
+    m : OccupancyMap or (H, W) uint8 array
+        Map values in {0, 127, 255}.
+    margin_px : int
+        Unknown pixels kept (or added) around the known cells.
+
+    Returns
+    -------
+    OccupancyMap or ndarray
+        Same kind as ``m``.
 
     Examples
     --------
@@ -237,7 +291,7 @@ def preprocess(
     crop: bool = False,
     margin: int = 4,
 ) -> OccupancyMap | np.ndarray:
-    """The thesis 4.1 preprocessing chain: values, (crop), square + resize, thicken.
+    """The thesis sec. 4.1 preprocessing chain: values, (crop), square + resize, thicken.
 
     1. :func:`harmonise` -- pixel values to SLAM values (a no-op on maps);
     2. :func:`crop_to_content` with ``margin`` pixels, when ``crop`` -- the
@@ -245,6 +299,24 @@ def preprocess(
        before squaring so the output stays ``size x size``;
     3. :func:`square_resize` to ``size``;
     4. :func:`thicken` occupied edges by ``thicken`` output pixels.
+
+    Parameters
+    ----------
+    m : OccupancyMap or ndarray
+        A map, or a CAD picture's pixel values.
+    size : int
+        Output side in pixels (the thesis uses 256).
+    thicken : int
+        Wall thickening in output pixels (0: none).
+    crop : bool
+        Crop to the known cells first.
+    margin : int
+        Unknown margin in pixels kept when cropping.
+
+    Returns
+    -------
+    OccupancyMap or (size, size) uint8 array
+        Same kind as ``m``.
 
     Examples
     --------
@@ -274,6 +346,15 @@ def save_preprocess_figure(
     before: OccupancyMap, after: OccupancyMap, path, title: str | None = None
 ) -> None:
     """Side-by-side figure of a map before and after :func:`preprocess` (atomic save).
+
+    Parameters
+    ----------
+    before, after : OccupancyMap
+        The input and output of :func:`preprocess`.
+    path : path-like
+        Output figure; the format comes from the suffix.
+    title : str, optional
+        Figure title.
 
     Examples
     --------
@@ -305,6 +386,21 @@ def reduce_plan(plan: OccupancyMap, max_side: int = MAX_SIDE) -> OccupancyMap:
     A reduced cell is occupied if any of its pixels is, else free if any is free, else
     unknown, so that walls and doors survive.
 
+    Parameters
+    ----------
+    plan : OccupancyMap
+        The plan.
+    max_side : int
+        Largest side, pixels, of the result.
+
+    Returns
+    -------
+    OccupancyMap
+        ``plan`` itself when it already fits, else the reduced copy (resolution times
+        the factor, same origin).
+
+    Examples
+    --------
     >>> m = OccupancyMap(np.full((700, 500), 255, np.uint8), 0.05)
     >>> r = reduce_plan(m)
     >>> r.shape, round(r.resolution, 9)

@@ -150,6 +150,11 @@ def read_image(path: str | os.PathLike, *, referenced_by: str | os.PathLike | No
         The image file.
     referenced_by : path-like, optional
         The file that named this image (e.g. a ROS yaml), quoted in error messages.
+
+    Returns
+    -------
+    RasterImage
+        The pixels and what the file said about them (bit depth, alpha, maxval, text).
     """
     p = Path(path)
     via = f" (named by {os.fspath(referenced_by)})" if referenced_by is not None else ""
@@ -201,6 +206,15 @@ def read_image(path: str | os.PathLike, *, referenced_by: str | os.PathLike | No
 def write_pgm(values: np.ndarray, path: str | os.PathLike, comment: str | None = None) -> None:
     """Write an 8-bit binary (P5) PGM atomically, as ROS map_saver does.
 
+    Parameters
+    ----------
+    values : (H, W) uint8 array
+        Grey values.
+    path : path-like
+        Output file.
+    comment : str, optional
+        A ``#`` comment line after the magic number.
+
     Examples
     --------
     >>> import tempfile, pathlib
@@ -215,7 +229,24 @@ def write_pgm(values: np.ndarray, path: str | os.PathLike, comment: str | None =
 
 
 def pgm_bytes(values: np.ndarray, comment: str | None = None) -> bytes:
-    """The bytes of an 8-bit binary (P5) PGM file holding ``values``."""
+    """The bytes of an 8-bit binary (P5) PGM file holding ``values``.
+
+    Parameters
+    ----------
+    values : (H, W) uint8 array
+        Grey values.
+    comment : str, optional
+        A ``#`` comment line after the magic number.
+
+    Returns
+    -------
+    bytes
+
+    Examples
+    --------
+    >>> pgm_bytes(np.array([[0, 255]], np.uint8))
+    b'P5\\n2 1\\n255\\n\\x00\\xff'
+    """
     v = np.ascontiguousarray(values, np.uint8)
     if v.ndim != 2:
         raise ValueError("PGM needs a 2-D array")
@@ -227,7 +258,15 @@ def pgm_bytes(values: np.ndarray, comment: str | None = None) -> bytes:
 
 
 def write_grey_image(values: np.ndarray, path: str | os.PathLike) -> None:
-    """Write an 8-bit grey image atomically; the format follows the suffix (PGM is P5)."""
+    """Write an 8-bit grey image atomically; the format follows the suffix (PGM is P5).
+
+    Parameters
+    ----------
+    values : (H, W) uint8 array
+        Grey values.
+    path : path-like
+        Output file (``.pgm``, ``.png``, ...).
+    """
     p = Path(path)
     v = np.ascontiguousarray(values, np.uint8)
     if p.suffix.lower() == ".pgm":

@@ -56,6 +56,11 @@ def fill_exact(
     rule : {"evenodd", "nonzero"}
         ``"evenodd"`` (holes as extra rings, self-touching rings are fine) or
         ``"nonzero"`` (the union of overlapping rings that share an orientation).
+
+    Returns
+    -------
+    (H, W) bool array
+        True where the pixel centre ``(c + 0.5, r + 0.5)`` is inside.
     """
     if rule not in ("evenodd", "nonzero"):
         raise ValueError(f"rule must be 'evenodd' or 'nonzero', got {rule!r}")
@@ -94,6 +99,22 @@ def segment_pixels(starts: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray, np
     piece marks the pixel containing its midpoint. Where a segment passes exactly
     through a pixel corner, one of the two side pixels is added, so consecutive
     pixels always share an edge.
+
+    Parameters
+    ----------
+    starts, ends : (S, 2) float arrays
+        Segment ends in continuous pixel coordinates ``(u, v)`` (u = column).
+
+    Returns
+    -------
+    rows, cols : int arrays
+        Every pixel crossed (repeats possible, nothing clipped to a grid).
+
+    Examples
+    --------
+    >>> r, c = segment_pixels(np.array([[0.5, 0.5]]), np.array([[2.5, 0.5]]))
+    >>> sorted(zip(r.tolist(), c.tolist()))
+    [(0, 0), (0, 1), (0, 2)]
     """
     p0 = np.asarray(starts, float).reshape(-1, 2)
     p1 = np.asarray(ends, float).reshape(-1, 2)
@@ -138,6 +159,25 @@ def trace(
     The pixels of each polyline form a 4-connected chain, which no 8-connected path
     can cross: a wall traced this way is an unbroken barrier however thin it is in
     the drawing.
+
+    Parameters
+    ----------
+    shape : (H, W)
+        Size of the mask.
+    lines : sequence of (N, 2) arrays
+        Polylines in continuous pixel coordinates ``(u, v)``.
+    closed : bool
+        Join each polyline's last vertex to its first.
+
+    Returns
+    -------
+    (H, W) bool array
+        Pixels crossed, clipped to the grid.
+
+    Examples
+    --------
+    >>> trace((3, 4), [np.array([[0.5, 1.5], [3.5, 1.5]])]).astype(int).tolist()
+    [[0, 0, 0, 0], [1, 1, 1, 1], [0, 0, 0, 0]]
     """
     mask = np.zeros(shape, bool)
     starts, ends = [], []
@@ -165,6 +205,24 @@ def thin_parts(geom, width: float = 2.0):
     of that width; they are what centre sampling can lose, and what callers trace
     conservatively with :func:`trace`. Numerical slivers along thick parts are
     dropped.
+
+    Parameters
+    ----------
+    geom : shapely geometry
+        Polygonal geometry in pixel units.
+    width : float
+        Width below which a part counts as thin.
+
+    Returns
+    -------
+    shapely geometry
+        The thin parts (possibly empty).
+
+    Examples
+    --------
+    >>> import shapely
+    >>> thin_parts(shapely.box(0, 0, 10, 1)).area
+    10.0
     """
     r = 0.5 * width
     opened = geom.buffer(-r, join_style="mitre").buffer(r, join_style="mitre")

@@ -29,7 +29,22 @@ __all__ = ["save_map_figure", "map_summary"]
 
 
 def map_summary(m: OccupancyMap) -> str:
-    """One line: size in metres, resolution, pixels and free area."""
+    """One line: size in metres, resolution, pixels and free area.
+
+    Parameters
+    ----------
+    m : OccupancyMap
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> map_summary(OccupancyMap(np.full((20, 40), 255, np.uint8), 0.05))
+    '2.0 x 1.0 m, 5 cm/px (40 x 20 px), free 2.0 m²'
+    """
     w_m, h_m = m.size_m
     res = m.resolution
     res_text = f"{res * 100:.3g} cm/px" if res < 1 else f"{res:.3g} m/px"
@@ -44,6 +59,21 @@ def display_map(m: OccupancyMap, max_pixels: int = 1200) -> OccupancyMap:
     sampling drops one-pixel walls; here each block of ``k x k`` cells becomes one
     cell that is occupied if any cell is, else free if any cell is, else unknown.
 
+    Parameters
+    ----------
+    m : OccupancyMap
+        The map.
+    max_pixels : int
+        Largest side of the result, pixels.
+
+    Returns
+    -------
+    OccupancyMap
+        ``m`` itself when it fits, else the reduced map (resolution times the block
+        size, same world extent).
+
+    Examples
+    --------
     >>> big = OccupancyMap(np.full((10, 10), 255, np.uint8), 0.1)
     >>> big.data[:, 3] = 0
     >>> small = display_map(big, max_pixels=5)

@@ -109,7 +109,19 @@ SAVER_OCCUPIED_THRESH, SAVER_FREE_THRESH = 0.65, 0.196
 
 # --------------------------------------------------------------------------- semantics
 def check_thresholds(source, occupied_thresh: float, free_thresh: float) -> None:
-    """Raise :class:`InputError` unless ``0 <= free_thresh < occupied_thresh <= 1``."""
+    """Raise :class:`InputError` unless ``0 <= free_thresh < occupied_thresh <= 1``.
+
+    Parameters
+    ----------
+    source : path-like or str
+        Named in the error (the yaml, or the parameter).
+    occupied_thresh, free_thresh : float
+        map_server thresholds.
+
+    Examples
+    --------
+    >>> check_thresholds("map.yaml", 0.65, 0.196)
+    """
     for name, v in (("occupied_thresh", occupied_thresh), ("free_thresh", free_thresh)):
         if not isinstance(v, int | float) or isinstance(v, bool) or not math.isfinite(v):
             raise InputError(source, f"{name} must be a number, got {v!r}")
@@ -137,6 +149,23 @@ def map_server_values(
     The result is in image order (row 0 = top row of the picture). See the module
     docstring for the rules.
 
+    Parameters
+    ----------
+    img : RasterImage
+        The picture a yaml names.
+    mode : {"trinary", "scale", "raw"}
+        map_server mode.
+    negate : bool
+        Read white as occupied.
+    occupied_thresh, free_thresh : float
+        Thresholds on the darkness ``p``.
+    flavor : {"nav2", "ros1"}
+        Whose map_server rules.
+
+    Returns
+    -------
+    (H, W) int8 array
+
     Examples
     --------
     >>> from map2map.maps.raster import RasterImage
@@ -160,6 +189,18 @@ def per_value(img: RasterImage, fn):
 
     A grey picture without alpha has at most ``maxval + 1`` distinct pixels, so the
     rule is evaluated once per possible value and the picture indexed into it.
+
+    Parameters
+    ----------
+    img : RasterImage
+        The picture.
+    fn : callable
+        Pixel-wise rule taking a RasterImage and returning an (H, W) array.
+
+    Returns
+    -------
+    ndarray
+        ``fn(img)``.
     """
     if img.channels.shape[2] != 1 or img.alpha is not None:
         return fn(img)
@@ -248,6 +289,16 @@ def _values_ros1(img: RasterImage, mode, negate, occ_th, free_th) -> np.ndarray:
 def ros_values_to_grid(values: np.ndarray) -> np.ndarray:
     """OccupancyGrid values -> our grid: 100 occupied, 0 free, anything else unknown.
 
+    Parameters
+    ----------
+    values : int array
+        OccupancyGrid values (-1, 0..100).
+
+    Returns
+    -------
+    uint8 array
+        Same shape, 0, 127 or 255.
+
     Examples
     --------
     >>> ros_values_to_grid(np.array([100, 0, -1, 42], np.int8)).tolist()
@@ -297,6 +348,20 @@ def read_ros_yaml(path: str | os.PathLike) -> dict[str, Any]:
     Keys of the result: ``image`` (Path, resolved against the yaml's folder),
     ``resolution``, ``origin`` (3-tuple), ``negate`` (bool), ``occupied_thresh``,
     ``free_thresh``, ``mode``.
+
+    Parameters
+    ----------
+    path : path-like
+        The yaml.
+
+    Returns
+    -------
+    dict
+
+    Raises
+    ------
+    InputError
+        Missing file, not YAML, missing or invalid keys (each named).
     """
     p = Path(path)
     if not p.exists():
@@ -449,6 +514,27 @@ def save_ros_map(
     can be moved together. Numbers are written with full precision, so
     :func:`load_ros_map` gives back the identical grid, resolution and origin. Both
     files are written atomically. Returns the path of the picture.
+
+    Parameters
+    ----------
+    m : OccupancyMap
+        The map.
+    yaml_path : path-like
+        The ``.yaml`` file.
+    image_name : str, optional
+        File name of the picture, beside the yaml.
+
+    Returns
+    -------
+    pathlib.Path
+        The picture written.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> m = OccupancyMap(np.full((10, 20), 255, np.uint8), 0.05)
+    >>> save_ros_map(m, pathlib.Path(tempfile.mkdtemp()) / "map.yaml").name
+    'map.pgm'
     """
     yp = Path(yaml_path)
     ensure_output_dir(yp, is_dir=False)

@@ -4,10 +4,11 @@ Modules follow the data flow:
 
 * :mod:`~map2map.parametric.params` - every parameter, documented defaults, YAML I/O;
 * :mod:`~map2map.parametric.visibility` - pixels the LIDAR sees from each pose;
-* :mod:`~map2map.parametric.lidar` - LIDAR error model, eqs. 3.8-3.30;
-* :mod:`~map2map.parametric.odometry` - odometry error model, eqs. 3.31-3.53;
-* :mod:`~map2map.parametric.additive` - odometry to map error, method of [58], eqs. 3.81-3.90;
-* :mod:`~map2map.parametric.ekf` - odometry to map error by EKF-SLAM, eqs. 3.54-3.80;
+* :mod:`~map2map.parametric.lidar` - LIDAR error model, thesis eqs. 3.8-3.30;
+* :mod:`~map2map.parametric.odometry` - odometry error model, thesis eqs. 3.31-3.53;
+* :mod:`~map2map.parametric.additive` - odometry to map error, method of [58],
+  thesis eqs. 3.81-3.90;
+* :mod:`~map2map.parametric.ekf` - odometry to map error by EKF-SLAM, thesis eqs. 3.54-3.80;
 * :mod:`~map2map.parametric.field` - displacement field and the deformed map;
 * :mod:`~map2map.parametric.pipeline` - :func:`deform`, the whole model;
 * :mod:`~map2map.parametric.figures` - thesis Figs. 3.3 and 5.15.

@@ -1,15 +1,15 @@
 """Odometry error to map error by EKF-SLAM, thesis eqs. 3.54-3.80 (ref. [57]).
 
 The robot drives the key poses of the trajectory; its odometry reports each step with
-the error of the model (nominal - actual, eqs. 3.40-3.50), so its dead-reckoned pose
+the error of the model (nominal - actual, thesis eqs. 3.40-3.50), so its dead-reckoned pose
 drifts. The
 filter state ``X = (x, y, theta, lambda_1x, lambda_1y, ...)`` holds the robot pose and
 the landmarks seen so far, ``P`` their covariance:
 
-1. prediction with the odometry (eqs. 3.54-3.57), Jacobian ``A`` (3.60) and process
-   noise ``Q`` built from the error terms (3.58-3.59, 3.61), eqs. 3.62-3.63;
+1. prediction with the odometry (thesis eqs. 3.54-3.57), Jacobian ``A`` (3.60) and process
+   noise ``Q`` built from the error terms (3.58-3.59, 3.61), thesis eqs. 3.62-3.63;
 2. update with every re-observed landmark: range and bearing measured by the LIDAR model
-   (eqs. 3.64-3.66 with 3.29-3.30), noise ``R`` (3.67-3.69), Jacobian ``H`` (3.70-3.71),
+   (thesis eqs. 3.64-3.66 with 3.29-3.30), noise ``R`` (3.67-3.69), Jacobian ``H`` (3.70-3.71),
    gain and state update (3.72-3.73);
 3. augmentation with the new landmarks (3.74-3.80).
 
@@ -28,15 +28,15 @@ stacked update (the same linearisation point as sequential updates, one BLAS cal
 
 Reading of the thesis, where it is ambiguous
 --------------------------------------------
-* Eqs. 3.54-3.57 apply to the odometry increments (whose error is ``sigma``), so that the
+* Thesis eqs. 3.54-3.57 apply to the odometry increments (whose error is ``sigma``), so that the
   state is the robot pose: the reading is the true step between key poses (in the
-  robot's estimated frame) minus the ``sigma`` of eqs. 3.48-3.50, its heading change
-  ``Delta theta`` the true one minus ``sigma_theta`` (eq. 3.54); ``Delta thrust`` is
-  recovered from the y increment (eq. 3.55) or, where ``sin(theta)`` is small, from the
+  robot's estimated frame) minus the ``sigma`` of thesis eqs. 3.48-3.50, its heading change
+  ``Delta theta`` the true one minus ``sigma_theta`` (thesis eq. 3.54); ``Delta thrust`` is
+  recovered from the y increment (thesis eq. 3.55) or, where ``sin(theta)`` is small, from the
   x increment. With zero error parameters the filter reproduces the plan exactly.
-* Eq. 3.62 is ``A P A^T + Q``; ``Q`` (3.61) is projected on the nearest positive
-  semi-definite matrix (eqs. 3.51-3.53 do not guarantee one).
-* Eq. 3.70 omits the range normalisation of the standard Jacobian (ref. [57]); the rows
+* Thesis eq. 3.62 is ``A P A^T + Q``; ``Q`` (3.61) is projected on the nearest positive
+  semi-definite matrix (thesis eqs. 3.51-3.53 do not guarantee one).
+* Thesis eq. 3.70 omits the range normalisation of the standard Jacobian (ref. [57]); the rows
   are divided by ``r`` and ``r^2`` so that ``H`` is the derivative of range and bearing.
 * ``R`` (3.69) uses ``|r c|`` and ``|delta d|``, floored by ``ekf_range_var_min`` and
   ``ekf_bearing_var_min`` (it is singular when ``a1`` or ``b1`` is zero).
@@ -46,7 +46,7 @@ Reading of the thesis, where it is ambiguous
 
 Examples
 --------
->>> A = motion_jacobian(*jacobian_terms(1.0, 0.0))  # eqs. 3.56-3.57, 3.60: thrust 1 along x
+>>> A = motion_jacobian(*jacobian_terms(1.0, 0.0))  # thesis eqs. 3.56-3.57, 3.60: thrust 1 along x
 >>> A.tolist()
 [[1.0, 0.0, -0.0], [0.0, 1.0, 1.0], [0.0, 0.0, 1.0]]
 """
@@ -85,14 +85,37 @@ __all__ = [
 
 
 def heading_change(sigma_t):
-    """Eq. 3.54: ``Delta theta = sigma_theta`` (the heading increment of the prediction)."""
+    """Thesis eq. 3.54: ``Delta theta = sigma_theta`` (the heading increment of the prediction).
+
+    Parameters
+    ----------
+    sigma_t : float or ndarray
+        Heading error terms.
+
+    Returns
+    -------
+    ndarray
+    """
     return np.asarray(sigma_t, float)
 
 
 def thrust(dx_inc, dy_inc, theta):
-    """Eq. 3.55: ``Delta thrust = Delta y / sin(theta)`` (``Delta x / cos(theta)`` where
+    """Thesis eq. 3.55: ``Delta thrust = Delta y / sin(theta)`` (``Delta x / cos(theta)`` where
     ``|sin theta| < |cos theta|``, the same quantity better conditioned).
 
+    Parameters
+    ----------
+    dx_inc, dy_inc : float or ndarray
+        Position increments.
+    theta : float or ndarray
+        Heading, radians.
+
+    Returns
+    -------
+    ndarray
+
+    Examples
+    --------
     >>> round(float(thrust(0.0, 0.5, np.pi / 2)), 6), round(float(thrust(0.5, 0.0, 0.0)), 6)
     (0.5, 0.5)
     """
@@ -101,25 +124,78 @@ def thrust(dx_inc, dy_inc, theta):
 
 
 def jacobian_terms(length, angle):
-    """Eqs. 3.56-3.57 (and the terms of 3.74): ``Delta x = l sin(angle)``,
-    ``Delta y = l cos(angle)``."""
+    """Thesis eqs. 3.56-3.57 (and the terms of 3.74): ``Delta x = l sin(angle)``,
+    ``Delta y = l cos(angle)``.
+
+    Parameters
+    ----------
+    length : float or ndarray
+        Distance ``l``.
+    angle : float or ndarray
+        Angle, radians.
+
+    Returns
+    -------
+    dx, dy : ndarray
+
+    Examples
+    --------
+    >>> [round(float(v), 6) for v in jacobian_terms(2.0, 0.0)]
+    [0.0, 2.0]
+    """
     return length * np.sin(angle), length * np.cos(angle)
 
 
 def initial_covariance(sigma: dict) -> np.ndarray:
-    """Eqs. 3.58-3.59: the initial ``P = P^rr`` from the first step's error terms."""
+    """Thesis eqs. 3.58-3.59: the initial ``P = P^rr`` from the first step's error terms.
+
+    Parameters
+    ----------
+    sigma : dict
+        Error terms ``x``, ``y``, ``t`` (arrays; the first step is used).
+
+    Returns
+    -------
+    (3, 3) ndarray
+    """
     return process_noise({k: np.asarray(v).ravel()[:1] for k, v in sigma.items()})[0]
 
 
 def motion_jacobian(dx: float, dy: float) -> np.ndarray:
-    """Eq. 3.60: ``A = [[1, 0, -Delta x], [0, 1, Delta y], [0, 0, 1]]``."""
+    """Thesis eq. 3.60: ``A = [[1, 0, -Delta x], [0, 1, Delta y], [0, 0, 1]]``.
+
+    Parameters
+    ----------
+    dx, dy : float
+        Terms of :func:`jacobian_terms`.
+
+    Returns
+    -------
+    (3, 3) ndarray
+
+    Examples
+    --------
+    >>> motion_jacobian(0.5, 0.25)[:2].tolist()
+    [[1.0, 0.0, -0.5], [0.0, 1.0, 0.25]]
+    """
     return np.array([[1.0, 0.0, -dx], [0.0, 1.0, dy], [0.0, 0.0, 1.0]])
 
 
 def process_noise(sigma: dict) -> np.ndarray:
-    """Eq. 3.61: ``Q`` from the error terms of eqs. 3.48-3.53, for every step (N, 3, 3).
+    """Thesis eq. 3.61: ``Q`` from the error terms of thesis eqs. 3.48-3.53, for every step (N, 3,
+    3).
 
     Projected on the positive semi-definite cone (negative eigenvalues set to zero).
+
+    Parameters
+    ----------
+    sigma : dict
+        Error terms ``x``, ``y``, ``t`` per step, arrays (N,).
+
+    Returns
+    -------
+    (N, 3, 3) ndarray
+        Positive semi-definite.
     """
     sx, sy, st = (np.asarray(sigma[k], float) for k in ("x", "y", "t"))
     sxy, sxt, syt = (np.asarray(sigma[k], float) for k in ("xy", "xt", "yt"))
@@ -133,8 +209,20 @@ def process_noise(sigma: dict) -> np.ndarray:
 
 
 def predict_covariance(P: np.ndarray, n: int, A: np.ndarray, Q: np.ndarray) -> None:
-    """Eqs. 3.62-3.63 in place on the active ``n x n`` block: ``P^rr = A P^rr A^T + Q``,
-    ``P^ri = A P^ri`` (and ``P^ir`` its transpose)."""
+    """Thesis eqs. 3.62-3.63 in place on the active ``n x n`` block: ``P^rr = A P^rr A^T + Q``,
+    ``P^ri = A P^ri`` (and ``P^ir`` its transpose).
+
+    Parameters
+    ----------
+    P : (S, S) ndarray
+        Full covariance buffer, updated in place.
+    n : int
+        Active size (3 + 2 x landmarks).
+    A : (3, 3) ndarray
+        Motion Jacobian.
+    Q : (3, 3) ndarray
+        Process noise.
+    """
     P[:3, :3] = A @ P[:3, :3] @ A.T + Q
     if n > 3:
         P[:3, 3:n] = A @ P[:3, 3:n]
@@ -142,9 +230,22 @@ def predict_covariance(P: np.ndarray, n: int, A: np.ndarray, Q: np.ndarray) -> N
 
 
 def measurement(r_true, b_true, coeffs: LidarCoefficients):
-    """Eqs. 3.64-3.66: ``z = (r, delta) = (z_meas, alpha_meas)`` of landmarks at true range
-    ``r_true`` [m] and bearing ``b_true`` [rad], through the LIDAR model (eqs. 3.9-3.12,
-    3.29-3.30)."""
+    """Thesis eqs. 3.64-3.66: ``z = (r, delta) = (z_meas, alpha_meas)`` of landmarks at true range
+    ``r_true`` [m] and bearing ``b_true`` [rad], through the LIDAR model (thesis eqs. 3.9-3.12,
+    3.29-3.30).
+
+    Parameters
+    ----------
+    r_true, b_true : float or ndarray
+        True range [m] and bearing [rad] of the landmarks.
+    coeffs : LidarCoefficients
+        The drawn LIDAR calibration.
+
+    Returns
+    -------
+    r, delta : ndarray
+        Measured range and bearing.
+    """
     dD = range_error(r_true, coeffs.a0, coeffs.a1)
     da = angle_error(b_true, r_true, coeffs.b)
     dx_hit, dy_hit = polar_displacement(r_true, b_true, dD, da, 1.0)
@@ -152,7 +253,23 @@ def measurement(r_true, b_true, coeffs: LidarCoefficients):
 
 
 def measurement_noise(r, delta, a1: float, b1: float, r_min: float, b_min: float) -> np.ndarray:
-    """Eqs. 3.67-3.69: ``c = a1``, ``d = b1``, ``R = diag(r c, delta d)`` per landmark (M, 2)."""
+    """Thesis eqs. 3.67-3.69: ``c = a1``, ``d = b1``, ``R = diag(r c, delta d)`` per landmark (M,
+    2).
+
+    Parameters
+    ----------
+    r, delta : (M,) arrays
+        Measured ranges [m] and bearings [rad].
+    a1, b1 : float
+        Scale coefficients ``c`` and ``d``.
+    r_min, b_min : float
+        Variance floors.
+
+    Returns
+    -------
+    (M, 2) ndarray
+        Diagonal of ``R`` per landmark.
+    """
     c, d = a1, b1
     return np.stack(
         [np.maximum(np.abs(r * c), r_min), np.maximum(np.abs(delta * d), b_min)], axis=-1
@@ -160,8 +277,21 @@ def measurement_noise(r, delta, a1: float, b1: float, r_min: float, b_min: float
 
 
 def measurement_jacobian(x, y, lx, ly):
-    """Eqs. 3.70-3.71 per landmark: robot block ``H^{2x3}`` (M, 2, 3) and landmark block
-    ``H^k = -H^{2x2}`` (M, 2, 2), with the range normalisation of ref. [57]."""
+    """Thesis eqs. 3.70-3.71 per landmark: robot block ``H^{2x3}`` (M, 2, 3) and landmark block
+    ``H^k = -H^{2x2}`` (M, 2, 2), with the range normalisation of ref. [57].
+
+    Parameters
+    ----------
+    x, y : float
+        Robot position.
+    lx, ly : (M,) arrays
+        Landmark positions.
+
+    Returns
+    -------
+    hr : (M, 2, 3) ndarray
+    hl : (M, 2, 2) ndarray
+    """
     ddx, ddy = x - lx, y - ly
     r2 = np.maximum(ddx * ddx + ddy * ddy, 1e-12)
     r = np.sqrt(r2)
@@ -172,11 +302,28 @@ def measurement_jacobian(x, y, lx, ly):
 
 
 def kalman_update(X, P, n, cols, hr, hl, innovation, rdiag) -> None:
-    """Eqs. 3.72-3.73 (stacked over the re-observed landmarks, in place):
+    """Thesis eqs. 3.72-3.73 (stacked over the re-observed landmarks, in place):
     ``K = P H^T (H P H^T + R)^-1``, ``X = X + K (z - h)``, then ``P = P - K H P``.
 
     ``cols`` are the state columns of each landmark's x (M,), ``hr``/``hl`` the blocks of
     :func:`measurement_jacobian`, ``innovation`` (M, 2), ``rdiag`` (M, 2).
+
+    Parameters
+    ----------
+    X : (S,) ndarray
+        State buffer, updated in place.
+    P : (S, S) ndarray
+        Covariance buffer, updated in place.
+    n : int
+        Active size.
+    cols : (M,) int array
+        State column of each landmark's x.
+    hr, hl : ndarrays
+        Jacobian blocks.
+    innovation : (M, 2) ndarray
+        ``z - h``.
+    rdiag : (M, 2) ndarray
+        Diagonal of ``R``.
     """
     m = cols.size
     Pa = P[:n, :n]
@@ -199,9 +346,22 @@ def kalman_update(X, P, n, cols, hr, hl, innovation, rdiag) -> None:
 
 
 def landmark_jacobians(r, angle) -> tuple[np.ndarray, np.ndarray]:
-    """Eqs. 3.74-3.75 per new landmark at range ``r`` and absolute angle ``theta + delta``:
+    """Thesis eqs. 3.74-3.75 per new landmark at range ``r`` and absolute angle ``theta + delta``:
     ``J_xr = [[1, 0, -Delta x], [0, 1, Delta y]]`` (M, 2, 3) and
-    ``J_z = [[cos, -r sin], [sin, r cos]]`` (M, 2, 2)."""
+    ``J_z = [[cos, -r sin], [sin, r cos]]`` (M, 2, 2).
+
+    Parameters
+    ----------
+    r : (M,) array
+        Measured ranges.
+    angle : (M,) array
+        Absolute angles ``theta + delta``.
+
+    Returns
+    -------
+    jxr : (M, 2, 3) ndarray
+    jz : (M, 2, 2) ndarray
+    """
     dx, dy = jacobian_terms(r, angle)
     m = np.size(r)
     jxr = np.zeros((m, 2, 3))
@@ -214,12 +374,28 @@ def landmark_jacobians(r, angle) -> tuple[np.ndarray, np.ndarray]:
 
 
 def augment_covariance(P, n, jxr, jz, rdiag) -> int:
-    """Eqs. 3.76-3.80 in place for M new landmarks; returns the new active size.
+    """Thesis eqs. 3.76-3.80 in place for M new landmarks; returns the new active size.
 
     ``P^{N+1,N+1} = J_xr P^rr J_xr^T + J_z R J_z^T`` (3.76), robot-landmark
     ``P^{r,N+1} = P^rr J_xr^T`` (3.77-3.78), landmark-landmark
     ``P^{N+1,i} = J_xr P^{ri}`` (3.79-3.80); cross terms between the new landmarks follow
     from the same product.
+
+    Parameters
+    ----------
+    P : (S, S) ndarray
+        Covariance buffer, updated in place.
+    n : int
+        Active size before.
+    jxr, jz : ndarrays
+        From :func:`landmark_jacobians`.
+    rdiag : (M, 2) ndarray
+        Diagonal of ``R``.
+
+    Returns
+    -------
+    int
+        ``n + 2 M``.
     """
     m = jxr.shape[0]
     G = jxr.reshape(2 * m, 3)
@@ -242,6 +418,20 @@ def choose_landmarks(walls: np.ndarray, max_landmarks: int) -> np.ndarray:
     One pixel (the first in raster order) per ``s x s`` block, with the smallest stride
     ``s`` that leaves at most ``max_landmarks``.
 
+    Parameters
+    ----------
+    walls : (H, W) bool array
+        Landmark candidates.
+    max_landmarks : int
+        Upper bound on the count.
+
+    Returns
+    -------
+    (M,) int64 array
+        Flat indices, M <= ``max_landmarks``.
+
+    Examples
+    --------
     >>> w = np.zeros((10, 10), bool); w[0, :] = True
     >>> choose_landmarks(w, 5).tolist()
     [0, 2, 4, 6, 8]
@@ -300,6 +490,12 @@ def ekf_field(
         ``ekf_max_landmarks``, ``ekf_range_var_min``, ``ekf_bearing_var_min``.
     resolution : float
         Metres per pixel.
+
+    Returns
+    -------
+    EkfResult
+        Landmarks, their field and the field interpolated to every pixel, and the
+        robot's estimate error per key pose.
     """
     h, w = vis.shape
     lm_pix = choose_landmarks(walls_observed, int(p.ekf_max_landmarks))
@@ -326,7 +522,7 @@ def ekf_field(
     for k in range(k_poses):
         if k > 0:
             # odometry reading: the true increment, rotated into the estimated heading, plus
-            # the error model's actual - nominal difference (eqs. 3.40-3.50)
+            # the error model's actual - nominal difference (thesis eqs. 3.40-3.50)
             th = X[2]
             step = truth[k] - truth[k - 1]
             dth = heading_change(wrap_angle(step[2]) - sigma["t"][k - 1])
@@ -347,7 +543,7 @@ def ekf_field(
         ids = ids[ids >= 0]
         if ids.size == 0:
             continue
-        # LIDAR measurements from the true pose (eqs. 3.64-3.66)
+        # LIDAR measurements from the true pose (thesis eqs. 3.64-3.66)
         rel = lm_true[ids] - truth[k, :2]
         r_true = np.hypot(rel[:, 0], rel[:, 1])
         b_true = wrap_angle(np.arctan2(rel[:, 1], rel[:, 0]) - truth[k, 2])

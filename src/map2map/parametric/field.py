@@ -57,6 +57,16 @@ class DisplacementField:
 
     @classmethod
     def zeros(cls, shape: tuple[int, int]) -> DisplacementField:
+        """A zero field of ``shape``.
+
+        Parameters
+        ----------
+        shape : (H, W)
+
+        Returns
+        -------
+        DisplacementField
+        """
         return cls(np.zeros(shape, np.float32), np.zeros(shape, np.float32))
 
     @property
@@ -72,23 +82,57 @@ class DisplacementField:
         return DisplacementField(self.dx + other.dx, self.dy + other.dy)
 
     def masked(self, mask: np.ndarray) -> DisplacementField:
-        """Zero outside ``mask``."""
+        """Zero outside ``mask``.
+
+        Parameters
+        ----------
+        mask : (H, W) bool array
+
+        Returns
+        -------
+        DisplacementField
+        """
         return DisplacementField(np.where(mask, self.dx, 0), np.where(mask, self.dy, 0))
 
     def stats(self, mask: np.ndarray | None = None) -> dict[str, float]:
-        """Mean and maximum ``|d|`` [px] (over ``mask`` if given)."""
+        """Mean and maximum ``|d|`` [px] (over ``mask`` if given).
+
+        Parameters
+        ----------
+        mask : (H, W) bool array, optional
+
+        Returns
+        -------
+        dict
+            ``mean`` and ``max``.
+        """
         mag = self.magnitude if mask is None else self.magnitude[mask]
         if mag.size == 0:
             return {"mean": 0.0, "max": 0.0}
         return {"mean": float(mag.mean()), "max": float(mag.max())}
 
     def save_npz(self, path: str | os.PathLike) -> None:
-        """Write ``dx`` and ``dy`` (float32, pixels) to an ``.npz`` atomically."""
+        """Write ``dx`` and ``dy`` (float32, pixels) to an ``.npz`` atomically.
+
+        Parameters
+        ----------
+        path : path-like
+        """
         with atomic_path(path) as tmp, open(tmp, "wb") as fh:
             np.savez(fh, dx=self.dx, dy=self.dy)
 
     @classmethod
     def load_npz(cls, path: str | os.PathLike) -> DisplacementField:
+        """Read a field written by :meth:`save_npz` (:class:`InputError` if unreadable).
+
+        Parameters
+        ----------
+        path : path-like
+
+        Returns
+        -------
+        DisplacementField
+        """
         try:
             with np.load(path) as z:
                 return cls(z["dx"], z["dy"])
@@ -107,6 +151,23 @@ def invert_field(
     (Where the field jumps, e.g. at the edge of what a pose saw, or folds, there is no
     exact inverse and the iteration keeps oscillating there.)
 
+    Parameters
+    ----------
+    field : DisplacementField
+        Forward displacement.
+    iterations : int
+        Most fixed-point steps.
+    tol : float
+        Movement (pixels) below which a pixel counts as settled.
+    settled : float
+        Fraction of settled pixels that stops the iteration.
+
+    Returns
+    -------
+    px, py : (H, W) float32 arrays
+
+    Examples
+    --------
     >>> f = DisplacementField(np.full((3, 4), 1.5, np.float32), np.zeros((3, 4), np.float32))
     >>> px, py = invert_field(f)
     >>> px[0].tolist()
@@ -126,6 +187,10 @@ def warp_map(plan: np.ndarray, field: DisplacementField, observed: np.ndarray) -
         Displacement of every plan pixel.
     observed : (H, W) bool
         Plan pixels the LIDAR saw; only they appear in the output.
+
+    Returns
+    -------
+    (H, W) uint8 array
     """
     plan = np.ascontiguousarray(plan, np.uint8)
     h, w = plan.shape

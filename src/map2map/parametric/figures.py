@@ -34,7 +34,19 @@ __all__ = ["roadmap_figure", "deform_figure", "draw_trajectory"]
 
 
 def draw_trajectory(ax, plan: OccupancyMap, traj: Trajectory, colour: str = "tab:orange") -> None:
-    """Trajectory in the plan's pixel coordinates, start (circle) and goal (star) marked."""
+    """Trajectory in the plan's pixel coordinates, start (circle) and goal (star) marked.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes showing the plan in pixel coordinates.
+    plan : OccupancyMap
+        The plan.
+    traj : Trajectory
+        World poses.
+    colour : str
+        Line colour.
+    """
     px = trajectory_to_pixels(plan, traj.x, traj.y, traj.theta)
     ax.plot(px[:, 0], px[:, 1], "-", color=colour, lw=2, label="trajectory")
     ax.plot(px[0, 0], px[0, 1], "o", color=colour, ms=7, mec="k")
@@ -44,7 +56,19 @@ def draw_trajectory(ax, plan: OccupancyMap, traj: Trajectory, colour: str = "tab
 def roadmap_figure(
     plan: OccupancyMap, rm: Roadmap, traj: Trajectory, path: str | os.PathLike
 ) -> None:
-    """Thesis Fig. 3.3: the probabilistic roadmap (blue) and the chosen trajectory (orange)."""
+    """Thesis Fig. 3.3: the probabilistic roadmap (blue) and the chosen trajectory (orange).
+
+    Parameters
+    ----------
+    plan : OccupancyMap
+        The plan.
+    rm : Roadmap
+        The roadmap.
+    traj : Trajectory
+        The trajectory.
+    path : path-like
+        Output figure (atomic).
+    """
     fig, ax = new_figure(plan)
     draw_map(ax, plan, title=f"Probabilistic roadmap ({rm.nodes.shape[0]} nodes) and trajectory")
     seg = np.stack([rm.nodes[rm.edges[:, 0]], rm.nodes[rm.edges[:, 1]]], 1)
@@ -58,7 +82,19 @@ def deform_figure(
     plan: OccupancyMap, result: DeformResult, path: str | os.PathLike, title: str | None = None
 ) -> None:
     """Thesis Fig. 5.15: plan with trajectory, displacement field (|d| and arrows), and the
-    modelled SLAM map."""
+    modelled SLAM map.
+
+    Parameters
+    ----------
+    plan : OccupancyMap
+        The plan.
+    result : DeformResult
+        From :func:`map2map.parametric.pipeline.deform`.
+    path : path-like
+        Output figure (atomic).
+    title : str, optional
+        Figure title.
+    """
     fig, axes = new_figure(plan, ncols=3)
     draw_map(axes[0], plan, title="Plan and trajectory")
     draw_trajectory(axes[0], plan, result.trajectory)

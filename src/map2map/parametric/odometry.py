@@ -1,4 +1,4 @@
-"""Proprioceptive (odometry) error model, thesis section 3.2.2, eqs. 3.31-3.53.
+"""Proprioceptive (odometry) error model, thesis section 3.2.2, thesis eqs. 3.31-3.53.
 
 The systematic errors of a differential-drive robot as UMBmark measures them
 (Borenstein & Feng, refs. [19, 20]): a wheelbase error ``E_b`` and a ratio ``E_d`` of
@@ -8,18 +8,18 @@ distributions with the experimental standard deviations (params
 ``alpha_eb_std_deg``, ``alpha_ed_std_deg``, ``beta_std_deg``). Between successive key
 poses the wheel rotations ``gamma`` follow from the nominal motion; the same rotations
 with the actual wheel diameters and wheelbase give the actual motion, and the
-per-step differences nominal - actual are the error terms ``sigma`` of eqs. 3.48-3.53.
+per-step differences nominal - actual are the error terms ``sigma`` of thesis eqs. 3.48-3.53.
 
-Conventions: ``gamma`` is defined so that eq. 3.38 holds as written, ``Delta d = gamma D``
-(``gamma`` is half the wheel's rotation angle in radians). ``beta`` enters eq. 3.33 in
-radians. The previous heading ``theta_{k-1}`` of eqs. 3.42-3.43 and 3.46-3.47 is the
+Conventions: ``gamma`` is defined so that thesis eq. 3.38 holds as written, ``Delta d = gamma D``
+(``gamma`` is half the wheel's rotation angle in radians). ``beta`` enters thesis eq. 3.33 in
+radians. The previous heading ``theta_{k-1}`` of thesis eqs. 3.42-3.43 and 3.46-3.47 is the
 nominal one for both, so the ``sigma`` are per-step errors (their accumulation is what
-the conversion methods model). The products of eqs. 3.51-3.53 are read as
+the conversion methods model). The products of thesis eqs. 3.51-3.53 are read as
 ``sigma_xy = Dx_nom Dy_nom - Dx_act Dy_act`` (and likewise for ``x theta``, ``y theta``).
 
 Examples
 --------
->>> round(wheelbase_error(0.5, 0.4), 6)             # eq. 3.31: 90 / (90 - 0.9)
+>>> round(wheelbase_error(0.5, 0.4), 6)             # thesis eq. 3.31: 90 / (90 - 0.9)
 1.010101
 >>> dl, dr = actual_diameters(1.0, 0.066)           # E_d = 1: both wheels nominal
 >>> round(dl, 6), round(dr, 6)
@@ -70,24 +70,81 @@ class OdometryCoefficients:
 def draw_odometry_coefficients(
     p: ParametricParams, rng: np.random.Generator
 ) -> OdometryCoefficients:
-    """Draw ``alpha_Eb``, ``alpha_Ed``, ``beta`` [deg] from N(0, std) (refs. [19, 20])."""
+    """Draw ``alpha_Eb``, ``alpha_Ed``, ``beta`` [deg] from N(0, std) (refs. [19, 20]).
+
+    Parameters
+    ----------
+    p : ParametricParams
+        ``alpha_eb_std_deg``, ``alpha_ed_std_deg``, ``beta_std_deg``.
+    rng : numpy.random.Generator
+        Source of the draws.
+
+    Returns
+    -------
+    OdometryCoefficients
+    """
     v = rng.normal(0.0, 1.0, 3) * np.array([p.alpha_eb_std_deg, p.alpha_ed_std_deg, p.beta_std_deg])
     return OdometryCoefficients(float(v[0]), float(v[1]), float(v[2]))
 
 
 def wheelbase_error(alpha_eb: float, alpha_ed: float) -> float:
-    """Eq. 3.31: ``E_b = 90 / (90 - (alpha_Eb + alpha_Ed))`` (angles in degrees)."""
+    """Thesis eq. 3.31: ``E_b = 90 / (90 - (alpha_Eb + alpha_Ed))`` (angles in degrees).
+
+    Parameters
+    ----------
+    alpha_eb, alpha_ed : float
+        UMBmark angles, degrees.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> wheelbase_error(0.0, 0.0)
+    1.0
+    """
     return 90.0 / (90.0 - (alpha_eb + alpha_ed))
 
 
 def actual_wheelbase(e_b: float, b_nominal: float) -> float:
-    """Eq. 3.32: ``b_actual = E_b b_nominal``."""
+    """Thesis eq. 3.32: ``b_actual = E_b b_nominal``.
+
+    Parameters
+    ----------
+    e_b : float
+        Wheelbase error factor.
+    b_nominal : float
+        Nominal wheelbase, metres.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> round(actual_wheelbase(1.5, 0.2), 6)
+    0.3
+    """
     return e_b * b_nominal
 
 
 def curvature_radius(L: float, beta_deg: float) -> float:
-    """Eq. 3.33: ``R = (L / 2) / sin(beta / 2)``; infinite (straight) when ``beta = 0``.
+    """Thesis eq. 3.33: ``R = (L / 2) / sin(beta / 2)``; infinite (straight) when ``beta = 0``.
 
+    Parameters
+    ----------
+    L : float
+        Straight-run length, metres.
+    beta_deg : float
+        UMBmark angle ``beta``, degrees.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
     >>> round(curvature_radius(4.0, 2.0), 3)
     114.597
     """
@@ -96,50 +153,155 @@ def curvature_radius(L: float, beta_deg: float) -> float:
 
 
 def diameter_ratio(R: float, b_actual: float) -> float:
-    """Eq. 3.34: ``E_d = D_R / D_L = (R + b/2) / (R - b/2)``; 1 for a straight run (R infinite)."""
+    """Thesis eq. 3.34: ``E_d = D_R / D_L = (R + b/2) / (R - b/2)``; 1 for a straight run (R
+    infinite).
+
+    Parameters
+    ----------
+    R : float
+        Curvature radius, metres (may be infinite).
+    b_actual : float
+        Actual wheelbase, metres.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> diameter_ratio(math.inf, 0.3)
+    1.0
+    """
     if math.isinf(R):
         return 1.0
     return (R + b_actual / 2.0) / (R - b_actual / 2.0)
 
 
 def average_diameter(d_r: float, d_l: float) -> float:
-    """Eq. 3.35: ``D_a = (D_R + D_L) / 2``."""
+    """Thesis eq. 3.35: ``D_a = (D_R + D_L) / 2``.
+
+    Parameters
+    ----------
+    d_r, d_l : float
+        Wheel diameters, metres.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> round(average_diameter(0.066, 0.064), 6)
+    0.065
+    """
     return (d_r + d_l) / 2.0
 
 
 def actual_diameters(e_d: float, d_a: float) -> tuple[float, float]:
-    """Eqs. 3.36-3.37: ``D_L = 2 D_a / (E_d + 1)``, ``D_R = 2 D_a / (1 / E_d + 1)``.
+    """Thesis eqs. 3.36-3.37: ``D_L = 2 D_a / (E_d + 1)``, ``D_R = 2 D_a / (1 / E_d + 1)``.
 
     Returns ``(D_L, D_R)``.
+
+    Parameters
+    ----------
+    e_d : float
+        Diameter ratio.
+    d_a : float
+        Average diameter, metres.
+
+    Returns
+    -------
+    D_L, D_R : float
+
+    Examples
+    --------
+    >>> actual_diameters(1.0, 0.066)
+    (0.066, 0.066)
     """
     return 2.0 / (e_d + 1.0) * d_a, 2.0 / (1.0 / e_d + 1.0) * d_a
 
 
 def wheel_displacement(gamma, diameter: float):
-    """Eqs. 3.38-3.39: ``Delta d = gamma D`` for one wheel."""
+    """Thesis eqs. 3.38-3.39: ``Delta d = gamma D`` for one wheel.
+
+    Parameters
+    ----------
+    gamma : float or ndarray
+        Half the wheel's rotation angle, radians (module docstring).
+    diameter : float
+        Wheel diameter, metres.
+
+    Returns
+    -------
+    ndarray
+        Metres.
+    """
     return np.asarray(gamma, float) * diameter
 
 
 def centre_increment(dd_r, dd_l, b: float):
-    """Eqs. 3.40-3.41 (actual) and 3.44-3.45 (nominal): ``Delta d = (d_R + d_L) / 2``,
-    ``Delta theta = (d_R - d_L) / b``."""
+    """Thesis eqs. 3.40-3.41 (actual) and 3.44-3.45 (nominal): ``Delta d = (d_R + d_L) / 2``,
+    ``Delta theta = (d_R - d_L) / b``.
+
+    Parameters
+    ----------
+    dd_r, dd_l : float or ndarray
+        Right and left wheel displacements, metres.
+    b : float
+        Wheelbase, metres.
+
+    Returns
+    -------
+    dd, dth : float or ndarray
+
+    Examples
+    --------
+    >>> [round(float(v), 6) for v in centre_increment(0.2, 0.1, 0.25)]
+    [0.15, 0.4]
+    """
     dd_r = np.asarray(dd_r, float)
     dd_l = np.asarray(dd_l, float)
     return (dd_r + dd_l) / 2.0, (dd_r - dd_l) / b
 
 
 def pose_increment(dd, dth, theta_prev):
-    """Eqs. 3.42-3.43 (actual) and 3.46-3.47 (nominal):
-    ``Delta x = Delta d cos(theta + Delta theta / 2)``, ``Delta y = Delta d sin(...)``."""
+    """Thesis eqs. 3.42-3.43 (actual) and 3.46-3.47 (nominal):
+    ``Delta x = Delta d cos(theta + Delta theta / 2)``, ``Delta y = Delta d sin(...)``.
+
+    Parameters
+    ----------
+    dd : float or ndarray
+        Distance increments, metres.
+    dth : float or ndarray
+        Heading increments, radians.
+    theta_prev : float or ndarray
+        Headings before the step.
+
+    Returns
+    -------
+    dx, dy : ndarray
+    """
     a = np.asarray(theta_prev, float) + np.asarray(dth, float) / 2.0
     return np.asarray(dd, float) * np.cos(a), np.asarray(dd, float) * np.sin(a)
 
 
 def error_terms(nom: dict, act: dict) -> dict:
-    """Eqs. 3.48-3.53: covariance terms as nominal minus actual increments.
+    """Thesis eqs. 3.48-3.53: covariance terms as nominal minus actual increments.
 
     ``nom`` and ``act`` hold arrays ``dx``, ``dy``, ``dth``.
 
+    Parameters
+    ----------
+    nom, act : dict
+        Nominal and actual increments.
+
+    Returns
+    -------
+    dict
+        ``x``, ``y``, ``t``: nominal minus actual.
+
+    Examples
+    --------
     >>> e = error_terms({"dx": 1.0, "dy": 2.0, "dth": 0.1}, {"dx": 0.9, "dy": 2.0, "dth": 0.1})
     >>> round(float(e["x"]), 6), round(float(e["xy"]), 6), round(float(e["xt"]), 6)
     (0.1, 0.2, 0.01)
@@ -155,10 +317,22 @@ def error_terms(nom: dict, act: dict) -> dict:
 
 
 def straight_run_length(traj: Trajectory, min_length: float = 0.5) -> float:
-    """Mean length [m] of the straight runs of a trajectory (``L`` of eq. 3.33).
+    """Mean length [m] of the straight runs of a trajectory (``L`` of thesis eq. 3.33).
 
     A run is a maximal stretch of steps that move without turning. Falls back to the
     UMBmark square side, 4 m, when the trajectory has no straight run of ``min_length``.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        The robot's trajectory.
+    min_length : float
+        Shortest run counted, metres.
+
+    Returns
+    -------
+    float
+        Metres.
     """
     step = np.hypot(np.diff(traj.x), np.diff(traj.y))
     turn = np.abs(wrap_angle(np.diff(traj.theta)))
@@ -177,7 +351,7 @@ def straight_run_length(traj: Trajectory, min_length: float = 0.5) -> float:
 class OdometryErrors:
     """Per-step quantities between successive key poses (arrays of length K - 1)."""
 
-    sigma: dict  # eqs. 3.48-3.53: x, y, t, xy, xt, yt
+    sigma: dict  # thesis eqs. 3.48-3.53: x, y, t, xy, xt, yt
     nominal: dict  # dd, dth, dx, dy
     actual: dict  # dd, dth, dx, dy
     e_b: float
@@ -188,7 +362,7 @@ class OdometryErrors:
 def odometry_errors(
     poses: np.ndarray, coeffs: OdometryCoefficients, p: ParametricParams, L: float
 ) -> OdometryErrors:
-    """Per-step odometry errors between successive key poses, eqs. 3.31-3.53.
+    """Per-step odometry errors between successive key poses, thesis eqs. 3.31-3.53.
 
     Parameters
     ----------
@@ -199,7 +373,12 @@ def odometry_errors(
     p : ParametricParams
         ``wheelbase`` and ``wheel_radius`` (nominal geometry).
     L : float
-        Straight-run length [m] of eq. 3.33.
+        Straight-run length [m] of thesis eq. 3.33.
+
+    Returns
+    -------
+    OdometryErrors
+        Error terms, nominal and actual increments, ``E_b``, ``E_d`` and ``L``.
     """
     poses = np.asarray(poses, float).reshape(-1, 3)
     b_nom = p.wheelbase

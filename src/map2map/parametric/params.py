@@ -42,39 +42,42 @@ class ParametricParams:
         ``wheel_radius`` 0.033 [m], ``robot_radius`` 0.15 [m] (clearance of the roadmap),
         ``dt`` 0.1 [s] trajectory sampling, ``range_min`` 0.12 / ``range_max`` 3.5 [m],
         ``fov_deg`` 360 (or 180 as in the thesis experiments), ``beam_aperture_deg`` 1.0
-        (LDS-01 angular resolution; the beta of eq. 3.84).
+        (LDS-01 angular resolution; the beta of thesis eq. 3.84).
     Key poses
         The map is built from key poses taken whenever the robot has moved
         ``keyframe_distance`` 1.0 [m] or turned ``keyframe_angle`` 0.5 [rad] (the scan
         update thresholds ``linearUpdate`` / ``angularUpdate`` of gmapping); visibility
         and both conversions run on them. The additive method sums one error per key
         pose that sees a pixel, so its field grows as these shrink.
-    LIDAR model, eqs. 3.8-3.30
+    LIDAR model, thesis eqs. 3.8-3.30
         ``lidar_geometry`` "random" (thesis: D, alpha random per pixel and median filtered
         over ``median_size`` 5 pixels) or "geometry" (D, alpha from the first key pose that
-        saw the pixel). Calibration coefficients of eqs. 3.9-3.10 are drawn per map,
+        saw the pixel). Calibration coefficients of thesis eqs. 3.9-3.10 are drawn per map,
         uniformly in +-bound (ref. [13] order of magnitude): ``a0_bound`` 0.01 [m]
         (zero offset), ``a1_bound`` 0.005 (scale), ``b1_bound`` 0.001 (encoder scale),
         ``b2_bound``/``b3_bound`` 0.002 [rad] (horizontal eccentricity),
         ``b4_bound``/``b5_bound`` 0.001 [rad] (non-orthogonality), ``b6_bound`` 0.002
-        [rad m] (collimation). ``lambda_short`` 0.5 [1/m] (eq. 3.13, ref. [56]),
+        [rad m] (collimation). ``lambda_short`` 0.5 [1/m] (thesis eq. 3.13, ref. [56]),
         ``short_scale`` 0.02 (fraction of the short-reading error E_short applied to the
         map, see :func:`map2map.parametric.lidar.short_error`), ``max_err_bound`` and
         ``rand_err_bound`` 0.05 [m] (Max_err, Ran_err drawn uniformly in [0, bound],
-        eqs. 3.21, 3.24), ``z_weights`` (0.4, 0.3, 0.2, 0.1) (eqs. 3.27-3.28, ref. [56]).
-    Odometry model, eqs. 3.31-3.53 (UMBmark, refs. [19, 20])
+        thesis eqs. 3.21, 3.24), ``z_weights`` (0.4, 0.3, 0.2, 0.1) (thesis eqs. 3.27-3.28,
+        ref. [56]).
+    Odometry model, thesis eqs. 3.31-3.53 (UMBmark, refs. [19, 20])
         Standard deviations of the drawn systematic errors: ``alpha_eb_std_deg`` 0.5 and
-        ``alpha_ed_std_deg`` 0.5 [deg] (eq. 3.31), ``beta_std_deg`` 0.5 [deg] (eq. 3.33;
+        ``alpha_ed_std_deg`` 0.5 [deg] (thesis eq. 3.31), ``beta_std_deg`` 0.5 [deg]
+        (thesis eq. 3.33;
         with the trajectory's straight runs of 1-3 m this gives ``E_d - 1`` of about
         0.1 %, a well-built robot before calibration).
-    Additive conversion of [58], eqs. 3.81-3.90
-        ``lin_gain`` 0.09 (eq. 3.81), ``ang_gain`` 0.095 (eq. 3.82), ``eta`` 0.01 (eq. 3.83,
+    Additive conversion of [58], thesis eqs. 3.81-3.90
+        ``lin_gain`` 0.09 (thesis eq. 3.81), ``ang_gain`` 0.095 (thesis eq. 3.82), ``eta`` 0.01
+        (thesis eq. 3.83,
         "typically about 1%"), ``eps_lin`` 0 [m] and ``eps_ang`` 0 [rad] (noise of
-        eqs. 3.83-3.84; zero in the thesis).
-    EKF conversion, eqs. 3.54-3.80
+        thesis eqs. 3.83-3.84; zero in the thesis).
+    EKF conversion, thesis eqs. 3.54-3.80
         ``ekf_max_landmarks`` 400 (wall pixels decimated on a regular grid to at most this
         many landmarks), ``ekf_range_var_min`` 1e-4 [m^2] and ``ekf_bearing_var_min``
-        3e-4 [rad^2] (floors of R, eq. 3.69, which is singular when a1 or b1 is zero),
+        3e-4 [rad^2] (floors of R, thesis eq. 3.69, which is singular when a1 or b1 is zero),
         ``ekf_reference`` "plan" (the field is the final landmark estimate minus the
         landmark's plan position: the map error) or "initial" (minus the estimate the
         landmark was added with: only the filter's later corrections).
@@ -141,7 +144,12 @@ class ParametricParams:
             raise ValueError(problem)
 
     def zero_error(self) -> ParametricParams:
-        """The same parameters with every error source switched off (field must be zero)."""
+        """The same parameters with every error source switched off (field must be zero).
+
+        Returns
+        -------
+        ParametricParams
+        """
         zero = {
             f.name: 0.0
             for f in fields(self)
@@ -198,14 +206,50 @@ def _finite(v: Any) -> bool:
 
 
 def params_to_dict(p: ParametricParams) -> dict[str, Any]:
-    """Plain-YAML-friendly dict of every parameter."""
+    """Plain-YAML-friendly dict of every parameter.
+
+    Parameters
+    ----------
+    p : ParametricParams
+
+    Returns
+    -------
+    dict
+
+    Examples
+    --------
+    >>> params_to_dict(ParametricParams())["lin_gain"]
+    0.09
+    """
     d = asdict(p)
     d["z_weights"] = [float(x) for x in p.z_weights]
     return d
 
 
 def params_from_dict(d: dict[str, Any], source: str = "parameters") -> ParametricParams:
-    """Build parameters from a mapping, rejecting unknown keys, NaN and bad values."""
+    """Build parameters from a mapping, rejecting unknown keys, NaN and bad values.
+
+    Parameters
+    ----------
+    d : dict
+        Parameter names to values.
+    source : str
+        Named in errors (a file).
+
+    Returns
+    -------
+    ParametricParams
+
+    Raises
+    ------
+    InputError
+        Unknown key, wrong type or value out of range.
+
+    Examples
+    --------
+    >>> params_from_dict({"lin_gain": 0.1}).lin_gain
+    0.1
+    """
     if not isinstance(d, dict):
         raise InputError(source, "parameter file must hold a mapping of name: value")
     names = {f.name: f for f in fields(ParametricParams)}
@@ -238,7 +282,22 @@ def params_from_dict(d: dict[str, Any], source: str = "parameters") -> Parametri
 
 
 def load_params(path: str | os.PathLike) -> ParametricParams:
-    """Read a parameter YAML file (flat, or a ``params.yaml`` written by ``map2map deform``)."""
+    """Read a parameter YAML file (flat, or a ``params.yaml`` written by ``map2map deform``).
+
+    Parameters
+    ----------
+    path : path-like
+        The YAML file.
+
+    Returns
+    -------
+    ParametricParams
+
+    Raises
+    ------
+    InputError
+        Missing file, not YAML, bad keys or values.
+    """
     source = os.fspath(path)
     try:
         with open(path, encoding="utf-8") as fh:
@@ -263,7 +322,25 @@ def save_params(
     run: dict[str, Any] | None = None,
     drawn: dict[str, Any] | None = None,
 ) -> None:
-    """Write ``parameters`` (and informational ``run`` / ``drawn`` sections) atomically."""
+    """Write ``parameters`` (and informational ``run`` / ``drawn`` sections) atomically.
+
+    Parameters
+    ----------
+    p : ParametricParams
+        Parameters written under ``parameters``.
+    path : path-like
+        The YAML file.
+    run, drawn : dict, optional
+        Informational sections (run settings, drawn coefficients).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "params.yaml"
+    >>> save_params(ParametricParams(eta=0.02), path)
+    >>> load_params(path).eta
+    0.02
+    """
     doc: dict[str, Any] = {}
     if run:
         doc["run"] = run

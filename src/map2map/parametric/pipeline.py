@@ -87,6 +87,21 @@ def keyframe_indices(
     The turn is measured on the (unwrapped) heading averaged over ``smooth`` samples, so
     that the jitter of recorded grid paths (headings jumping by pi/4 at every stair step)
     does not make every sample a key pose; a real, lasting turn passes the filter.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        The trajectory.
+    distance : float
+        Metres between key poses.
+    angle : float
+        Radians between key poses.
+    smooth : int
+        Samples averaged for the heading.
+
+    Returns
+    -------
+    (K,) int array
     """
     keep = [0]
     x, y = traj.x, traj.y
@@ -107,14 +122,45 @@ def keyframe_indices(
 
 def trajectory_to_pixels(plan: OccupancyMap, x, y, theta) -> np.ndarray:
     """World poses -> pixel poses ``(x = column, y = row, angle)``, the angle in the image
-    frame (y down, so a world heading ``theta`` becomes ``-(theta - yaw)``)."""
+    frame (y down, so a world heading ``theta`` becomes ``-(theta - yaw)``).
+
+    Parameters
+    ----------
+    plan : OccupancyMap
+        The plan whose grid is used.
+    x, y, theta : array-like
+        World poses.
+
+    Returns
+    -------
+    (N, 3) float array
+    """
     rows, cols = plan.world_to_pixel_float(x, y)
     ang = wrap_angle(-(np.asarray(theta, float) - plan.origin[2]))
     return np.stack([cols, rows, ang], 1)
 
 
 def check_point(plan: OccupancyMap, x: float, y: float, what: str) -> np.ndarray:
-    """Pixel ``(x, y)`` of a world point that must lie in the plan's free space."""
+    """Pixel ``(x, y)`` of a world point that must lie in the plan's free space.
+
+    Parameters
+    ----------
+    plan : OccupancyMap
+        The plan.
+    x, y : float
+        World point, metres.
+    what : str
+        Name of the point in errors (``"start"``, ``"goal"``...).
+
+    Returns
+    -------
+    (2,) float array
+
+    Raises
+    ------
+    InputError
+        Outside the plan or not on free space.
+    """
     r, c = plan.world_to_pixel([x], [y])
     name = f"{what} ({x:g}, {y:g}) m"
     if not plan.contains(r, c)[0]:
@@ -144,6 +190,26 @@ def make_trajectory(
     and ``goal`` (world metres) it joins them; otherwise it joins two random roadmap
     nodes, or, with ``tour`` > 2, tours that many roadmap nodes spread over the plan.
     Raises :class:`InputError` for points outside the free space or not connected.
+
+    Parameters
+    ----------
+    plan : OccupancyMap
+        The plan.
+    p : ParametricParams
+        Roadmap and robot parameters.
+    rng : numpy.random.Generator
+        Source of the roadmap and the random ends.
+    start, goal : (x, y), optional
+        World metres.
+    waypoints : (W, 2) array, optional
+        World metres.
+    tour : int
+        Number of spread-out nodes to tour.
+
+    Returns
+    -------
+    trajectory : Trajectory
+    roadmap : Roadmap
     """
     if not plan.free.any():
         raise InputError(None, "the plan has no free space")
@@ -204,12 +270,28 @@ def deform(
     trajectory : Trajectory
         Robot trajectory in the plan's world frame.
     method : {"additive", "ekf"}
-        Conversion of odometry error to map error: ref. [58] (eqs. 3.81-3.90) or EKF-SLAM
-        (eqs. 3.54-3.80).
+        Conversion of odometry error to map error: ref. [58] (thesis eqs. 3.81-3.90) or EKF-SLAM
+        (thesis eqs. 3.54-3.80).
     params : ParametricParams
         Model parameters (defaults if None).
     rng : numpy.random.Generator
         All random draws; the same generator state gives the same bytes.
+
+    Returns
+    -------
+    DeformResult
+        The modelled map, the total, LIDAR and odometry fields, the observed pixels
+        and the trajectory.
+
+    Examples
+    --------
+    >>> from map2map.maps.floorplan import generate_floorplan
+    >>> plan = generate_floorplan(1, size=(6, 5), resolution=0.1)
+    >>> rng = np.random.default_rng(0)
+    >>> traj, _ = make_trajectory(plan, ParametricParams(), rng)
+    >>> res = deform(plan, traj, rng=rng)
+    >>> res.map.shape == plan.shape
+    True
     """
     if method not in METHODS:
         raise InputError("method", f"unknown method {method!r} (use additive or ekf)")
@@ -236,7 +318,7 @@ def deform(
     )
     observed = vis.observed_mask()
     timings["visibility"] = time.perf_counter() - t0
-    # LIDAR model (eqs. 3.8-3.30)
+    # LIDAR model (thesis eqs. 3.8-3.30)
     t1 = time.perf_counter()
     lcoef = draw_lidar_coefficients(p, rng)
     ocoef = draw_odometry_coefficients(p, rng)
@@ -247,7 +329,7 @@ def deform(
         D, alpha, heading = _geometry_range_angle(vis, poses_px, res, p.range_max)
     lf = lidar_field(D, alpha, lcoef, p, pm, rng, heading)
     timings["lidar"] = time.perf_counter() - t1
-    # odometry model (eqs. 3.31-3.53) on metric image-frame key poses
+    # odometry model (thesis eqs. 3.31-3.53) on metric image-frame key poses
     t2 = time.perf_counter()
     metric = poses_px.copy()
     metric[:, :2] *= res

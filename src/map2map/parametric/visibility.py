@@ -11,7 +11,7 @@ least 1 px), so no pixel of the visible region is skipped. Unknown plan pixels
 
 The result is a compressed sparse row structure: the pixels seen from pose ``k`` are
 ``pixels[indptr[k]:indptr[k + 1]]`` (flat indices ``row * W + col``, each once per pose).
-This is the per-pose field-of-view *mask* of eqs. 3.83-3.90, in a form that costs
+This is the per-pose field-of-view *mask* of thesis eqs. 3.83-3.90, in a form that costs
 memory proportional to what is seen rather than ``K * H * W``.
 
 Examples
@@ -48,17 +48,36 @@ class Visibility:
         return self.indptr.size - 1
 
     def seen_from(self, k: int) -> np.ndarray:
-        """Flat indices of the pixels seen from pose ``k``."""
+        """Flat indices of the pixels seen from pose ``k``.
+
+        Parameters
+        ----------
+        k : int
+
+        Returns
+        -------
+        int32 array
+        """
         return self.pixels[self.indptr[k] : self.indptr[k + 1]]
 
     def observed_mask(self) -> np.ndarray:
-        """Pixels seen from at least one pose."""
+        """Pixels seen from at least one pose.
+
+        Returns
+        -------
+        (H, W) bool array
+        """
         m = np.zeros(self.shape[0] * self.shape[1], bool)
         m[self.pixels] = True
         return m.reshape(self.shape)
 
     def first_seen(self) -> np.ndarray:
-        """(H, W) int32: index of the first pose that saw each pixel, -1 if never seen."""
+        """(H, W) int32: index of the first pose that saw each pixel, -1 if never seen.
+
+        Returns
+        -------
+        (H, W) int32 array
+        """
         first = np.full(self.shape[0] * self.shape[1], -1, np.int32)
         pose = np.repeat(np.arange(self.n_poses, dtype=np.int32), np.diff(self.indptr))
         # reversed assignment keeps the earliest pose for duplicated indices
@@ -66,7 +85,12 @@ class Visibility:
         return first.reshape(self.shape)
 
     def counts(self) -> np.ndarray:
-        """(H, W) int32: how many poses saw each pixel."""
+        """(H, W) int32: how many poses saw each pixel.
+
+        Returns
+        -------
+        (H, W) int32 array
+        """
         c = np.bincount(self.pixels, minlength=self.shape[0] * self.shape[1])
         return c.astype(np.int32).reshape(self.shape)
 
@@ -184,6 +208,17 @@ def visible_pixels(
         Cells that neither stop rays nor are marked seen.
     beam_spacing_px : float
         Largest gap between neighbouring rays at full range.
+
+    Returns
+    -------
+    Visibility
+
+    Examples
+    --------
+    >>> occ = np.zeros((20, 20), bool); occ[:, 12] = True
+    >>> vis = visible_pixels(occ, np.array([[5.0, 10.0, 0.0]]), 0.0, 30.0)
+    >>> bool((vis.seen_from(0) % 20 > 12).any())
+    False
     """
     occ = np.ascontiguousarray(occupancy, dtype=np.uint8)
     if unknown is not None:

@@ -83,13 +83,31 @@ class Mapper(Protocol):
     name: str
 
     def update(self, odom: OdometryReading, scan: LaserScan) -> None:
-        """Take one odometry reading and the scan taken at that time."""
+        """Take one odometry reading and the scan taken at that time.
+
+        Parameters
+        ----------
+        odom : OdometryReading
+            Raw odometry at the scan's time.
+        scan : LaserScan
+            The scan.
+        """
         ...
 
     def pose(self) -> np.ndarray:
-        """Current pose estimate ``(x, y, theta)`` in the map frame."""
+        """Current pose estimate ``(x, y, theta)`` in the map frame.
+
+        Returns
+        -------
+        (x, y, theta)
+        """
         ...
 
     def get_map(self) -> OccupancyMap:
-        """The current occupancy map (0 occupied, 255 free, 127 unknown)."""
+        """The current occupancy map (0 occupied, 255 free, 127 unknown).
+
+        Returns
+        -------
+        OccupancyMap
+        """
         ...

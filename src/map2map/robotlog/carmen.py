@@ -427,6 +427,17 @@ def read_carmen(path: str | os.PathLike, *, range_min: float = 0.0) -> CarmenLog
 def flaser_angle_increment(n: int) -> float:
     """Beam spacing of an old-format ``FLASER`` line of ``n`` readings (CARMEN's guess).
 
+    Parameters
+    ----------
+    n : int
+        Number of readings on the line.
+
+    Returns
+    -------
+    float
+        Angle between beams in radians: 180 and 181 beams span 180 degrees at 1
+        degree, 361 at 0.5, 401 at 0.25; any other count spans 180 degrees evenly.
+
     Examples
     --------
     >>> [round(math.degrees(flaser_angle_increment(n)), 3) for n in (180, 181, 361, 401, 90)]
@@ -526,6 +537,37 @@ def replay(log: CarmenLog, mapper: Mapper, *, use_truth: bool = True, progress: 
     Mappers that take ground truth (the oracle, which has ``observe_truth``) get
     the log's ``TRUEPOS`` poses when ``use_truth`` is set; SLAM backends never see
     them.
+
+    Parameters
+    ----------
+    log : CarmenLog
+        The recorded run.
+    mapper : Mapper
+        The backend to feed (its state is updated in place).
+    use_truth : bool
+        Give ``TRUEPOS`` poses to mappers that observe truth.
+    progress : bool
+        Show a tqdm progress bar.
+
+    Returns
+    -------
+    Mapper
+        ``mapper`` after the last scan.
+
+    Raises
+    ------
+    InputError
+        The mapper needs true poses and the log has none.
+
+    Examples
+    --------
+    >>> from map2map.robotlog.base import LaserScan, OdometryReading
+    >>> from map2map.robotlog.mappers import make_mapper
+    >>> scan = LaserScan(0.0, np.full(5, 2.0), -1.0, 0.5, 0.1, 3.5)
+    >>> log = CarmenLog(odometry=[OdometryReading(0.0, 0.0, 0.0, 0.0)], scans=[scan],
+    ...                 true_poses=np.zeros((1, 3)))
+    >>> bool(replay(log, make_mapper("oracle")).get_map().occupied.any())
+    True
     """
     from tqdm.auto import tqdm
 

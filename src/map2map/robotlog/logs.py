@@ -87,6 +87,18 @@ def read_breezyslam(path: str | os.PathLike, robot: BreezyRobot = BreezyRobot())
     degrees (counter-clockwise, 0 = ahead). A 0 reading (no echo or an error code)
     becomes NaN: unusable, it neither hits nor clears.
 
+    Parameters
+    ----------
+    path : path-like
+        The ``.dat`` log.
+    robot : BreezyRobot
+        Encoder and laser geometry.
+
+    Returns
+    -------
+    CarmenLog
+        Odometry (odometry frame starting at the origin) and scans, one per line.
+
     Raises
     ------
     InputError
@@ -152,6 +164,16 @@ def detect_format(path: str | os.PathLike) -> str:
 
     BreezySLAM logs are recognised by their first data line starting with a number;
     CARMEN lines start with a message name.
+
+    Parameters
+    ----------
+    path : path-like
+        A log file, or a folder written by ``map2map simulate``.
+
+    Returns
+    -------
+    str
+        The format name that :func:`load_log` takes.
     """
     path = Path(path)
     if path.is_dir():
@@ -176,7 +198,25 @@ def detect_format(path: str | os.PathLike) -> str:
 
 
 def load_log(path: str | os.PathLike, fmt: str = "auto") -> CarmenLog:
-    """Read a recorded run (see module docstring); ``fmt`` forces a format."""
+    """Read a recorded run (see module docstring); ``fmt`` forces a format.
+
+    Parameters
+    ----------
+    path : path-like
+        A CARMEN log (``.log``, ``.log.gz``), a BreezySLAM ``.dat`` or a simulator
+        output folder (its ``run.log``).
+    fmt : {"auto", "carmen", "breezyslam", "simrun"}
+        Format; ``"auto"`` asks :func:`detect_format`.
+
+    Returns
+    -------
+    CarmenLog
+
+    Raises
+    ------
+    InputError
+        Unknown format, a folder without ``run.log``, or the reader's own refusals.
+    """
     path = Path(path)
     kind = detect_format(path) if fmt == "auto" else fmt
     if kind == "simrun":

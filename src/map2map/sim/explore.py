@@ -155,7 +155,27 @@ def make_costmap(
     cost_scaling: float = 6.0,
     inflation_weight: float = 8.0,
 ) -> Costmap:
-    """Inflated costmap of ``m`` (see module docstring)."""
+    """Inflated costmap of ``m`` (see module docstring).
+
+    Parameters
+    ----------
+    m : OccupancyMap
+        The mapper's current map.
+    robot_radius : float
+        Radius of the robot, metres.
+    safety : float
+        Extra clearance, metres, below which a cell is not traversable.
+    inflation_radius : float
+        Distance, metres, over which costs decay to 1.
+    cost_scaling : float
+        Exponential decay rate of the inflation.
+    inflation_weight : float
+        Cost added at the edge of the lethal zone.
+
+    Returns
+    -------
+    Costmap
+    """
     src = np.where(m.occupied, 0, 255).astype(np.uint8)
     d = cv2.distanceTransform(src, cv2.DIST_L2, cv2.DIST_MASK_5)
     clear = (d - np.float32(0.5)) * np.float32(m.resolution)  # to the nearest occupied face
@@ -235,6 +255,18 @@ def dijkstra(cost, start_r, start_c):
     mean of the two cells' costs. Cells with infinite cost are never entered
     (the start cell is always expanded). Returns ``(dist, parent)`` with
     ``parent`` the flat index of the previous cell (-1 at the start / unreached).
+
+    Parameters
+    ----------
+    cost : (H, W) float array
+        Cell costs (``inf``: not traversable).
+    start_r, start_c : int
+        Start cell.
+
+    Returns
+    -------
+    dist : (H, W) float64 array
+    parent : (H, W) int64 array
     """
     h, w = cost.shape
     n_cells = h * w
@@ -284,7 +316,29 @@ def dijkstra(cost, start_r, start_c):
 
 
 def backtrack(parent: np.ndarray, goal_flat: int, width: int) -> np.ndarray:
-    """Cells ``(row, col)`` from the start to ``goal_flat`` following ``parent``."""
+    """Cells ``(row, col)`` from the start to ``goal_flat`` following ``parent``.
+
+    Parameters
+    ----------
+    parent : (H, W) int array
+        From :func:`dijkstra`.
+    goal_flat : int
+        Flat index of the goal cell.
+    width : int
+        Grid width.
+
+    Returns
+    -------
+    (P, 2) int array
+        ``(row, col)`` from start to goal.
+
+    Examples
+    --------
+    >>> cost = np.ones((3, 4), np.float32)
+    >>> dist, parent = dijkstra(cost, 0, 0)
+    >>> backtrack(parent, 2 * 4 + 3, 4).tolist()
+    [[0, 0], [1, 1], [2, 2], [2, 3]]
+    """
     cells = []
     u = int(goal_flat)
     while u >= 0:
@@ -311,6 +365,17 @@ def find_frontiers(m: OccupancyMap, min_size_cells: int = 10) -> Frontiers:
     diverging beams far from the robot) and unknown cells touching a wall (the
     fringe beams graze) do not make frontiers. Frontier cells up to one cell apart
     belong to the same group (a ragged boundary is one frontier, not many dashes).
+
+    Parameters
+    ----------
+    m : OccupancyMap
+        The mapper's current map.
+    min_size_cells : int
+        Smallest group kept.
+
+    Returns
+    -------
+    Frontiers
     """
     free = m.free.astype(np.uint8)
     k3 = np.ones((3, 3), np.uint8)
@@ -366,6 +431,24 @@ def frontier_goals(labels, n_groups, dist, occ, reach):
     reachable cell within ``reach`` cells of the middle with the least path cost and
     a clear line of sight to it; when there is none, the same search around every
     cell of the group. Returns ``(goal_flat, goal_cost)`` per group (-1 / inf if none).
+
+    Parameters
+    ----------
+    labels : (H, W) int array
+        Frontier groups (0 = none, k = group k - 1).
+    n_groups : int
+        Number of groups.
+    dist : (H, W) float array
+        Path cost from the robot (:func:`dijkstra`).
+    occ : (H, W) bool array
+        Cells that block the line of sight.
+    reach : int
+        Search radius around the middle, cells.
+
+    Returns
+    -------
+    goal_flat : (n_groups,) int64 array
+    goal_cost : (n_groups,) float64 array
     """
     h, w = labels.shape
     sum_r = np.zeros(n_groups)
@@ -445,7 +528,20 @@ class PathController:
         return d0 + float(np.hypot(*np.diff(p, axis=0).T).sum()) if len(p) > 1 else d0
 
     def command(self, pose, scan: LaserScan | None) -> tuple[float, float, bool]:
-        """``(v, w, blocked)`` to follow the path from ``pose``; ``(0, 0, False)`` at the end."""
+        """``(v, w, blocked)`` to follow the path from ``pose``; ``(0, 0, False)`` at the end.
+
+        Parameters
+        ----------
+        pose : (x, y, theta)
+            Pose estimate, map frame.
+        scan : LaserScan or None
+            Latest scan (stops the robot before an obstacle).
+
+        Returns
+        -------
+        v, w : float
+        blocked : bool
+        """
         if not len(self.path):
             return 0.0, 0.0, False
         x, y, th = pose
@@ -667,7 +763,23 @@ class Explorer:
 
     # -- control -------------------------------------------------------------
     def command(self, t: float, pose, mapper, scan: LaserScan | None) -> tuple[float, float]:
-        """Velocity command at time ``t`` from the mapper's pose estimate ``pose``."""
+        """Velocity command at time ``t`` from the mapper's pose estimate ``pose``.
+
+        Parameters
+        ----------
+        t : float
+            Simulated time, seconds.
+        pose : (x, y, theta)
+            Pose estimate, map frame.
+        mapper : Mapper
+            Asked for its map when replanning.
+        scan : LaserScan or None
+            Latest scan.
+
+        Returns
+        -------
+        v, w : float
+        """
         cfg = self.cfg
         dt = 0.0 if self._last_t is None else t - self._last_t
         self._last_t = t

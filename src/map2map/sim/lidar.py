@@ -146,7 +146,17 @@ class Scene:
 
     @classmethod
     def from_map(cls, m: OccupancyMap) -> Scene:
-        """Occupied cells of ``m`` block the beams; free and unknown cells do not."""
+        """Occupied cells of ``m`` block the beams; free and unknown cells do not.
+
+        Parameters
+        ----------
+        m : OccupancyMap
+            The map.
+
+        Returns
+        -------
+        Scene
+        """
         return cls(m, m.occupied)
 
     def cast(self, x: float, y: float, theta: float, rel_angles: np.ndarray, max_range: float):
@@ -154,6 +164,20 @@ class Scene:
 
         ``(x, y, theta)`` is the sensor pose in the frame of ``self.frame``;
         ``rel_angles`` are beam angles relative to ``theta`` (counter-clockwise).
+
+        Parameters
+        ----------
+        x, y, theta : float
+            Sensor pose, world frame.
+        rel_angles : (B,) float array
+            Beam angles relative to ``theta``.
+        max_range : float
+            Metres.
+
+        Returns
+        -------
+        (B,) float array
+            Metres.
         """
         m = self.frame
         row, col = m.world_to_pixel_float(x, y)
@@ -209,7 +233,19 @@ class Lidar:
         self._angles = config.angles
 
     def true_ranges(self, scene: Scene, pose) -> np.ndarray:
-        """Exact ranges (metres) from robot ``pose``; ``inf`` beyond ``range_max``."""
+        """Exact ranges (metres) from robot ``pose``; ``inf`` beyond ``range_max``.
+
+        Parameters
+        ----------
+        scene : Scene
+            What the beams hit.
+        pose : (x, y, theta)
+            Robot pose (the sensor offset is applied).
+
+        Returns
+        -------
+        (B,) float array
+        """
         cfg = self.config
         x, y, th = (float(v) for v in pose)
         ox, oy, oth = cfg.sensor_offset
@@ -220,7 +256,19 @@ class Lidar:
         return d
 
     def measure(self, true: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        """Apply the beam model and 1 mm quantisation to exact ranges (float32)."""
+        """Apply the beam model and 1 mm quantisation to exact ranges (float32).
+
+        Parameters
+        ----------
+        true : (B,) float array
+            Exact ranges.
+        rng : numpy.random.Generator
+            Source of the noise.
+
+        Returns
+        -------
+        (B,) float32 array
+        """
         cfg = self.config
         n = true.shape[0]
         kind = rng.random(n)
@@ -241,7 +289,23 @@ class Lidar:
         return (np.round(z * 1000.0) / 1000.0).astype(np.float32)
 
     def scan(self, scene: Scene, pose, t: float, rng: np.random.Generator) -> LaserScan:
-        """A noisy scan taken at robot ``pose`` (plan frame) at time ``t``."""
+        """A noisy scan taken at robot ``pose`` (plan frame) at time ``t``.
+
+        Parameters
+        ----------
+        scene : Scene
+            What the beams hit.
+        pose : (x, y, theta)
+            Robot pose, plan frame.
+        t : float
+            Time stamp, seconds.
+        rng : numpy.random.Generator
+            Source of the noise.
+
+        Returns
+        -------
+        LaserScan
+        """
         cfg = self.config
         ranges = self.measure(self.true_ranges(scene, pose), rng)
         return LaserScan(

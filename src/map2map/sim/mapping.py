@@ -71,6 +71,25 @@ def integrate_scan(L, T, x0, y0, angles, dists, hits, l_free, l_free_far, l_occ,
     must not carve free space behind it, while a wall that really went away (a
     person who walked off) still fades after a few beams.
     ``lims = (lmin, lmax, occ_thr, free_thr, block_thr)``.
+
+    Parameters
+    ----------
+    L : (H, W) float32 array
+        Log-odds grid, updated in place.
+    T : (H, W) array
+        Per-cell observation counter, updated in place.
+    x0, y0 : float
+        Sensor position in pixels.
+    angles, dists : float arrays
+        Beam directions (pixel frame) and lengths (pixels).
+    hits : bool array
+        Beam ended on an obstacle.
+    l_free, l_free_far, l_occ : float
+        Log-odds increments.
+    lims : tuple of float
+        ``(lmin, lmax, occ_thr, free_thr, block_thr)``.
+    margin : float
+        Pixels before the end point left uncleared.
     """
     h, w = L.shape
     lmin, lmax, occ_thr, free_thr, block_thr = lims[0], lims[1], lims[2], lims[3], lims[4]
@@ -199,7 +218,15 @@ class LogOddsGrid:
         self.ox, self.oy = nx0 * res, ny0 * res
 
     def integrate(self, sensor_pose, scan: LaserScan) -> None:
-        """Add one scan taken from ``sensor_pose`` (x, y, theta) in this grid's frame."""
+        """Add one scan taken from ``sensor_pose`` (x, y, theta) in this grid's frame.
+
+        Parameters
+        ----------
+        sensor_pose : (x, y, theta)
+            Sensor pose, this grid's frame.
+        scan : LaserScan
+            The scan.
+        """
         x, y, th = (float(v) for v in sensor_pose)
         rmax = float(scan.range_max)
         self._ensure(x - rmax, x + rmax, y - rmax, y + rmax)
@@ -231,7 +258,12 @@ class LogOddsGrid:
         )
 
     def to_map(self) -> OccupancyMap:
-        """The ternary map (a copy) with its frame."""
+        """The ternary map (a copy) with its frame.
+
+        Returns
+        -------
+        OccupancyMap
+        """
         if not self.T.size:
             return OccupancyMap(np.full((1, 1), UNKNOWN, np.uint8), self.resolution)
         return OccupancyMap(self.T.copy(), self.resolution, (self.ox, self.oy, 0.0))
@@ -259,10 +291,30 @@ class OracleMapper:
         self._pose = (0.0, 0.0, 0.0)
 
     def observe_truth(self, pose) -> None:
-        """The true pose (any fixed world frame) at the next scan."""
+        """The true pose (any fixed world frame) at the next scan.
+
+        Parameters
+        ----------
+        pose : (x, y, theta)
+            True pose.
+        """
         self._truth = tuple(float(v) for v in pose)
 
     def update(self, odom: OdometryReading, scan: LaserScan) -> None:
+        """Integrate ``scan`` at the pose given to :meth:`observe_truth`.
+
+        Parameters
+        ----------
+        odom : OdometryReading
+            Ignored (the oracle uses the true pose).
+        scan : LaserScan
+            Integrated at the true pose.
+
+        Raises
+        ------
+        RuntimeError
+            No :meth:`observe_truth` since the last update.
+        """
         if self._truth is None:
             raise RuntimeError("OracleMapper needs observe_truth(pose) before each update")
         if self._start is None:
@@ -273,9 +325,22 @@ class OracleMapper:
         self._truth = None
 
     def pose(self) -> np.ndarray:
+        """The current pose in the map frame (exact).
+
+        Returns
+        -------
+        (3,) ndarray
+            The last true pose relative to the first one (the map frame).
+        """
         return np.array(self._pose)
 
     def get_map(self) -> OccupancyMap:
+        """The map built from the true poses.
+
+        Returns
+        -------
+        OccupancyMap
+        """
         return self.grid.to_map()
 
 
@@ -285,6 +350,20 @@ def resample_to_frame(m: OccupancyMap, frame_pose, target: OccupancyMap) -> Occu
     ``frame_pose`` is the pose of ``m``'s world frame in ``target``'s world frame
     (for a SLAM map: the robot's true start pose in the plan). Nearest-neighbour,
     cells outside ``m`` are unknown.
+
+    Parameters
+    ----------
+    m : OccupancyMap
+        The map to move.
+    frame_pose : (x, y, theta)
+        Pose of ``m``'s world frame in ``target``'s.
+    target : OccupancyMap
+        The grid to resample onto.
+
+    Returns
+    -------
+    OccupancyMap
+        ``target``'s shape, resolution and origin, ``m``'s content.
 
     Examples
     --------

@@ -75,7 +75,17 @@ class OdometryErrors:
 
     @classmethod
     def none(cls, ticks_per_rev: int = 4096) -> OdometryErrors:
-        """No systematic error and no slip."""
+        """No systematic error and no slip.
+
+        Parameters
+        ----------
+        ticks_per_rev : int
+            Encoder resolution kept.
+
+        Returns
+        -------
+        OdometryErrors
+        """
         return cls(1.0, 1.0, 1.0, 0.0, ticks_per_rev)
 
 
@@ -115,7 +125,15 @@ class WheelOdometry:
         self._ticks_l = self._ticks_r = 0
 
     def step(self, ds: float, dth: float) -> None:
-        """The true robot moved ``ds`` metres while turning ``dth`` rad; update the pose."""
+        """The true robot moved ``ds`` metres while turning ``dth`` rad; update the pose.
+
+        Parameters
+        ----------
+        ds : float
+            Metres.
+        dth : float
+            Radians.
+        """
         e, p = self.errors, self.params
         roll_l = ds - dth * self.b_true / 2
         roll_r = ds + dth * self.b_true / 2

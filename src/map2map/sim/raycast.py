@@ -54,6 +54,21 @@ def make_cast_grid(solid: np.ndarray) -> np.ndarray:
     one load per step tells both whether a cell blocks and how far one may jump.
     Coordinates into the field are shifted by one cell; the ``cast_*`` functions
     take the unshifted coordinates of the original grid.
+
+    Parameters
+    ----------
+    solid : (H, W) bool array
+        Cells that stop a ray.
+
+    Returns
+    -------
+    (H + 2, W + 2) float32 array
+
+    Examples
+    --------
+    >>> g = make_cast_grid(np.zeros((3, 3), bool))
+    >>> g.shape, float(g[0, 0]), float(g[2, 2]) > 0
+    ((5, 5), -2.0, True)
     """
     from scipy.ndimage import distance_transform_edt
 
@@ -219,6 +234,21 @@ def cast_scan(field, x0, y0, heading, cos_rel, sin_rel, max_dist, out):
 
     Writes distances (pixels, ``inf`` for no return) into ``out``. Avoids one
     ``cos``/``sin`` pair per beam by rotating precomputed beam directions.
+
+    Parameters
+    ----------
+    field : float32 array
+        From :func:`make_cast_grid`.
+    x0, y0 : float
+        Sensor position, pixels of the original grid.
+    heading : float
+        Sensor heading, pixel frame.
+    cos_rel, sin_rel : float arrays
+        Cosine and sine of the beams' angles relative to the heading.
+    max_dist : float
+        Longest range, pixels.
+    out : float array
+        Receives the distances.
     """
     ch = math.cos(heading)
     sh = math.sin(heading)
@@ -234,6 +264,21 @@ def cast_rays_many(field, xs, ys, headings, rel_angles, max_dist):
 
     ``headings[k] + rel_angles[j]`` is the direction of beam ``j`` at pose ``k``
     (pixel frame). Used by benchmarks and batch simulation.
+
+    Parameters
+    ----------
+    field : float32 array
+        From :func:`make_cast_grid`.
+    xs, ys, headings : (N,) float arrays
+        Poses, pixel frame.
+    rel_angles : (B,) float array
+        Beam angles relative to the heading.
+    max_dist : float
+        Longest range, pixels.
+
+    Returns
+    -------
+    (N, B) float array
     """
     n = xs.shape[0]
     b = rel_angles.shape[0]

@@ -64,7 +64,17 @@ class RobotParams:
     max_alpha: float = 3.2
 
     def wheel_speed_limit(self, v: float, w: float) -> tuple[float, float]:
-        """Scale ``(v, w)`` so that no wheel exceeds ``max_v`` (same curvature)."""
+        """Scale ``(v, w)`` so that no wheel exceeds ``max_v`` (same curvature).
+
+        Parameters
+        ----------
+        v, w : float
+            Linear (m/s) and angular (rad/s) command.
+
+        Returns
+        -------
+        v, w : float
+        """
         v = min(max(float(v), -self.max_v), self.max_v)
         w = min(max(float(w), -self.max_w), self.max_w)
         fastest = abs(v) + abs(w) * self.wheelbase / 2
@@ -78,7 +88,26 @@ WAFFLE_PI = RobotParams()
 
 
 def arc_step(pose, ds: float, dth: float) -> tuple[float, float, float]:
-    """Pose after moving ``ds`` along an arc turning by ``dth`` (exact integration)."""
+    """Pose after moving ``ds`` along an arc turning by ``dth`` (exact integration).
+
+    Parameters
+    ----------
+    pose : (x, y, theta)
+        Start pose.
+    ds : float
+        Arc length, metres.
+    dth : float
+        Heading change, radians.
+
+    Returns
+    -------
+    (x, y, theta)
+
+    Examples
+    --------
+    >>> [round(v, 6) for v in arc_step((0.0, 0.0, 0.0), 1.0, 0.0)]
+    [1.0, 0.0, 0.0]
+    """
     x, y, th = pose
     if abs(dth) < 1e-9:
         mid = th + dth / 2
@@ -130,6 +159,20 @@ class DiffDriveRobot:
 
         ``people`` is an optional ``(K, 3)`` array of ``(x, y, radius)``; the robot
         halts rather than drive into a person (not a collision).
+
+        Parameters
+        ----------
+        v_cmd, w_cmd : float
+            Command.
+        dt : float
+            Seconds.
+        people : array, optional
+            Circles ``(x, y, r)`` of the people.
+
+        Returns
+        -------
+        StepResult
+            Executed motion ``ds``, ``dth``, ``collided``, ``blocked_by_person``.
         """
         p = self.params
         v_cmd, w_cmd = p.wheel_speed_limit(v_cmd, w_cmd)

@@ -36,6 +36,20 @@ def read_route(path: str | os.PathLike, kind: str = "waypoints", min_spacing: fl
     Parsing and validation are :func:`map2map.trajectory.read_waypoints` and
     :func:`map2map.trajectory.read_trajectory`; poses closer than ``min_spacing``
     metres are thinned out.
+
+    Parameters
+    ----------
+    path : path-like
+        The file.
+    kind : {"waypoints", "trajectory"}
+        How to read it.
+    min_spacing : float
+        Metres between kept poses.
+
+    Returns
+    -------
+    (N, 2) or (N, 3) float array
+        World metres (and radians).
     """
     from ..trajectory import read_trajectory, read_waypoints
 
@@ -60,7 +74,22 @@ def _thin(pts: np.ndarray, spacing: float) -> np.ndarray:
 
 
 def as_waypoints(route) -> np.ndarray:
-    """Any route object as an ``(N, 2|3)`` float array (see module docstring)."""
+    """Any route object as an ``(N, 2|3)`` float array (see module docstring).
+
+    Parameters
+    ----------
+    route : array-like, Trajectory or roadmap path
+        The route.
+
+    Returns
+    -------
+    (N, 2) or (N, 3) float array
+
+    Examples
+    --------
+    >>> as_waypoints([(0, 0), (1, 2)]).tolist()
+    [[0.0, 0.0], [1.0, 2.0]]
+    """
     if hasattr(route, "x") and hasattr(route, "y"):
         cols = [np.asarray(route.x, float), np.asarray(route.y, float)]
         if hasattr(route, "theta"):

@@ -31,7 +31,7 @@ from __future__ import annotations
 import math
 import os
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 import numpy as np
@@ -49,7 +49,7 @@ from .robot import WAFFLE_PI, DiffDriveRobot, RobotParams
 from .routes import as_waypoints
 from .world import World, check_start
 
-__all__ = ["SimResult", "simulate", "choose_start", "validate_route", "REACH_MARGIN"]
+__all__ = ["SimConfig", "SimResult", "simulate", "choose_start", "validate_route", "REACH_MARGIN"]
 
 #: Clearance (m) beyond the robot radius that "reachable" free space requires: the
 #: coverage reference is what a navigation stack keeping 5 cm from walls can reach.
@@ -123,7 +123,12 @@ class SimResult:
     info: dict[str, Any] = field(default_factory=dict)
 
     def report(self) -> dict[str, Any]:
-        """The contents of ``report.json``."""
+        """The contents of ``report.json``.
+
+        Returns
+        -------
+        dict
+        """
         err = self.estimated_poses[:, :2] - self.true_poses[:, :2]
         return {
             "coverage": round(self.coverage, 6),
@@ -142,7 +147,27 @@ class SimResult:
 
 def choose_start(world: World, radius: float, rng: np.random.Generator):
     """A random start pose with room around it, in the largest region the robot can
-    reach keeping :data:`REACH_MARGIN` from walls."""
+    reach keeping :data:`REACH_MARGIN` from walls.
+
+    Parameters
+    ----------
+    world : World
+        The plan with its clearance.
+    radius : float
+        Robot radius, metres.
+    rng : numpy.random.Generator
+        Source of the draw.
+
+    Returns
+    -------
+    (x, y, theta)
+        Plan frame.
+
+    Raises
+    ------
+    InputError
+        No place with enough clearance.
+    """
     from scipy import ndimage
 
     ok = world.clearance >= radius + 0.15
@@ -166,7 +191,28 @@ def choose_start(world: World, radius: float, rng: np.random.Generator):
 
 
 def validate_route(world: World, waypoints, radius: float, source) -> np.ndarray:
-    """Check a route against the plan: finite, >= 1 point, every segment clear of walls."""
+    """Check a route against the plan: finite, >= 1 point, every segment clear of walls.
+
+    Parameters
+    ----------
+    world : World
+        The plan with its clearance.
+    waypoints : array-like
+        ``(N, 2)`` or ``(N, 3)`` points, plan frame.
+    radius : float
+        Clearance the robot needs, metres.
+    source : path-like or str
+        Named in errors.
+
+    Returns
+    -------
+    (N, 2) or (N, 3) float array
+
+    Raises
+    ------
+    InputError
+        Malformed route, a point or segment outside the plan or through a wall.
+    """
     try:
         wp = np.asarray(waypoints, float)
     except (TypeError, ValueError):
@@ -196,6 +242,50 @@ def validate_route(world: World, waypoints, radius: float, source) -> np.ndarray
     return wp
 
 
+@dataclass(frozen=True)
+class SimConfig:
+    """The knobs of :func:`simulate` in one value (a dataset builder keeps one per split).
+
+    Every field is a keyword argument of :func:`simulate` with the same default;
+    ``simulate(plan, config=cfg)`` runs with ``cfg`` and ``simulate(plan, seed=3)``
+    builds one. See :func:`simulate` for the meaning of each field.
+
+    Examples
+    --------
+    >>> cfg = SimConfig(mapper="oracle", duration=30.0, progress=False)
+    >>> cfg.seed, cfg.control_hz, cfg.lidar_config().fov_deg
+    (0, 5.0, 360.0)
+    >>> SimConfig(fov=180.0).lidar_config().fov_deg
+    180.0
+    """
+
+    seed: int = 0
+    duration: float = 420.0
+    fov: float = 360.0
+    mapper: str | Mapper = "rbpf"
+    obstacles: int = 0
+    people: int = 0
+    lidar: LidarConfig | None = None
+    odometry: OdometryErrors | None = None
+    robot: RobotParams = WAFFLE_PI
+    explore: ExploreConfig | None = None
+    control_hz: float = 5.0
+    frame_every: float = 0.0
+    progress: bool = True
+
+    def lidar_config(self) -> LidarConfig:
+        """``lidar``, or the LDS-01 defaults with the field of view ``fov``.
+
+        Returns
+        -------
+        LidarConfig
+        """
+        return self.lidar or LidarConfig(fov_deg=float(self.fov))
+
+
+_KNOBS = tuple(f.name for f in fields(SimConfig))
+
+
 def simulate(
     plan: OccupancyMap,
     *,
@@ -216,6 +306,7 @@ def simulate(
     progress: bool = True,
     source: str | os.PathLike | None = None,
     route_source: str | os.PathLike | None = None,
+    config: SimConfig | None = None,
 ) -> SimResult:
     """Simulate one run of a TurtleBot3 exploring ``plan`` (or following ``route``).
 
@@ -252,27 +343,103 @@ def simulate(
         Show a tqdm progress bar (simulated seconds).
     source, route_source : path, optional
         Names used in error messages (the plan file, the route file).
+    config : SimConfig, optional
+        All the knobs above (``seed`` to ``progress``) in one value; a knob also
+        given as a keyword with a value other than its default overrides ``config``.
+
+    Returns
+    -------
+    SimResult
+        Trajectories (true, estimated, odometry), scans, odometry readings, the
+        mapper's map (own frame and resampled onto the plan), coverage of the
+        reachable free space, collisions and the report's counters.
 
     Raises
     ------
     InputError
         Plan without free space or too small for the robot, start pose in a wall
         or outside, a route that is malformed or goes through walls, duration <= 0.
-    """
-    from tqdm.auto import tqdm
 
+    Examples
+    --------
+    >>> import numpy as np
+    >>> data = np.full((60, 100), 255, np.uint8); data[[0, -1], :] = 0; data[:, [0, -1]] = 0
+    >>> cfg = SimConfig(mapper="oracle", seed=2, duration=10, progress=False)
+    >>> res = simulate(OccupancyMap(data, 0.05), config=cfg)
+    >>> res.info["mapper"], len(res.scans)
+    ('oracle', 46)
+    """
     t_wall = time.perf_counter()
+    given = locals()
+    cfg = _config(config, {k: given[k] for k in _KNOBS})
     src = source if source is not None else "plan"
+    duration = cfg.duration
     if not (isinstance(duration, int | float) and math.isfinite(duration) and duration > 0):
         raise InputError("duration", f"duration must be > 0 seconds, got {duration}")
     if not plan.free.any():
         raise InputError(src, "plan has no free space")
-    rng = np.random.default_rng(seed)
+    setup = _set_up(plan, cfg, route, start, src, route_source)
+    trace = _drive(setup, cfg)
+    return _result(plan, setup, trace, cfg, t_wall)
+
+
+def _config(config: SimConfig | None, knobs: dict[str, Any]) -> SimConfig:
+    """``config`` with the knobs given as keywords (non-default values) applied."""
+    if config is None:
+        return SimConfig(**knobs)
+    defaults = SimConfig()
+    changed = {k: v for k, v in knobs.items() if not _same(v, getattr(defaults, k))}
+    return replace(config, **changed) if changed else config
+
+
+def _same(a, b) -> bool:
+    """``a`` is the default ``b`` (same type, equal)."""
+    if a is b:
+        return True
+    try:
+        return bool(a == b) and type(a) is type(b)
+    except Exception:  # noqa: BLE001 - arrays, odd objects: not the default
+        return False
+
+
+@dataclass
+class _Setup:
+    """What a run starts from: the world, the start pose, the robot and its parts."""
+
+    world: World
+    start: tuple[float, float, float]
+    waypoints: np.ndarray | None
+    mapper: Mapper
+    bot: DiffDriveRobot
+    odo: WheelOdometry
+    sensor: Lidar
+    lidar: LidarConfig
+    driver: Explorer | RouteFollower
+    rng_lidar: np.random.Generator
+    rng_people: np.random.Generator
+
+
+def _route_start(wp: np.ndarray) -> tuple[float, float, float]:
+    """Start pose of a route: its first point, heading to the first point 5 cm away."""
+    th = float(wp[0, 2]) if wp.shape[1] == 3 else 0.0
+    if wp.shape[1] == 2 and len(wp) > 1:
+        d = wp[1:, :2] - wp[0, :2]
+        k = int(np.argmax(np.hypot(d[:, 0], d[:, 1]) > 0.05))
+        th = math.atan2(d[k, 1], d[k, 0])
+    return float(wp[0, 0]), float(wp[0, 1]), th
+
+
+def _set_up(plan, cfg: SimConfig, route, start, src, route_source) -> _Setup:
+    """World, start pose, mapper, robot, odometry, lidar and driver (explorer or route).
+
+    The random streams are spawned from ``cfg.seed`` in a fixed order (world, start,
+    lidar, odometry, people), so the same seed gives the same run bit for bit.
+    """
+    robot = cfg.robot
+    rng = np.random.default_rng(cfg.seed)
     rng_world, rng_start, rng_lidar, rng_odo, rng_people = rng.spawn(5)
-    lidar_cfg = lidar or LidarConfig(fov_deg=float(fov))
-    if lidar is None and fov != 360.0:
-        lidar_cfg = LidarConfig(fov_deg=float(fov))
-    ecfg = explore or ExploreConfig(robot_radius=robot.radius)
+    lidar_cfg = cfg.lidar_config()
+    ecfg = cfg.explore or ExploreConfig(robot_radius=robot.radius)
     base = World.build(plan, start=(0.0, 0.0, 0.0), rng=rng_world)
     if not (base.clearance >= robot.radius).any():
         raise InputError(src, "plan too small for the robot: no place with enough clearance")
@@ -280,12 +447,7 @@ def simulate(
     if route is not None:
         wp = validate_route(base, as_waypoints(route), robot.radius, route_source or "route")
         if start is None:
-            th = float(wp[0, 2]) if wp.shape[1] == 3 else 0.0
-            if wp.shape[1] == 2 and len(wp) > 1:
-                d = wp[1:, :2] - wp[0, :2]
-                k = int(np.argmax(np.hypot(d[:, 0], d[:, 1]) > 0.05))
-                th = math.atan2(d[k, 1], d[k, 0])
-            start = (float(wp[0, 0]), float(wp[0, 1]), th)
+            start = _route_start(wp)
     if start is None:
         start = choose_start(base, robot.radius, rng_start)
     start = tuple(float(v) for v in start)
@@ -293,122 +455,154 @@ def simulate(
     world = World.build(
         plan,
         start=start,
-        obstacles=obstacles,
-        people=people,
+        obstacles=cfg.obstacles,
+        people=cfg.people,
         robot_radius=robot.radius,
         rng=rng_world,
     )
+    mapper = cfg.mapper
     if isinstance(mapper, str):
-        mapper_obj = make_mapper(mapper, resolution=plan.resolution, seed=seed)
-    else:
-        mapper_obj = mapper
-    has_truth = hasattr(mapper_obj, "observe_truth")
-
-    bot = DiffDriveRobot(robot, start, world)
-    odo = WheelOdometry(odometry or OdometryErrors(), robot, rng=rng_odo)
-    sensor = Lidar(lidar_cfg)
+        mapper = make_mapper(mapper, resolution=plan.resolution, seed=cfg.seed)
     if wp is not None:
         local = np.array([relative_pose(start, (x, y, 0.0))[:2] for x, y in wp[:, :2]])
         driver: Explorer | RouteFollower = RouteFollower(local, ecfg, robot.max_v, robot.max_w)
     else:
         driver = Explorer(ecfg, robot.max_v, robot.max_w, spin_first=lidar_cfg.fov_deg < 360)
+    return _Setup(
+        world=world,
+        start=start,
+        waypoints=wp,
+        mapper=mapper,
+        bot=DiffDriveRobot(robot, start, world),
+        odo=WheelOdometry(cfg.odometry or OdometryErrors(), robot, rng=rng_odo),
+        sensor=Lidar(lidar_cfg),
+        lidar=lidar_cfg,
+        driver=driver,
+        rng_lidar=rng_lidar,
+        rng_people=rng_people,
+    )
 
+
+@dataclass
+class _Trace:
+    """What the control loop recorded, per scan and per contact."""
+
+    times: list = field(default_factory=list)
+    true_p: list = field(default_factory=list)
+    est_p: list = field(default_factory=list)
+    odo_p: list = field(default_factory=list)
+    vel: list = field(default_factory=list)
+    scans: list[LaserScan] = field(default_factory=list)
+    readings: list[OdometryReading] = field(default_factory=list)
+    frames: list = field(default_factory=list)
+    collisions: int = 0
+    contacts: list[tuple[float, float, float, float]] = field(default_factory=list)
+    path_len: float = 0.0
+    stop_reason: str = "time budget"
+
+
+def _drive(s: _Setup, cfg: SimConfig) -> _Trace:
+    """The control loop (module docstring): move, integrate odometry, scan, map, replan."""
+    from tqdm.auto import tqdm
+
+    world, bot, odo, mapper, driver, start = s.world, s.bot, s.odo, s.mapper, s.driver, s.start
+    has_truth = hasattr(mapper, "observe_truth")
+    control_hz, duration = cfg.control_hz, cfg.duration
     dt = 1.0 / control_hz
-    per_scan = max(1, int(round(control_hz / lidar_cfg.rate_hz)))
+    per_scan = max(1, int(round(control_hz / s.lidar.rate_hz)))
     n_steps = int(math.floor(duration * control_hz + 1e-9))
-    times, true_p, est_p, odo_p, vel = [], [], [], [], []
-    scans: list[LaserScan] = []
-    readings: list[OdometryReading] = []
-    frames = []
-    collisions = 0
-    contacts: list[tuple[float, float, float, float]] = []
+    tr = _Trace()
     in_contact = False
-    path_len = 0.0
     last_scan = None
     est = (0.0, 0.0, 0.0)
-    stop_reason = "time budget"
     next_frame = 0.0
-    bar = tqdm(total=int(duration), desc="simulate", unit="sim s", disable=not progress)
+    bar = tqdm(total=int(duration), desc="simulate", unit="sim s", disable=not cfg.progress)
     t = 0.0
     for step in range(n_steps + 1):
         t = step * dt
         if step % per_scan == 0:
             if step:
-                world.step_people(dt * per_scan, bot.pose[:2], rng_people)
-            scan = sensor.scan(world.scene, bot.pose, t, rng_lidar)
+                world.step_people(dt * per_scan, bot.pose[:2], s.rng_people)
+            scan = s.sensor.scan(world.scene, bot.pose, t, s.rng_lidar)
             reading = OdometryReading(t, *odo.pose)
             if has_truth:
-                mapper_obj.observe_truth(bot.pose)
-            mapper_obj.update(reading, scan)
-            est = tuple(float(v) for v in mapper_obj.pose())
-            scans.append(scan)
-            readings.append(reading)
-            times.append(t)
-            true_p.append(bot.pose)
-            est_p.append(compose_pose(start, est))
-            odo_p.append(compose_pose(start, odo.pose))
-            vel.append((bot.v, bot.w))
+                mapper.observe_truth(bot.pose)
+            mapper.update(reading, scan)
+            est = tuple(float(v) for v in mapper.pose())
+            tr.scans.append(scan)
+            tr.readings.append(reading)
+            tr.times.append(t)
+            tr.true_p.append(bot.pose)
+            tr.est_p.append(compose_pose(start, est))
+            tr.odo_p.append(compose_pose(start, odo.pose))
+            tr.vel.append((bot.v, bot.w))
             last_scan = scan
-            if frame_every > 0 and t >= next_frame:
-                frames.append((t, mapper_obj.get_map(), bot.pose))
-                next_frame = t + frame_every
+            if cfg.frame_every > 0 and t >= next_frame:
+                tr.frames.append((t, mapper.get_map(), bot.pose))
+                next_frame = t + cfg.frame_every
             if step:
                 bar.update(int(t) - bar.n)
         if step == n_steps:
             break
-        v, w = driver.command(t, est, mapper_obj, last_scan)
+        v, w = driver.command(t, est, mapper, last_scan)
         if driver.done:
-            stop_reason = "route done" if wp is not None else "explored"
+            tr.stop_reason = "route done" if s.waypoints is not None else "explored"
             break
-        res = bot.step(v, w, dt, world.people.circles if people else None)
+        res = bot.step(v, w, dt, world.people.circles if cfg.people else None)
         odo.step(res.ds, res.dth)
-        path_len += abs(res.ds)
+        tr.path_len += abs(res.ds)
         if res.collided and not in_contact:
-            collisions += 1
-            contacts.append((t, *bot.pose))
+            tr.collisions += 1
+            tr.contacts.append((t, *bot.pose))
         in_contact = res.collided
     bar.close()
+    return tr
 
-    slam_map = mapper_obj.get_map()
+
+def _result(plan, s: _Setup, tr: _Trace, cfg: SimConfig, t_wall: float) -> SimResult:
+    """The :class:`SimResult`: final map in the plan frame, coverage, report counters."""
+    world, start, mapper, driver = s.world, s.start, s.mapper, s.driver
+    radius = cfg.robot.radius
+    slam_map = mapper.get_map()
     slam_plan = resample_to_frame(slam_map, start, plan)
-    reachable = world.reachable_cells(start, robot.radius, REACH_MARGIN)
+    reachable = world.reachable_cells(start, radius, REACH_MARGIN)
     n_reach = int(reachable.sum())
     coverage = float((slam_plan.free & reachable).sum() / n_reach) if n_reach else 0.0
-    touchable = world.reachable_cells(start, robot.radius)  # no margin: every squeeze counts
+    touchable = world.reachable_cells(start, radius)  # no margin: every squeeze counts
     strict = float((slam_plan.free & touchable).sum() / max(int(touchable.sum()), 1))
-    frames = [(ft, resample_to_frame(fm, start, plan), fp) for ft, fm, fp in frames]
+    frames = [(ft, resample_to_frame(fm, start, plan), fp) for ft, fm, fp in tr.frames]
     info = {
-        "seed": int(seed),
-        "mapper": getattr(mapper_obj, "name", type(mapper_obj).__name__),
-        "fov_deg": lidar_cfg.fov_deg,
+        "seed": int(cfg.seed),
+        "mapper": getattr(mapper, "name", type(mapper).__name__),
+        "fov_deg": s.lidar.fov_deg,
         "obstacles": len(world.furniture),
-        "people": int(people),
-        "mode": "route" if wp is not None else "explore",
+        "people": int(cfg.people),
+        "mode": "route" if s.waypoints is not None else "explore",
         "replans": driver.stats.replans,
         "blacklisted_goals": len(driver.stats.blacklisted),
         "coverage_strict": round(strict, 6),
-        "collision_events": [[round(float(v), 3) for v in c] for c in contacts],
+        "collision_events": [[round(float(v), 3) for v in c] for c in tr.contacts],
     }
     return SimResult(
         plan=plan,
         world=world,
         start=start,
-        times=np.array(times),
-        true_poses=np.array(true_p),
-        estimated_poses=np.array(est_p),
-        odometry_poses=np.array(odo_p),
-        scans=scans,
-        odometry=readings,
-        velocities=np.array(vel),
+        times=np.array(tr.times),
+        true_poses=np.array(tr.true_p),
+        estimated_poses=np.array(tr.est_p),
+        odometry_poses=np.array(tr.odo_p),
+        scans=tr.scans,
+        odometry=tr.readings,
+        velocities=np.array(tr.vel),
         slam_map=slam_map,
         slam_map_plan=slam_plan,
         reachable=reachable,
         coverage=coverage,
-        path_length=path_len,
-        collisions=collisions,
-        sim_seconds=float(times[-1]) if times else 0.0,
+        path_length=tr.path_len,
+        collisions=tr.collisions,
+        sim_seconds=float(tr.times[-1]) if tr.times else 0.0,
         wall_seconds=time.perf_counter() - t_wall,
-        stop_reason=stop_reason,
+        stop_reason=tr.stop_reason,
         frames=frames,
         info=info,
     )

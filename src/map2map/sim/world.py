@@ -80,7 +80,17 @@ class World:
 
     # ------------------------------------------------------------ geometry
     def clearance_at(self, xs, ys) -> np.ndarray:
-        """Distance (m) from points (plan frame) to the nearest blocked cell; 0 outside."""
+        """Distance (m) from points (plan frame) to the nearest blocked cell; 0 outside.
+
+        Parameters
+        ----------
+        xs, ys : array-like
+            Points, metres.
+
+        Returns
+        -------
+        ndarray of float
+        """
         r, c = self.plan.world_to_pixel(xs, ys)
         inside = self.plan.contains(r, c)
         out = np.zeros(np.shape(r))
@@ -93,6 +103,19 @@ class World:
 
         With a ``margin`` (the clearance a navigation stack keeps, e.g. 5 cm) gaps the
         robot could only squeeze through touching both sides do not count as reachable.
+
+        Parameters
+        ----------
+        start : (x, y, theta)
+            Start pose.
+        radius : float
+            Robot radius, metres.
+        margin : float
+            Extra clearance, metres.
+
+        Returns
+        -------
+        (H, W) bool array
         """
         ok = self.clearance >= radius + margin
         r, c = (int(v) for v in self.plan.world_to_pixel(start[0], start[1]))
@@ -118,7 +141,25 @@ class World:
         robot_radius: float = 0.2,
         rng: np.random.Generator,
     ) -> World:
-        """The world for a run: ``obstacles`` furniture boxes and ``people`` walkers (seeded)."""
+        """The world for a run: ``obstacles`` furniture boxes and ``people`` walkers (seeded).
+
+        Parameters
+        ----------
+        plan : OccupancyMap
+            The plan.
+        start : (x, y, theta)
+            Robot start (kept clear of furniture and people).
+        obstacles, people : int
+            Counts.
+        robot_radius : float
+            Metres.
+        rng : numpy.random.Generator
+            Source of the placements.
+
+        Returns
+        -------
+        World
+        """
         blocked = ~plan.free
         solid = plan.occupied.copy()
         world = cls(plan, blocked, solid, [])
@@ -192,7 +233,17 @@ class World:
         self.scene.circles = self.people.circles
 
     def step_people(self, dt: float, robot_xy, rng: np.random.Generator) -> None:
-        """Walk every person towards their goal; new goal when reached or stuck."""
+        """Walk every person towards their goal; new goal when reached or stuck.
+
+        Parameters
+        ----------
+        dt : float
+            Seconds.
+        robot_xy : (x, y)
+            Robot position (people keep away from it).
+        rng : numpy.random.Generator
+            Source of new goals.
+        """
         pp = self.people
         if len(pp.positions) == 0:
             return
@@ -220,7 +271,24 @@ class World:
 
 
 def check_start(world: World, start, radius: float, source) -> None:
-    """Raise InputError if the robot cannot stand at ``start``."""
+    """Raise InputError if the robot cannot stand at ``start``.
+
+    Parameters
+    ----------
+    world : World
+        The plan with its clearance.
+    start : (x, y, theta)
+        Start pose, plan frame.
+    radius : float
+        Robot radius, metres.
+    source : path-like or str
+        Named in errors.
+
+    Raises
+    ------
+    InputError
+        Outside the plan, or too close to a wall.
+    """
     x, y = float(start[0]), float(start[1])
     r, c = world.plan.world_to_pixel(x, y)
     if not world.plan.contains(r, c):

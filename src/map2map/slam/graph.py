@@ -274,6 +274,29 @@ def correlative_match(
 
     Returns the fine :class:`MatchResult` and the coarse response.
 
+    Parameters
+    ----------
+    points : (K, 2) float array
+        Scan endpoints in the robot frame.
+    guess : (3,) float array
+        Initial pose ``(x, y, theta)``.
+    coarse, fine : LookupTable
+        Likelihood fields of the submap at two resolutions.
+    half_width, half_angle : float
+        Search window around ``guess``: metres and radians.
+    coarse_step, coarse_angle : float
+        Steps of the coarse search.
+    fine_step, fine_angle : float
+        Steps of the fine search around the coarse optimum.
+    penalize : bool
+        Penalise distance from ``guess`` (Karto's response penalty).
+
+    Returns
+    -------
+    match : MatchResult
+        Pose, response and covariance of the fine search.
+    coarse_response : float
+
     Examples
     --------
     >>> ang = np.linspace(0, 2 * np.pi, 180, endpoint=False)
@@ -335,6 +358,22 @@ def optimize_pose_graph(
     frame of ``i`` and the 3x3 square root of its information matrix. Solved with
     ``scipy.optimize.least_squares`` (trust-region reflective with the LSMR
     solver, an analytic sparse Jacobian, robust ``loss``).
+
+    Parameters
+    ----------
+    poses : (N, 3) float array
+        Initial poses; ``poses[0]`` stays fixed.
+    edges : list of (i, j, z_ij, sqrt_info)
+        Relative constraints.
+    loss : str
+        ``scipy.optimize.least_squares`` loss (``"huber"``, ``"linear"``, ...).
+    f_scale : float
+        Scale of the robust loss (whitened residual units).
+
+    Returns
+    -------
+    (N, 3) float array
+        Optimised poses, angles wrapped.
 
     Examples
     --------
@@ -461,7 +500,12 @@ class GraphSLAM:
         return self._map_cache
 
     def trajectory(self) -> np.ndarray:
-        """``(K, 4)`` rows ``t, x, y, theta`` of the optimised keyframes."""
+        """``(K, 4)`` rows ``t, x, y, theta`` of the optimised keyframes.
+
+        Returns
+        -------
+        (K, 4) ndarray
+        """
         return np.array([(k.t, *k.pose) for k in self.keyframes], float).reshape(-1, 4)
 
     # ---------------------------------------------------------------- internals
@@ -645,6 +689,19 @@ def make_graph(resolution: float = 0.05, seed: int | None = 0, **options) -> Gra
     """Registry factory (``map2map simulate --mapper graph``); graph SLAM is deterministic,
     ``seed`` is accepted for a uniform interface. Keyword options are
     :class:`GraphSLAMParams` fields (``None`` keeps the default); ``particles`` is ignored.
+
+    Parameters
+    ----------
+    resolution : float
+        Cell size of the map, metres.
+    seed : int, optional
+        Ignored (the backend is deterministic).
+    **options
+        :class:`GraphSLAMParams` fields.
+
+    Returns
+    -------
+    GraphSLAM
 
     Examples
     --------

@@ -134,6 +134,30 @@ def register_scan(
     maxRange" for drivers that report a no-return at the sensor's maximum range.
     Beams longer than ``usable_range`` are cropped to it and mark only free space;
     the others mark free space up to the endpoint cell and a hit in it.
+
+    Parameters
+    ----------
+    hits, visits : (H, W) int arrays
+        Per-cell counts, updated in place.
+    sx, sy : (H, W) float arrays
+        Sums of the hit points' world x and y per cell, updated in place.
+    mean : (H, W, 2) float array
+        Mean hit point of each cell (NaN where the cell is not occupied enough),
+        updated in place.
+    gx0, gy0 : float
+        World position of cell (0, 0).
+    delta : float
+        Cell size, metres.
+    lx, ly, lt : float
+        Laser pose.
+    ranges, angles : float arrays
+        The scan's readings (metres) and beam angles in the laser frame.
+    usable_range : float
+        GMapping's ``maxUrange``.
+    max_range : float
+        GMapping's ``maxRange``.
+    no_return_free : bool
+        Let no-return beams clear up to ``usable_range``.
     """
     cx0 = int(math.floor((lx - gx0) / delta))
     cy0 = int(math.floor((ly - gy0) / delta))
@@ -249,7 +273,31 @@ def _score_core(mean, gx0, gy0, delta, px, py, pt, beams, kernel, sigma, lsigma)
 
 @nb.njit(cache=True)
 def gmapping_score(mean, gx0, gy0, delta, px, py, pt, off, ranges, angles, kernel, sigma, lsigma):
-    """GMapping's scan score and log-likelihood at one pose; see :func:`_score_core`."""
+    """GMapping's scan score and log-likelihood at one pose; see :func:`_score_core`.
+
+    Parameters
+    ----------
+    mean : (H, W, 2) float array
+        Mean hit point of each cell (NaN: none), GMapping's likelihood reference.
+    gx0, gy0 : float
+        World position of the grid's cell (0, 0).
+    delta : float
+        Cell size, metres.
+    px, py, pt : float
+        Robot pose.
+    off : (3,) float array
+        Laser offset on the robot.
+    ranges, angles : float arrays
+        The scan's readings (metres) and beam angles in the laser frame.
+    kernel : int
+        Search half-width (cells) for the nearest hit.
+    sigma, lsigma : float
+        Score and likelihood standard deviations, metres.
+
+    Returns
+    -------
+    score, loglik : float
+    """
     beams = _beam_vectors(ranges, angles, off)
     return _score_core(
         mean,
@@ -300,6 +348,35 @@ def hill_climb(
     proportional to the scan likelihood *times* the odometry motion model). All
     weights zero is GMapping's code, which drops that factor; along a featureless
     corridor the score is flat and the match then slides freely.
+
+    Parameters
+    ----------
+    mean : (H, W, 2) float array
+        Mean hit point of each cell (NaN: none), GMapping's likelihood reference.
+    gx0, gy0 : float
+        World position of the grid's cell (0, 0).
+    delta : float
+        Cell size, metres.
+    px, py, pt : float
+        Start pose.
+    off : (3,) float array
+        Laser offset on the robot.
+    ranges, angles : float arrays
+        The scan's readings (metres) and beam angles in the laser frame.
+    kernel : int
+        Search half-width (cells) for the nearest hit.
+    sigma : float
+        Score standard deviation, metres.
+    lstep, astep : float
+        Initial linear (m) and angular (rad) steps.
+    iterations : int
+        Refinements allowed without improvement.
+    prior : (6,) float array
+        Motion-model prior (see above).
+
+    Returns
+    -------
+    x, y, theta, score : float
     """
     beams = _beam_vectors(ranges, angles, off)
     cx, cy, ct = px, py, pt
@@ -398,6 +475,33 @@ def sample_likelihood(
     is the importance-weight increment of the improved proposal. Each beam is
     matched (:func:`_nearest_hit`) once at the centre pose and keeps that match for
     all samples (they lie within ``lrange`` of it, well inside one cell).
+
+    Parameters
+    ----------
+    mean : (H, W, 2) float array
+        Mean hit point of each cell (NaN: none), GMapping's likelihood reference.
+    gx0, gy0 : float
+        World position of the grid's cell (0, 0).
+    delta : float
+        Cell size, metres.
+    px, py, pt : float
+        Matched pose.
+    off : (3,) float array
+        Laser offset on the robot.
+    ranges, angles : float arrays
+        The scan's readings (metres) and beam angles in the laser frame.
+    kernel : int
+        Search half-width (cells) for the nearest hit.
+    sigma, lsigma : float
+        Score and likelihood standard deviations, metres.
+    lrange, lstep_, arange_, astep_ : float
+        Sampling ranges and steps (metres, radians).
+
+    Returns
+    -------
+    log_eta : float
+    mean : (3,) float array
+    cov : (3, 3) float array
     """
     beams = _beam_vectors(ranges, angles, off)
     nb_ = beams.shape[1]
@@ -459,7 +563,25 @@ def sample_likelihood(
 
 @nb.njit(cache=True)
 def occupancy_from_counts(hits, visits, occ_thresh):
-    """Image-order (row 0 = top = largest y) uint8 map: 0 occupied, 255 free, 127 unknown."""
+    """Image-order (row 0 = top = largest y) uint8 map: 0 occupied, 255 free, 127 unknown.
+
+    Parameters
+    ----------
+    hits, visits : (H, W) int arrays
+        Per-cell counts (row 0 = smallest y).
+    occ_thresh : float
+        Hit ratio above which a visited cell is occupied.
+
+    Returns
+    -------
+    (H, W) uint8 array
+
+    Examples
+    --------
+    >>> hits = np.array([[0, 3, 0]]); visits = np.array([[0, 4, 5]])
+    >>> occupancy_from_counts(hits, visits, 0.25).tolist()
+    [[127, 0, 255]]
+    """
     ny, nx = visits.shape
     out = np.empty((ny, nx), np.uint8)
     for iy in range(ny):
@@ -537,7 +659,21 @@ class CountGrid:
 
     @classmethod
     def around(cls, x: float, y: float, half_size: float, delta: float) -> CountGrid:
-        """A square grid of side ``2 * half_size`` metres centred on ``(x, y)``."""
+        """A square grid of side ``2 * half_size`` metres centred on ``(x, y)``.
+
+        Parameters
+        ----------
+        x, y : float
+            Centre, metres.
+        half_size : float
+            Half the side, metres.
+        delta : float
+            Cell size, metres.
+
+        Returns
+        -------
+        CountGrid
+        """
         n = int(math.ceil(2 * half_size / delta))
         return cls((n, n), x - n * delta / 2, y - n * delta / 2, delta)
 
@@ -549,6 +685,15 @@ class CountGrid:
         resampling, a dropped particle and the one copied into its grid share most
         of their history, and a scan touches only the blocks within the usable range
         (measured: about a fifth of the blocks of a 7-minute run's grids differ).
+
+        Parameters
+        ----------
+        out : CountGrid, optional
+            A grid whose arrays may be reused.
+
+        Returns
+        -------
+        CountGrid
         """
         if out is self:
             return self
@@ -578,7 +723,12 @@ class CountGrid:
         return self.visits.shape  # type: ignore[return-value]
 
     def arrays(self):
-        """``(hits, visits, sx, sy, mean, x0, y0, delta)``: leading arguments of the update."""
+        """``(hits, visits, sx, sy, mean, x0, y0, delta)``: leading arguments of the update.
+
+        Returns
+        -------
+        tuple
+        """
         return self.hits, self.visits, self.sx, self.sy, self.mean, self.x0, self.y0, self.delta
 
     def match_arrays(self):
@@ -587,11 +737,20 @@ class CountGrid:
         ``mean[iy, ix]`` is the mean hit position of an occupied cell (hits/visits
         above GMapping's fullness threshold 0.1) and NaN elsewhere; it is kept up to
         date by the map update, so the matcher reads one compact array.
+
+        Returns
+        -------
+        tuple
         """
         return self.mean, self.x0, self.y0, self.delta
 
     def extent(self) -> tuple[float, float, float, float]:
-        """World ``(xmin, xmax, ymin, ymax)`` covered by the grid."""
+        """World ``(xmin, xmax, ymin, ymax)`` covered by the grid.
+
+        Returns
+        -------
+        (xmin, xmax, ymin, ymax) : float
+        """
         ny, nx = self.shape
         return self.x0, self.x0 + nx * self.delta, self.y0, self.y0 + ny * self.delta
 
@@ -600,6 +759,17 @@ class CountGrid:
 
         A side that must grow grows by at least a quarter of the grid's size, so
         growth (a copy of every array) stays rare.
+
+        Parameters
+        ----------
+        xmin, xmax, ymin, ymax : float
+            Box to fit, metres.
+        margin : float
+            Extra room, metres.
+
+        Returns
+        -------
+        (left, right, bottom, top) or None
         """
         gx0, gx1, gy0, gy1 = self.extent()
         need = (
@@ -614,7 +784,13 @@ class CountGrid:
         return tuple(int(math.ceil(max(n, step) / self.delta)) if n > 0 else 0 for n in need)
 
     def pad(self, left: int, right: int, bottom: int, top: int) -> None:
-        """Grow in place by whole cells (rows ``iy`` grow upwards with y)."""
+        """Grow in place by whole cells (rows ``iy`` grow upwards with y).
+
+        Parameters
+        ----------
+        left, right, bottom, top : int
+            Cells added on each side.
+        """
         widths = ((bottom, top), (left, right))
         self.hits = np.pad(self.hits, widths)
         self.visits = np.pad(self.visits, widths)
@@ -634,7 +810,21 @@ class CountGrid:
         max_range: float = np.inf,
         no_return_free: bool = False,
     ) -> None:
-        """Integrate a scan from the world laser pose ``(x, y, theta)`` (grows if needed)."""
+        """Integrate a scan from the world laser pose ``(x, y, theta)`` (grows if needed).
+
+        Parameters
+        ----------
+        laser_pose : (x, y, theta)
+            World pose of the laser.
+        ranges, angles : float arrays
+            The scan's readings (metres) and beam angles in the laser frame.
+        usable_range : float
+            GMapping's ``maxUrange``.
+        max_range : float
+            GMapping's ``maxRange``.
+        no_return_free : bool
+            Let no-return beams clear up to ``usable_range``.
+        """
         lx, ly, lt = (float(v) for v in laser_pose)
         r = np.asarray(ranges, np.float64)
         a = np.asarray(angles, np.float64)
@@ -665,7 +855,19 @@ class CountGrid:
             self.tile_id[ty0:ty1, tx0:tx1] = _fresh_tile_ids(ty1 - ty0, tx1 - tx0)
 
     def to_occupancy_map(self, occ_thresh: float = 0.25, meta: dict | None = None) -> OccupancyMap:
-        """The ternary map (GMapping/slam_gmapping rule: occupied when hits/visits > occ_thresh)."""
+        """The ternary map (GMapping/slam_gmapping rule: occupied when hits/visits > occ_thresh).
+
+        Parameters
+        ----------
+        occ_thresh : float
+            Hit ratio above which a visited cell is occupied.
+        meta : dict, optional
+            Copied into the map.
+
+        Returns
+        -------
+        OccupancyMap
+        """
         data = occupancy_from_counts(self.hits, self.visits, float(occ_thresh))
         return OccupancyMap(data, self.delta, (self.x0, self.y0, 0.0), dict(meta or {}))
 
@@ -676,6 +878,19 @@ def likelihood_field(occupied: np.ndarray, delta: float, sigma: float) -> np.nda
     ``occupied`` is a boolean grid; the distance transform is OpenCV's exact
     Euclidean one (``cv2.DIST_L2``, ``DIST_MASK_PRECISE``). Returns float32 in
     ``[0, 1]``, 1 on occupied cells.
+
+    Parameters
+    ----------
+    occupied : (H, W) bool array
+        Hit cells.
+    delta : float
+        Cell size, metres.
+    sigma : float
+        Standard deviation, metres.
+
+    Returns
+    -------
+    (H, W) float32 array
 
     Examples
     --------

@@ -57,7 +57,17 @@ class SlamResult:
 
 
 def odometry_in_map_frame(log: CarmenLog) -> np.ndarray:
-    """``(N, 4)`` raw odometry ``t, x, y, theta`` relative to the first reading (the map frame)."""
+    """``(N, 4)`` raw odometry ``t, x, y, theta`` relative to the first reading (the map frame).
+
+    Parameters
+    ----------
+    log : CarmenLog
+        A recorded run.
+
+    Returns
+    -------
+    (N, 4) float array
+    """
     from .rbpf import absolute_difference
 
     o = np.array([(r.x, r.y, r.theta) for r in log.odometry], float)
@@ -74,6 +84,22 @@ def check_options(
     max_range: float | None = None,
 ) -> None:
     """Raise :class:`InputError` (naming the parameter) for options :func:`run_slam` refuses.
+
+    Parameters
+    ----------
+    backend : str
+        Registered mapper name.
+    particles : int, optional
+        Particle count (``rbpf`` only).
+    resolution : float
+        Map cell size, metres.
+    max_range : float, optional
+        Usable laser range, metres.
+
+    Raises
+    ------
+    InputError
+        A value out of range, or an option the backend does not take.
 
     Examples
     --------
@@ -100,6 +126,15 @@ def default_usable_range(sensor_max: float) -> float:
     80 % of its range up to 10 m. On the Radish logs (50 m SICK, scans about 1 m
     apart) the TurtleBot3 value of 3 m left the matcher too little to match and
     the map fell apart (``benchmarks/carmen_real.py``: 2.8 m mean error on aces).
+
+    Parameters
+    ----------
+    sensor_max : float
+        The scanner's maximum range, metres.
+
+    Returns
+    -------
+    float
 
     Examples
     --------
@@ -151,6 +186,48 @@ def run_slam(
     the backend's parameters. A map too large for the memory budget (its extent
     from :func:`map_shape_estimate`) is refused before any grid is allocated, naming
     ``source`` (the log file).
+
+    Parameters
+    ----------
+    log : CarmenLog
+        The recorded run (odometry and scans).
+    backend : str
+        Registered mapper name (``"rbpf"``, ``"graph"``).
+    particles : int, optional
+        Particle count of ``rbpf``.
+    resolution : float
+        Map cell size, metres.
+    seed : int
+        Seed of the backend's random steps.
+    max_range : float, optional
+        Usable laser range (above).
+    progress : bool
+        Show a tqdm progress bar.
+    source : str or path, optional
+        The log file, named in a size refusal.
+    **options
+        Backend parameters.
+
+    Returns
+    -------
+    SlamResult
+        Map, estimated trajectory and raw odometry in the map frame, the mapper.
+
+    Raises
+    ------
+    InputError
+        Options refused by :func:`check_options`, or a log without scans.
+
+    Examples
+    --------
+    >>> from map2map.robotlog.base import LaserScan, OdometryReading
+    >>> from map2map.robotlog.carmen import CarmenLog
+    >>> scans = [LaserScan(float(t), np.full(90, 2.0), -np.pi, np.pi / 45, 0.1, 3.5)
+    ...          for t in range(3)]
+    >>> odo = [OdometryReading(float(t), 0.0, 0.0, 0.0) for t in range(3)]
+    >>> res = run_slam(CarmenLog(odometry=odo, scans=scans), "graph")
+    >>> res.trajectory.shape[1], bool(res.map.occupied.any())
+    (4, True)
     """
     from tqdm.auto import tqdm
 

@@ -38,7 +38,25 @@ __all__ = [
 
 
 def ate_rmse(est: np.ndarray, true: np.ndarray, align: bool = True) -> float:
-    """RMSE (m) of matched positions ``est[:, :2]`` vs ``true[:, :2]``, rigidly aligned first."""
+    """RMSE (m) of matched positions ``est[:, :2]`` vs ``true[:, :2]``, rigidly aligned first.
+
+    Parameters
+    ----------
+    est, true : (N, >=2) float arrays
+        Matched estimated and true poses.
+    align : bool
+        Fit a rigid transform ``est -> true`` first.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> true = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]])
+    >>> ate_rmse(true + [0.5, 0.0], true), round(ate_rmse(true + [0.5, 0.0], true, align=False), 3)
+    (0.0, 0.5)
+    """
     est = np.asarray(est, float)[:, :2]
     true = np.asarray(true, float)[:, :2]
     if align and len(est) >= 2:
@@ -47,7 +65,19 @@ def ate_rmse(est: np.ndarray, true: np.ndarray, align: bool = True) -> float:
 
 
 def map_to_plan_points(slam_map: OccupancyMap, start_pose) -> np.ndarray:
-    """World (plan-frame) coordinates ``(K, 2)`` of the occupied cells of a SLAM map."""
+    """World (plan-frame) coordinates ``(K, 2)`` of the occupied cells of a SLAM map.
+
+    Parameters
+    ----------
+    slam_map : OccupancyMap
+        The SLAM map in its own frame.
+    start_pose : (x, y, theta)
+        Pose of that frame in the plan (the robot's true start pose).
+
+    Returns
+    -------
+    (K, 2) float array
+    """
     rows, cols = np.nonzero(slam_map.occupied)
     x, y = slam_map.pixel_to_world(rows, cols)
     x0, y0, th = (float(v) for v in start_pose)
@@ -64,6 +94,21 @@ def wall_error(
     rigid transform (rotation about the points' centroid, translation) minimising the
     distances with a Huber loss (scale 10 cm), so that a global offset or rotation of
     an otherwise good map is not counted -- as in the appendix paper's rigid alignment.
+
+    Parameters
+    ----------
+    slam_map : OccupancyMap
+        The SLAM map in its own frame.
+    plan : OccupancyMap
+        The plan.
+    start_pose : (x, y, theta)
+        Pose of the SLAM map's frame in the plan.
+    align : bool
+        Refine the placement first.
+
+    Returns
+    -------
+    float
 
     Examples
     --------
@@ -89,6 +134,21 @@ def wall_distances(
     The placement and the optional rigid refinement are those of :func:`wall_error`
     (which is the mean of this array); with ``align`` the refinement is kept only if
     it lowers the mean.
+
+    Parameters
+    ----------
+    slam_map : OccupancyMap
+        The SLAM map in its own frame.
+    plan : OccupancyMap
+        The plan.
+    start_pose : (x, y, theta)
+        Pose of the SLAM map's frame in the plan.
+    align : bool
+        Refine the placement first.
+
+    Returns
+    -------
+    (K,) float array
 
     Examples
     --------

@@ -174,6 +174,15 @@ def absolute_difference(p1: np.ndarray, p2: np.ndarray) -> np.ndarray:
 
     :func:`map2map.core.geometry.relative_pose` ``(p2, p1)`` on arrays.
 
+    Parameters
+    ----------
+    p1, p2 : (N, 3) float arrays
+        Poses.
+
+    Returns
+    -------
+    (N, 3) float array
+
     Examples
     --------
     >>> d = absolute_difference(np.array([1.0, 1.0, np.pi / 2]), np.array([0.0, 1.0, np.pi / 2]))
@@ -218,6 +227,22 @@ def absolute_sum(p: np.ndarray, d: np.ndarray) -> np.ndarray:
     """Compose pose ``p`` with the relative motion ``d`` (GMapping ``absoluteSum``), row-wise.
 
     :func:`map2map.core.geometry.compose_pose` on arrays.
+
+    Parameters
+    ----------
+    p : (N, 3) float array
+        Poses.
+    d : (N, 3) or (3,) float array
+        Motions in the frames of ``p``.
+
+    Returns
+    -------
+    (N, 3) float array
+
+    Examples
+    --------
+    >>> absolute_sum(np.array([[0.0, 0.0, np.pi / 2]]), np.array([1.0, 0.0, 0.0])).round(6).tolist()
+    [[0.0, 1.0, 1.570796]]
     """
     return compose_pose(np.asarray(p, float), np.asarray(d, float))
 
@@ -244,6 +269,21 @@ def sample_motion(
     (GMapping's ``srr``: translation error from translation, ``srt``: translation
     from rotation in the ROS wiki's wording, applied here exactly as the GMapping
     source does) and composed with each particle's pose.
+
+    Parameters
+    ----------
+    poses : (N, 3) float array
+        Particle poses.
+    odom_new, odom_old : (3,) float arrays
+        Odometry now and at the previous update.
+    srr, srt, str_, stt : float
+        GMapping's motion-model noise parameters.
+    rng : numpy.random.Generator
+        Source of the noise.
+
+    Returns
+    -------
+    (N, 3) float array
 
     Examples
     --------
@@ -274,6 +314,18 @@ def normalize_log_weights(log_w: np.ndarray, gain: float = 1.0) -> np.ndarray:
 
     GMapping smooths the likelihood with ``gain = 1 / (ogain * N)``.
 
+    Parameters
+    ----------
+    log_w : (N,) float array
+        Log-weights.
+    gain : float
+        Smoothing gain.
+
+    Returns
+    -------
+    (N,) float array
+        Weights summing to 1.
+
     Examples
     --------
     >>> normalize_log_weights(np.array([0.0, 0.0, np.log(2.0)])).round(2).tolist()
@@ -286,6 +338,15 @@ def normalize_log_weights(log_w: np.ndarray, gain: float = 1.0) -> np.ndarray:
 
 def effective_sample_size(weights: np.ndarray) -> float:
     """``N_eff = 1 / sum(w_i^2)`` of normalised weights (Grisetti 2007, eq. 14).
+
+    Parameters
+    ----------
+    weights : (N,) float array
+        Normalised weights.
+
+    Returns
+    -------
+    float
 
     Examples
     --------
@@ -306,6 +367,18 @@ def low_variance_resample(weights: np.ndarray, rng: np.random.Generator) -> np.n
     cumulative weight. A particle of weight ``w`` is drawn ``floor(N w)`` or
     ``ceil(N w)`` times.
 
+    Parameters
+    ----------
+    weights : (N,) float array
+        Normalised weights.
+    rng : numpy.random.Generator
+        Draws the offset.
+
+    Returns
+    -------
+    (N,) int array
+        Sorted particle indices.
+
     Examples
     --------
     >>> low_variance_resample(np.array([0.5, 0.0, 0.5, 0.0]), np.random.default_rng(1)).tolist()
@@ -322,7 +395,24 @@ def low_variance_resample(weights: np.ndarray, rng: np.random.Generator) -> np.n
 # ----------------------------------------------------------------------------- scans
 def prepare_scan(scan: LaserScan) -> tuple[np.ndarray, np.ndarray]:
     """``(ranges, angles)`` as float64: no return (``>= range_max``, ``inf``) becomes ``inf``,
-    an invalid reading (``nan``, below ``range_min``) becomes ``nan``."""
+    an invalid reading (``nan``, below ``range_min``) becomes ``nan``.
+
+    Parameters
+    ----------
+    scan : LaserScan
+
+    Returns
+    -------
+    ranges, angles : (B,) float64 arrays
+        Angles in the laser frame.
+
+    Examples
+    --------
+    >>> from map2map.robotlog.base import LaserScan
+    >>> r, a = prepare_scan(LaserScan(0.0, np.array([1.0, 3.5, 0.01]), 0.0, 0.1, 0.12, 3.5))
+    >>> r.tolist()
+    [1.0, inf, nan]
+    """
     r = np.asarray(scan.ranges, np.float64).copy()
     r[np.isnan(r) | (r < scan.range_min)] = np.nan
     r[r >= scan.range_max] = np.inf
@@ -386,7 +476,15 @@ class GMappingRBPF:
 
     # ---------------------------------------------------------------- Mapper API
     def update(self, odom: OdometryReading, scan: LaserScan) -> None:
-        """Feed one odometry reading and its scan (see module docstring for the steps)."""
+        """Feed one odometry reading and its scan (see module docstring for the steps).
+
+        Parameters
+        ----------
+        odom : OdometryReading
+            Raw odometry at the scan's time.
+        scan : LaserScan
+            The scan.
+        """
         p = self.params
         o = self._frame.accept(odom, scan)  # odometry in the map frame
         ranges, angles = prepare_scan(scan)
@@ -424,11 +522,21 @@ class GMappingRBPF:
         self.n_updates += 1
 
     def pose(self) -> np.ndarray:
-        """Pose of the best particle (highest accumulated log weight)."""
+        """Pose of the best particle (highest accumulated log weight).
+
+        Returns
+        -------
+        (3,) ndarray
+        """
         return self.poses[self.best_index()].copy()
 
     def get_map(self) -> OccupancyMap:
-        """The best particle's occupancy map (cached between filter updates)."""
+        """The best particle's occupancy map (cached between filter updates).
+
+        Returns
+        -------
+        OccupancyMap
+        """
         if self._map_cache is None:
             if not self.grids:
                 raise RuntimeError("no scan integrated yet")
@@ -441,7 +549,12 @@ class GMappingRBPF:
         return int(np.argmax(self.log_w_sum))
 
     def trajectory(self) -> np.ndarray:
-        """``(T, 4)`` rows ``t, x, y, theta`` of the best particle at each processed scan."""
+        """``(T, 4)`` rows ``t, x, y, theta`` of the best particle at each processed scan.
+
+        Returns
+        -------
+        (T, 4) ndarray
+        """
         if not self._node_pose:
             return np.zeros((0, 4))
         poses = np.concatenate(self._node_pose)
@@ -602,6 +715,19 @@ def make_rbpf(
     """Registry factory (``map2map simulate --mapper rbpf``): ``resolution`` is GMapping's
     ``delta``; other keyword options are :class:`GMappingParams` fields (``None`` keeps the
     default).
+
+    Parameters
+    ----------
+    resolution : float
+        Map cell size, metres.
+    seed : int or numpy.random.Generator, optional
+        Seed of the filter's random steps.
+    **options
+        :class:`GMappingParams` fields.
+
+    Returns
+    -------
+    GMappingRBPF
 
     Examples
     --------

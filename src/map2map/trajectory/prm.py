@@ -82,11 +82,29 @@ class Roadmap:
     factor: int
 
     def to_work(self, xy: np.ndarray) -> np.ndarray:
-        """Plan pixel (x, y) -> working-grid continuous indices (x, y)."""
+        """Plan pixel (x, y) -> working-grid continuous indices (x, y).
+
+        Parameters
+        ----------
+        xy : (N, 2) array
+
+        Returns
+        -------
+        (N, 2) float array
+        """
         return (np.asarray(xy, float) - (self.factor - 1) / 2.0) / self.factor
 
     def to_plan(self, xy: np.ndarray) -> np.ndarray:
-        """Working-grid indices (x, y) -> plan pixel (x, y)."""
+        """Working-grid indices (x, y) -> plan pixel (x, y).
+
+        Parameters
+        ----------
+        xy : (N, 2) array
+
+        Returns
+        -------
+        (N, 2) float array
+        """
         return np.asarray(xy, float) * self.factor + (self.factor - 1) / 2.0
 
 
@@ -106,6 +124,20 @@ def segments_clear(mask: np.ndarray, a: np.ndarray, b: np.ndarray, step: float =
     """Whether straight segments ``a[i] -> b[i]`` (grid (x, y)) stay on True cells of ``mask``.
 
     Every segment is sampled every ``step`` cells (vectorised over all segments).
+
+    Parameters
+    ----------
+    mask : (h, w) bool array
+        Traversable cells.
+    a, b : (S, 2) float arrays
+        Segment ends in grid coordinates ``(x = column, y = row)``.
+    step : float
+        Sampling step along each segment, in cells.
+
+    Returns
+    -------
+    (S,) bool array
+        True where every sample of the segment lies on a True cell inside the grid.
 
     Examples
     --------
@@ -158,6 +190,11 @@ def build_roadmap(
         Spacing [m] of the extra nodes on the skeleton of the clearance region.
     rng : numpy.random.Generator
         Source of the random nodes.
+
+    Returns
+    -------
+    Roadmap
+        Nodes, collision-free edges and the masks they were checked against.
 
     Raises
     ------
@@ -232,6 +269,32 @@ def shortest_path(rm: Roadmap, start: tuple[float, float], goal: tuple[float, fl
     Start and goal are joined to nearby nodes by straight segments through free cells
     (they may lie closer to a wall than the robot radius). Raises ``InputError`` when no
     path exists. The path is shortened by :func:`shortcut_path`.
+
+    Parameters
+    ----------
+    rm : Roadmap
+        From :func:`build_roadmap`.
+    start, goal : (x, y)
+        Plan pixels (column, row), continuous.
+
+    Returns
+    -------
+    (P, 2) float array
+        Waypoints in plan pixels from ``start`` to ``goal``.
+
+    Raises
+    ------
+    InputError
+        Start or goal cannot reach the roadmap, or no path joins them.
+
+    Examples
+    --------
+    >>> from map2map.core.grid import OccupancyMap
+    >>> data = np.zeros((60, 100), np.uint8); data[5:55, 5:95] = 255
+    >>> rm = build_roadmap(OccupancyMap(data, 0.05), rng=np.random.default_rng(0))
+    >>> path = shortest_path(rm, (15.0, 30.0), (85.0, 30.0))
+    >>> path[0].tolist(), path[-1].tolist()
+    ([15.0, 30.0], [85.0, 30.0])
     """
     s = np.asarray(start, float)
     g = np.asarray(goal, float)
@@ -266,6 +329,18 @@ def shortcut_path(rm: Roadmap, path: np.ndarray) -> np.ndarray:
 
     Inner waypoints are tested against the clearance mask, so the result keeps the
     robot-radius clearance wherever the roadmap did.
+
+    Parameters
+    ----------
+    rm : Roadmap
+        The roadmap whose masks the shortcuts are checked against.
+    path : (P, 2) float array
+        Waypoints in plan pixels.
+
+    Returns
+    -------
+    (Q, 2) float array
+        A subsequence of ``path`` (first and last kept), Q <= P.
     """
     if path.shape[0] <= 2:
         return path
@@ -288,6 +363,25 @@ def path_through(rm: Roadmap, waypoints: np.ndarray, names: list[str] | None = N
 
     ``names`` (e.g. the world coordinates as typed by the user) are used in the error
     message when two consecutive waypoints are not connected.
+
+    Parameters
+    ----------
+    rm : Roadmap
+        From :func:`build_roadmap`.
+    waypoints : (W, 2) float array
+        Plan pixels ``(x, y)`` to visit in order, W >= 2.
+    names : list of str, optional
+        How each waypoint is named in error messages.
+
+    Returns
+    -------
+    (P, 2) float array
+        The concatenated shortest paths, in plan pixels.
+
+    Raises
+    ------
+    InputError
+        Two consecutive waypoints are not connected.
     """
     waypoints = np.asarray(waypoints, float)
     parts = []
@@ -308,7 +402,22 @@ def random_start_goal(
     rm: Roadmap, rng: np.random.Generator, min_separation: float = 0.3
 ) -> tuple[np.ndarray, np.ndarray]:
     """Two random roadmap nodes of its largest connected part, at least ``min_separation``
-    of that part's extent apart when possible. Returns plan pixels ``(x, y)``."""
+    of that part's extent apart when possible. Returns plan pixels ``(x, y)``.
+
+    Parameters
+    ----------
+    rm : Roadmap
+        From :func:`build_roadmap`.
+    rng : numpy.random.Generator
+        Source of the draw.
+    min_separation : float
+        Wanted distance as a fraction of the largest part's extent.
+
+    Returns
+    -------
+    start, goal : (2,) float arrays
+        Plan pixels.
+    """
     _, labels = connected_components(rm.graph, directed=False)
     biggest = np.flatnonzero(labels == np.bincount(labels).argmax())
     pts = rm.nodes[biggest]
@@ -330,6 +439,22 @@ def random_tour(rm: Roadmap, rng: np.random.Generator, n: int = 4) -> np.ndarray
     point sampling from a random first node): waypoints of a tour that explores the plan.
     Returns (n, 2) plan pixels.
 
+    Parameters
+    ----------
+    rm : Roadmap
+        From :func:`build_roadmap`.
+    rng : numpy.random.Generator
+        Picks the first node.
+    n : int
+        Number of waypoints.
+
+    Returns
+    -------
+    (n, 2) float array
+        Plan pixels, in visiting order.
+
+    Examples
+    --------
     >>> data = np.zeros((60, 100), np.uint8); data[5:55, 5:95] = 255
     >>> from map2map.core.grid import OccupancyMap
     >>> rm = build_roadmap(OccupancyMap(data, 0.05), rng=np.random.default_rng(0))

@@ -54,6 +54,18 @@ def wrap_angle(a):
 
     :func:`map2map.core.geometry.wrap_angle` with ``keep_in_range=True``.
 
+    Parameters
+    ----------
+    a : float or array-like
+        Angles in radians.
+
+    Returns
+    -------
+    ndarray
+        Wrapped angles, same shape.
+
+    Examples
+    --------
     >>> wrap_angle([0.25, 7.0]).round(6).tolist()
     [0.25, 0.716815]
     """
@@ -109,7 +121,13 @@ class Trajectory:
 
     def to_csv(self, path: str | os.PathLike) -> None:
         """Write ``t,x,y,theta,v,omega`` (header line, one row per sample, full precision so
-        that reading it back gives the same numbers) atomically."""
+        that reading it back gives the same numbers) atomically.
+
+        Parameters
+        ----------
+        path : path-like
+            Output file.
+        """
         buf = io.StringIO()
         buf.write("t,x,y,theta,v,omega\n")
         np.savetxt(
@@ -127,6 +145,24 @@ def trapezoid(tau: np.ndarray, distance: float, v_max: float, a_max: float):
 
     Returns ``(s, v, duration)``; triangular when ``distance`` is too short to reach
     ``v_max``.
+
+    Parameters
+    ----------
+    tau : ndarray
+        Times since the start, seconds (clipped to the profile's duration).
+    distance : float
+        Distance (or angle) to cover, >= 0.
+    v_max : float
+        Speed limit.
+    a_max : float
+        Acceleration limit.
+
+    Returns
+    -------
+    s, v : ndarray
+        Position and speed at ``tau``.
+    duration : float
+        Time the profile takes.
 
     Examples
     --------
@@ -172,6 +208,30 @@ def time_waypoints(
 
     The robot starts at rest facing the first segment (or ``theta0``), and stops at the
     last waypoint. Samples every ``dt`` seconds plus the final instant.
+
+    Parameters
+    ----------
+    waypoints : (W, 2) array-like
+        World positions in metres, W >= 2.
+    v_max, omega_max : float
+        Linear (m/s) and angular (rad/s) speed limits (TurtleBot3 Waffle Pi defaults).
+    acc_lin, acc_ang : float
+        Linear (m/s^2) and angular (rad/s^2) acceleration limits.
+    dt : float
+        Sampling period, seconds.
+    theta0 : float, optional
+        Initial heading (radians); default: facing the first segment.
+
+    Returns
+    -------
+    Trajectory
+        Poses and speeds sampled every ``dt`` seconds.
+
+    Examples
+    --------
+    >>> tr = time_waypoints(np.array([[0.0, 0.0], [1.0, 0.0]]), dt=0.5)
+    >>> round(float(tr.x[-1]), 6), round(float(tr.t[-1]), 2)
+    (1.0, 3.95)
     """
     wp = np.asarray(waypoints, float)
     keep = np.concatenate([[True], np.hypot(*np.diff(wp, axis=0).T) > 1e-9])
@@ -231,6 +291,25 @@ def trajectory_from_poses(
     Without ``t`` each step takes ``max(distance / v_max, |turn| / omega_max)`` (at least
     1 ms). Speeds are finite differences: ``v`` is the displacement projected on the
     heading per second, ``omega`` the wrapped heading change per second.
+
+    Parameters
+    ----------
+    x, y, theta : array-like
+        Poses in world metres and radians (N >= 2).
+    t : array-like, optional
+        Times in seconds, strictly increasing.
+    v_max, omega_max : float
+        Speed limits used to time the steps when ``t`` is absent.
+
+    Returns
+    -------
+    Trajectory
+
+    Examples
+    --------
+    >>> tr = trajectory_from_poses([0.0, 0.26], [0.0, 0.0], [0.0, 0.0])
+    >>> tr.t.tolist(), tr.v.round(3).tolist()
+    ([0.0, 1.0], [0.26, 0.0])
     """
     x, y, theta = (np.asarray(a, float) for a in (x, y, theta))
     dist = np.hypot(np.diff(x), np.diff(y))
@@ -285,7 +364,23 @@ def _read_table(path: str | os.PathLike, what: str) -> tuple[list[str] | None, n
 
 def read_waypoints(path: str | os.PathLike) -> np.ndarray:
     """Waypoints file: one ``x y`` (or ``x,y``) pair per line in world metres, ``#`` comments,
-    optional header ``x,y``. At least two waypoints. Returns (W, 2)."""
+    optional header ``x,y``. At least two waypoints. Returns (W, 2).
+
+    Parameters
+    ----------
+    path : path-like
+        The text file.
+
+    Returns
+    -------
+    (W, 2) float array
+        World metres.
+
+    Raises
+    ------
+    InputError
+        Missing file, a malformed line (with its number), fewer than two waypoints.
+    """
     header, arr = _read_table(path, "waypoints file")
     if header is not None and header[:2] != ["x", "y"]:
         raise InputError(path, f"waypoints header must be 'x,y', got {','.join(header)!r}")
@@ -305,6 +400,22 @@ def read_trajectory(
     and extra ones are ignored). World metres and radians. ``v`` and ``omega`` are
     recomputed from the poses unless both are given; missing times come from the speed
     limits (:func:`trajectory_from_poses`).
+
+    Parameters
+    ----------
+    path : path-like
+        The CSV file.
+    v_max, omega_max : float
+        Speed limits that time the poses when the file has no ``t`` column.
+
+    Returns
+    -------
+    Trajectory
+
+    Raises
+    ------
+    InputError
+        Missing file, unknown columns, malformed numbers, fewer than two poses.
     """
     header, arr = _read_table(path, "trajectory file")
     if header is not None:
