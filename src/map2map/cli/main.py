@@ -27,6 +27,8 @@ COMMANDS = [
     "slam",
     "align",
     "evaluate",
+    "train",
+    "autocorrect",
 ]
 
 

@@ -1,0 +1,296 @@
+"""Model_BA: losses against hand computations, discriminator pairing, exact resume,
+safetensors without pickle, autocorrect's frame handling, the command lines."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+pytest.importorskip("safetensors")
+
+from map2map.cli.main import main  # noqa: E402
+from map2map.datasets.packed import PackedPairs, save_packed  # noqa: E402
+from map2map.learn import losses as L  # noqa: E402
+from map2map.learn import train as T  # noqa: E402
+from map2map.learn.autocorrect import BAModel, autocorrect_many, load_model  # noqa: E402
+from map2map.learn.config import TrainConfig  # noqa: E402
+from map2map.learn.data import downsample_target  # noqa: E402
+from map2map.maps.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap  # noqa: E402
+
+
+@pytest.fixture(autouse=True)
+def _one_thread():
+    """One intra-op thread: tiny networks on a shared machine run faster without them."""
+    n = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(n)
+
+
+TINY = dict(size=16, epochs=2, batch=4, g_channels=8, g_max_channels=16, d_channels=8,
+            d_layers=2, samples=2)
+
+
+def _pairs(n=10, size=32, seed=0) -> PackedPairs:
+    """Boxes with a wall (A) and a shifted, speckled copy (B)."""
+    rng = np.random.default_rng(seed)
+    a = np.full((n, size, size), UNKNOWN, np.uint8)
+    for i in range(n):
+        r0, c0 = rng.integers(2, 8, 2)
+        a[i, r0:size - 3, c0:size - 3] = FREE
+        a[i, r0, c0:size - 3] = OCCUPIED
+        a[i, size - 4, c0:size - 3] = OCCUPIED
+        a[i, r0:size - 3, rng.integers(c0 + 3, size - 5)] = OCCUPIED
+    b = np.roll(a, 1, axis=2)
+    b[rng.random(b.shape) < 0.03] = UNKNOWN
+    split = np.array(["train"] * (n - 2) + ["val", "test"])
+    return PackedPairs(a, b, np.array([f"p{i}" for i in range(n)]), split, {"seed": seed})
+
+
+# ----------------------------------------------------------------------------- losses
+def _scales(*arrays):
+    return [[torch.tensor(a, dtype=torch.float32).reshape(1, 1, 1, -1) for a in feats]
+            for feats in arrays]
+
+
+def test_gan_losses_match_hand_computation():
+    real = _scales([[2.0, -1.0]])              # logits
+    fake = _scales([[0.5, -3.0]])
+    false = _scales([[1.0, 0.0]])
+    sp = lambda z: math.log1p(math.exp(z))   # -log sigmoid(-z) = softplus(z)  # noqa: E731
+    d_real = (sp(-2.0) + sp(1.0)) / 2          # -log D(real)
+    d_fake = (sp(0.5) + sp(-3.0)) / 2          # -log(1 - D(fake))
+    d_false = (sp(1.0) + sp(0.0)) / 2
+    got = float(L.gan_real_fake_3_4(real, fake, side="d"))
+    assert got == pytest.approx(d_real + d_fake, rel=1e-6)
+    got = float(L.gan_domain_3_3(real, fake, false, side="d"))
+    assert got == pytest.approx(d_real + 0.5 * (d_fake + d_false), rel=1e-6)
+    g = (sp(-0.5) + sp(3.0)) / 2               # -log D(fake), non-saturating
+    assert float(L.gan_domain_3_3(None, fake, side="g")) == pytest.approx(g, rel=1e-6)
+    assert float(L.gan_real_fake_3_4(None, fake, side="g")) == pytest.approx(g, rel=1e-6)
+    # three scales are summed (eq. 3.2's sum over k)
+    three = real * 3
+    assert float(L.gan_real_fake_3_4(three, fake * 3, side="d")) == pytest.approx(
+        3 * (d_real + d_fake), rel=1e-6)
+
+
+def test_feature_terms_match_hand_computation():
+    # two intermediate layers (2 and 4 elements) + logits, two scales
+    a = [[torch.tensor([1.0, 2.0]), torch.tensor([0.0, 0.0, 0.0, 4.0]), torch.tensor([9.0])]] * 2
+    b = [[torch.tensor([2.0, 0.0]), torch.tensor([1.0, 1.0, 1.0, 1.0]), torch.tensor([-9.0])]] * 2
+    per_scale = (1 + 2) / 2 + (1 + 1 + 1 + 3) / 4   # mean |diff| per layer, logits left out
+    assert float(L.feature_matching_3_5(a, b)) == pytest.approx(2 * per_scale)
+    assert float(L.input_consistency_3_6(a, b)) == pytest.approx(2 * per_scale)
+    x = torch.tensor([[0.0, 1.0], [-1.0, 0.5]])
+    y = torch.tensor([[1.0, 1.0], [1.0, 0.0]])
+    assert float(L.l1_3_7(x, y)) == pytest.approx((1 + 0 + 2 + 0.5) / 4)
+
+
+def test_generator_loss_sums_its_terms_and_real_side_gets_no_gradient():
+    real = [[torch.ones(1, 2, 2, 2), torch.zeros(1, 1, 1, 1)]]
+    feat = torch.zeros(1, 2, 2, 2, requires_grad=True)
+    fake = [[feat, torch.zeros(1, 1, 1, 1, requires_grad=True)]]
+    total, terms = L.generator_loss_3_2(real, fake, real, fake, torch.zeros(3),
+                                        torch.ones(3), lambda_l1=10.0)
+    expect = (terms["gan_domain_3_3"] + terms["gan_real_fake_3_4"] + terms["fm_3_5"]
+              + terms["ic_3_6"] + 10.0 * terms["l1_3_7"])
+    assert float(total.detach()) == pytest.approx(float(expect.detach()))
+    total.backward()
+    assert feat.grad is not None and real[0][0].grad is None
+
+
+# ------------------------------------------------------------------------- training
+def test_discriminator_pairing(monkeypatch, tmp_path):
+    """D_d: (x, y) real, (x, G(x)) fake, (x, y') false target of another input; D_r: y, G(x)."""
+    seen = {"dd": [], "dr": [], "g": []}
+    real_build = T.build_networks
+
+    def build(cfg):
+        g, dd, dr = real_build(cfg)
+        g.register_forward_hook(lambda m, i, o: seen["g"].append((i[0].clone(), o.detach())))
+        dd.register_forward_pre_hook(lambda m, i: seen["dd"].append(i[0].detach().clone()))
+        dr.register_forward_pre_hook(lambda m, i: seen["dr"].append(i[0].detach().clone()))
+        return g, dd, dr
+
+    monkeypatch.setattr(T, "build_networks", build)
+    cfg = TrainConfig(**{**TINY, "epochs": 1, "samples": 0})
+    T.train_ba(_pairs(), tmp_path / "run", cfg, progress=False, figures=False)
+    x, fake = seen["g"][0]
+    B = len(x)
+    dd = seen["dd"][0]                         # the first discriminator step
+    assert dd.shape[0] == 3 * B and dd.shape[1] == 2
+    real_pair, fake_pair, false_pair = dd[:B], dd[B:2 * B], dd[2 * B:]
+    y = real_pair[:, 1:]
+    for pair in (real_pair, fake_pair, false_pair):
+        assert torch.equal(pair[:, :1], x)         # every pair starts with the input
+    assert torch.equal(fake_pair[:, 1:], fake)
+    false_y = false_pair[:, 1:]
+    # each false target is the target of another input of the batch, untransformed
+    for i in range(B):
+        assert not torch.equal(false_y[i], y[i])
+        assert any(torch.equal(false_y[i], y[j]) for j in range(B) if j != i)
+    dr = seen["dr"][0]
+    assert torch.equal(dr[:B], y) and torch.equal(dr[B:], fake)
+
+
+def _weights(path):
+    from safetensors.torch import load_file
+
+    return load_file(str(path))
+
+
+def test_resume_continues_exactly(tmp_path):
+    data = tmp_path / "ds.npz"
+    save_packed(data, _pairs())
+    cfg = TrainConfig(**TINY)
+    T.train_ba(data, tmp_path / "two", cfg, progress=False)
+    T.train_ba(data, tmp_path / "split", TrainConfig(**{**TINY, "epochs": 1}), progress=False,
+               figures=False)
+    res = T.train_ba(data, tmp_path / "split", resume=True, epochs=2, progress=False,
+                     figures=False)
+    assert res.epochs_done == 2 and len(res.history) == 2
+    a = _weights(tmp_path / "two" / "last.safetensors")
+    b = _weights(tmp_path / "split" / "last.safetensors")
+    assert a.keys() == b.keys()
+    for k in a:
+        assert torch.equal(a[k], b[k]), k
+    log = (tmp_path / "split" / "log.csv").read_text().splitlines()
+    assert len(log) == 3 and log[0].startswith("epoch,lr,")
+    assert (tmp_path / "two" / "samples" / "epoch_0002.png").is_file()
+    # a finished run refuses to be overwritten; a wrong dataset refuses to resume
+    from map2map.errors import InputError
+
+    with pytest.raises(InputError, match="already holds a checkpoint"):
+        T.train_ba(data, tmp_path / "two", cfg, progress=False)
+    other = tmp_path / "other.npz"
+    save_packed(other, _pairs(seed=1))
+    with pytest.raises(InputError, match="digest"):
+        T.train_ba(other, tmp_path / "two", resume=True, progress=False)
+
+
+def test_checkpoints_are_safetensors_without_pickle(tmp_path, monkeypatch):
+    run = tmp_path / "run"
+    T.train_ba(_pairs(), run, TrainConfig(**{**TINY, "epochs": 1}), progress=False,
+               figures=False)
+    for name in ("last.safetensors", "model.safetensors"):
+        raw = (run / name).read_bytes()
+        n = int.from_bytes(raw[:8], "little")
+        assert raw[8:9] == b"{" and raw[8 + n - 1:8 + n].strip() in (b"}", b"")
+        assert b"\x80\x04" not in raw[:16]           # no pickle protocol header
+
+    def no_pickle(*a, **k):
+        raise AssertionError("torch.load (pickle) must not be used")
+
+    monkeypatch.setattr(torch, "load", no_pickle)
+    model = load_model(run)
+    assert model.size == 16 and model.header["dataset"]["digest"]
+    res = T.train_ba(_pairs(), run, resume=True, epochs=2, progress=False, figures=False)
+    assert res.epochs_done == 2
+
+
+# ----------------------------------------------------------------------- autocorrect
+class _Identity(BAModel):
+    """A stand-in generator that returns its input, reduced with walls kept: isolates the
+    frame handling from what a network learnt."""
+
+    def __init__(self, size=32, data_size=256):
+        super().__init__(None, size, data_size, 3.0, {}, "identity")
+
+    def predict(self, inputs, batch=256):
+        return downsample_target(inputs, self.size).astype(np.float32)
+
+
+def test_autocorrect_keeps_frame_resolution_and_world_positions():
+    h, w = 150, 230
+    data = np.full((h, w), UNKNOWN, np.uint8)
+    data[30:130, 20:200] = FREE
+    data[30, 20:200] = OCCUPIED                   # walls
+    data[129, 20:200] = OCCUPIED
+    data[30:130, 20] = OCCUPIED
+    data[30:130, 199] = OCCUPIED
+    data[30:130, 111] = OCCUPIED                  # an inner wall
+    m = OccupancyMap(data, 0.037, (3.5, -1.25, 0.3))
+    (res,) = autocorrect_many([m], _Identity())
+    out = res.map
+    assert out.shape == m.shape and out.resolution == m.resolution and out.origin == m.origin
+    assert set(np.unique(out.data).tolist()) <= {OCCUPIED, UNKNOWN, FREE}
+    # the inner wall comes back in the same column (within 2 px), whole and straight
+    cols = np.flatnonzero((out.data[40:120] == OCCUPIED).mean(axis=0) > 0.9)
+    assert any(abs(c - 111) <= 2 for c in cols)
+    assert (out.data[:20] == UNKNOWN).all()       # outside the content stays unknown
+    # segments are in world metres (the map's yaw applied): the inner wall's ends map back
+    # onto column 111 of the input
+    seg = res.segments
+    r0, c0 = m.world_to_pixel_float(seg[:, 0], seg[:, 1])
+    r1, c1 = m.world_to_pixel_float(seg[:, 2], seg[:, 3])
+    inner = (np.abs(c0 - 111) <= 1.5) & (np.abs(c1 - 111) <= 1.5)
+    assert inner.any() and np.abs(r1[inner] - r0[inner]).max() > 90
+    assert res.warnings == [] and 0.9 <= out.meta["autocorrect"]["support"] <= 1.0
+
+
+def test_autocorrect_handles_small_and_empty_maps():
+    empty = OccupancyMap(np.full((20, 30), UNKNOWN, np.uint8), 0.05)
+    small = np.full((12, 9), FREE, np.uint8)
+    small[0] = OCCUPIED
+    r_empty, r_small = autocorrect_many([empty, OccupancyMap(small, 0.05)], _Identity())
+    assert r_empty.map == empty and r_empty.warnings
+    assert r_small.map.shape == (12, 9)
+
+
+def test_pretrained_weights_load_and_run():
+    model = load_model("pretrained")
+    assert model.header["format"] == "map2map-model-ba"
+    assert model.generator.to_map[str(model.size)].weight.dtype == torch.float32
+    from map2map.learn.autocorrect import pretrained_path
+
+    assert pretrained_path().stat().st_size <= 10 * 2**20
+
+
+# --------------------------------------------------------------------------- CLI
+def test_cli_train_and_autocorrect(tmp_path, capsys):
+    data = tmp_path / "ds"
+    data.mkdir()
+    save_packed(data / "packed.npz", _pairs())
+    run = tmp_path / "run"
+    rc = main(["train", "ba", "--data", str(data), "--out", str(run), "--epochs", "1",
+               "--size", "16", "--batch", "4", "--g-channels", "8", "--d-channels", "8",
+               "--d-layers", "2",
+               "--quiet"])
+    assert rc == 0 and (run / "losses.png").is_file()
+    from map2map.maps.formats import load_map, save_map
+
+    m = OccupancyMap(_pairs().b[0], 0.05, (1.0, 2.0, 0.0))
+    maps = tmp_path / "maps"
+    maps.mkdir()
+    save_map(m, maps / "a.yaml")
+    save_map(m, maps / "b.png")
+    rc = main(["autocorrect", str(maps / "a.yaml"), "--out", str(tmp_path / "cad.yaml"),
+               "--model", str(run), "--dxf", str(tmp_path / "w.dxf"),
+               "--figure", str(tmp_path / "fig.png")])
+    assert rc == 0
+    back = load_map(tmp_path / "cad.yaml")
+    assert back.shape == m.shape and back.origin == m.origin and back.resolution == m.resolution
+    assert (tmp_path / "w.dxf").is_file() and (tmp_path / "fig.png").is_file()
+    rc = main(["autocorrect", str(maps), "--out", str(tmp_path / "outdir"), "--model", str(run)])
+    assert rc == 0 and sorted(p.name for p in (tmp_path / "outdir").iterdir()) == [
+        "a.pgm", "a.yaml", "b.png"]
+    capsys.readouterr()
+    assert main(["autocorrect", str(tmp_path / "nope.yaml"), "--out",
+                 str(tmp_path / "x.yaml")]) == 2
+    assert main(["autocorrect", str(maps / "a.yaml"), "--out", str(tmp_path / "x.yaml"),
+                 "--model", str(tmp_path)]) == 2
+    assert main(["train", "ba", "--data", str(tmp_path / "none"), "--out", str(run)]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and err.count("map2map: error:") == 3
+
+
+def test_import_map2map_does_not_import_torch():
+    code = "import sys, map2map; map2map.__version__; print('torch' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    assert out.stdout.strip() == "False"
