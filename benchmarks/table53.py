@@ -16,8 +16,9 @@ loses recall is counted apart. Writes ``table53.csv`` and the box plot ``fig512.
     python3 benchmarks/table53.py --quick                # 12 pairs
     python3 benchmarks/table53.py --data DS --model RUN  # a dataset's test split, a run
 
-Also times inference (maps/s at 256, batched, CPU) and, with ``--train-speed``, training
-images/s of the default Model_32 configuration on this machine.
+Also times inference (maps/s at 256, batched, CPU); ``benchmarks/bench_learn.py`` measures
+training and inference speed on their own. The generated held-out pairs are cached in
+``OUT/heldout_N.npz`` so that several models are compared on the same maps.
 """
 
 from __future__ import annotations
@@ -59,7 +60,6 @@ def main(argv=None) -> int:
     ap.add_argument("--n", type=int, default=100, help="held-out pairs (default 100)")
     ap.add_argument("--quick", action="store_true", help="12 pairs")
     ap.add_argument("--out", default="table53_out")
-    ap.add_argument("--train-speed", action="store_true", help="also time training")
     args = ap.parse_args(argv)
     n = 12 if args.quick else args.n
     out = Path(args.out)
@@ -69,14 +69,21 @@ def main(argv=None) -> int:
         a, b = pairs.a[:n], pairs.b[:n]
         source = f"{args.data} (test split)"
     else:
-        pairs = make_pairs(n, 256, seed=HELD_OUT_SEED)
+        from map2map.datasets.packed import load_packed, save_packed
+
+        cache = out / f"heldout_{n}.npz"
+        if cache.is_file():
+            pairs = load_packed(cache)
+        else:
+            pairs = make_pairs(n, 256, seed=HELD_OUT_SEED)
+            save_packed(cache, pairs)
         a, b = pairs.a, pairs.b
         source = f"generated pairs, seeds {HELD_OUT_SEED}..{HELD_OUT_SEED + n - 1}"
     model = load_model(args.model)
     maps = [OccupancyMap(x, 0.05) for x in b]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        autocorrect_many(maps[:2], model)  # warm-up
+        autocorrect_many(maps, model)  # warm-up (same batch shape)
         t0 = time.perf_counter()
         results = autocorrect_many(maps, model)
         dt = time.perf_counter() - t0
@@ -134,20 +141,6 @@ def main(argv=None) -> int:
            title=f"Fig. 5.12: {improved}/{int(ok.sum())} improved")
     fig.tight_layout()
     fig.savefig(out / "fig512.png", dpi=100)
-    if args.train_speed:
-        import torch
-
-        from map2map.learn.config import TrainConfig
-        from map2map.learn.train import train_ba
-
-        sub = make_pairs(40, 256, seed=HELD_OUT_SEED + 50_000, progress=False)
-        for name, cfg in (("Model_32 default", TrainConfig(epochs=1, samples=0)),
-                          ("Model_32 provisional (16 ch)",
-                           TrainConfig(epochs=1, samples=0, g_channels=16, g_max_channels=64,
-                                       d_channels=16))):
-            res = train_ba(sub, out / f"speed_{len(name)}", cfg, progress=False)
-            print(f"training {name}: {res.images_per_s:.0f} img/s on {torch.device('cpu')} "
-                  f"({torch.get_num_threads()} threads)")
     print(f"wrote {out / 'table53.csv'} and {out / 'fig512.png'}")
     return 0
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -289,8 +290,47 @@ def test_cli_train_and_autocorrect(tmp_path, capsys):
     assert "Traceback" not in err and err.count("map2map: error:") == 3
 
 
+@pytest.mark.slow
+def test_ddp_two_processes_gloo(tmp_path):
+    """torchrun with 2 CPU processes (gloo): one run folder, one report, a loadable model."""
+    data = tmp_path / "ds.npz"
+    save_packed(data, _pairs(18))
+    import os
+
+    src = str(Path(__file__).resolve().parents[1] / "src")
+    env = {**os.environ, "OMP_NUM_THREADS": "1",
+           "PYTHONPATH": os.pathsep.join([src, os.environ.get("PYTHONPATH", "")])}
+    cmd = [sys.executable, "-m", "torch.distributed.run", "--standalone",
+           "--nproc_per_node", "2", "-m", "map2map", "train", "ba", "--data", str(data),
+           "--out", str(tmp_path / "run"), "--epochs", "1", "--size", "16", "--batch", "4",
+           "--g-channels", "8", "--d-channels", "8", "--d-layers", "2", "--device", "cpu",
+           "--quiet"]
+    out = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=240)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stderr.count("trained 1 epochs") == 1
+    assert load_model(tmp_path / "run").size == 16
+
+
 def test_import_map2map_does_not_import_torch():
     code = "import sys, map2map; map2map.__version__; print('torch' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True)
     assert out.stdout.strip() == "False"
+
+
+def test_demo_stage_autocorrects_the_slam_map(tmp_path, capsys):
+    from types import SimpleNamespace
+
+    from map2map.demo import STAGES, DemoContext
+    from map2map.learn.demo_stage import stage_autocorrect
+
+    names = [n for n, _ in STAGES]
+    assert names.index("slam") < names.index("autocorrect") < names.index("evaluate")
+    ctx = DemoContext(out=tmp_path, seed=0)
+    stage_autocorrect(ctx)
+    assert "skipped" in capsys.readouterr().out and not ctx.written
+    m = OccupancyMap(_pairs().b[0], 0.05, (1.0, 2.0, 0.0))
+    ctx.results["sim"] = SimpleNamespace(slam_map=m)
+    stage_autocorrect(ctx)
+    assert ctx.results["autocorrected"].shape == m.shape
+    assert {p.name for _, p in ctx.written} == {"cad.yaml", "walls.dxf", "before_after.png"}

@@ -18,6 +18,7 @@ from tqdm.auto import tqdm
 
 from ._io import ensure_output_dir
 from .evaluate.demo_stage import stage_evaluate
+from .learn.demo_stage import stage_autocorrect
 from .maps.prep_demo import stage_prep
 from .parametric.demo_stage import stage_parametric
 from .sim.demo_stage import stage_simulate
@@ -63,6 +64,7 @@ STAGES: list[tuple[str, Callable[[DemoContext], None]]] = [
     ("parametric", stage_parametric),
     ("simulate", stage_simulate),
     ("slam", _slam_stage.stage_slam),
+    ("autocorrect", stage_autocorrect),
     ("evaluate", stage_evaluate),  # keep last: it evaluates the maps the stages above made
 ]
 

@@ -38,6 +38,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     b.add_argument("--d-channels", type=int, default=32, help="discriminator width (32)")
     b.add_argument("--d-layers", type=int, default=3,
                    help="stride-2 layers per patch discriminator (3)")
+    b.add_argument("--input-reduce", choices=("area", "classes"), default="area",
+                   help="how the SLAM map is reduced to --size: area average (default) or "
+                   "per class, walls kept")
     b.add_argument("--no-false-targets", action="store_true",
                    help="no false-target augmentation for D_d")
     b.add_argument("--no-amp", action="store_true", help="fp32 on CUDA (no bf16 autocast)")
@@ -64,10 +67,15 @@ def run(args: argparse.Namespace) -> int:
         size=args.size, epochs=args.epochs or 200, batch=args.batch, device=args.device,
         seed=args.seed, lambda_l1=args.lambda_l1, g_channels=args.g_channels,
         g_max_channels=args.g_max_channels, d_channels=args.d_channels, d_layers=args.d_layers,
+        input_reduce=args.input_reduce,
         false_targets=not args.no_false_targets, amp=not args.no_amp, compile=args.compile,
     )
     res = train_ba(args.data, args.out, cfg, resume=args.resume,
                    epochs=args.epochs if args.resume else None, progress=not args.quiet)
+    import os
+
+    if int(os.environ.get("RANK", "0")) != 0:  # torchrun: one report, from rank 0
+        return 0
     last = res.history[-1] if res.history else {}
     print(f"trained {res.epochs_done} epochs at {res.images_per_s:.0f} img/s; "
           f"loss G {last.get('loss_G', float('nan')):.4f} D {last.get('loss_D', float('nan')):.4f}"

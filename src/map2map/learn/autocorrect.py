@@ -55,7 +55,7 @@ import torch
 from ..errors import InputError
 from ..maps.grid import OCCUPIED, UNKNOWN, OccupancyMap
 from ..maps.preprocess import square_resize
-from .data import downsample_input
+from .data import reduce_input
 from .networks import UNetGenerator, from_unit
 from .postprocess import postprocess
 
@@ -86,7 +86,8 @@ class BAModel:
     @torch.no_grad()
     def predict(self, inputs: np.ndarray, batch: int = 256) -> np.ndarray:
         """(N, data_size, data_size) uint8 maps -> (N, size, size) float32 grey outputs."""
-        small = downsample_input(inputs, self.size)
+        how = self.header.get("train", {}).get("input_reduce", "area")
+        small = reduce_input(inputs, self.size, how)
         out = []
         for i in range(0, len(small), batch):
             x = torch.from_numpy(small[i:i + batch])[:, None].to(self.device)

@@ -72,6 +72,10 @@ class TrainConfig:
         ``torch.compile`` the generator (not the spectral-normalised discriminators).
     samples : int
         Validation pairs shown in each epoch's sample grid.
+    input_reduce : {"area", "classes"}
+        How the input (SLAM map) is brought to ``size``: ``"area"`` averages grey values
+        (a one-pixel wall becomes a faint line), ``"classes"`` reduces per class as the
+        targets are (walls kept dark; :func:`map2map.learn.data.downsample_target`).
     """
 
     size: int = 32
@@ -97,6 +101,7 @@ class TrainConfig:
     amp: bool = True
     compile: bool = False
     samples: int = 6
+    input_reduce: str = "area"
 
     @property
     def batch_size(self) -> int:

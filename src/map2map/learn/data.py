@@ -41,7 +41,7 @@ from ..errors import InputError
 from ..maps.grid import FREE, OCCUPIED, UNKNOWN
 
 __all__ = ["resolve_packed", "load_pairs", "downsample_input", "downsample_target",
-           "ResidentPairs"]
+           "reduce_input", "ResidentPairs"]
 
 
 def resolve_packed(path: str | os.PathLike) -> Path:
@@ -73,6 +73,16 @@ def downsample_input(maps: np.ndarray, size: int) -> np.ndarray:
     return np.rint(_pool(maps, size).numpy()).astype(np.uint8)
 
 
+def reduce_input(maps: np.ndarray, size: int, how: str = "area") -> np.ndarray:
+    """The model's input at ``size``: :func:`downsample_input` (``"area"``) or
+    :func:`downsample_target` (``"classes"``)."""
+    if how == "area":
+        return downsample_input(maps, size)
+    if how == "classes":
+        return downsample_target(maps, size)
+    raise ValueError(f"input_reduce must be 'area' or 'classes', got {how!r}")
+
+
 def downsample_target(maps: np.ndarray, size: int) -> np.ndarray:
     """(N, H, W) ternary maps -> (N, size, size) ternary maps, walls kept (module doc)."""
     maps = np.asarray(maps, np.uint8)
@@ -97,6 +107,8 @@ class ResidentPairs:
     device : torch.device
     channels_last : bool
         Batches in channels-last memory format (CUDA).
+    input_reduce : {"area", "classes"}
+        See :func:`reduce_input`.
 
     Examples
     --------
@@ -109,13 +121,14 @@ class ResidentPairs:
     """
 
     def __init__(self, inputs: np.ndarray, targets: np.ndarray, size: int,
-                 device: torch.device, channels_last: bool = False):
+                 device: torch.device, channels_last: bool = False,
+                 input_reduce: str = "area"):
         if len(inputs) != len(targets):
             raise ValueError("inputs and targets differ in length")
         if inputs.shape[-1] < size:
             raise InputError(None, f"dataset maps are {inputs.shape[-1]} px, smaller than "
                                    f"the training size {size}")
-        self.x = torch.from_numpy(downsample_input(inputs, size))[:, None].to(device)
+        self.x = torch.from_numpy(reduce_input(inputs, size, input_reduce))[:, None].to(device)
         self.y = torch.from_numpy(downsample_target(targets, size))[:, None].to(device)
         self.channels_last = channels_last
 

@@ -8,8 +8,10 @@ needs 8x (or more) upsampling, and plain upsampling gives grey, blurred walls.
 1. **Upsampling** -- bilinear (``cv2.INTER_LINEAR``, pixel centres aligned) of the grey
    output to the working frame ``(H, W)``; a wall cell of the 32 map becomes a dark band
    centred on that cell.
-2. **Snapping** to the three map values with thresholds halfway between them: ``< 64``
-   occupied, ``>= 191`` free, unknown in between (:func:`map2map.maps.grid.ternarize`).
+2. **Snapping** to the three map values: ``< 96`` occupied (a third of the way from
+   occupied 0 to free 255, past the occupied/unknown midpoint because blur only ever
+   lightens a wall: a thin dark line of the output is a wall, not unknown space),
+   ``>= 191`` free (halfway between unknown and free), unknown in between.
 3. **Straightening of walls** (``straighten=True``): the occupied pixels are thinned to
    their centre lines (``skimage.morphology.skeletonize``), the centre lines are cut into
    straight segments (probabilistic Hough transform, ``cv2.HoughLinesP``, segments at
@@ -30,7 +32,8 @@ needs 8x (or more) upsampling, and plain upsampling gives grey, blurred walls.
    least one model cell in area. Free and unknown come from the output with its wall
    cells replaced by their nearest non-wall cell, upsampled the same way and split at 191
    (halfway between unknown 127 and free 255): the grey halo that upsampling leaves beside
-   every wall is not taken for unknown space.
+   every wall is not taken for unknown space. Last, unknown pockets enclosed by free space
+   and walls become free (a plan has no unknown inside the building).
 
 The result is a three-valued map plus its wall segments (pixel coordinates of the
 working frame, ``x`` = column, ``y`` = row), which ``map2map autocorrect --dxf`` writes as
@@ -54,11 +57,15 @@ import cv2
 import numpy as np
 from scipy import ndimage
 
-from ..maps.grid import FREE, OCCUPIED, UNKNOWN, ternarize
+from ..maps.grid import FREE, OCCUPIED, UNKNOWN
 
 __all__ = ["postprocess", "wall_thickness_px", "straight_segments"]
 
 AXIS_TOLERANCE_DEG = 10.0
+#: Grey level below which an upsampled output pixel is wall (step 2).
+WALL_BELOW = 96
+#: Grey level from which it is free rather than unknown (step 2).
+FREE_FROM = 191
 
 
 def wall_thickness_px(maps: np.ndarray, limit: int = 64) -> float:
@@ -235,15 +242,15 @@ def postprocess(output: np.ndarray, shape: tuple[int, int], guide: np.ndarray | 
     H, W = shape
     low = np.asarray(output, np.float32)
     up = cv2.resize(low, (W, H), interpolation=cv2.INTER_LINEAR)
-    walls = ternarize(up, occupied_below=63, free_above=191) == OCCUPIED
+    walls = up < WALL_BELOW
     # free vs unknown from the output with its wall cells replaced by their nearest
     # non-wall cell: a wall's grey halo (between 64 and 191 after upsampling) is not unknown
-    low_walls = low < 64
+    low_walls = low < WALL_BELOW
     if low_walls.any() and not low_walls.all():
         _, (ri, ci) = ndimage.distance_transform_edt(low_walls, return_indices=True)
         low = low[ri, ci]
     up_space = cv2.resize(low, (W, H), interpolation=cv2.INTER_LINEAR)
-    data = np.where(up_space >= 191, FREE, UNKNOWN).astype(np.uint8)
+    data = np.where(up_space >= FREE_FROM, FREE, UNKNOWN).astype(np.uint8)
     if not straighten:
         data[walls] = OCCUPIED
         return data, np.zeros((0, 4))
@@ -265,6 +272,10 @@ def postprocess(output: np.ndarray, shape: tuple[int, int], guide: np.ndarray | 
         keep = np.flatnonzero(area >= cell * cell)
         keep = keep[keep > 0]
         data[np.isin(blobs, keep)] = OCCUPIED
-    data[drawn.astype(bool)] = OCCUPIED
+    wall = drawn.astype(bool)
+    data[wall] = OCCUPIED
+    # a plan has no unknown pockets inside the building: fill what walls and free enclose
+    inside = ndimage.binary_fill_holes((data == FREE) | (data == OCCUPIED))
+    data[inside & (data == UNKNOWN)] = FREE
     return data, segs
 

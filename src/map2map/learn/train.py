@@ -195,6 +195,14 @@ class _Dist:
         ids = [self.device.index] if self.device.type == "cuda" else None
         return DDP(net, device_ids=ids)
 
+    def close(self) -> None:
+        if self.world > 1:
+            import torch.distributed as dist
+
+            if dist.is_initialized():
+                dist.barrier()
+                dist.destroy_process_group()
+
     def mean(self, values: dict[str, float]) -> dict[str, float]:
         if self.world == 1:
             return values
@@ -273,9 +281,10 @@ def train_ba(data: str | os.PathLike | PackedPairs, out: str | os.PathLike,
                                f"{cfg.size}")
     val = pairs.select("val")
     show = val if len(val) else train
-    res = ResidentPairs(train.b, train.a, cfg.size, dev, channels_last=amp)
+    res = ResidentPairs(train.b, train.a, cfg.size, dev, channels_last=amp,
+                        input_reduce=cfg.input_reduce)
     shown = ResidentPairs(show.b[:cfg.samples], show.a[:cfg.samples], cfg.size, dev,
-                          channels_last=amp)
+                          channels_last=amp, input_reduce=cfg.input_reduce)
     meta = dict(pairs.meta)
     meta.setdefault("digest", pairs.digest())
 
@@ -465,6 +474,7 @@ def train_ba(data: str | os.PathLike | PackedPairs, out: str | os.PathLike,
             signal.signal(signal.SIGINT, old_handler)
         if bar is not None:
             bar.close()
+    dist.close()
     el = time.perf_counter() - t_start
     return TrainResult(out, epoch, history, images / el if el > 0 else float("nan"),
                        interrupted)
