@@ -334,3 +334,32 @@ def test_demo_stage_autocorrects_the_slam_map(tmp_path, capsys):
     stage_autocorrect(ctx)
     assert ctx.results["autocorrected"].shape == m.shape
     assert {p.name for _, p in ctx.written} == {"cad.yaml", "walls.dxf", "before_after.png"}
+
+
+def test_autocorrect_deskews_rotated_maps_and_rotates_back():
+    import cv2
+
+    n = 240
+    data = np.full((n, n), UNKNOWN, np.uint8)
+    data[60:180, 50:190] = FREE
+    for r in (60, 179):
+        data[r, 50:190] = OCCUPIED
+    for c in (50, 120, 189):
+        data[60:180, c] = OCCUPIED
+    rot = cv2.getRotationMatrix2D(((n - 1) / 2, (n - 1) / 2), 25, 1.0)
+    tilted = cv2.warpAffine(data, rot, (n, n), flags=cv2.INTER_NEAREST, borderValue=UNKNOWN)
+    m = OccupancyMap(tilted, 0.05)
+    (res,) = autocorrect_many([m], _Identity())
+    assert res.map.meta["autocorrect"]["deskew_deg"] == pytest.approx(-25, abs=2)
+    assert res.map.shape == m.shape
+    # walls come back where the tilted input has them (the output is in the input's frame)
+    from scipy import ndimage
+
+    near = ndimage.distance_transform_edt(tilted != OCCUPIED)
+    assert np.median(near[res.map.data == OCCUPIED]) <= 2.0
+    # segments follow the tilted walls (about 25 degrees off the axes), not the grid
+    seg = np.asarray(res.map.meta["autocorrect"]["segments_px"])
+    ang = np.degrees(np.arctan2(seg[:, 3] - seg[:, 1], seg[:, 2] - seg[:, 0])) % 90
+    length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+    along = np.minimum(np.abs(ang - 25), np.abs(ang - 65)) < 5   # +-25 deg, mod 90
+    assert length[along].sum() >= 0.9 * length.sum()

@@ -4,6 +4,10 @@
 
 1. the known part of the map (its content box, plus a margin that is 4 px at the
    dataset's size, as in the dataset's crop) is padded to a square with unknown cells;
+   when its walls run at an angle to the grid (:func:`dominant_angle`, more than 3
+   degrees, coherent), the square is rotated to make them axis-aligned (nearest
+   neighbour, padded so nothing is cut) -- the model learnt plans drawn along the axes --
+   and everything below is rotated back at the end (``meta["autocorrect"]["deskew_deg"]``);
 2. that square is brought to the dataset's size (256) exactly as the dataset was made
    (:func:`map2map.maps.preprocess.square_resize`: walls survive any reduction) and then to
    the model's size by area averaging (:func:`map2map.learn.data.downsample_input`) --
@@ -36,7 +40,7 @@ Examples
 >>> out.shape, out.resolution, out.origin
 ((90, 140), 0.04, (1.0, -2.0, 0.0))
 >>> sorted(out.meta["autocorrect"])
-['model', 'segments_px', 'support', 'warnings']
+['deskew_deg', 'model', 'segments_px', 'support', 'warnings']
 """
 
 from __future__ import annotations
@@ -60,10 +64,11 @@ from .networks import UNetGenerator, from_unit
 from .postprocess import postprocess
 
 __all__ = ["BAModel", "load_model", "autocorrect", "autocorrect_many", "Correction",
-           "pretrained_path", "save_segments_dxf", "export_model"]
+           "pretrained_path", "save_segments_dxf", "export_model", "dominant_angle"]
 
 PRETRAINED = "model_ba.safetensors"
 MARGIN_PX = 4  # dataset crop margin at the dataset's size (learn.synthetic, dataset build)
+MIN_SKEW_DEG = 3.0  # smaller rotations are left alone
 
 
 def pretrained_path() -> Path:
@@ -163,14 +168,78 @@ def _square(m: OccupancyMap, data_size: int):
     return sq, row0, col0, side
 
 
+def dominant_angle(data: np.ndarray) -> tuple[float, float]:
+    """Dominant wall direction (degrees in (-45, 45], image coordinates) and its coherence
+    (0: no preferred direction, 1: all walls parallel or perpendicular): the circular mean
+    of four times the gradient angle of the blurred wall mask, weighted by magnitude.
+
+    Examples
+    --------
+    >>> import cv2
+    >>> img = np.full((200, 200), 255, np.uint8)
+    >>> _ = cv2.rectangle(img, (50, 60), (150, 140), 0, 1)
+    >>> rot = cv2.warpAffine(img, cv2.getRotationMatrix2D((100, 100), 20, 1), (200, 200),
+    ...                      flags=cv2.INTER_NEAREST, borderValue=255)
+    >>> a, coherence = dominant_angle(rot)
+    >>> round(a), coherence > 0.5
+    (-20, True)
+    """
+    import cv2
+
+    occ = cv2.GaussianBlur((np.asarray(data) == OCCUPIED).astype(np.float32), (0, 0), 2.0)
+    gx = cv2.Sobel(occ, cv2.CV_32F, 1, 0, ksize=3)
+    gy = cv2.Sobel(occ, cv2.CV_32F, 0, 1, ksize=3)
+    mag = np.hypot(gx, gy)
+    total = float(mag.sum())
+    if total <= 0:
+        return 0.0, 0.0
+    z = np.sum(mag * np.exp(4j * np.arctan2(gy, gx)))
+    return float(np.degrees(np.angle(z) / 4)), float(abs(z) / total)
+
+
+def _rotate(data: np.ndarray, angle: float) -> np.ndarray:
+    import cv2
+
+    n = data.shape[0]
+    rot = cv2.getRotationMatrix2D(((n - 1) / 2, (n - 1) / 2), angle, 1.0)
+    return cv2.warpAffine(data, rot, (n, n), flags=cv2.INTER_NEAREST, borderValue=UNKNOWN)
+
+
+def _prepare(m: OccupancyMap, data_size: int, deskew: bool):
+    """Square of the content, and its deskewed version: (square, row0, col0, side,
+    angle, pad, model-frame square) or None for a map without known cells."""
+    sq = _square(m, data_size)
+    if sq is None:
+        return None
+    square, row0, col0, side = sq
+    angle, coherence = dominant_angle(square) if deskew else (0.0, 0.0)
+    if abs(angle) < MIN_SKEW_DEG or coherence < 0.3:
+        return square, row0, col0, side, 0.0, 0, square
+    t = math.radians(abs(angle))
+    pad = math.ceil(side * (math.cos(t) + math.sin(t) - 1) / 2)
+    big = np.pad(square, pad, constant_values=UNKNOWN)
+    return square, row0, col0, side, angle, pad, _rotate(big, angle)
+
+
+def _unrotate_segments(segs: np.ndarray, angle: float, n: int) -> np.ndarray:
+    import cv2
+
+    if not len(segs):
+        return segs
+    inv = cv2.getRotationMatrix2D(((n - 1) / 2, (n - 1) / 2), -angle, 1.0)
+    pts = segs.reshape(-1, 2)
+    back = pts @ inv[:, :2].T + inv[:, 2]
+    return back.reshape(-1, 4)
+
+
 def autocorrect_many(maps: list[OccupancyMap], model: str | os.PathLike | BAModel | None =
-                     "pretrained", *, straighten: bool = True, device: str = "cpu",
-                     batch: int = 256) -> list[Correction]:
+                     "pretrained", *, straighten: bool = True, deskew: bool = True,
+                     device: str = "cpu", batch: int = 256) -> list[Correction]:
     """:func:`autocorrect` for several maps, the network run in batches."""
     net = load_model(model, device)
-    squares = [_square(m, net.data_size) for m in maps]
+    squares = [_prepare(m, net.data_size, deskew) for m in maps]
     todo = [i for i, s in enumerate(squares) if s is not None]
-    inputs = np.stack([square_resize(squares[i][0], net.data_size) for i in todo]) if todo \
+    inputs = np.stack([square_resize(squares[i][-1], net.data_size) for i in todo]) if todo \
         else np.zeros((0, net.data_size, net.data_size), np.uint8)
     outputs = net.predict(inputs, batch)
     results: list[Correction] = []
@@ -183,12 +252,16 @@ def autocorrect_many(maps: list[OccupancyMap], model: str | os.PathLike | BAMode
                                        "model": net.source}
             results.append(Correction(out, np.zeros((0, 4)), [msg]))
             continue
-        square, row0, col0, side = sq
-        scale = side / net.data_size
-        data_sq, segs = postprocess(outputs[k], (side, side), square,
+        square, row0, col0, side, angle, pad, model_sq = sq
+        n = model_sq.shape[0]
+        scale = n / net.data_size
+        data_sq, segs = postprocess(outputs[k], (n, n), model_sq,
                                     wall_px=max(1.0, net.target_wall_px * scale),
                                     straighten=straighten)
         k += 1
+        if angle:  # back from the deskewed frame
+            data_sq = _rotate(data_sq, -angle)[pad:pad + side, pad:pad + side]
+            segs = _unrotate_segments(segs, angle, n) - pad
         H, W = m.shape
         data = np.full((H, W), UNKNOWN, np.uint8)
         rs, re = max(0, row0), min(H, row0 + side)
@@ -207,7 +280,8 @@ def autocorrect_many(maps: list[OccupancyMap], model: str | os.PathLike | BAMode
                          "the input: the model may have invented structure; check the figure")
         out = m.copy(data=data)
         out.meta["autocorrect"] = {"model": net.source, "warnings": warns,
-                                   "support": support, "segments_px": seg_px.tolist()}
+                                   "support": support, "segments_px": seg_px.tolist(),
+                                   "deskew_deg": angle}
         x0, y0 = m.pixel_to_world(seg_px[:, 1] - 0.5, seg_px[:, 0] - 0.5)
         x1, y1 = m.pixel_to_world(seg_px[:, 3] - 0.5, seg_px[:, 2] - 0.5)
         seg_w = np.stack([x0, y0, x1, y1], 1) if len(seg_px) else np.zeros((0, 4))
@@ -232,7 +306,8 @@ def _support(inp: np.ndarray, out: np.ndarray, cell: float) -> float | None:
 
 
 def autocorrect(m: OccupancyMap, model: str | os.PathLike | BAModel | None = "pretrained",
-                *, straighten: bool = True, device: str = "cpu") -> OccupancyMap:
+                *, straighten: bool = True, deskew: bool = True, device: str = "cpu"
+                ) -> OccupancyMap:
     """Auto-correct a SLAM map into a CAD-like plan with Model_BA (module docstring).
 
     Parameters
@@ -243,6 +318,8 @@ def autocorrect(m: OccupancyMap, model: str | os.PathLike | BAModel | None = "pr
         Which Model_BA to use.
     straighten : bool
         Post-processing steps 3-5 (straight walls); False keeps the snapped upsampling.
+    deskew : bool
+        Rotate maps whose walls are not along the grid to the axes first (step 1).
     device : str
         Torch device for the network.
 
@@ -254,7 +331,8 @@ def autocorrect(m: OccupancyMap, model: str | os.PathLike | BAModel | None = "pr
     """
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = autocorrect_many([m], model, straighten=straighten, device=device)[0]
+        res = autocorrect_many([m], model, straighten=straighten, deskew=deskew,
+                               device=device)[0]
     for w in res.warnings:
         warnings.warn(w, stacklevel=2)
     return res.map

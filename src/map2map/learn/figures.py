@@ -81,7 +81,8 @@ def save_sample_grid(inputs: np.ndarray, outputs: np.ndarray, targets: np.ndarra
 
 def save_before_after(before: OccupancyMap, after: OccupancyMap, path: str | os.PathLike,
                       segments: np.ndarray | None = None, title: str = "") -> None:
-    """Input SLAM map | auto-corrected map (its wall segments in red), metric axes."""
+    """Input SLAM map | auto-corrected map (its wall segments in red, continuous pixel
+    coordinates of the map), metric axes, zoomed on the input's known part."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -94,10 +95,17 @@ def save_before_after(before: OccupancyMap, after: OccupancyMap, path: str | os.
                         (axes[1], after, "auto-corrected (Model_BA)")):
         ax.imshow(m.data, cmap="gray", vmin=0, vmax=255, extent=ext, interpolation="nearest")
         ax.set(title=name, xlabel="m")
+    r = before.resolution
     if segments is not None and len(segments):
-        r = before.resolution
         for x0, y0, x1, y1 in segments:
             axes[1].plot([x0 * r, x1 * r], [(h - y0) * r, (h - y1) * r], "r-", lw=0.8)
+    box = before.content_bbox()
+    if box is not None:  # zoom on the known part (plus 5 %)
+        r0, r1, c0, c1 = box
+        pad = 0.05 * max(r1 - r0, c1 - c0)
+        for ax in axes:
+            ax.set_xlim(max(0, c0 - pad) * r, min(w, c1 + pad) * r)
+            ax.set_ylim((h - min(h, r1 + pad)) * r, (h - max(0, r0 - pad)) * r)
     if title:
         fig.suptitle(title, fontsize=9)
     fig.tight_layout()
