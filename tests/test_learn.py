@@ -363,3 +363,41 @@ def test_autocorrect_deskews_rotated_maps_and_rotates_back():
     length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
     along = np.minimum(np.abs(ang - 25), np.abs(ang - 65)) < 5   # +-25 deg, mod 90
     assert length[along].sum() >= 0.9 * length.sum()
+
+
+def test_ctrl_c_checkpoints_mid_epoch_and_resume_is_exact(monkeypatch, tmp_path):
+    """Ctrl-C after the first batch: a checkpoint at batch 1 of epoch 1, and --resume ends
+    with the weights of an uninterrupted run."""
+    import os
+    import signal
+
+    data = _pairs(14)                                  # 12 train pairs: 3 batches of 4
+    cfg = dict(TINY, epochs=1)
+    T.train_ba(data, tmp_path / "whole", TrainConfig(**cfg), progress=False, figures=False)
+    real_build = T.build_networks
+    calls = {"n": 0}
+
+    def build(c):
+        g, dd, dr = real_build(c)
+
+        def hook(module, inputs, output):
+            calls["n"] += 1
+            if calls["n"] == 1:                       # during the first batch
+                os.kill(os.getpid(), signal.SIGINT)
+
+        g.register_forward_hook(hook)
+        return g, dd, dr
+
+    monkeypatch.setattr(T, "build_networks", build)
+    with pytest.raises(KeyboardInterrupt):
+        T.train_ba(data, tmp_path / "cut", TrainConfig(**cfg), progress=False, figures=False)
+    from map2map.learn.checkpoint import load_checkpoint
+
+    _, state = load_checkpoint(tmp_path / "cut" / "last.safetensors")
+    assert (state["epoch"], state["batch"]) == (0, 1)
+    monkeypatch.setattr(T, "build_networks", real_build)
+    T.train_ba(data, tmp_path / "cut", resume=True, progress=False, figures=False)
+    a = _weights(tmp_path / "whole" / "last.safetensors")
+    b = _weights(tmp_path / "cut" / "last.safetensors")
+    for k in a:
+        assert torch.equal(a[k], b[k]), k
