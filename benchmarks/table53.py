@@ -10,7 +10,8 @@ improved", although its text calls the negative ones the improvements), the shar
 improved with its one-sided sign-test p-value (``scipy.stats.binomtest``), and the guards
 against a map that scores a low error by dropping walls: wall recall, boundary F1 (2 px),
 Chamfer distance, per-class IoU, of B and of the output, against A; an improvement that
-loses recall is counted apart. Writes ``table53.csv`` and the box plot ``fig512.png``.
+loses recall is counted apart. Writes ``table53.csv``, the box plot ``fig512.png`` and
+``examples.png`` (the three worst and best maps: SLAM map | auto-corrected | plan).
 
     python3 benchmarks/table53.py                        # 100 generated held-out pairs
     python3 benchmarks/table53.py --quick                # 12 pairs
@@ -141,7 +142,27 @@ def main(argv=None) -> int:
            title=f"Fig. 5.12: {improved}/{int(ok.sum())} improved")
     fig.tight_layout()
     fig.savefig(out / "fig512.png", dpi=100)
-    print(f"wrote {out / 'table53.csv'} and {out / 'fig512.png'}")
+    plt.close(fig)
+    # the three best and three worst maps: SLAM map | auto-corrected | plan
+    order = np.argsort(np.where(ok, diff, np.inf))
+    picks = list(order[:3]) + [i for i in np.argsort(np.where(ok, -diff, np.inf))[:3]]
+    fig, axes = plt.subplots(len(picks), 3, figsize=(7.5, 2.5 * len(picks)))
+    for row, i in enumerate(picks):
+        for col, (img, name) in enumerate(((b[i], "SLAM map"), (gen[i], "auto-corrected"),
+                                           (a[i], "plan"))):
+            ax = axes[row, col]
+            ax.imshow(img, cmap="gray", vmin=0, vmax=255, interpolation="nearest")
+            ax.set_xticks([])
+            ax.set_yticks([])
+            if col == 0:
+                ax.set_ylabel(f"map {i + 1}: {diff[i]:+.2f} px", fontsize=8)
+            if row == 0:
+                ax.set_title(name, fontsize=9)
+    fig.suptitle("worst (top) and best (bottom) Error(sim) - Error(gen)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out / "examples.png", dpi=90)
+    plt.close(fig)
+    print(f"wrote {out / 'table53.csv'}, {out / 'fig512.png'} and {out / 'examples.png'}")
     return 0
 
 

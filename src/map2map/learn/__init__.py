@@ -10,7 +10,7 @@ PyTorch is imported only inside this package (``pip install 'map2map[learn]'``);
 * :mod:`~map2map.learn.data` -- the training set resident on the device, batches by index;
 * :mod:`~map2map.learn.checkpoint` -- safetensors checkpoints (no pickle);
 * :mod:`~map2map.learn.train` -- :func:`train_ba` (``map2map train ba``);
-* :mod:`~map2map.learn.postprocess` -- Model_32's post-processing (upsample, snap, straighten);
+* :mod:`~map2map.learn.postprocess` -- post-processing of Model_32/64 (upsample, snap, straighten);
 * :mod:`~map2map.learn.autocorrect` -- :func:`autocorrect` (``map2map autocorrect``);
 * :mod:`~map2map.learn.synthetic` -- provisional generated pairs (tests, provisional weights);
 * :mod:`~map2map.learn.figures` -- loss curves (Fig. 5.2), sample grids, before/after.

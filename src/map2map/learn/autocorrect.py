@@ -23,10 +23,10 @@
 The whole map goes through the network in one piece (resizing, not tiling): the model
 learnt whole buildings at the dataset's scale. A result the model is unsure of carries a
 warning in ``meta["autocorrect"]["warnings"]`` (and on the command line): content
-shrunk more than 8x to reach the model (details below a model cell are only kept where
-the input had them), or output walls that the input's walls do not support (a low share
-of the output wall pixels within 2 cells of an input wall means the network invented
-structure).
+more than 4x the dataset's size (a building much larger than those the model learnt:
+walls below a model cell are lost and the layout may be invented), or output walls that
+the input's walls do not support (fewer than half of the output wall pixels within half
+a wall plus 2 dataset pixels of an input wall means the network invented structure).
 
 Examples
 --------
@@ -69,6 +69,7 @@ __all__ = ["BAModel", "load_model", "autocorrect", "autocorrect_many", "Correcti
 PRETRAINED = "model_ba.safetensors"
 MARGIN_PX = 4  # dataset crop margin at the dataset's size (learn.synthetic, dataset build)
 MIN_SKEW_DEG = 3.0  # smaller rotations are left alone
+MAX_SHRINK = 4.0  # content squares more than 4x the dataset's size get a warning
 
 
 def pretrained_path() -> Path:
@@ -270,11 +271,12 @@ def autocorrect_many(maps: list[OccupancyMap], model: str | os.PathLike | BAMode
         # segments: square pixel indices -> continuous input pixel coordinates
         seg_px = segs + np.array([col0, row0, col0, row0]) + 0.5
         warns = []
-        if scale > 8:
-            warns.append(f"the map was shrunk {scale:.1f}x to the model's {net.data_size} px: "
-                         f"details smaller than {scale * net.data_size / net.size:.0f} px "
-                         "come only from the input's walls")
-        support = _support(square, data_sq, cell=side / net.size)
+        if scale > MAX_SHRINK:
+            warns.append(f"the map is {scale:.1f}x larger than the maps the model learnt on "
+                         f"({net.data_size} px): small walls may be lost and the layout "
+                         "invented; check the figure, or correct parts of the map separately")
+        wall_px = max(1.0, net.target_wall_px * side / net.data_size)
+        support = _support(square, data_sq, tol=0.5 * wall_px + 2 * side / net.data_size)
         if support is not None and support < 0.5:
             warns.append(f"only {support:.0%} of the output's wall pixels lie near a wall of "
                          "the input: the model may have invented structure; check the figure")
@@ -291,8 +293,8 @@ def autocorrect_many(maps: list[OccupancyMap], model: str | os.PathLike | BAMode
     return results
 
 
-def _support(inp: np.ndarray, out: np.ndarray, cell: float) -> float | None:
-    """Share of output wall pixels within 2 model cells of an input wall pixel."""
+def _support(inp: np.ndarray, out: np.ndarray, tol: float) -> float | None:
+    """Share of output wall pixels within ``tol`` pixels of an input wall pixel."""
     from scipy import ndimage
 
     ow = out == OCCUPIED
@@ -302,7 +304,7 @@ def _support(inp: np.ndarray, out: np.ndarray, cell: float) -> float | None:
     if not iw.any():
         return 0.0
     dist = ndimage.distance_transform_edt(~iw)
-    return float((dist[ow] <= 2 * cell).mean())
+    return float((dist[ow] <= tol).mean())
 
 
 def autocorrect(m: OccupancyMap, model: str | os.PathLike | BAModel | None = "pretrained",

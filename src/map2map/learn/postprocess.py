@@ -1,5 +1,5 @@
-"""Model_32's post-processing (thesis sec. 3.1): from the 32 x 32 output back to the
-input's resolution, without the blur.
+"""Model_32's post-processing (thesis sec. 3.1): from the 32 x 32 output (or the 64 x 64
+one of the default model) back to the input's resolution, without the blur.
 
 The network sees and writes 32 x 32 maps; a map at 256 px (or at its own resolution)
 needs 8x (or more) upsampling, and plain upsampling gives grey, blurred walls.
@@ -21,7 +21,8 @@ needs 8x (or more) upsampling, and plain upsampling gives grey, blurred walls.
    perpendicular wall by less than a model cell is moved onto it, so corners and
    T-junctions close.
 4. **Guided refinement** (when the input map is given as ``guide``): a model cell is
-   ``f = H / 32`` pixels, so the network cannot place a wall closer than about ``f / 2``.
+   ``f = H / s`` pixels (``s`` the model's size), so the network cannot place a wall
+   closer than about ``f / 2``.
    Each axis-aligned segment is moved (across its direction only, by at most ``f / 2``)
    onto the mean position of the input map's occupied pixels in that band, when they
    cover at least 30 % of its length. The input's walls are bent, noisy and doubled in

@@ -227,7 +227,7 @@ def train_ba(data: str | os.PathLike | PackedPairs, out: str | os.PathLike,
     out : path
         Run folder (created).
     config : TrainConfig
-        Settings (defaults: the thesis's Model_32); ignored when resuming, except
+        Settings (defaults: see :class:`TrainConfig`); ignored when resuming, except
         ``epochs`` (which may extend a run).
     resume : bool
         Continue the run in ``out`` exactly where its last checkpoint stopped.
