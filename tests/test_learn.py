@@ -401,3 +401,34 @@ def test_ctrl_c_checkpoints_mid_epoch_and_resume_is_exact(monkeypatch, tmp_path)
     b = _weights(tmp_path / "cut" / "last.safetensors")
     for k in a:
         assert torch.equal(a[k], b[k]), k
+
+
+def test_output_head_and_logits_stay_float32_under_bf16_autocast():
+    from map2map.learn.networks import MultiScaleDiscriminator, UNetGenerator
+
+    g = UNetGenerator(16, channels=8)
+    d = MultiScaleDiscriminator(1, channels=8, n_layers=2)
+    x = torch.zeros(2, 1, 16, 16)
+    with torch.autocast("cpu", dtype=torch.bfloat16):
+        y = g(x)
+        feats = d(y)
+        loss = L.gan_real_fake_3_4(feats, feats, side="d")
+    assert y.dtype == torch.float32
+    assert feats[0][0].dtype == torch.bfloat16          # the body runs in bf16
+    assert all(f[-1].dtype == torch.float32 for f in feats) and loss.dtype == torch.float32
+
+
+def test_generator_fade_in_blends_resolutions():
+    """Issue #15 hook: with alpha the finest block fades in; 0 is the coarser path."""
+    from map2map.learn.networks import UNetGenerator, area_downsample
+
+    torch.manual_seed(0)
+    g = UNetGenerator(32, channels=8, min_size=16)
+    x = torch.rand(1, 1, 32, 32) * 2 - 1
+    coarse = g(area_downsample(x, 16))
+    up = torch.nn.functional.interpolate(torch.atanh(coarse.clamp(-0.999, 0.999)),
+                                         scale_factor=2, mode="bilinear", align_corners=False)
+    faded0 = g(x, alpha=torch.tensor(0.0))
+    assert torch.allclose(torch.atanh(faded0.clamp(-0.999, 0.999)), up, atol=1e-3)
+    assert not torch.allclose(g(x, alpha=torch.tensor(1.0)), faded0)
+    assert torch.allclose(g(x, alpha=torch.tensor(1.0)), g(x))
