@@ -66,6 +66,7 @@ class DemoContext:
     slam_maps: dict[str, OccupancyMap] = field(default_factory=dict)  # in the plan frame
     evaluation: dict[str, dict] = field(default_factory=dict)  # name -> chosen chain errors
     ate: dict[str, float] = field(default_factory=dict)  # map name -> path ATE (m), plan frame
+    autocorrected: OccupancyMap | None = None  # Model_BA's plan from the simulated SLAM map
     written: list[tuple[str, Path]] = field(default_factory=list)
     timings: dict[str, float] = field(default_factory=dict)
     #: The step running now (set by :func:`run_demo`); files and lines are filed under it.
@@ -340,6 +341,55 @@ def _known_errors(plan: OccupancyMap, seed: int) -> tuple[OccupancyMap, np.ndarr
     return OccupancyMap(data, plan.resolution, plan.origin), u
 
 
+def stage_autocorrect(ctx: DemoContext) -> None:
+    """Auto-correct the simulated rbpf SLAM map into a CAD-like plan with Model_BA.
+
+    Uses the shipped (provisional) weights; writes ``autocorrect/cad.yaml`` (+ ``.pgm``),
+    ``autocorrect/walls.dxf`` (the walls as line segments) and
+    ``autocorrect/before_after.png``. Skipped, saying so, when PyTorch is not installed
+    (``pip install -e '.[learn]'``) or no SLAM map was made.
+    """
+    import warnings
+
+    slam = getattr(ctx.sim, "slam_map_plan", None)
+    if not isinstance(slam, OccupancyMap):
+        ctx.say("autocorrect: no SLAM map in this demo run; skipped")
+        return
+    try:
+        from .learn.autocorrect import autocorrect_many, save_segments_dxf
+        from .learn.figures import save_before_after
+    except ImportError:
+        ctx.say("autocorrect: PyTorch not installed (pip install -e '.[learn]'); skipped")
+        return
+    from .maps.formats import save_map
+
+    out = ctx.out / "autocorrect"
+    out.mkdir(parents=True, exist_ok=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        (res,) = autocorrect_many([slam])
+    save_map(res.map, out / "cad.yaml")
+    ctx.wrote("auto-corrected plan (Model_BA, ROS map)", out / "cad.yaml")
+    ctx.wrote("auto-corrected plan (Model_BA, ROS map pixels)", out / "cad.pgm")
+    save_segments_dxf(res.segments, out / "walls.dxf")
+    ctx.wrote("auto-corrected walls (DXF line segments)", out / "walls.dxf")
+    save_before_after(
+        slam,
+        res.map,
+        out / "before_after.png",
+        res.map.meta["autocorrect"]["segments_px"],
+        title="Model_BA (provisional weights): rbpf SLAM map -> CAD-like plan",
+    )
+    ctx.wrote("auto-correct before/after figure", out / "before_after.png")
+    ctx.say(
+        f"autocorrect: rbpf SLAM map -> CAD-like plan with Model_BA (provisional CPU-trained "
+        f"weights): {len(res.segments)} wall segments"
+    )
+    for w in res.warnings:
+        ctx.say(f"autocorrect: warning: {w}")
+    ctx.autocorrected = res.map
+
+
 def stage_evaluate(ctx: DemoContext) -> None:
     """Evaluate every SLAM and modelled map against the plan (appendix paper Algorithm 1).
 
@@ -400,6 +450,7 @@ STAGES: list[tuple[str, Callable[[DemoContext], None]]] = [
     ("parametric", stage_parametric),
     ("simulate", stage_simulate),
     ("slam", stage_slam),
+    ("autocorrect", stage_autocorrect),
     ("evaluate", stage_evaluate),  # keep last: it evaluates the maps the steps above made
 ]
 

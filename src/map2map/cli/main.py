@@ -30,6 +30,8 @@ COMMANDS = [
     "align",
     "evaluate",
     "dataset",
+    "train",
+    "autocorrect",
 ]
 
 

@@ -1,0 +1,20 @@
+"""Learned map translation (thesis sec. 3.1, 4.2, 5.1): Model_BA, the SLAM -> CAD
+"auto-correct" GAN, with its training loop, checkpoints and inference.
+
+PyTorch is imported only inside this package (``pip install 'map2map[learn]'``);
+``import map2map`` stays light. Modules:
+
+* :mod:`~map2map.learn.networks` -- U-Net generator, multi-scale patch discriminators;
+* :mod:`~map2map.learn.losses` -- the terms of eq. 3.2 (eqs. 3.3-3.7), one function each;
+* :mod:`~map2map.learn.config` -- :class:`TrainConfig` and Table 5.1's batch mapping;
+* :mod:`~map2map.learn.data` -- the training set resident on the device, batches by index;
+* :mod:`~map2map.learn.checkpoint` -- safetensors checkpoints (no pickle);
+* :mod:`~map2map.learn.train` -- :func:`train_ba` (``map2map train ba``);
+* :mod:`~map2map.learn.postprocess` -- post-processing of Model_32/64 (upsample, snap, straighten);
+* :mod:`~map2map.learn.autocorrect` -- :func:`autocorrect` (``map2map autocorrect``);
+* :mod:`~map2map.learn.synthetic` -- provisional generated pairs (tests, provisional weights);
+* :mod:`~map2map.learn.figures` -- loss curves (Fig. 5.2), sample grids, before/after.
+
+Wall recall, boundary F1, Chamfer distance and per-class IoU (the guards of
+``benchmarks/table53.py``) live in :mod:`map2map.evaluate.wallmetrics`, a layer above.
+"""

@@ -1,0 +1,409 @@
+"""``map2map autocorrect``: a SLAM map in, a CAD-like plan out, in the input's frame.
+
+:func:`autocorrect` runs Model_BA on any map, whatever its size, resolution and origin:
+
+1. the known part of the map (its content box, plus a margin that is 4 px at the
+   dataset's size, as in the dataset's crop) is padded to a square with unknown cells;
+   when its walls run at an angle to the grid (:func:`dominant_angle`, more than 3
+   degrees, coherent), the square is rotated to make them axis-aligned (nearest
+   neighbour, padded so nothing is cut) -- the model learnt plans drawn along the axes --
+   and everything below is rotated back at the end (``meta["autocorrect"]["deskew_deg"]``);
+2. that square is brought to the dataset's size (256) exactly as the dataset was made
+   (:func:`map2map.maps.preprocess.square_resize`: walls survive any reduction) and then to
+   the model's size by area averaging (:func:`map2map.learn.data.downsample_input`) --
+   the same path the training inputs took;
+3. the generator's output is post-processed back to the square *at the input's own
+   resolution* (:func:`map2map.learn.postprocess.postprocess`: upsampling, snapping to the
+   three values, straightened walls moved onto the input's wall pixels, walls redrawn
+   with the training targets' thickness scaled to the input);
+4. the square is cut back into the input's grid: the result has the input's shape,
+   resolution and origin, so every corrected wall lies in the same world frame. Cells
+   outside the square (all unknown in the input) stay unknown.
+
+The whole map goes through the network in one piece (resizing, not tiling): the model
+learnt whole buildings at the dataset's scale. A result the model is unsure of carries a
+warning in ``meta["autocorrect"]["warnings"]`` (and on the command line): content
+more than 4x the dataset's size (a building much larger than those the model learnt:
+walls below a model cell are lost and the layout may be invented), or output walls that
+the input's walls do not support (fewer than half of the output wall pixels within half
+a wall plus 2 dataset pixels of an input wall means the network invented structure).
+
+Examples
+--------
+>>> import numpy as np
+>>> from map2map.core.grid import OccupancyMap
+>>> data = np.full((90, 140), 127, np.uint8)
+>>> data[10:80, 10:130] = 255; data[10, 10:130] = 0; data[79, 10:130] = 0
+>>> data[10:80, 10] = 0; data[10:80, 129] = 0
+>>> m = OccupancyMap(data, 0.04, (1.0, -2.0, 0.0))
+>>> out = autocorrect(m)                        # the shipped (provisional) weights
+>>> out.shape, out.resolution, out.origin
+((90, 140), 0.04, (1.0, -2.0, 0.0))
+>>> sorted(out.meta["autocorrect"])
+['deskew_deg', 'model', 'segments_px', 'support', 'warnings']
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import warnings
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from ..core.errors import InputError
+from ..core.grid import OCCUPIED, UNKNOWN, OccupancyMap
+from ..maps.preprocess import square_resize
+from .data import reduce_input
+from .networks import UNetGenerator, from_unit
+from .postprocess import postprocess
+
+__all__ = ["BAModel", "load_model", "autocorrect", "autocorrect_many", "Correction",
+           "pretrained_path", "save_segments_dxf", "export_model", "dominant_angle"]
+
+PRETRAINED = "model_ba.safetensors"
+MARGIN_PX = 4  # dataset crop margin at the dataset's size (learn.synthetic, dataset build)
+MIN_SKEW_DEG = 3.0  # smaller rotations are left alone
+MAX_SHRINK = 4.0  # content squares more than 4x the dataset's size get a warning
+
+
+def pretrained_path() -> Path:
+    """The weights shipped in the package (``map2map/learn/weights/model_ba.safetensors``)."""
+    return Path(str(resources.files("map2map.learn") / "weights" / PRETRAINED))
+
+
+@dataclass
+class BAModel:
+    """A loaded Model_BA generator and what inference needs to know about its training."""
+
+    generator: UNetGenerator
+    size: int
+    data_size: int
+    target_wall_px: float
+    header: dict
+    source: str
+    device: torch.device = field(default_factory=lambda: torch.device("cpu"))
+
+    @torch.no_grad()
+    def predict(self, inputs: np.ndarray, batch: int = 256) -> np.ndarray:
+        """(N, data_size, data_size) uint8 maps -> (N, size, size) float32 grey outputs."""
+        how = self.header.get("train", {}).get("input_reduce", "area")
+        small = reduce_input(inputs, self.size, how)
+        out = []
+        for i in range(0, len(small), batch):
+            x = torch.from_numpy(small[i:i + batch])[:, None].to(self.device)
+            y = self.generator(x.float() / 127.5 - 1.0)
+            out.append(from_unit(y[:, 0]))
+        return np.concatenate(out) if out else np.zeros((0, self.size, self.size), np.float32)
+
+
+def load_model(model: str | os.PathLike | BAModel | None = "pretrained",
+               device: str | torch.device = "cpu") -> BAModel:
+    """Load Model_BA from ``"pretrained"`` (the shipped weights), a training run folder
+    (its ``model.safetensors``) or a ``.safetensors`` file written by the trainer."""
+    if isinstance(model, BAModel):
+        return model
+    from safetensors import SafetensorError, safe_open
+
+    if model is None or str(model) == "pretrained":
+        path = pretrained_path()
+        if not path.is_file():
+            raise InputError("--model", "no pretrained weights in this installation")
+    else:
+        path = Path(model)
+        if path.is_dir():
+            path = path / "model.safetensors"
+        if not path.is_file():
+            raise InputError(model, "no Model_BA weights here (expected a training run "
+                                    "folder holding model.safetensors, or that file)")
+    try:
+        with safe_open(str(path), framework="pt", device="cpu") as f:
+            header = json.loads((f.metadata() or {}).get("map2map", "{}"))
+            tensors = {k: f.get_tensor(k).float() for k in f.keys()}
+    except (SafetensorError, OSError, ValueError) as exc:
+        raise InputError(path, f"not readable Model_BA weights ({exc})") from None
+    if header.get("format") != "map2map-model-ba":
+        raise InputError(path, "not a Model_BA weights file (no map2map-model-ba header)")
+    g = UNetGenerator(**header["generator"])
+    try:
+        g.load_state_dict(tensors, strict=True)
+    except RuntimeError as exc:
+        raise InputError(path, f"weights do not fit the network ({str(exc).splitlines()[0]})"
+                         ) from None
+    dev = torch.device(device)
+    g.to(dev).eval()
+    return BAModel(g, int(header["generator"]["size"]), int(header.get("data_size", 256)),
+                   float(header.get("target_wall_px", 2.0)), header, str(path), dev)
+
+
+@dataclass
+class Correction:
+    """An auto-corrected map and its wall segments (world metres: x0, y0, x1, y1)."""
+
+    map: OccupancyMap
+    segments: np.ndarray
+    warnings: list[str]
+
+
+def _square(m: OccupancyMap, data_size: int):
+    """(square uint8 array, row0, col0 of the square in the input grid, side)."""
+    bbox = m.content_bbox()
+    if bbox is None:
+        return None
+    r0, r1, c0, c1 = bbox
+    side = max(r1 - r0, c1 - c0)
+    margin = math.ceil(MARGIN_PX * side / max(1, data_size - 2 * MARGIN_PX))
+    side += 2 * margin
+    row0 = r0 - (side - (r1 - r0)) // 2
+    col0 = c0 - (side - (c1 - c0)) // 2
+    sq = np.full((side, side), UNKNOWN, np.uint8)
+    H, W = m.shape
+    rs, re = max(0, row0), min(H, row0 + side)
+    cs, ce = max(0, col0), min(W, col0 + side)
+    sq[rs - row0:re - row0, cs - col0:ce - col0] = m.data[rs:re, cs:ce]
+    return sq, row0, col0, side
+
+
+def dominant_angle(data: np.ndarray) -> tuple[float, float]:
+    """Dominant wall direction (degrees in (-45, 45], image coordinates) and its coherence
+    (0: no preferred direction, 1: all walls parallel or perpendicular): the circular mean
+    of four times the gradient angle of the blurred wall mask, weighted by magnitude.
+
+    Examples
+    --------
+    >>> import cv2
+    >>> img = np.full((200, 200), 255, np.uint8)
+    >>> _ = cv2.rectangle(img, (50, 60), (150, 140), 0, 1)
+    >>> rot = cv2.warpAffine(img, cv2.getRotationMatrix2D((100, 100), 20, 1), (200, 200),
+    ...                      flags=cv2.INTER_NEAREST, borderValue=255)
+    >>> a, coherence = dominant_angle(rot)
+    >>> round(a), coherence > 0.5
+    (-20, True)
+    """
+    import cv2
+
+    occ = cv2.GaussianBlur((np.asarray(data) == OCCUPIED).astype(np.float32), (0, 0), 2.0)
+    gx = cv2.Sobel(occ, cv2.CV_32F, 1, 0, ksize=3)
+    gy = cv2.Sobel(occ, cv2.CV_32F, 0, 1, ksize=3)
+    mag = np.hypot(gx, gy)
+    total = float(mag.sum())
+    if total <= 0:
+        return 0.0, 0.0
+    z = np.sum(mag * np.exp(4j * np.arctan2(gy, gx)))
+    return float(np.degrees(np.angle(z) / 4)), float(abs(z) / total)
+
+
+def _rotate(data: np.ndarray, angle: float) -> np.ndarray:
+    import cv2
+
+    n = data.shape[0]
+    rot = cv2.getRotationMatrix2D(((n - 1) / 2, (n - 1) / 2), angle, 1.0)
+    return cv2.warpAffine(data, rot, (n, n), flags=cv2.INTER_NEAREST, borderValue=UNKNOWN)
+
+
+def _prepare(m: OccupancyMap, data_size: int, deskew: bool):
+    """Square of the content, and its deskewed version: (square, row0, col0, side,
+    angle, pad, model-frame square) or None for a map without known cells."""
+    sq = _square(m, data_size)
+    if sq is None:
+        return None
+    square, row0, col0, side = sq
+    angle, coherence = dominant_angle(square) if deskew else (0.0, 0.0)
+    if abs(angle) < MIN_SKEW_DEG or coherence < 0.3:
+        return square, row0, col0, side, 0.0, 0, square
+    t = math.radians(abs(angle))
+    pad = math.ceil(side * (math.cos(t) + math.sin(t) - 1) / 2)
+    big = np.pad(square, pad, constant_values=UNKNOWN)
+    return square, row0, col0, side, angle, pad, _rotate(big, angle)
+
+
+def _unrotate_segments(segs: np.ndarray, angle: float, n: int) -> np.ndarray:
+    import cv2
+
+    if not len(segs):
+        return segs
+    inv = cv2.getRotationMatrix2D(((n - 1) / 2, (n - 1) / 2), -angle, 1.0)
+    pts = segs.reshape(-1, 2)
+    back = pts @ inv[:, :2].T + inv[:, 2]
+    return back.reshape(-1, 4)
+
+
+def autocorrect_many(maps: list[OccupancyMap], model: str | os.PathLike | BAModel | None =
+                     "pretrained", *, straighten: bool = True, deskew: bool = True,
+                     device: str = "cpu", batch: int = 256) -> list[Correction]:
+    """:func:`autocorrect` for several maps, the network run in batches."""
+    net = load_model(model, device)
+    squares = [_prepare(m, net.data_size, deskew) for m in maps]
+    todo = [i for i, s in enumerate(squares) if s is not None]
+    inputs = np.stack([square_resize(squares[i][-1], net.data_size) for i in todo]) if todo \
+        else np.zeros((0, net.data_size, net.data_size), np.uint8)
+    outputs = net.predict(inputs, batch)
+    results: list[Correction] = []
+    k = 0
+    for m, sq in zip(maps, squares, strict=True):
+        if sq is None:
+            msg = "the map holds no known cells; nothing to correct"
+            out = m.copy()
+            out.meta["autocorrect"] = {"warnings": [msg], "segments_px": [], "support": None,
+                                       "model": net.source}
+            results.append(Correction(out, np.zeros((0, 4)), [msg]))
+            continue
+        square, row0, col0, side, angle, pad, model_sq = sq
+        n = model_sq.shape[0]
+        scale = n / net.data_size
+        data_sq, segs = postprocess(outputs[k], (n, n), model_sq,
+                                    wall_px=max(1.0, net.target_wall_px * scale),
+                                    straighten=straighten)
+        k += 1
+        if angle:  # back from the deskewed frame
+            data_sq = _rotate(data_sq, -angle)[pad:pad + side, pad:pad + side]
+            segs = _unrotate_segments(segs, angle, n) - pad
+        H, W = m.shape
+        data = np.full((H, W), UNKNOWN, np.uint8)
+        rs, re = max(0, row0), min(H, row0 + side)
+        cs, ce = max(0, col0), min(W, col0 + side)
+        data[rs:re, cs:ce] = data_sq[rs - row0:re - row0, cs - col0:ce - col0]
+        # segments: square pixel indices -> continuous input pixel coordinates
+        seg_px = segs + np.array([col0, row0, col0, row0]) + 0.5
+        warns = []
+        if scale > MAX_SHRINK:
+            warns.append(f"the map is {scale:.1f}x larger than the maps the model learnt on "
+                         f"({net.data_size} px): small walls may be lost and the layout "
+                         "invented; check the figure, or correct parts of the map separately")
+        wall_px = max(1.0, net.target_wall_px * side / net.data_size)
+        support = _support(square, data_sq, tol=0.5 * wall_px + 2 * side / net.data_size)
+        if support is not None and support < 0.5:
+            warns.append(f"only {support:.0%} of the output's wall pixels lie near a wall of "
+                         "the input: the model may have invented structure; check the figure")
+        out = m.copy(data=data)
+        out.meta["autocorrect"] = {"model": net.source, "warnings": warns,
+                                   "support": support, "segments_px": seg_px.tolist(),
+                                   "deskew_deg": angle}
+        x0, y0 = m.pixel_to_world(seg_px[:, 1] - 0.5, seg_px[:, 0] - 0.5)
+        x1, y1 = m.pixel_to_world(seg_px[:, 3] - 0.5, seg_px[:, 2] - 0.5)
+        seg_w = np.stack([x0, y0, x1, y1], 1) if len(seg_px) else np.zeros((0, 4))
+        for w in warns:
+            warnings.warn(w, stacklevel=2)
+        results.append(Correction(out, seg_w, warns))
+    return results
+
+
+def _support(inp: np.ndarray, out: np.ndarray, tol: float) -> float | None:
+    """Share of output wall pixels within ``tol`` pixels of an input wall pixel."""
+    from scipy import ndimage
+
+    ow = out == OCCUPIED
+    iw = inp == OCCUPIED
+    if not ow.any():
+        return None
+    if not iw.any():
+        return 0.0
+    dist = ndimage.distance_transform_edt(~iw)
+    return float((dist[ow] <= tol).mean())
+
+
+def autocorrect(m: OccupancyMap, model: str | os.PathLike | BAModel | None = "pretrained",
+                *, straighten: bool = True, deskew: bool = True, device: str = "cpu"
+                ) -> OccupancyMap:
+    """Auto-correct a SLAM map into a CAD-like plan with Model_BA (module docstring).
+
+    Parameters
+    ----------
+    m : OccupancyMap
+        The SLAM map (any size, resolution, origin).
+    model : "pretrained", run folder, weights file or BAModel
+        Which Model_BA to use.
+    straighten : bool
+        Post-processing steps 3-5 (straight walls); False keeps the snapped upsampling.
+    deskew : bool
+        Rotate maps whose walls are not along the grid to the axes first (step 1).
+    device : str
+        Torch device for the network.
+
+    Returns
+    -------
+    OccupancyMap
+        Same shape, resolution and origin as ``m``; ``meta["autocorrect"]`` holds the
+        wall segments (input pixels), the wall support and any warnings.
+    """
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = autocorrect_many([m], model, straighten=straighten, deskew=deskew,
+                               device=device)[0]
+    for w in res.warnings:
+        warnings.warn(w, stacklevel=2)
+    return res.map
+
+
+def save_segments_dxf(segments: np.ndarray, path: str | os.PathLike, *, layer: str = "WALLS",
+                      width: float | None = None) -> None:
+    """Write wall segments (world metres: x0, y0, x1, y1) as DXF ``LINE`` entities.
+
+    The drawing is in metres (``$INSUNITS`` 6); ``width`` (metres, optional) is stored as
+    each line's constant width through a ``LWPOLYLINE`` instead, so CAD shows the wall
+    thickness.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib, ezdxf
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "walls.dxf"
+    >>> save_segments_dxf(np.array([[0.0, 0.0, 4.0, 0.0], [4.0, 0.0, 4.0, 3.0]]), p)
+    >>> len(ezdxf.readfile(p).modelspace().query("LINE"))
+    2
+    """
+    import ezdxf
+
+    from ..core._io import atomic_path
+
+    doc = ezdxf.new(units=6)
+    doc.header["$INSUNITS"] = 6
+    if layer not in doc.layers:
+        doc.layers.add(layer)
+    msp = doc.modelspace()
+    for x0, y0, x1, y1 in np.asarray(segments, float).reshape(-1, 4):
+        if width:
+            msp.add_lwpolyline([(x0, y0), (x1, y1)], dxfattribs={"layer": layer,
+                                                                 "const_width": width})
+        else:
+            msp.add_line((x0, y0), (x1, y1), dxfattribs={"layer": layer})
+    with atomic_path(path) as tmp:
+        doc.saveas(tmp)
+
+
+def export_model(run: str | os.PathLike, dest: str | os.PathLike, *, note: str = "") -> Path:
+    """Copy a run's generator to ``dest`` in float16 with its header (and ``note``), plus a
+    readable ``.json`` beside it: how the shipped ``model_ba.safetensors`` is made.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> p = export_model(pretrained_path(), d / "m.safetensors", note="copy")
+    >>> load_model(p).header["note"]
+    'copy'
+    """
+    from safetensors import safe_open
+    from safetensors.torch import save_file
+
+    from ..core._io import atomic_path
+
+    src = Path(run)
+    if src.is_dir():
+        src = src / "model.safetensors"
+    net = load_model(src)
+    header = dict(net.header)
+    if note:
+        header["note"] = note
+    with safe_open(str(src), framework="pt", device="cpu") as f:
+        tensors = {k: f.get_tensor(k).to(torch.float16).contiguous() for k in f.keys()}
+    dest = Path(dest)
+    with atomic_path(dest) as tmp:
+        save_file(tensors, str(tmp), metadata={"map2map": json.dumps(header, sort_keys=True)})
+    with atomic_path(dest.with_suffix(".json")) as tmp:
+        tmp.write_text(json.dumps(header, indent=2, sort_keys=True))
+    return dest
