@@ -36,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import fft as sfft
 
+from ..core.geometry import wrap_angle
 from .decomposition import Face
 from .transforms import apply, decompose_similarity, similarity_matrix
 
@@ -164,7 +165,7 @@ def suppress_duplicates(
         s, a, tx, ty = decompose_similarity(h.T)
         dup = False
         for s2, a2, tx2, ty2 in params:
-            da = abs((a - a2 + np.pi) % (2 * np.pi) - np.pi)
+            da = abs(wrap_angle(a - a2))
             if (
                 da < angle
                 and abs(math.log(s / s2)) < scale
