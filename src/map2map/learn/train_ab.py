@@ -12,7 +12,8 @@ The machinery is Model_BA's (:mod:`~map2map.learn.train`): data resident on the 
 (:class:`~map2map.learn.data.ResidentPairs`, one per stage, built when the stage starts),
 Adam 2e-4 / (0.55, 0.99) with the learning rate a pure function of the epoch
 (:func:`~map2map.learn.config.lr_factor` over all the epochs), safetensors checkpoints
-written atomically after every epoch and on Ctrl-C, exact ``--resume`` (the stage and the
+written atomically after every epoch and on Ctrl-C, exact ``--resume`` (the dropout's
+random state is saved too) (the stage and the
 fade-in alpha are functions of (epoch, batch), so nothing else has to be stored), DDP under
 ``torchrun`` (``find_unused_parameters``: the blocks of the stages not reached have no
 gradient), bf16 autocast + channels_last on CUDA.
@@ -289,6 +290,9 @@ def train_ab(data: str | os.PathLike | PackedPairs, out: str | os.PathLike,
         load_optimizer(opt_g, tensors, "opt_G", state["opt_G"])
         load_optimizer(opt_d, tensors, "opt_D", state["opt_D"])
         gen.set_state(tensors["rng.shuffle"])
+        torch.set_rng_state(tensors["rng.torch"])
+        if cuda and "rng.cuda" in tensors:
+            torch.cuda.set_rng_state(tensors["rng.cuda"], dev)
         epoch, start_batch = state["epoch"], state["batch"]
         sums, history = state["sums"], state["history"]
     from .postprocess import wall_thickness_px
@@ -345,6 +349,9 @@ def train_ab(data: str | os.PathLike | PackedPairs, out: str | os.PathLike,
         t.update(tg)
         t.update(td)
         t["rng.shuffle"] = rng_state
+        t["rng.torch"] = torch.get_rng_state()  # the dropout masks draw from it
+        if cuda:
+            t["rng.cuda"] = torch.cuda.get_rng_state(dev)
         st = {"format": FORMAT_AB, "config": cfg.to_dict(), "dataset": meta, "epoch": ep,
               "batch": batch, "sums": run_sums, "history": history, "opt_G": groups_g,
               "opt_D": groups_d}
