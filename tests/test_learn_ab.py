@@ -255,3 +255,90 @@ def test_cli_train_ab_and_bad_input(tmp_path, capsys):
     assert main(args[:4] + ["--out", str(tmp_path / "r3"), "--schedule", "4:1,8:1,16:1"]) == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err and err.count("map2map: error:") == 3
+
+
+# ------------------------------------------------------------------------- synthesize
+@pytest.fixture(scope="module")
+def tiny_run(tmp_path_factory):
+    run = tmp_path_factory.mktemp("ab") / "run"
+    n = torch.get_num_threads()
+    torch.set_num_threads(1)
+    TA.train_ab(_pairs(), run, ABConfig(**{**TINY, "schedule": ((8, 1), (16, 1))}),
+                progress=False, figures=False)
+    torch.set_num_threads(n)
+    return run
+
+
+def _plan():
+    from map2map.maps.grid import OccupancyMap
+
+    data = np.full((30, 44), UNKNOWN, np.uint8)
+    data[4:26, 6:40] = FREE
+    data[4, 6:40] = data[25, 6:40] = OCCUPIED
+    data[4:26, 6] = data[4:26, 39] = data[4:26, 20] = OCCUPIED
+    return OccupancyMap(data, resolution=0.07, origin=(1.5, -2.0, 0.0))
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+def test_synthesize_keeps_the_plan_frame_and_gives_seeded_distinct_hypotheses(tiny_run):
+    from map2map.learn.synthesize import load_ab_model, synthesize
+
+    plan = _plan()
+    with pytest.warns(UserWarning):
+        res = synthesize(plan, tiny_run, samples=3, seed=5)
+    assert len(res.maps) == 3
+    for m in res.maps:
+        assert m.shape == plan.shape and m.resolution == plan.resolution
+        assert m.origin == plan.origin
+        assert set(np.unique(m.data)) <= {OCCUPIED, UNKNOWN, FREE}
+    assert np.all(res.maps[0].data[:, :2] == UNKNOWN)     # outside the plan's square
+    again = synthesize(plan, load_ab_model(tiny_run), samples=3, seed=5)
+    for a, b in zip(res.maps, again.maps, strict=True):
+        assert np.array_equal(a.data, b.data)             # same seed, same maps
+    assert res.pairwise.shape == (3, 3) and np.all(np.diag(res.pairwise) == 0)
+    assert res.diversity == pytest.approx(res.pairwise[~np.eye(3, dtype=bool)].mean())
+    assert res.diversity > 0                              # dropout on: distinct hypotheses
+    one = synthesize(plan, tiny_run, samples=1)
+    assert one.diversity == 0.0 and len(one.maps) == 1
+    assert any("16 px" in w for w in res.warnings)        # coarse model says so
+    from map2map.errors import InputError
+    from map2map.maps.grid import OccupancyMap
+
+    with pytest.raises(InputError, match="no known cells"):
+        synthesize(OccupancyMap(np.full((9, 9), UNKNOWN, np.uint8), 0.05), tiny_run)
+
+
+def test_cli_synthesize_writes_maps_summary_and_figure(tiny_run, tmp_path, capsys):
+    import json
+
+    from map2map.maps.formats import load_map, save_map
+
+    save_map(_plan(), tmp_path / "plan.yaml")
+    out = tmp_path / "hyps"
+    rc = main(["synthesize", str(tmp_path / "plan.yaml"), "--out", str(out), "--samples", "3",
+               "--model", str(tiny_run)])
+    assert rc == 0
+    m = load_map(out / "plan_hyp02.yaml")
+    assert m.shape == (30, 44) and m.resolution == pytest.approx(0.07)
+    assert m.origin[:2] == pytest.approx((1.5, -2.0))
+    summary = json.loads((out / "plan_synthesize.json").read_text())
+    assert summary["samples"] == 3 and 0 < summary["diversity_mean_pairwise_disagreement"] < 1
+    assert (out / "plan_synthesize.png").stat().st_size > 1000
+    assert main(["synthesize", str(tmp_path / "plan.yaml"), "--out", str(tmp_path / "p"),
+                 "--samples", "2", "--format", "png", "--no-figure", "--model",
+                 str(tiny_run)]) == 0
+    assert sorted(p.name for p in (tmp_path / "p").iterdir()) == \
+        ["plan_hyp00.png", "plan_hyp01.png", "plan_synthesize.json"]
+    err = capsys.readouterr().err
+    assert "mean pairwise disagreement" in err
+    from map2map.learn.autocorrect import pretrained_path
+
+    bad = [["--samples", "0"], ["--model", str(pretrained_path())],
+           ["--model", str(tmp_path / "nope")]]
+    for extra in bad:
+        assert main(["synthesize", str(tmp_path / "plan.yaml"), "--out",
+                     str(tmp_path / "bad"), *extra]) == 2
+    assert main(["synthesize", str(tmp_path / "none.yaml"), "--out", str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and err.count("map2map: error:") == 4
+    assert not (tmp_path / "bad").exists()

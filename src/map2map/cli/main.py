@@ -29,6 +29,7 @@ COMMANDS = [
     "evaluate",
     "train",
     "autocorrect",
+    "synthesize",
 ]
 
 

@@ -443,8 +443,8 @@ def train_ab(data: str | os.PathLike | PackedPairs, out: str | os.PathLike,
                     el = time.perf_counter() - t_start
                     bar.set_postfix_str(f"epoch {epoch + 1}/{cfg.epochs} {r}px a={a:.2f} "
                                         f"{images / max(el, 1e-9):.0f} img/s "
-                                        f"G {float(vals['loss_G']):.3f} "
-                                        f"D {float(vals['loss_D']):.3f}")
+                                        f"G {float(vals['loss_G'].detach()):.3f} "
+                                        f"D {float(vals['loss_D'].detach()):.3f}")
                     bar.update(1)
                 if stop["flag"]:
                     raise KeyboardInterrupt
