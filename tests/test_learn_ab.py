@@ -342,3 +342,29 @@ def test_cli_synthesize_writes_maps_summary_and_figure(tiny_run, tmp_path, capsy
     err = capsys.readouterr().err
     assert "Traceback" not in err and err.count("map2map: error:") == 4
     assert not (tmp_path / "bad").exists()
+
+
+@pytest.mark.slow
+def test_ddp_two_processes_gloo(tmp_path):
+    """torchrun with 2 CPU processes (gloo) through a stage switch: one run folder, one
+    report, a loadable model at the last resolution (unused finer blocks do not stall DDP)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    data = tmp_path / "ds.npz"
+    save_packed(data, _pairs(10))
+    src = str(Path(__file__).resolve().parents[1] / "src")
+    env = {**os.environ, "OMP_NUM_THREADS": "1",
+           "PYTHONPATH": os.pathsep.join([src, os.environ.get("PYTHONPATH", "")])}
+    cmd = [sys.executable, "-m", "torch.distributed.run", "--standalone",
+           "--nproc_per_node", "2", "-m", "map2map", "train", "ab", "--data", str(data),
+           "--out", str(tmp_path / "run"), "--schedule", "8:1,16:1", "--batch", "4",
+           "--g-channels", "8", "--g-max-channels", "16", "--d-channels", "8",
+           "--d-layers", "1", "--fade-batches", "1", "--device", "cpu", "--quiet"]
+    out = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=240)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stderr.count("trained 2 epochs") == 1
+    from map2map.learn.synthesize import load_ab_model
+
+    assert load_ab_model(tmp_path / "run").resolution == 16
