@@ -11,7 +11,9 @@ dataset's square, in pixels of the dataset's size):
 * ``spurious``     occupied 8-connected fragments farther than 3 px from every plan wall;
 * ``thickness``    wall thickness (px), :func:`map2map.learn.postprocess.wall_thickness_px`;
 * ``bend``         bent-wall curvature: RMS distance of a fragment's pixels to its own
-  principal line, over fragments of >= 20 px (0 for straight walls).
+  principal line, over fragments of >= 20 px (0 for straight walls). Crude: a fragment
+  joining walls at an L or T junction counts as bent too, so the ratio is only
+  meaningful between maps whose walls connect alike.
 
 Each statistic's distribution over generated maps is compared with that over reference
 run 1 by the Wasserstein distance, normalised by the same distance between reference runs

@@ -368,3 +368,17 @@ def test_ddp_two_processes_gloo(tmp_path):
     from map2map.learn.synthesize import load_ab_model
 
     assert load_ab_model(tmp_path / "run").resolution == 16
+
+
+def test_pretrained_weights_load_and_synthesize():
+    from map2map.learn.synthesize import load_ab_model, pretrained_ab_path, synthesize
+
+    path = pretrained_ab_path()
+    assert path.is_file() and path.stat().st_size <= 10 * 2**20
+    net = load_ab_model("pretrained")
+    assert "PROVISIONAL" in net.header["note"]
+    assert net.header["format"] == "map2map-model-ab" and net.resolution >= 16
+    plan = _plan()
+    with pytest.warns(UserWarning, match="provisional"):
+        res = synthesize(plan, "pretrained", samples=2, seed=1)
+    assert [m.shape for m in res.maps] == [plan.shape] * 2
