@@ -32,6 +32,7 @@ COMMANDS = [
     "dataset",
     "train",
     "autocorrect",
+    "synthesize",
 ]
 
 

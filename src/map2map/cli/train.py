@@ -9,7 +9,7 @@ import sys
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "train",
-        help="train a learned model (ba: SLAM -> CAD auto-correct)",
+        help="train a learned model (ba: SLAM -> CAD auto-correct; ab: CAD -> SLAM)",
         description="Train a learned map model on a packed dataset (thesis 3.1, 4.2). "
         "Multi-GPU: torchrun --nproc_per_node K -m map2map train ba ...",
     )
@@ -48,6 +48,87 @@ def register(sub: argparse._SubParsersAction) -> None:
     b.add_argument("--compile", action="store_true", help="torch.compile the generator")
     b.add_argument("--quiet", action="store_true", help="no progress bar")
     b.set_defaults(func=run)
+    register_ab(tsub)
+
+
+def register_ab(tsub) -> None:
+    """``map2map train ab``: Model_AB (CAD -> SLAM), grown progressively (Model_prog)."""
+    b = tsub.add_parser(
+        "ab",
+        help="Model_AB: CAD plan -> SLAM map, grown coarse to fine (Model_prog)",
+        description="Train Model_AB (eq. 3.2, plan -> SLAM map) on the train split of DATA, "
+        "generator and both discriminators grown coarse to fine with a fade-in of each new "
+        "resolution (thesis 3.1; Table 5.2's schedule, Table 5.1's batches x batch_rate 1). "
+        "Writes what 'train ba' writes; losses.png marks the resolution switches (Fig. 5.1).",
+    )
+    b.add_argument("--data", required=True, help="dataset folder (packed.npz inside) or .npz")
+    b.add_argument("--out", required=True, help="run folder")
+    b.add_argument("--schedule", default="32:15,64:30,128:60,256:100",
+                   help="RES:EPOCHS per stage, coarse to fine (default Table 5.2)")
+    b.add_argument("--epochs", type=int, help="total epochs (default: the schedule's sum; "
+                   "beyond it the last resolution continues; with --resume: extend)")
+    b.add_argument("--resume", action="store_true", help="continue the run in --out exactly")
+    b.add_argument("--batch", type=int, help="one batch size for every stage (default: "
+                   "Table 5.1 x --batch-rate)")
+    b.add_argument("--batch-rate", type=float, default=1.0, help="Table 5.1 multiplier (1)")
+    b.add_argument("--fade-share", type=float, default=0.5,
+                   help="fade-in length as a share of each new stage's batches (0.5)")
+    b.add_argument("--fade-batches", type=int, help="fade-in length in batches (overrides "
+                   "--fade-share)")
+    b.add_argument("--dropout", type=float, default=0.5,
+                   help="decoder dropout, the hypotheses' noise source (0.5)")
+    b.add_argument("--device", default="auto", help="auto (CUDA when present), cpu, cuda, ...")
+    b.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    b.add_argument("--lambda-l1", type=float, default=100.0, help="weight of eq. 3.7 (100)")
+    b.add_argument("--g-channels", type=int, default=32, help="generator width at the "
+                   "finest resolution (32)")
+    b.add_argument("--g-max-channels", type=int, default=256, help="generator cap (256)")
+    b.add_argument("--d-channels", type=int, default=32, help="discriminator width (32)")
+    b.add_argument("--d-layers", type=int, default=3,
+                   help="stride-2 layers of the first stage's patch discriminators (3)")
+    b.add_argument("--no-false-targets", action="store_true",
+                   help="no false-target augmentation for D_d")
+    b.add_argument("--no-amp", action="store_true", help="fp32 on CUDA (no bf16 autocast)")
+    b.add_argument("--compile", action="store_true", help="torch.compile the generator")
+    b.add_argument("--quiet", action="store_true", help="no progress bar")
+    b.set_defaults(func=run_ab)
+
+
+def run_ab(args: argparse.Namespace) -> int:
+    from ..errors import InputError
+
+    try:
+        from ..learn.progressive import ABConfig, parse_schedule
+        from ..learn.train_ab import train_ab
+    except ImportError as exc:
+        raise InputError("train", f"needs PyTorch: pip install 'map2map[learn]' ({exc})") from None
+    for name in ("epochs", "batch", "fade_batches"):
+        v = getattr(args, name)
+        if v is not None and v < (0 if name == "fade_batches" else 1):
+            raise InputError(f"--{name.replace('_', '-')}", f"must be positive, got {v}")
+    try:
+        cfg = ABConfig(
+            schedule=parse_schedule(args.schedule), epochs=args.epochs or 0, batch=args.batch,
+            batch_rate=args.batch_rate, fade_share=args.fade_share,
+            fade_batches=args.fade_batches, dropout=args.dropout, device=args.device,
+            seed=args.seed, lambda_l1=args.lambda_l1, g_channels=args.g_channels,
+            g_max_channels=args.g_max_channels, d_channels=args.d_channels,
+            d_layers=args.d_layers, false_targets=not args.no_false_targets,
+            amp=not args.no_amp, compile=args.compile)
+    except ValueError as exc:
+        raise InputError("--schedule", str(exc)) from None
+    res = train_ab(args.data, args.out, cfg, resume=args.resume,
+                   epochs=args.epochs if args.resume else None, progress=not args.quiet)
+    import os
+
+    if int(os.environ.get("RANK", "0")) != 0:
+        return 0
+    last = res.history[-1] if res.history else {}
+    print(f"trained {res.epochs_done} epochs (now {last.get('resolution', '?')} px, alpha "
+          f"{last.get('alpha', float('nan')):.2f}) at {res.images_per_s:.0f} img/s; "
+          f"loss G {last.get('loss_G', float('nan')):.4f} D {last.get('loss_D', float('nan')):.4f}"
+          f"; run in {res.run}", file=sys.stderr)
+    return 0
 
 
 def run(args: argparse.Namespace) -> int:

@@ -1,5 +1,6 @@
 """Learned map translation (thesis sec. 3.1, 4.2, 5.1): Model_BA, the SLAM -> CAD
-"auto-correct" GAN, with its training loop, checkpoints and inference.
+"auto-correct" GAN, and Model_AB, the CAD -> SLAM GAN grown progressively (Model_prog),
+with their training loops, checkpoints and inference.
 
 PyTorch is imported only inside this package (``pip install 'map2map[learn]'``);
 ``import map2map`` stays light. Modules:
@@ -13,7 +14,12 @@ PyTorch is imported only inside this package (``pip install 'map2map[learn]'``);
 * :mod:`~map2map.learn.postprocess` -- post-processing of Model_32/64 (upsample, snap, straighten);
 * :mod:`~map2map.learn.autocorrect` -- :func:`autocorrect` (``map2map autocorrect``);
 * :mod:`~map2map.learn.synthetic` -- provisional generated pairs (tests, provisional weights);
-* :mod:`~map2map.learn.figures` -- loss curves (Fig. 5.2), sample grids, before/after.
+* :mod:`~map2map.learn.figures` -- loss curves (Fig. 5.2), sample grids, before/after;
+* :mod:`~map2map.learn.progressive` -- Model_prog: growing generator and discriminators,
+  Table 5.2's schedule, the fade-in alpha, :class:`ABConfig`;
+* :mod:`~map2map.learn.train_ab` -- :func:`train_ab` (``map2map train ab``, Fig. 5.1);
+* :mod:`~map2map.learn.synthesize` -- K SLAM-map hypotheses of a plan (``map2map
+  synthesize``) and their diversity.
 
 Wall recall, boundary F1, Chamfer distance and per-class IoU (the guards of
 ``benchmarks/table53.py``) live in :mod:`map2map.evaluate.wallmetrics`, a layer above.

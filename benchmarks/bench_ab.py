@@ -1,0 +1,96 @@
+"""Speed of Model_prog (Model_AB) training per stage, and Table 5.2's schedule projected.
+
+For each stage resolution: the full eq. 3.2 step (:func:`map2map.learn.train_ab.gan_step`:
+two 3-scale progressive discriminators with false targets, feature matching, input
+consistency, L1) at Table 5.1's batch (batch_rate 1) on data resident on the device,
+during the fade-in (alpha a tensor), after warm-up steps; images/s. Then the time the
+whole Table 5.2 schedule would take on ``--pairs`` pairs (4,224: the issue's dataset).
+Issue #15's target: >= 700 img/s at 256 px on one H100 (bf16 + channels_last there).
+
+    python3 benchmarks/bench_ab.py [--quick] [--device cpu|cuda] [--steps 10]
+
+``--quick``: stages 32 and 64 only, 2 timed steps, narrow networks (G 8-32 channels,
+D 8): a CPU smoke run of the script, not a figure to compare with the target.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+
+import torch  # noqa: E402
+
+from map2map.learn.progressive import ABConfig, build_ab_networks  # noqa: E402
+from map2map.learn.train_ab import gan_step  # noqa: E402
+
+
+def stage_speed(cfg: ABConfig, r: int, dev: torch.device, steps: int, warm: int = 2) -> float:
+    """Images/s of ``steps`` training steps at stage ``r`` (fading in)."""
+    g, dd, dr = build_ab_networks(cfg)
+    amp = dev.type == "cuda" and cfg.amp
+    for n in (g, dd, dr):
+        n.to(dev)
+        if amp:
+            n.to(memory_format=torch.channels_last)
+    opt_g = torch.optim.Adam(g.parameters(), lr=cfg.lr, betas=(cfg.beta1, cfg.beta2))
+    opt_d = torch.optim.Adam(list(dd.parameters()) + list(dr.parameters()), lr=cfg.lr,
+                             betas=(cfg.beta1, cfg.beta2))
+    B = cfg.stage_batch(r)
+    gen = torch.Generator().manual_seed(0)
+    x = (torch.randint(0, 3, (B, 1, r, r), generator=gen).float() - 1).to(dev)
+    y = (torch.randint(0, 3, (B, 1, r, r), generator=gen).float() - 1).to(dev)
+    if amp:
+        x, y = (t.contiguous(memory_format=torch.channels_last) for t in (x, y))
+    alpha = torch.tensor(0.5, device=dev) if r > cfg.min_size else None
+    autocast = torch.autocast("cuda", dtype=torch.bfloat16, enabled=amp) if dev.type == "cuda" \
+        else torch.autocast("cpu", enabled=False)
+
+    def run(n):
+        for _ in range(n):
+            gan_step(g, dd, dr, opt_g, opt_d, x, y, alpha, cfg, 1, autocast, (dd, dr))
+
+    run(warm)
+    if dev.type == "cuda":
+        torch.cuda.synchronize()
+    t0 = time.perf_counter()
+    run(steps)
+    if dev.type == "cuda":
+        torch.cuda.synchronize()
+    return steps * B / (time.perf_counter() - t0)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--device", default="cuda" if torch.cuda.is_available() else "cpu")
+    ap.add_argument("--steps", type=int, default=10)
+    ap.add_argument("--pairs", type=int, default=4224)
+    ap.add_argument("--quick", action="store_true")
+    args = ap.parse_args(argv)
+    dev = torch.device(args.device)
+    cfg = ABConfig(device=args.device)
+    if args.quick:
+        cfg = ABConfig(device=args.device, g_channels=8, g_max_channels=32, d_channels=8)
+    stages = cfg.schedule[:2] if args.quick else cfg.schedule
+    steps = 2 if args.quick else args.steps
+    print(f"device {dev}, {torch.get_num_threads()} threads; G {cfg.g_channels}-"
+          f"{cfg.g_max_channels} ch, D {cfg.d_channels} ch x {cfg.d_scales} scales; "
+          "CPU figures depend on whatever else the machine runs")
+    total_s = 0.0
+    print(f"{'stage':>6} {'batch':>6} {'epochs':>7} {'img/s':>9} {'stage time':>11}")
+    for r, epochs in stages:
+        ips = stage_speed(cfg, r, dev, steps)
+        t = epochs * args.pairs / ips
+        total_s += t
+        print(f"{r:>6} {cfg.stage_batch(r):>6} {epochs:>7} {ips:>9.1f} {t / 60:>9.1f} min")
+    what = "stages shown" if args.quick else "Table 5.2"
+    print(f"{what} on {args.pairs} pairs: {total_s / 60:.1f} min (issue target: the whole "
+          "schedule <= 20 min on one H100, >= 700 img/s at 256)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

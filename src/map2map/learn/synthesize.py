@@ -1,0 +1,338 @@
+"""``map2map synthesize``: SLAM-map hypotheses for a CAD plan with Model_AB (thesis 3.1,
+5.1, Fig. 5.3), in the plan's frame and resolution.
+
+The thesis's Model_AB gives one SLAM map per plan and calls that a weakness against the
+parametric model (sec. 5.2). Here one plan gives ``K`` hypotheses: the generator's
+decoder dropout (:class:`~map2map.learn.progressive.StochasticUNet`, trained with it on)
+stays on at test time, and the ``K`` copies of the plan run as one batch, each with its
+own dropout masks, all drawn from ``seed`` (same seed, same maps, bit for bit on CPU).
+Their **diversity** is measured, not assumed: the mean over pairs of hypotheses of the
+share of the plan's content pixels whose class (occupied / free / unknown) differs
+(:func:`pairwise_disagreement`). A diversity near zero means the dropout noise has
+collapsed (pix2pix's known limitation); it is reported with a warning.
+
+Frame: the plan's known part is cut into a square (as the datasets are,
+:func:`map2map.learn.autocorrect` does the same), resized to the model's data size and
+its walls thickened as in the training pairs, reduced to the resolution the model was
+trained up to, run, snapped to the three values, brought back to the square's size
+(nearest neighbour) and pasted into a map of the plan's shape, resolution and origin,
+unknown outside.
+
+Examples
+--------
+An untrained generator (``"pretrained"`` or a run folder in practice):
+
+>>> from map2map.maps.floorplan import generate_floorplan
+>>> _ = torch.manual_seed(0)
+>>> net = ABModel(StochasticUNet(size=32, channels=8, min_size=16), resolution=32, alpha=1.0,
+...               data_size=64, header={}, source="untrained")
+>>> plan = generate_floorplan(3, size=(10, 8))
+>>> res = synthesize(plan, net, samples=3, seed=0)
+>>> len(res.maps), res.maps[0].shape == plan.shape, res.maps[0].resolution == plan.resolution
+(3, True, True)
+>>> 0.0 < res.diversity < 1.0
+True
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import warnings
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from ..errors import InputError
+from ..maps.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from ..maps.preprocess import square_resize, thicken
+from .autocorrect import _square
+from .data import reduce_input
+from .networks import from_unit
+from .progressive import StochasticUNet
+
+__all__ = ["ABModel", "SynthesisResult", "load_ab_model", "pretrained_ab_path",
+           "synthesize", "snap", "pairwise_disagreement", "export_ab_model",
+           "save_synthesis_figure"]
+
+PRETRAINED = "model_ab.safetensors"
+FORMAT_AB = "map2map-model-ab"
+
+
+def pretrained_ab_path() -> Path:
+    """The shipped weights (``map2map/learn/weights/model_ab.safetensors``)."""
+    return Path(str(resources.files("map2map.learn") / "weights" / PRETRAINED))
+
+
+@dataclass
+class ABModel:
+    """A loaded Model_AB generator: the resolution it reached and its fade-in alpha."""
+
+    generator: StochasticUNet
+    resolution: int
+    alpha: float
+    data_size: int
+    header: dict
+    source: str
+    device: torch.device = field(default_factory=lambda: torch.device("cpu"))
+
+    @torch.no_grad()
+    def sample(self, inputs: np.ndarray, samples: int, seed: int = 0) -> np.ndarray:
+        """(data_size, data_size) uint8 plan -> (samples, r, r) float32 grey SLAM maps."""
+        how = self.header.get("train", {}).get("input_reduce", "area")
+        x = torch.from_numpy(reduce_input(inputs[None], self.resolution, how))[:, None]
+        x = (x.float() / 127.5 - 1.0).to(self.device).expand(samples, -1, -1, -1)
+        alpha = torch.tensor(self.alpha, device=self.device) if self.alpha < 1.0 else None
+        g = self.generator
+        g.stochastic = samples > 1
+        with torch.random.fork_rng(devices=[self.device] if self.device.type == "cuda" else []):
+            torch.manual_seed(seed)
+            y = g(x.contiguous(), alpha)
+        g.stochastic = False
+        return from_unit(y[:, 0])
+
+
+def load_ab_model(model: str | os.PathLike | ABModel | None = "pretrained",
+                  device: str | torch.device = "cpu") -> ABModel:
+    """Model_AB from ``"pretrained"``, a ``map2map train ab`` run folder or its
+    ``model.safetensors``."""
+    if isinstance(model, ABModel):
+        return model
+    from safetensors import SafetensorError, safe_open
+
+    if model is None or str(model) == "pretrained":
+        path = pretrained_ab_path()
+        if not path.is_file():
+            raise InputError("--model", "no pretrained Model_AB weights in this installation")
+    else:
+        path = Path(model)
+        if path.is_dir():
+            path = path / "model.safetensors"
+        if not path.is_file():
+            raise InputError(model, "no Model_AB weights here (expected a 'map2map train ab' "
+                                    "run folder holding model.safetensors, or that file)")
+    try:
+        with safe_open(str(path), framework="pt", device="cpu") as f:
+            header = json.loads((f.metadata() or {}).get("map2map", "{}"))
+            tensors = {k: f.get_tensor(k).float() for k in f.keys()}
+    except (SafetensorError, OSError, ValueError) as exc:
+        raise InputError(path, f"not readable Model_AB weights ({exc})") from None
+    if header.get("format") != FORMAT_AB:
+        raise InputError(path, "not a Model_AB weights file (no map2map-model-ab header; "
+                               "Model_BA weights go to 'map2map autocorrect')")
+    if "resolution" not in header:
+        raise InputError(path, "the run has not finished an epoch yet (no resolution)")
+    g = StochasticUNet(**{k: v for k, v in header["generator"].items() if k != "dropout"},
+                       dropout=header["generator"].get("dropout", 0.5))
+    try:
+        g.load_state_dict(tensors, strict=True)
+    except RuntimeError as exc:
+        raise InputError(path, f"weights do not fit the network ({str(exc).splitlines()[0]})"
+                         ) from None
+    dev = torch.device(device)
+    g.to(dev).eval()
+    return ABModel(g, int(header["resolution"]), float(header.get("alpha", 1.0)),
+                   int(header.get("data_size", 256)), header, str(path), dev)
+
+
+def snap(grey: np.ndarray) -> np.ndarray:
+    """Grey values -> the nearest of occupied 0, unknown 127, free 255.
+
+    Examples
+    --------
+    >>> snap(np.array([10.0, 100.0, 200.0])).tolist()
+    [0, 127, 255]
+    """
+    out = np.full(np.shape(grey), UNKNOWN, np.uint8)
+    out[grey < 63.5] = OCCUPIED
+    out[grey > 191.0] = FREE
+    return out
+
+
+def pairwise_disagreement(maps: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
+    """(K, H, W) ternary maps -> (K, K) share of the ``mask`` pixels whose class differs.
+
+    Examples
+    --------
+    >>> m = np.array([[[0, 255]], [[0, 0]], [[0, 255]]], np.uint8)
+    >>> pairwise_disagreement(m).tolist()
+    [[0.0, 0.5, 0.0], [0.5, 0.0, 0.5], [0.0, 0.5, 0.0]]
+    """
+    maps = np.asarray(maps)
+    flat = maps.reshape(len(maps), -1)
+    if mask is not None:
+        flat = flat[:, np.asarray(mask, bool).ravel()]
+    n = max(1, flat.shape[1])
+    return np.array([[np.count_nonzero(a != b) / n for b in flat] for a in flat])
+
+
+@dataclass
+class SynthesisResult:
+    """K hypotheses of one plan and how far apart they are."""
+
+    maps: list[OccupancyMap]
+    diversity: float
+    pairwise: np.ndarray
+    warnings: list[str]
+    model: str
+
+    def summary(self) -> dict:
+        k = len(self.maps)
+        off = self.pairwise[~np.eye(k, dtype=bool)] if k > 1 else np.zeros(0)
+        return {"samples": k, "model": self.model,
+                "diversity_mean_pairwise_disagreement": self.diversity,
+                "pairwise_min": float(off.min()) if off.size else 0.0,
+                "pairwise_max": float(off.max()) if off.size else 0.0,
+                "occupied_share": [float(np.mean(m.data == OCCUPIED)) for m in self.maps],
+                "unknown_share": [float(np.mean(m.data == UNKNOWN)) for m in self.maps],
+                "warnings": self.warnings}
+
+
+def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "pretrained",
+               *, samples: int = 4, seed: int = 0, device: str = "cpu") -> SynthesisResult:
+    """``samples`` SLAM-map hypotheses of ``plan`` (module doc), in its frame.
+
+    Parameters
+    ----------
+    plan : OccupancyMap
+        The CAD plan (internal convention; any size and resolution).
+    model : "pretrained", run folder, weights file or ABModel
+    samples : int
+        Number of hypotheses ``K`` (1: dropout off, the thesis's single output).
+    seed : int
+        Seeds the dropout masks.
+    device : str
+
+    Returns
+    -------
+    SynthesisResult
+    """
+    if samples < 1:
+        raise InputError("--samples", f"must be >= 1, got {samples}")
+    net = load_ab_model(model, device)
+    sq = _square(plan, net.data_size)
+    if sq is None:
+        raise InputError(None, "the plan holds no known cells; nothing to synthesize")
+    square, row0, col0, side = sq
+    k_thick = int(net.header.get("dataset", {}).get("thicken", 0) or 0)
+    inp = thicken(square_resize(square, net.data_size), k_thick)
+    grey = net.sample(inp, samples, seed)
+    import cv2
+
+    H, W = plan.shape
+    rs, re = max(0, row0), min(H, row0 + side)
+    cs, ce = max(0, col0), min(W, col0 + side)
+    maps, squares = [], []
+    for k in range(samples):
+        s = cv2.resize(snap(grey[k]), (side, side), interpolation=cv2.INTER_NEAREST)
+        squares.append(s)
+        data = np.full((H, W), UNKNOWN, np.uint8)
+        data[rs:re, cs:ce] = s[rs - row0:re - row0, cs - col0:ce - col0]
+        maps.append(plan.copy(data=data))
+    known = square != UNKNOWN
+    pw = pairwise_disagreement(np.stack(squares), known)
+    div = float(pw[~np.eye(samples, dtype=bool)].mean()) if samples > 1 else 0.0
+    warns = []
+    if net.alpha < 1.0:
+        warns.append(f"the model stopped during the fade-in of its {net.resolution} px stage "
+                     f"(alpha {net.alpha:.2f}); it is run with that blend")
+    cell = side / net.resolution
+    if cell > 2:
+        warns.append(f"the model was trained up to {net.resolution} px: one output cell is "
+                     f"{cell:.1f} plan pixels ({cell * plan.resolution:.2f} m); finer SLAM "
+                     "detail is not modelled")
+    if samples > 1 and div < 0.005:
+        warns.append(f"the {samples} hypotheses differ in only {div:.2%} of the plan's pixels: "
+                     "the dropout noise barely changes this model's output")
+    if "PROVISIONAL" in str(net.header.get("note", "")):
+        warns.append("provisional weights (trained on generated pairs, not a simulated "
+                     "dataset): hypotheses show the method, not realistic SLAM error")
+    for w in warns:
+        warnings.warn(w, stacklevel=2)
+    for m in maps:
+        m.meta["synthesize"] = {"model": net.source, "seed": seed, "samples": samples}
+    return SynthesisResult(maps, div, pw, warns, net.source)
+
+
+def save_synthesis_figure(plan: OccupancyMap, result: SynthesisResult,
+                          path: str | os.PathLike, title: str = "", show: int = 5) -> None:
+    """Plan | up to ``show`` hypotheses | per-pixel disagreement (share of hypotheses not
+    agreeing with the majority class), zoomed on the plan's known part.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from map2map.maps.floorplan import generate_floorplan
+    >>> plan = generate_floorplan(3, size=(10, 8))
+    >>> net = ABModel(StochasticUNet(size=16, channels=8), resolution=16, alpha=1.0,
+    ...               data_size=32, header={}, source="untrained")
+    >>> res = synthesize(plan, net, samples=2)
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "f.png"; save_synthesis_figure(plan, res, p)
+    >>> p.stat().st_size > 1000
+    True
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .._io import atomic_path
+
+    hyps = result.maps[:show]
+    stack = np.stack([m.data for m in result.maps])
+    counts = np.stack([(stack == v).sum(0) for v in (OCCUPIED, UNKNOWN, FREE)])
+    disagree = 1.0 - counts.max(0) / len(stack)
+    panels = [(plan.data, "plan (input)", "gray")] + \
+        [(m.data, f"hypothesis {i + 1}", "gray") for i, m in enumerate(hyps)] + \
+        [(disagree, f"disagreement (mean pairwise {result.diversity:.1%})", "magma")]
+    h, w = plan.shape
+    r = plan.resolution
+    ext = (0, w * r, 0, h * r)
+    fig, axes = plt.subplots(1, len(panels), figsize=(3.2 * len(panels), 3.6 * h / max(w, 1)
+                                                      + 0.9), squeeze=False)
+    box = plan.content_bbox()
+    for ax, (img, name, cmap) in zip(axes[0], panels, strict=True):
+        vmax = 255 if cmap == "gray" else 1
+        ax.imshow(img, cmap=cmap, vmin=0, vmax=vmax, extent=ext, interpolation="nearest")
+        ax.set_title(name, fontsize=8)
+        ax.set_xlabel("m", fontsize=7)
+        ax.tick_params(labelsize=6)
+        if box is not None:
+            r0, r1, c0, c1 = box
+            pad = 0.05 * max(r1 - r0, c1 - c0)
+            ax.set_xlim(max(0, c0 - pad) * r, min(w, c1 + pad) * r)
+            ax.set_ylim((h - min(h, r1 + pad)) * r, (h - max(0, r0 - pad)) * r)
+    fig.suptitle(title or f"Model_AB: {len(result.maps)} SLAM-map hypotheses "
+                 f"({Path(result.model).name})", fontsize=9)
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=100, format="png")
+    plt.close(fig)
+
+
+def export_ab_model(run: str | os.PathLike, dest: str | os.PathLike, *, note: str = ""
+                    ) -> Path:
+    """A run's generator in float16 with its header (and ``note``) plus a readable
+    ``.json`` beside it: how the shipped ``model_ab.safetensors`` is made."""
+    from safetensors import safe_open
+    from safetensors.torch import save_file
+
+    from .._io import atomic_path
+
+    src = Path(run)
+    if src.is_dir():
+        src = src / "model.safetensors"
+    header = dict(load_ab_model(src).header)
+    if note:
+        header["note"] = note
+    with safe_open(str(src), framework="pt", device="cpu") as f:
+        tensors = {k: f.get_tensor(k).to(torch.float16).contiguous() for k in f.keys()}
+    dest = Path(dest)
+    with atomic_path(dest) as tmp:
+        save_file(tensors, str(tmp), metadata={"map2map": json.dumps(header, sort_keys=True)})
+    with atomic_path(dest.with_suffix(".json")) as tmp:
+        tmp.write_text(json.dumps(header, indent=2, sort_keys=True))
+    return dest

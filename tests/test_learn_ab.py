@@ -1,0 +1,384 @@
+"""Model_AB / Model_prog: growth and fade-in (shapes at each stage, alpha schedule, the
+fade's end points), exact resume at the right resolution and alpha, the command lines,
+synthesize's frame and hypotheses."""
+
+from __future__ import annotations
+
+import os
+import signal
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+pytest.importorskip("safetensors")
+
+import torch.nn.functional as F  # noqa: E402
+
+from map2map.cli.main import main  # noqa: E402
+from map2map.datasets.packed import PackedPairs, save_packed  # noqa: E402
+from map2map.learn import train_ab as TA  # noqa: E402
+from map2map.learn.progressive import (  # noqa: E402
+    TABLE_5_2,
+    ABConfig,
+    ProgMultiScaleDiscriminator,
+    StochasticUNet,
+    build_ab_networks,
+    fade_alpha,
+    fade_steps,
+    parse_schedule,
+    stage_of,
+)
+from map2map.maps.grid import FREE, OCCUPIED, UNKNOWN  # noqa: E402
+
+
+@pytest.fixture(autouse=True)
+def _one_thread():
+    n = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(n)
+
+
+#: two stages, 8 then 16 px; 6 train pairs in batches of 2: 3 batches per epoch
+TINY = dict(schedule=((8, 1), (16, 2)), batch=2, g_channels=8, g_max_channels=16,
+            d_channels=8, d_layers=1, d_scales=2, fade_batches=4, samples=2)
+
+
+def _pairs(n=8, size=16, seed=0) -> PackedPairs:
+    """Plans (A): boxes with a wall; SLAM maps (B): shifted, speckled copies."""
+    rng = np.random.default_rng(seed)
+    a = np.full((n, size, size), UNKNOWN, np.uint8)
+    for i in range(n):
+        r0, c0 = rng.integers(1, 4, 2)
+        a[i, r0:size - 2, c0:size - 2] = FREE
+        a[i, r0, c0:size - 2] = OCCUPIED
+        a[i, r0:size - 2, rng.integers(c0 + 2, size - 3)] = OCCUPIED
+    b = np.roll(a, 1, axis=1)
+    b[rng.random(b.shape) < 0.05] = UNKNOWN
+    split = np.array(["train"] * (n - 2) + ["val", "test"])
+    return PackedPairs(a, b, np.array([f"p{i}" for i in range(n)]), split, {"seed": seed})
+
+
+# ------------------------------------------------------------------------- schedule
+def test_table_5_2_schedule_and_table_5_1_batches_are_the_defaults():
+    cfg = ABConfig()
+    assert cfg.schedule == TABLE_5_2 and cfg.epochs == 205 and cfg.size == 256
+    assert cfg.batch_rate == 1.0
+    assert [cfg.stage_batch(r) for r, _ in cfg.schedule] == [64, 32, 16, 4]
+    firsts = [e for e in range(205) if e == 0 or stage_of(e, cfg.schedule)[1]
+              != stage_of(e - 1, cfg.schedule)[1]]
+    assert firsts == [0, 15, 45, 105]
+    assert stage_of(300, cfg.schedule)[1] == 256          # beyond the table: last stage
+    assert parse_schedule("8:7,16:15,32:15")[0] == (8, 7)
+    for bad in ("32:15,128:60", "30:2", "32:0", "32"):
+        with pytest.raises(ValueError):
+            parse_schedule(bad)
+    # fade length: half the new stage's batches by default, stated in batches
+    assert fade_steps(0, 66, cfg) == 0
+    assert fade_steps(1, 132, cfg) == 1980                # 0.5 * 30 epochs * 132 batches
+    assert fade_steps(1, 132, ABConfig(fade_batches=10)) == 10
+
+
+def test_alpha_goes_from_zero_to_one_in_the_stated_batches():
+    steps = 8
+    a = [fade_alpha(s, steps) for s in range(12)]
+    assert a[0] == 0.0 and a[steps] == 1.0 and a[-1] == 1.0
+    assert np.all(np.diff(a[:steps + 1]) == pytest.approx(1 / steps))
+    assert fade_alpha(0, 0) == 1.0
+
+
+# ------------------------------------------------------------------------- networks
+def test_shapes_at_each_stage_and_unreached_blocks_get_no_gradient():
+    cfg = ABConfig(schedule=((8, 1), (16, 1), (32, 1)), g_channels=8, g_max_channels=16,
+                   d_channels=8, d_layers=1, d_scales=2)
+    g, dd, dr = build_ab_networks(cfg)
+    for r in (8, 16, 32):
+        x = torch.rand(2, 1, r, r) * 2 - 1
+        for alpha in (None, torch.tensor(0.3)):
+            y = g(x, alpha)
+            assert y.shape == (2, 1, r, r)
+            outs = dd(torch.cat([x, y], 1), alpha)
+            # scale 1 at r, scale 2 at r/2; one stride-2 layer beyond the growth blocks
+            assert [o[-1].shape[-1] for o in outs] == [4, 2]
+            assert [tuple(o[-1].shape[-2:]) for o in outs] == \
+                [tuple(o[-1].shape[-2:]) for o in dr(y, alpha)]
+    with pytest.raises(ValueError):
+        g(torch.zeros(1, 1, 4, 4))
+    with pytest.raises(ValueError):
+        dd(torch.zeros(1, 2, 64, 64))
+    # a step at the first stage touches none of the finer blocks
+    g.zero_grad()
+    dr.zero_grad()
+    x = torch.rand(2, 1, 8, 8)
+    sum(o[-1].sum() for o in dr(g(x))).backward()
+    assert g.from_map["16"][0].weight.grad is None and g.up["32"][0].weight.grad is None
+    assert dr.discs[0].from_map["16"][0].parametrizations.weight.original.grad is None
+    assert g.from_map["8"][0].weight.grad is not None
+
+
+def test_fade_end_points_are_the_old_and_the_new_network():
+    """alpha 0: exactly the previous stage's path (area-reduced input, upsampled output);
+    alpha 1: the new stage's network."""
+    torch.manual_seed(0)
+    g = StochasticUNet(size=32, channels=8, max_channels=16, min_size=8, dropout=0.0).eval()
+    d = ProgMultiScaleDiscriminator(2, channels=8, n_layers=1, scales=2, size=32, min_size=8).eval()
+    x = torch.rand(3, 1, 16, 16) * 2 - 1
+    small = F.avg_pool2d(x, 2)
+    with torch.no_grad():
+        old = g(small)
+        up = torch.tanh(F.interpolate(torch.atanh(old.clamp(-0.999999, 0.999999)),
+                                      scale_factor=2, mode="bilinear", align_corners=False))
+        assert torch.allclose(g(x, torch.tensor(0.0)), up, atol=1e-4)
+        assert torch.equal(g(x, torch.tensor(1.0)), g(x))
+        mid = g(x, torch.tensor(0.5))
+        assert not torch.allclose(mid, g(x)) and not torch.allclose(mid, up)
+        pair = torch.cat([x, x], 1)
+        for k, (a0, ref) in enumerate(zip(d(pair, torch.tensor(0.0)),
+                                          d(F.avg_pool2d(pair, 2)), strict=True)):
+            assert torch.allclose(a0[-1], ref[-1], atol=1e-5), k
+        for a1, ref in zip(d(pair, torch.tensor(1.0)), d(pair), strict=True):
+            assert torch.equal(a1[-1], ref[-1])
+
+
+def test_test_time_dropout_gives_distinct_reproducible_hypotheses():
+    g = StochasticUNet(size=16, channels=8, max_channels=16, min_size=8, dropout=0.5).eval()
+    x = torch.rand(1, 1, 16, 16)
+    with torch.no_grad():
+        assert torch.equal(g(x), g(x))                          # eval: deterministic
+        g.stochastic = True
+        outs = []
+        for seed in (0, 1, 0):
+            torch.manual_seed(seed)
+            outs.append(g(x))
+    assert torch.equal(outs[0], outs[2]) and not torch.equal(outs[0], outs[1])
+
+
+# ------------------------------------------------------------------------- training
+def _record(monkeypatch):
+    """Wrap gan_step: record (resolution, alpha value, id of the alpha tensor) per batch."""
+    seen = []
+    real = TA.gan_step
+
+    def step(g_run, dd_run, dr_run, opt_g, opt_d, x, y, alpha, *args, **kw):
+        seen.append((x.shape[-1], None if alpha is None else float(alpha),
+                     None if alpha is None else id(alpha)))
+        return real(g_run, dd_run, dr_run, opt_g, opt_d, x, y, alpha, *args, **kw)
+
+    monkeypatch.setattr(TA, "gan_step", step)
+    return seen
+
+
+def _weights(path):
+    from safetensors.torch import load_file
+
+    return {k: v for k, v in load_file(str(path)).items() if not k.startswith("rng.")}
+
+
+def test_training_grows_fades_in_one_tensor_and_logs_the_switches(monkeypatch, tmp_path):
+    seen = _record(monkeypatch)
+    res = TA.train_ab(_pairs(), tmp_path / "run", ABConfig(**TINY), progress=False)
+    # 3 batches at 8 px (no fade), then 6 at 16 px: alpha 0, .25, .5, .75, then the new net
+    assert [s[0] for s in seen] == [8] * 3 + [16] * 6
+    assert [s[1] for s in seen] == [None] * 3 + [0.0, 0.25, 0.5, 0.75, None, None]
+    assert len({s[2] for s in seen if s[2] is not None}) == 1    # one tensor, updated in place
+    assert [(r["resolution"], r["batch"], r["alpha"], r["fade_batches"])
+            for r in res.history] == [(8, 2, 1.0, 0), (16, 2, 0.5, 4), (16, 2, 1.0, 4)]
+    run = tmp_path / "run"
+    assert (run / "losses.png").is_file() and (run / "samples" / "epoch_0003.png").is_file()
+    import json
+
+    from safetensors import safe_open
+
+    with safe_open(str(run / "model.safetensors"), "pt") as f:
+        head = json.loads(f.metadata()["map2map"])
+    assert head["format"] == "map2map-model-ab" and head["resolution"] == 16
+    assert head["alpha"] == 1.0 and head["generator"]["min_size"] == 8
+    log = (run / "log.csv").read_text().splitlines()
+    assert "resolution" in log[0] and len(log) == 4
+
+
+def test_resume_mid_fade_continues_at_the_right_resolution_and_alpha(monkeypatch, tmp_path):
+    """Ctrl-C in the second batch of the 16 px stage (mid fade-in): the checkpoint says
+    epoch 1, batch 2; --resume goes on at 16 px with alpha 0.5 and ends with the weights
+    of an uninterrupted run, bit for bit (dropout's random state included)."""
+    data = tmp_path / "ds.npz"
+    save_packed(data, _pairs())
+    TA.train_ab(data, tmp_path / "whole", ABConfig(**TINY), progress=False, figures=False)
+    seen = _record(monkeypatch)
+    real_step = TA.gan_step
+
+    def step(*args, **kw):
+        out = real_step(*args, **kw)
+        if len(seen) == 5:                                 # 2nd batch of the 16 px stage
+            os.kill(os.getpid(), signal.SIGINT)
+        return out
+
+    monkeypatch.setattr(TA, "gan_step", step)
+    with pytest.raises(KeyboardInterrupt):
+        TA.train_ab(data, tmp_path / "cut", ABConfig(**TINY), progress=False, figures=False)
+    from map2map.learn.checkpoint import load_checkpoint
+
+    _, state = load_checkpoint(tmp_path / "cut" / "last.safetensors")
+    assert (state["epoch"], state["batch"]) == (1, 2)
+    seen.clear()
+    res = TA.train_ab(data, tmp_path / "cut", resume=True, progress=False, figures=False)
+    assert [s[:2] for s in seen] == [(16, 0.5), (16, 0.75), (16, None), (16, None)]
+    assert res.epochs_done == 3 and res.history[-1]["resolution"] == 16
+    a = _weights(tmp_path / "whole" / "last.safetensors")
+    b = _weights(tmp_path / "cut" / "last.safetensors")
+    assert a.keys() == b.keys()
+    for k in a:
+        assert torch.equal(a[k], b[k]), k
+    # extending past the schedule stays at its last resolution
+    monkeypatch.setattr(TA, "gan_step", real_step)
+    res = TA.train_ab(data, tmp_path / "cut", resume=True, epochs=4, progress=False,
+                      figures=False)
+    assert [r["resolution"] for r in res.history] == [8, 16, 16, 16]
+
+
+def test_cli_train_ab_and_bad_input(tmp_path, capsys):
+    data = tmp_path / "ds"
+    data.mkdir()
+    save_packed(data / "packed.npz", _pairs())
+    run = tmp_path / "run"
+    args = ["train", "ab", "--data", str(data), "--out", str(run), "--schedule", "8:1,16:1",
+            "--batch", "3", "--g-channels", "8", "--g-max-channels", "16", "--d-channels",
+            "8", "--d-layers", "1", "--fade-batches", "1", "--device", "cpu", "--quiet"]
+    assert main(args) == 0
+    err = capsys.readouterr().err
+    assert "trained 2 epochs (now 16 px, alpha 1.00)" in err
+    assert (run / "model.safetensors").is_file()
+    assert main(args[:-1] + ["--schedule", "8:1,32:1"]) == 2      # not doubling
+    assert main(["train", "ab", "--data", str(tmp_path / "none"), "--out",
+                 str(tmp_path / "r2")]) == 2
+    assert main(args[:4] + ["--out", str(tmp_path / "r3"), "--schedule", "4:1,8:1,16:1"]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and err.count("map2map: error:") == 3
+
+
+# ------------------------------------------------------------------------- synthesize
+@pytest.fixture(scope="module")
+def tiny_run(tmp_path_factory):
+    run = tmp_path_factory.mktemp("ab") / "run"
+    n = torch.get_num_threads()
+    torch.set_num_threads(1)
+    TA.train_ab(_pairs(), run, ABConfig(**{**TINY, "schedule": ((8, 1), (16, 1))}),
+                progress=False, figures=False)
+    torch.set_num_threads(n)
+    return run
+
+
+def _plan():
+    from map2map.maps.grid import OccupancyMap
+
+    data = np.full((30, 44), UNKNOWN, np.uint8)
+    data[4:26, 6:40] = FREE
+    data[4, 6:40] = data[25, 6:40] = OCCUPIED
+    data[4:26, 6] = data[4:26, 39] = data[4:26, 20] = OCCUPIED
+    return OccupancyMap(data, resolution=0.07, origin=(1.5, -2.0, 0.0))
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+def test_synthesize_keeps_the_plan_frame_and_gives_seeded_distinct_hypotheses(tiny_run):
+    from map2map.learn.synthesize import load_ab_model, synthesize
+
+    plan = _plan()
+    with pytest.warns(UserWarning):
+        res = synthesize(plan, tiny_run, samples=3, seed=5)
+    assert len(res.maps) == 3
+    for m in res.maps:
+        assert m.shape == plan.shape and m.resolution == plan.resolution
+        assert m.origin == plan.origin
+        assert set(np.unique(m.data)) <= {OCCUPIED, UNKNOWN, FREE}
+    assert np.all(res.maps[0].data[:, :2] == UNKNOWN)     # outside the plan's square
+    again = synthesize(plan, load_ab_model(tiny_run), samples=3, seed=5)
+    for a, b in zip(res.maps, again.maps, strict=True):
+        assert np.array_equal(a.data, b.data)             # same seed, same maps
+    assert res.pairwise.shape == (3, 3) and np.all(np.diag(res.pairwise) == 0)
+    assert res.diversity == pytest.approx(res.pairwise[~np.eye(3, dtype=bool)].mean())
+    assert res.diversity > 0                              # dropout on: distinct hypotheses
+    one = synthesize(plan, tiny_run, samples=1)
+    assert one.diversity == 0.0 and len(one.maps) == 1
+    assert any("16 px" in w for w in res.warnings)        # coarse model says so
+    from map2map.errors import InputError
+    from map2map.maps.grid import OccupancyMap
+
+    with pytest.raises(InputError, match="no known cells"):
+        synthesize(OccupancyMap(np.full((9, 9), UNKNOWN, np.uint8), 0.05), tiny_run)
+
+
+def test_cli_synthesize_writes_maps_summary_and_figure(tiny_run, tmp_path, capsys):
+    import json
+
+    from map2map.maps.formats import load_map, save_map
+
+    save_map(_plan(), tmp_path / "plan.yaml")
+    out = tmp_path / "hyps"
+    rc = main(["synthesize", str(tmp_path / "plan.yaml"), "--out", str(out), "--samples", "3",
+               "--model", str(tiny_run)])
+    assert rc == 0
+    m = load_map(out / "plan_hyp02.yaml")
+    assert m.shape == (30, 44) and m.resolution == pytest.approx(0.07)
+    assert m.origin[:2] == pytest.approx((1.5, -2.0))
+    summary = json.loads((out / "plan_synthesize.json").read_text())
+    assert summary["samples"] == 3 and 0 < summary["diversity_mean_pairwise_disagreement"] < 1
+    assert (out / "plan_synthesize.png").stat().st_size > 1000
+    assert main(["synthesize", str(tmp_path / "plan.yaml"), "--out", str(tmp_path / "p"),
+                 "--samples", "2", "--format", "png", "--no-figure", "--model",
+                 str(tiny_run)]) == 0
+    assert sorted(p.name for p in (tmp_path / "p").iterdir()) == \
+        ["plan_hyp00.png", "plan_hyp01.png", "plan_synthesize.json"]
+    err = capsys.readouterr().err
+    assert "mean pairwise disagreement" in err
+    from map2map.learn.autocorrect import pretrained_path
+
+    bad = [["--samples", "0"], ["--model", str(pretrained_path())],
+           ["--model", str(tmp_path / "nope")]]
+    for extra in bad:
+        assert main(["synthesize", str(tmp_path / "plan.yaml"), "--out",
+                     str(tmp_path / "bad"), *extra]) == 2
+    assert main(["synthesize", str(tmp_path / "none.yaml"), "--out", str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and err.count("map2map: error:") == 4
+    assert not (tmp_path / "bad").exists()
+
+
+@pytest.mark.slow
+def test_ddp_two_processes_gloo(tmp_path):
+    """torchrun with 2 CPU processes (gloo) through a stage switch: one run folder, one
+    report, a loadable model at the last resolution (unused finer blocks do not stall DDP)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    data = tmp_path / "ds.npz"
+    save_packed(data, _pairs(10))
+    src = str(Path(__file__).resolve().parents[1] / "src")
+    env = {**os.environ, "OMP_NUM_THREADS": "1",
+           "PYTHONPATH": os.pathsep.join([src, os.environ.get("PYTHONPATH", "")])}
+    cmd = [sys.executable, "-m", "torch.distributed.run", "--standalone",
+           "--nproc_per_node", "2", "-m", "map2map", "train", "ab", "--data", str(data),
+           "--out", str(tmp_path / "run"), "--schedule", "8:1,16:1", "--batch", "4",
+           "--g-channels", "8", "--g-max-channels", "16", "--d-channels", "8",
+           "--d-layers", "1", "--fade-batches", "1", "--device", "cpu", "--quiet"]
+    out = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=240)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stderr.count("trained 2 epochs") == 1
+    from map2map.learn.synthesize import load_ab_model
+
+    assert load_ab_model(tmp_path / "run").resolution == 16
+
+
+def test_pretrained_weights_load_and_synthesize():
+    from map2map.learn.synthesize import load_ab_model, pretrained_ab_path, synthesize
+
+    path = pretrained_ab_path()
+    assert path.is_file() and path.stat().st_size <= 10 * 2**20
+    net = load_ab_model("pretrained")
+    assert "PROVISIONAL" in net.header["note"]
+    assert net.header["format"] == "map2map-model-ab" and net.resolution >= 16
+    plan = _plan()
+    with pytest.warns(UserWarning, match="provisional"):
+        res = synthesize(plan, "pretrained", samples=2, seed=1)
+    assert [m.shape for m in res.maps] == [plan.shape] * 2
