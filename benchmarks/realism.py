@@ -41,9 +41,9 @@ from scipy.stats import wasserstein_distance
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
+from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap  # noqa: E402
 from map2map.learn.data import downsample_target, load_pairs  # noqa: E402
 from map2map.learn.postprocess import wall_thickness_px  # noqa: E402
-from map2map.maps.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap  # noqa: E402
 
 STATS = ("wall_err", "wall_seen", "free_mapped", "unknown", "spurious", "thickness", "bend")
 

@@ -16,6 +16,7 @@ pytest.importorskip("safetensors")
 import torch.nn.functional as F  # noqa: E402
 
 from map2map.cli.main import main  # noqa: E402
+from map2map.core.grid import FREE, OCCUPIED, UNKNOWN  # noqa: E402
 from map2map.datasets.packed import PackedPairs, save_packed  # noqa: E402
 from map2map.learn import train_ab as TA  # noqa: E402
 from map2map.learn.progressive import (  # noqa: E402
@@ -29,7 +30,6 @@ from map2map.learn.progressive import (  # noqa: E402
     parse_schedule,
     stage_of,
 )
-from map2map.maps.grid import FREE, OCCUPIED, UNKNOWN  # noqa: E402
 
 
 @pytest.fixture(autouse=True)
@@ -270,7 +270,7 @@ def tiny_run(tmp_path_factory):
 
 
 def _plan():
-    from map2map.maps.grid import OccupancyMap
+    from map2map.core.grid import OccupancyMap
 
     data = np.full((30, 44), UNKNOWN, np.uint8)
     data[4:26, 6:40] = FREE
@@ -301,8 +301,8 @@ def test_synthesize_keeps_the_plan_frame_and_gives_seeded_distinct_hypotheses(ti
     one = synthesize(plan, tiny_run, samples=1)
     assert one.diversity == 0.0 and len(one.maps) == 1
     assert any("16 px" in w for w in res.warnings)        # coarse model says so
+    from map2map.core.grid import OccupancyMap
     from map2map.errors import InputError
-    from map2map.maps.grid import OccupancyMap
 
     with pytest.raises(InputError, match="no known cells"):
         synthesize(OccupancyMap(np.full((9, 9), UNKNOWN, np.uint8), 0.05), tiny_run)

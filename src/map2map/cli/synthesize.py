@@ -34,8 +34,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from .._io import atomic_path, ensure_output_dir
-    from ..errors import InputError
+    from ..core._io import atomic_path, ensure_output_dir
+    from ..core.errors import InputError
     from ..maps.formats import check_output_path, save_map
 
     try:

@@ -95,7 +95,7 @@ def register_ab(tsub) -> None:
 
 
 def run_ab(args: argparse.Namespace) -> int:
-    from ..errors import InputError
+    from ..core.errors import InputError
 
     try:
         from ..learn.progressive import ABConfig, parse_schedule

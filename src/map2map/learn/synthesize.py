@@ -46,8 +46,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from ..errors import InputError
-from ..maps.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from ..core.errors import InputError
+from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from ..maps.preprocess import square_resize, thicken
 from .autocorrect import _square
 from .data import reduce_input
@@ -279,7 +279,7 @@ def save_synthesis_figure(plan: OccupancyMap, result: SynthesisResult,
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .._io import atomic_path
+    from ..core._io import atomic_path
 
     hyps = result.maps[:show]
     stack = np.stack([m.data for m in result.maps])
@@ -320,7 +320,7 @@ def export_ab_model(run: str | os.PathLike, dest: str | os.PathLike, *, note: st
     from safetensors import safe_open
     from safetensors.torch import save_file
 
-    from .._io import atomic_path
+    from ..core._io import atomic_path
 
     src = Path(run)
     if src.is_dir():

@@ -49,9 +49,9 @@ from pathlib import Path
 
 import torch
 
-from .._io import atomic_path, ensure_output_dir
+from ..core._io import atomic_path, ensure_output_dir
+from ..core.errors import InputError
 from ..datasets.packed import PackedPairs
-from ..errors import InputError
 from .checkpoint import (
     load_checkpoint,
     load_module,
