@@ -108,27 +108,15 @@ def load_model(model: str | os.PathLike | BAModel | None = "pretrained",
     (its ``model.safetensors``) or a ``.safetensors`` file written by the trainer."""
     if isinstance(model, BAModel):
         return model
-    from safetensors import SafetensorError, safe_open
+    from .checkpoint import read_model_file
 
-    if model is None or str(model) == "pretrained":
-        path = pretrained_path()
-        if not path.is_file():
-            raise InputError("--model", "no pretrained weights in this installation")
-    else:
-        path = Path(model)
-        if path.is_dir():
-            path = path / "model.safetensors"
-        if not path.is_file():
-            raise InputError(model, "no Model_BA weights here (expected a training run "
-                                    "folder holding model.safetensors, or that file)")
-    try:
-        with safe_open(str(path), framework="pt", device="cpu") as f:
-            header = json.loads((f.metadata() or {}).get("map2map", "{}"))
-            tensors = {k: f.get_tensor(k).float() for k in f.keys()}
-    except (SafetensorError, OSError, ValueError) as exc:
-        raise InputError(path, f"not readable Model_BA weights ({exc})") from None
-    if header.get("format") != "map2map-model-ba":
-        raise InputError(path, "not a Model_BA weights file (no map2map-model-ba header)")
+    path, header, tensors = read_model_file(
+        model, pretrained_path(), "map2map-model-ba", "Model_BA",
+        no_pretrained="no pretrained weights in this installation",
+        missing="no Model_BA weights here (expected a training run "
+                "folder holding model.safetensors, or that file)",
+        wrong="not a Model_BA weights file (no map2map-model-ba header)",
+    )  # fmt: skip
     g = UNetGenerator(**header["generator"])
     try:
         g.load_state_dict(tensors, strict=True)

@@ -38,7 +38,7 @@ from safetensors.torch import save_file
 from ..core._io import atomic_path
 from ..core.errors import InputError
 
-__all__ = ["save_checkpoint", "load_checkpoint", "module_tensors", "load_module",
+__all__ = ["read_model_file", "save_checkpoint", "load_checkpoint", "module_tensors", "load_module",
            "optimizer_tensors", "load_optimizer"]
 
 _META_KEY = "map2map"
@@ -112,3 +112,35 @@ def load_optimizer(opt: torch.optim.Optimizer, tensors: dict[str, torch.Tensor],
         if "betas" in g:
             g["betas"] = tuple(g["betas"])
     opt.load_state_dict({"state": state, "param_groups": groups})
+
+
+def read_model_file(model, pretrained: Path, fmt: str, name: str, *, no_pretrained: str,
+                    missing: str, wrong: str) -> tuple[Path, dict, dict[str, torch.Tensor]]:
+    """Find and read a shipped-model file: ``(path, header, float32 tensors)``.
+
+    ``model`` is ``"pretrained"``/``None`` (the file ``pretrained``), a training run
+    folder (its ``model.safetensors``) or a ``.safetensors`` file; its ``map2map``
+    header must say ``format == fmt``. ``name`` ("Model_BA") and the three messages
+    (no shipped file; no such file here; a file of another format) make the one-line
+    errors.
+    Safetensors only: nothing runs on load.
+    """
+    if model is None or str(model) == "pretrained":
+        path = pretrained
+        if not path.is_file():
+            raise InputError("--model", no_pretrained)
+    else:
+        path = Path(model)
+        if path.is_dir():
+            path = path / "model.safetensors"
+        if not path.is_file():
+            raise InputError(model, missing)
+    try:
+        with safe_open(str(path), framework="pt", device="cpu") as f:
+            header = json.loads((f.metadata() or {}).get("map2map", "{}"))
+            tensors = {k: f.get_tensor(k).float() for k in f.keys()}
+    except (SafetensorError, OSError, ValueError) as exc:
+        raise InputError(path, f"not readable {name} weights ({exc})") from None
+    if header.get("format") != fmt:
+        raise InputError(path, wrong)
+    return path, header, tensors

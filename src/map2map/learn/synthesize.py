@@ -101,28 +101,16 @@ def load_ab_model(model: str | os.PathLike | ABModel | None = "pretrained",
     ``model.safetensors``."""
     if isinstance(model, ABModel):
         return model
-    from safetensors import SafetensorError, safe_open
+    from .checkpoint import read_model_file
 
-    if model is None or str(model) == "pretrained":
-        path = pretrained_ab_path()
-        if not path.is_file():
-            raise InputError("--model", "no pretrained Model_AB weights in this installation")
-    else:
-        path = Path(model)
-        if path.is_dir():
-            path = path / "model.safetensors"
-        if not path.is_file():
-            raise InputError(model, "no Model_AB weights here (expected a 'map2map train ab' "
-                                    "run folder holding model.safetensors, or that file)")
-    try:
-        with safe_open(str(path), framework="pt", device="cpu") as f:
-            header = json.loads((f.metadata() or {}).get("map2map", "{}"))
-            tensors = {k: f.get_tensor(k).float() for k in f.keys()}
-    except (SafetensorError, OSError, ValueError) as exc:
-        raise InputError(path, f"not readable Model_AB weights ({exc})") from None
-    if header.get("format") != FORMAT_AB:
-        raise InputError(path, "not a Model_AB weights file (no map2map-model-ab header; "
-                               "Model_BA weights go to 'map2map autocorrect')")
+    path, header, tensors = read_model_file(
+        model, pretrained_ab_path(), FORMAT_AB, "Model_AB",
+        no_pretrained="no pretrained Model_AB weights in this installation",
+        missing="no Model_AB weights here (expected a 'map2map train ab' "
+                "run folder holding model.safetensors, or that file)",
+        wrong="not a Model_AB weights file (no map2map-model-ab header; "
+              "Model_BA weights go to 'map2map autocorrect')",
+    )  # fmt: skip
     if "resolution" not in header:
         raise InputError(path, "the run has not finished an epoch yet (no resolution)")
     g = StochasticUNet(**{k: v for k, v in header["generator"].items() if k != "dropout"},
