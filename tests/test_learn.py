@@ -437,3 +437,13 @@ def test_generator_fade_in_blends_resolutions():
     assert torch.allclose(torch.atanh(faded0.clamp(-0.999, 0.999)), up, atol=1e-3)
     assert not torch.allclose(g(x, alpha=torch.tensor(1.0)), faded0)
     assert torch.allclose(g(x, alpha=torch.tensor(1.0)), g(x))
+
+
+def test_autocorrect_warns_about_provisional_weights():
+    """The shipped weights say PROVISIONAL in their note: every correction says so."""
+    net = load_model("pretrained")
+    assert "PROVISIONAL" in net.header["note"]
+    m = OccupancyMap(_pairs().b[0], 0.05)
+    with pytest.warns(UserWarning, match="provisional"):
+        (res,) = autocorrect_many([m], net)
+    assert any("provisional" in w for w in res.warnings)

@@ -268,6 +268,9 @@ def autocorrect_many(maps: list[OccupancyMap], model: str | os.PathLike | BAMode
         if support is not None and support < 0.5:
             warns.append(f"only {support:.0%} of the output's wall pixels lie near a wall of "
                          "the input: the model may have invented structure; check the figure")
+        if "PROVISIONAL" in str(net.header.get("note", "")):
+            warns.append("provisional Model_BA weights (small CPU training run): they find "
+                         "walls but place them less exactly than a good SLAM map (docs/learn.md)")
         out = m.copy(data=data)
         out.meta["autocorrect"] = {"model": net.source, "warnings": warns,
                                    "support": support, "segments_px": seg_px.tolist(),
