@@ -152,3 +152,16 @@ def test_coherent_motion_takes_more_points_than_cv2_remap_rows():
     assert out.shape == (n, 2) and np.isfinite(out).all()
     # a smooth field stays itself: values sampled back in the wrong order would not
     assert np.abs(out - motion).mean() < 0.05
+
+
+def test_slam_budget_counts_the_readings_not_the_sensor_maximum():
+    """A 50 m scanner whose readings reach 8 m: the map is estimated from the 8 m."""
+    from map2map.robotlog.base import LaserScan, OdometryReading
+    from map2map.robotlog.carmen import CarmenLog
+    from map2map.slam.offline import farthest_reading, map_shape_estimate
+
+    scans = [LaserScan(float(t), np.full(180, 8.0), -np.pi / 2, np.pi / 180, 0.1, 50.0)
+             for t in range(3)]  # fmt: skip
+    log = CarmenLog([OdometryReading(float(t), 20.0 * t, 0.0, 0.0) for t in range(3)], scans)
+    assert farthest_reading(log) == 8.0
+    assert map_shape_estimate(log, 0.05, farthest_reading(log)) == (320, 1120)

@@ -163,6 +163,27 @@ def map_shape_estimate(log: CarmenLog, resolution: float, reach: float) -> tuple
     return int(h), int(w)
 
 
+def farthest_reading(log: CarmenLog) -> float:
+    """The longest valid range reading of ``log`` (metres; 0 if none).
+
+    A map reaches no farther from the path than this, whatever range the backend is
+    allowed: the graph backend defaults to the sensor maximum (50 m on the Radish logs,
+    whose no-returns read as invalid), which as a margin would inflate
+    :func:`map_shape_estimate` several times over.
+
+    >>> from map2map.robotlog.base import LaserScan
+    >>> s = LaserScan(0.0, np.array([1.0, 7.5, np.inf]), 0.0, 0.1, 0.1, 50.0)
+    >>> farthest_reading(CarmenLog([], [s]))
+    7.5
+    """
+    far = 0.0
+    for scan in log.scans:
+        r = np.asarray(scan.ranges, float)[scan.valid]
+        if r.size:
+            far = max(far, float(r.max()))
+    return far
+
+
 def run_slam(
     log: CarmenLog,
     backend: str = "rbpf",
@@ -244,7 +265,10 @@ def run_slam(
             options.setdefault("lskip", 0)
     elif backend == "graph":
         options.setdefault("max_range", max_range or sensor_max)
-    reach = options.get("max_urange", options.get("max_range", sensor_max))
+    reach = min(
+        float(options.get("max_urange", options.get("max_range", sensor_max))),
+        farthest_reading(log),
+    )
     check_map_size(
         map_shape_estimate(log, resolution, float(reach)),
         source if source is not None else "log",
