@@ -97,3 +97,25 @@ def test_slam_figure_is_drawn_in_the_plan_frame_of_a_simulated_run(tmp_path):
 
     unplaced = resample_to_frame(raw, (0.0, 0.0, 0.0), plan)  # map frame read as plan frame
     assert on_plan_walls(unplaced) < 0.6
+
+
+def test_an_interrupted_demo_leaves_no_folder_and_keeps_the_old_one(tmp_path, monkeypatch):
+    import map2map.demo as demo
+
+    out = tmp_path / "demo"
+    out.mkdir()
+    (out / "old.txt").write_text("an earlier run")
+
+    def boom(ctx):
+        (ctx.out / "half.txt").write_text("half-written")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(demo, "STAGES", [("plan", demo.stage_plan), ("boom", boom)])
+    try:
+        demo.run_demo(out, seed=0, progress=False, plan=two_rooms(), verbose=False)
+    except KeyboardInterrupt:
+        pass
+    else:  # pragma: no cover
+        raise AssertionError("the interruption was swallowed")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["demo"]
+    assert sorted(p.name for p in out.iterdir()) == ["old.txt"]

@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 from tqdm.auto import tqdm
 
-from .core._io import atomic_path, ensure_output_dir
+from .core._io import atomic_dir, atomic_path, check_output_dir
 from .core.grid import OccupancyMap
 
 __all__ = ["DemoContext", "STAGES", "run_demo", "write_index"]
@@ -551,17 +551,26 @@ def run_demo(
     ``plan`` replaces the generated apartment (the ``plan`` step then only saves and
     draws it) and ``sim_seconds`` the simulated minute: both for quick tests.
     ``verbose`` prints every step's key numbers as they come.
+
+    The folder is written whole or not at all (:func:`map2map.core._io.atomic_dir`): the
+    steps write under a temporary sibling name that is renamed to ``out`` at the end, so
+    an interrupted demo leaves no half-written folder and a finished one replaces an
+    older ``out`` as a whole.
     """
-    out_dir = ensure_output_dir(out)
-    ctx = DemoContext(out=out_dir, seed=int(seed), sim_seconds=sim_seconds, verbose=verbose)
-    ctx.plan = plan
-    bar = tqdm(STAGES, desc="map2map demo", unit="stage", disable=not progress)
-    for name, stage in bar:
-        bar.set_postfix_str(name)
-        ctx.step = name
-        t0 = time.perf_counter()
-        stage(ctx)
-        ctx.timings[name] = time.perf_counter() - t0
-    bar.close()
-    write_index(ctx)
+    final = check_output_dir(out)
+    with atomic_dir(final) as tmp:
+        ctx = DemoContext(out=tmp, seed=int(seed), sim_seconds=sim_seconds, verbose=verbose)
+        ctx.plan = plan
+        bar = tqdm(STAGES, desc="map2map demo", unit="stage", disable=not progress)
+        for name, stage in bar:
+            bar.set_postfix_str(name)
+            ctx.step = name
+            t0 = time.perf_counter()
+            stage(ctx)
+            ctx.timings[name] = time.perf_counter() - t0
+        bar.close()
+        write_index(ctx)
+    # the folder was written whole under a temporary name, then renamed: point there
+    ctx.written = [(what, final / p.relative_to(tmp)) for what, p in ctx.written]
+    ctx.out = final
     return ctx
