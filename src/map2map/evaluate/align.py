@@ -572,43 +572,27 @@ def _invert_similarity_range(p: AlignParams) -> AlignParams:
     )
 
 
-def align_maps(
-    source: np.ndarray,
-    target: np.ndarray,
-    *,
-    anchors: Anchors | None = None,
-    params: AlignParams | None = None,
-    names: tuple[str | None, str | None] = ("source", "target"),
-) -> Alignment:
-    """Align ``source`` to ``target`` (uint8 occupancy arrays); see the module docstring.
+@dataclass
+class _Crop:
+    """The known content of both maps (+ margin): the search works in these windows."""
 
-    Returns an :class:`Alignment` whose ``similarity``, ``affine`` and ``rigid``
-    3x3 matrices map source pixel coordinates (x = column, y = row, origin
-    top-left, continuous: pixel centres at +0.5) to target pixel coordinates.
+    s: tuple[int, int, int, int]  # source rows r0:r1, columns c0:c1
+    t: tuple[int, int, int, int]  # target rows r0:r1, columns c0:c1
 
-    The search runs both ways (source onto target and target onto source) and keeps
-    the direction that scores best: the fitness of eq. 8 is only meaningful when the
-    points scored are a *part* of the map they are scored against, and either map
-    may be the partial one (a SLAM map of part of a building, or a plan of one
-    wing of what the robot mapped). The winning direction is refined at full
-    resolution and inverted if needed.
-    """
-    p = params or AlignParams()
-    timings: dict[str, float] = {}
-    warnings: list[str] = []
-    t0 = time.perf_counter()
-    bs = check_map(source, names[0])
-    bt = check_map(target, names[1])
-    # crop to the known content (+ margin): everything below is in cropped coordinates
-    m = 4
-    r0s, r1s, c0s, c1s = max(0, bs[0] - m), bs[1] + m, max(0, bs[2] - m), bs[3] + m
-    r0t, r1t, c0t, c1t = max(0, bt[0] - m), bt[1] + m, max(0, bt[2] - m), bt[3] + m
-    src = source[r0s:r1s, c0s:c1s]
-    tgt = target[r0t:r1t, c0t:c1t]
-    big = max(*src.shape, *tgt.shape)
-    f1 = max(1, int(math.ceil(big / p.search_size)))
-    f2 = min(f1, max(1, int(round(big / p.refine_size))))
+    @classmethod
+    def of(cls, bs, bt, margin: int = 4) -> _Crop:
+        def box(b):
+            return max(0, b[0] - margin), b[1] + margin, max(0, b[2] - margin), b[3] + margin
 
+        return cls(box(bs), box(bt))
+
+    def cut(self, source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        (r0s, r1s, c0s, c1s), (r0t, r1t, c0t, c1t) = self.s, self.t
+        return source[r0s:r1s, c0s:c1s], target[r0t:r1t, c0t:c1t]
+
+
+def _coarse(src, tgt, f1: int, f2: int, p: AlignParams, warnings: list[str]):
+    """Hypothesis search both ways at the metric-scale prior, free scale if it fits far better."""
     prior = p.metric_scale
     band = _prior_band(p)
     fwd, bwd, reverse = _search_both(src, tgt, f1, f2, replace(p, scale_range=band))
@@ -625,26 +609,34 @@ def align_maps(
                 f"than at the scale {prior:.3f} their resolutions give (score {at_prior:.2f}): "
                 "check the resolutions"
             )
-    pb = _invert_similarity_range(p)
-    for k, v in fwd.timings.items():
-        timings[k] = v + bwd.timings.get(k, 0.0)
+    return fwd, bwd, reverse
+
+
+def _search_stats(fwd: _Search, bwd: _Search, reverse: bool, p: AlignParams) -> dict[str, Any]:
     stats = dict(fwd.stats)
     stats["direction"] = "target->source" if reverse else "source->target"
     stats["score_source_to_target"] = fwd.score
     stats["score_target_to_source"] = bwd.score
     stats["runner_up"] = (bwd if reverse else fwd).stats.get("runner_up", {"ratio": 0.0})
-    stats["scale_range"] = list(_prior_band(p)) if prior is not None else list(p.scale_range)
-    srch, a, b, q = (bwd, tgt, src, pb) if reverse else (fwd, src, tgt, p)
-    best = srch.T
+    band = _prior_band(p) if p.metric_scale is not None else p.scale_range
+    stats["scale_range"] = list(band)
+    return stats
 
-    # ---- full resolution, in the winning direction (a -> b)
-    t1 = time.perf_counter()
+
+def _full_resolution(srch: _Search, a, b, q: AlignParams, f1: int, f2: int, anchored: bool,
+                     warnings: list[str]):
+    """Refine the winning hypothesis (a -> b) at full resolution: similarity, affine, rigid.
+
+    Returns ``(sim, aff, rig, passed, line_plan)``; when no hypothesis passes, all three
+    are the best rigid fit (with a warning).
+    """
+    best = srch.T
     # full resolution starts from a passed hypothesis: all occupied cells, as tuned on
     # the Halmstad maps (their sensor walls are clouds whose inner cells carry the fit)
-    A3 = subsample(occupied_points(a), p.max_points, p.seed)
+    A3 = subsample(occupied_points(a), q.max_points, q.seed)
     edt3 = distance_map(b == OCCUPIED, return_indices=True)
     known3 = cv2.dilate((b != UNKNOWN).astype(np.uint8), np.ones((7, 7), np.uint8)) > 0
-    Mf3 = np.exp(-(edt3[0] ** 2) / (2 * p.fitness_sigma**2)).astype(np.float32)
+    Mf3 = np.exp(-(edt3[0] ** 2) / (2 * q.fitness_sigma**2)).astype(np.float32)
     down = _scale(f2)
     centre = A3.mean(0)
 
@@ -664,12 +656,12 @@ def align_maps(
 
     passed = best is not None
     line_plan = False
-    fallback = "falling back to the best rigid" + (" anchored" if anchors else "") + " result"
-    if passed and srch.score < p.min_score:
+    fallback = "falling back to the best rigid" + (" anchored" if anchored else "") + " result"
+    if passed and srch.score < q.min_score:
         passed = False
         warnings.append(
-            f"no alignment hypothesis passed (best score {srch.score:.3f} < {p.min_score}: "
-            f"the maps do not match at any scale in {p.scale_range}); {fallback}"
+            f"no alignment hypothesis passed (best score {srch.score:.3f} < {q.min_score}: "
+            f"the maps do not match at any scale in {q.scale_range}); {fallback}"
         )
     elif passed:
         sim = down @ best @ np.linalg.inv(down)
@@ -677,23 +669,19 @@ def align_maps(
         # map's wall noise instead of locking onto the nearest face (Halmstad: the
         # worst keypoint ratio 1.81 -> 1.46 x the floor)
         line_plan = thin_walls(a) or thin_walls(b)
-        sigmas = (2.0 * f2, *(p.line_sigmas if line_plan else p.full_sigmas))
+        sigmas = (2.0 * f2, *(q.line_sigmas if line_plan else q.full_sigmas))
         sim = refine(A3, edt3, sim, sigmas=sigmas, iterations=8, known=known3)
         fit_sim = fitness(Mf3, apply(sim, A3))
-        passed = fit_sim >= p.min_fitness
+        passed = fit_sim >= q.min_fitness
         if not passed:
             warnings.append(
-                f"no alignment hypothesis passed (best fitness {fit_sim:.3f} < {p.min_fitness}); "
+                f"no alignment hypothesis passed (best fitness {fit_sim:.3f} < {q.min_fitness}); "
                 + fallback
             )
     else:
-        warnings.append(
-            "no alignment hypothesis passed the similarity test; falling back to the best rigid"
-            + (" anchored" if anchors is not None else "")
-            + " result"
-        )
+        warnings.append("no alignment hypothesis passed the similarity test; " + fallback)
     if passed:
-        aff_sigmas = p.line_sigmas if line_plan and p.affine_line else (1.5, 1.0)
+        aff_sigmas = q.line_sigmas if line_plan and q.affine_line else (1.5, 1.0)
         aff = refine(A3, edt3, sim, model="affine", sigmas=aff_sigmas, iterations=8, known=known3)
         rig = rigid_from(sim)
     else:
@@ -703,15 +691,19 @@ def align_maps(
             S1, T1, A3, edt3, q, th_a, th_b, f1, lambda T: fitness(Mf3, apply(T, A3))
         )
         sim = aff = rig
-    if reverse:
-        sim, aff, rig = (np.linalg.inv(T) for T in (sim, aff, rig))
-    timings["full_resolution"] = time.perf_counter() - t1
+    return sim, aff, rig, passed, line_plan
 
-    # ---- back to full-image coordinates; final refinement on wall surfaces
-    A, B = _shift(c0t, r0t), _shift(-c0s, -r0s)
-    sim, aff, rig = (A @ T @ B for T in (sim, aff, rig))
-    t1 = time.perf_counter()
-    fields = SideFields.from_map(target, fwd.theta[1], window=(r0t, r1t, c0t, c1t))
+
+def _surfaces(source, target, src, a, b, sims, crop: _Crop, theta_t: float, passed: bool,
+              line_plan: bool, reverse: bool, p: AlignParams):
+    """Final refinement on wall surfaces, in full-image coordinates.
+
+    ``sims`` (similarity, affine, rigid) map source to target full images. Returns the
+    refined three and the target's side fields.
+    """
+    sim, aff, rig = sims
+    (r0s, _, c0s, _), (r0t, r1t, c0t, c1t) = crop.s, crop.t
+    fields = SideFields.from_map(target, theta_t, window=(r0t, r1t, c0t, c1t))
     X, N = edge_points(src)
     keep = subsample(np.arange(len(X))[:, None], p.max_points, p.seed)[:, 0]
     X, N = X[keep] + (c0s, r0s), N[keep]
@@ -741,11 +733,17 @@ def align_maps(
         S = maximise_fitness(pa, Mfd, S)
         S = _shift(*off_b) @ S @ _shift(-off_a[0], -off_a[1])
         sim = np.linalg.inv(S) if reverse else S
-    timings["surfaces"] = time.perf_counter() - t1
-    S3f = subsample(surface_points(source), p.max_points, p.seed)
-    Mf3f = np.zeros(target.shape, np.float32)  # eq. 8 fitness map of the whole target
-    d_t = distance_map(surface_mask(tgt))
-    Mf3f[r0t:r1t, c0t:c1t] = np.exp(-(d_t**2) / (2 * p.fitness_sigma**2))
+    return (sim, aff, rig), fields
+
+
+def _anchoring(source, target, sims, passed: bool, anchors: Anchors | None, p: AlignParams,
+               score, timings: dict[str, float]):
+    """Manual anchors, or automatic ones kept only when they raise the fitness (eq. 8).
+
+    Returns ``(sims, anchored, used)``: the three transforms, how they were anchored
+    and the anchors used.
+    """
+    sim, aff, rig = sims
     anchored = "none"
     used = anchors
     if anchors is not None:
@@ -762,7 +760,7 @@ def align_maps(
         if found is not None:
             cand = anchor(aff, found.source, found.target)
             # automatic anchors are accepted only when they improve the fitness (eq. 8)
-            if fitness(Mf3f, apply(cand, S3f)) > fitness(Mf3f, apply(aff, S3f)):
+            if score(cand) > score(aff):
                 aff = cand
                 sim = anchor(sim, found.source, found.target)
                 rig = anchor(rig, found.source, found.target)
@@ -772,10 +770,79 @@ def align_maps(
         else:
             anchored = "auto-none"
         timings["anchoring"] = time.perf_counter() - t1
+    return (sim, aff, rig), anchored, used
+
+
+def align_maps(
+    source: np.ndarray,
+    target: np.ndarray,
+    *,
+    anchors: Anchors | None = None,
+    params: AlignParams | None = None,
+    names: tuple[str | None, str | None] = ("source", "target"),
+) -> Alignment:
+    """Align ``source`` to ``target`` (uint8 occupancy arrays); see the module docstring.
+
+    Returns an :class:`Alignment` whose ``similarity``, ``affine`` and ``rigid``
+    3x3 matrices map source pixel coordinates (x = column, y = row, origin
+    top-left, continuous: pixel centres at +0.5) to target pixel coordinates.
+
+    The search runs both ways (source onto target and target onto source) and keeps
+    the direction that scores best: the fitness of eq. 8 is only meaningful when the
+    points scored are a *part* of the map they are scored against, and either map
+    may be the partial one (a SLAM map of part of a building, or a plan of one
+    wing of what the robot mapped). The winning direction is refined at full
+    resolution and inverted if needed. The steps: :func:`_coarse` (hypotheses both
+    ways), :func:`_full_resolution`, :func:`_surfaces` (wall faces), :func:`_anchoring`,
+    then the quality figures and warnings (:mod:`map2map.evaluate.confidence`).
+    """
+    p = params or AlignParams()
+    timings: dict[str, float] = {}
+    warnings: list[str] = []
+    t0 = time.perf_counter()
+    crop = _Crop.of(check_map(source, names[0]), check_map(target, names[1]))
+    src, tgt = crop.cut(source, target)
+    big = max(*src.shape, *tgt.shape)
+    f1 = max(1, int(math.ceil(big / p.search_size)))
+    f2 = min(f1, max(1, int(round(big / p.refine_size))))
+
+    fwd, bwd, reverse = _coarse(src, tgt, f1, f2, p, warnings)
+    for k, v in fwd.timings.items():
+        timings[k] = v + bwd.timings.get(k, 0.0)
+    stats = _search_stats(fwd, bwd, reverse, p)
+    srch, a, b, q = (bwd, tgt, src, _invert_similarity_range(p)) if reverse else (fwd, src, tgt, p)
+
+    t1 = time.perf_counter()
+    sim, aff, rig, passed, line_plan = _full_resolution(
+        srch, a, b, q, f1, f2, anchors is not None, warnings
+    )
+    if reverse:
+        sim, aff, rig = (np.linalg.inv(T) for T in (sim, aff, rig))
+    timings["full_resolution"] = time.perf_counter() - t1
+
+    # back to full-image coordinates
+    (r0s, _, c0s, _), (r0t, r1t, c0t, c1t) = crop.s, crop.t
+    A, B = _shift(c0t, r0t), _shift(-c0s, -r0s)
+    t1 = time.perf_counter()
+    sims, fields = _surfaces(
+        source, target, src, a, b, tuple(A @ T @ B for T in (sim, aff, rig)), crop,
+        fwd.theta[1], passed, line_plan, reverse, p,
+    )  # fmt: skip
+    timings["surfaces"] = time.perf_counter() - t1
+    S3f = subsample(surface_points(source), p.max_points, p.seed)
+    Mf3f = np.zeros(target.shape, np.float32)  # eq. 8 fitness map of the whole target
+    d_t = distance_map(surface_mask(tgt))
+    Mf3f[r0t:r1t, c0t:c1t] = np.exp(-(d_t**2) / (2 * p.fitness_sigma**2))
+
+    def score(T: np.ndarray) -> float:
+        return fitness(Mf3f, apply(T, S3f))
+
+    (sim, aff, rig), anchored, used = _anchoring(
+        source, target, sims, passed, anchors, p, score, timings
+    )
 
     stats["passed"] = bool(passed)
-    fit_sim = fitness(Mf3f, apply(sim, S3f))
-    quality = _quality(source, target, sim, p, (r0s, r1s, c0s, c1s))
+    quality = _quality(source, target, sim, p, crop.s)
     quality["runner_up_ratio"] = stats["runner_up"].get("ratio", 0.0)
     if "rotation_deg" in stats["runner_up"]:
         quality["runner_up_rotation_deg"] = stats["runner_up"]["rotation_deg"]
@@ -788,9 +855,9 @@ def align_maps(
         similarity=sim,
         affine=aff,
         rigid=rig,
-        fitness=fit_sim,
-        fitness_affine=fitness(Mf3f, apply(aff, S3f)),
-        fitness_rigid=fitness(Mf3f, apply(rig, S3f)),
+        fitness=score(sim),
+        fitness_affine=score(aff),
+        fitness_rigid=score(rig),
         anchored=anchored,
         anchors=used,
         warnings=warnings,
