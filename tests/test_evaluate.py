@@ -107,6 +107,25 @@ def test_no_hypothesis_passes_warns_and_falls_back(plan):
     assert np.all(np.isfinite(res.similarity))
 
 
+def test_a_weak_hypothesis_is_kept_with_a_warning_only_when_it_beats_the_rigid_fallback(plan):
+    # a scaled copy: the search finds it, but demand a search score it cannot reach so
+    # that it is "weak"; it fits far better than any scale-1 rigid fallback, so it is
+    # kept (right scale) with a low-confidence warning instead of replaced by a wrong rigid
+    C = np.array([[1, 0, 0.5], [0, 1, 0.5], [0, 0, 1.0]])
+    T_true = similarity_matrix(0.8, math.radians(10.0), 40.0, 30.0)
+    source = _transform_map(plan, np.linalg.inv(C) @ T_true @ C, (H, W))
+    weak = AlignParams(auto_anchor=False, min_score=0.99)
+    res = align_maps(source, plan, params=weak)
+    assert res.hypotheses["score_source_to_target"] < 0.99
+    assert any("low-confidence alignment" in w for w in res.warnings)
+    assert decompose_similarity(res.similarity)[0] == pytest.approx(1 / 0.8, rel=0.02)
+    # a margin no hypothesis can reach: back to the rigid fallback, with its warning
+    res = align_maps(source, plan, params=AlignParams(auto_anchor=False, min_score=0.99,
+                                                      weak_margin=1e9))  # fmt: skip
+    assert "no alignment hypothesis passed" in res.warnings[0]
+    assert decompose_similarity(res.similarity)[0] == pytest.approx(1.0)
+
+
 def test_auto_anchors_find_distant_corners(plan):
     shifted = _transform_map(plan, similarity_matrix(1.0, 0.0, 3.0, -2.0), (H, W))
     found = auto_anchors(shifted, plan, np.array([[1.0, 0, -3], [0, 1, 2], [0, 0, 1]]))
