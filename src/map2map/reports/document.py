@@ -261,7 +261,9 @@ footer{margin-top:2em;border-top:1px solid var(--rule);padding-top:.4em;color:va
 font-size:.85em}
 @page{margin:15mm}
 @media print{body{max-width:none;padding:0;font-size:10.5pt}nav{display:none}
-figure,table,.numbers,.warnings{break-inside:avoid;page-break-inside:avoid}
+figure,table,.numbers,.warnings,tr{break-inside:avoid;page-break-inside:avoid}
+table.long{break-inside:auto;page-break-inside:auto}thead{display:table-header-group}
+.number{min-width:6em;padding:.3em .6em}.number .value{font-size:1.5em}
 h2{break-after:avoid;page-break-after:avoid}figure img{max-height:22cm}
 *{-webkit-print-color-adjust:exact;print-color-adjust:exact}a{color:inherit}}
 """.strip()
@@ -419,7 +421,8 @@ class Report:
             return f'<div class="numbers">{items}</div>'
         if kind == "table":
             _, cols, cells, caption, numeric = block
-            out = ["<table>"]
+            # a table longer than a page breaks between rows (its header repeats)
+            out = ['<table class="long">' if len(cells) > 25 else "<table>"]
             if caption:
                 out.append(f"<caption>{e(caption)}</caption>")
             out.append("<thead><tr>" + "".join(f"<th>{e(c)}</th>" for c in cols) + "</tr></thead>")

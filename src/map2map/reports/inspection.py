@@ -597,7 +597,14 @@ def inspection_report(
     res = float(plan.resolution)
     src, tgt = rep.get("source") or "SLAM map", rep.get("target") or "plan"
     r = Report("As-built inspection", f"{src} (as built) against {tgt} (as planned)")
-    for w in rep["warnings"] if warnings is None else warnings:
+    doubts = list(rep["warnings"] if warnings is None else warnings)
+    if doubts:
+        r.warn(
+            "The alignment of the SLAM map to the plan is doubtful (the points below): every "
+            "error and wall verdict in this report depends on it. Check the aligned overlay "
+            "before acting on any of them."
+        )
+    for w in doubts:
         r.warn(f"Alignment: {w}")
     for w in insp.warnings:
         r.warn(w)
