@@ -143,6 +143,7 @@ def test_cli_refuses_bad_report_options(tmp_path, capsys):
         (["--tolerance", "0.1"], "add --report"),
         (["--report", str(tmp_path / "r.html"), "--units", "px"], "metres"),
         (["--report", str(tmp_path / "r.pdf")], ".html"),
+        (["--report", "/proc/r.html"], "/proc"),  # unwritable (root included): before any work
     ]
     for extra, words in cases:
         assert main(base + extra) == 2

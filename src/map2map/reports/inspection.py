@@ -769,6 +769,13 @@ def check_report_path(path: str | os.PathLike, name: str = "report") -> Path:
         anc = anc.parent
     if not anc.is_dir() or not os.access(anc, os.W_OK | os.X_OK):
         raise InputError(name, f"{path}: {anc} is not a writable folder")
+    try:  # os.access says yes to root everywhere: try it (the probe is removed at once)
+        import tempfile
+
+        with tempfile.TemporaryFile(dir=anc):
+            pass
+    except OSError as exc:
+        raise InputError(name, f"{path}: cannot write in {anc} ({exc.strerror})") from None
     return html_path
 
 
@@ -828,8 +835,11 @@ def write_inspection(
         evaluation, plan, tolerance=tolerance, inspection=insp, warnings=warnings,
         overlay_png=overlay_png, error_map_png=error_map_png, csv_name=csv_path.name,
     )  # fmt: skip
-    write_segments_csv(insp, csv_path)
-    h, m = report.write(html_path)
+    try:
+        write_segments_csv(insp, csv_path)
+        h, m = report.write(html_path)
+    except OSError as exc:
+        raise InputError(html_path, f"cannot write the report ({exc.strerror})") from None
     return InspectionFiles(h, m, csv_path, insp)
 
 
