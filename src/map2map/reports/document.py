@@ -112,7 +112,13 @@ def _cell(value: Any) -> str:
     return str(value)
 
 
+_NUMBER = re.compile(r"^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*%?$")
+
+
 def _is_number(value: Any) -> bool:
+    """A number, or a string the caller formatted from one ("12.50", "83%")."""
+    if isinstance(value, str):
+        return bool(_NUMBER.match(value.strip()))
     return isinstance(value, int | float | np.integer | np.floating) and not isinstance(value, bool)
 
 
@@ -192,7 +198,9 @@ class Section:
             Column headers.
         rows : list of list
             One list per row, as long as ``columns``; ``None`` shows as an empty cell,
-            floats as ``format(x, "g")``. Columns of numbers only are right-aligned.
+            floats as ``format(x, "g")``. Columns of numbers only (numbers formatted as
+            strings, e.g. ``"12.50"`` or ``"83%"``, and blanks ``""``, ``"-"`` included)
+            are right-aligned.
         caption : str, optional
             Caption above the table.
 
@@ -205,8 +213,12 @@ class Section:
         for i, row in enumerate(rows):
             if len(row) != len(cols):
                 raise ValueError(f"table row {i} has {len(row)} cells, expected {len(cols)}")
+        def blank(v: Any) -> bool:
+            return v is None or (isinstance(v, str) and v.strip() in {"", "-", "n/a"})
+
         numeric = [
-            bool(rows) and all(_is_number(r[j]) or r[j] is None for r in rows)
+            any(_is_number(r[j]) for r in rows)
+            and all(_is_number(r[j]) or blank(r[j]) for r in rows)
             for j in range(len(cols))
         ]
         cells = [[_cell(v) for v in row] for row in rows]

@@ -466,8 +466,9 @@ def _cm(v: float | None) -> str:
     return "n/a" if v is None or not math.isfinite(v) else f"{v:.1f} cm"
 
 
-def _num(v: float, nd: int = 1) -> float | str:
-    return round(v, nd) if math.isfinite(v) else "-"
+def _num(v: float, nd: int = 1) -> str:
+    """A figure with ``nd`` decimals, ``-`` when not measured."""
+    return f"{v:.{nd}f}" if math.isfinite(v) else "-"
 
 
 def status_figure(plan: OccupancyMap, inspection: WallInspection):
@@ -687,7 +688,7 @@ def inspection_report(
     length = {k: sum(w.length_m for w in insp.segments if w.status == k) for k in STATUSES}
     s.table(
         ["status", "segments", "share", "length (m)"],
-        [[k, counts[k], f"{counts[k] / total:.0%}", round(length[k], 2)] for k in STATUSES],
+        [[k, counts[k], f"{counts[k] / total:.0%}", _num(length[k], 2)] for k in STATUSES],
         caption="Segments per status",
     )
 
@@ -698,7 +699,7 @@ def inspection_report(
             ["id", "centre x (m)", "centre y (m)", "length (m)", "deviation (cm)",
              "mean (cm)", "max (cm)", "offset (cm)", "status"],  # fmt: skip
             [
-                [w.id, round(w.centre_m[0], 2), round(w.centre_m[1], 2), round(w.length_m, 2),
+                [w.id, _num(w.centre_m[0], 2), _num(w.centre_m[1], 2), _num(w.length_m, 2),
                  _num(w.deviation_cm), _num(w.mean_cm), _num(w.max_cm), _num(w.offset_cm),
                  w.status]  # fmt: skip
                 for w in worst
@@ -715,8 +716,8 @@ def inspection_report(
 
     s = r.section("Every wall segment")
     rows = [
-        [w.id, round(w.x0_m, 3), round(w.y0_m, 3), round(w.x1_m, 3), round(w.y1_m, 3),
-         round(w.length_m, 2), w.status, _num(w.deviation_cm), w.points,
+        [w.id, _num(w.x0_m, 3), _num(w.y0_m, 3), _num(w.x1_m, 3), _num(w.y1_m, 3),
+         _num(w.length_m, 2), w.status, _num(w.deviation_cm), w.points,
          f"{w.coverage:.0%}", w.note]  # fmt: skip
         for w in insp.segments
     ]
