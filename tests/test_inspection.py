@@ -201,3 +201,12 @@ def test_broken_figure_is_flagged_by_the_page(chromium, tmp_path):
     html_path.write_text(text[:good] + "AAAA" + text[good + 4 :])  # corrupt the PNG
     page = render(html_path, tmp_path / "shots", browser=chromium)
     assert page.figures == "0/1" and "figure failed to load" in page.text
+
+
+def test_a_plan_against_itself_fails_no_wall():
+    from map2map.maps.floorplan import generate_floorplan
+
+    plan = generate_floorplan(3, size=(10, 8))
+    insp = inspect_walls(evaluate_maps(plan, plan, resolution=plan.resolution), plan)
+    assert len(insp.segments) >= 8 and insp.counts["fail"] == 0
+    assert insp.counts["pass"] >= 0.8 * len(insp.segments) and not insp.warnings
