@@ -43,15 +43,22 @@ def stage_speed(cfg: ABConfig, r: int, dev: torch.device, steps: int, warm: int 
     gen = torch.Generator().manual_seed(0)
     x = (torch.randint(0, 3, (B, 1, r, r), generator=gen).float() - 1).to(dev)
     y = (torch.randint(0, 3, (B, 1, r, r), generator=gen).float() - 1).to(dev)
+    s = cfg.size
+    gi = None
+    if cfg.growth == "decoder":  # the generator reads the full-size input, exits at r
+        gi = (torch.randint(0, 3, (B, 1, s, s), generator=gen).float() - 1).to(dev)
+        g.out_size = r
     if amp:
         x, y = (t.contiguous(memory_format=torch.channels_last) for t in (x, y))
+        if gi is not None:
+            gi = gi.contiguous(memory_format=torch.channels_last)
     alpha = torch.tensor(0.5, device=dev) if r > cfg.min_size else None
     autocast = torch.autocast("cuda", dtype=torch.bfloat16, enabled=amp) if dev.type == "cuda" \
         else torch.autocast("cpu", enabled=False)
 
     def run(n):
         for _ in range(n):
-            gan_step(g, dd, dr, opt_g, opt_d, x, y, alpha, cfg, 1, autocast, (dd, dr))
+            gan_step(g, dd, dr, opt_g, opt_d, x, y, alpha, cfg, 1, autocast, (dd, dr), gi)
 
     run(warm)
     if dev.type == "cuda":
