@@ -189,7 +189,7 @@ class Fig514:
         fig.suptitle(f"Fig. 5.14 reproduced: same plan, same trajectory (appendix-metric "
                      f"error px of the {self.plans.shape[-1]} px square; wall recall 2 px); "
                      f"Model_AB: {Path(self.model).name}", fontsize=9)
-        fig.tight_layout()
+        fig.tight_layout(rect=(0, 0, 1, 1 - 0.45 / (3.1 * max(n, 1))))
         if path is not None:
             from ..core._io import atomic_path
 

@@ -248,8 +248,9 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
         warns.append(f"the {samples} hypotheses differ in only {div:.2%} of the plan's pixels: "
                      "the dropout noise barely changes this model's output")
     if "PROVISIONAL" in str(net.header.get("note", "")):
-        warns.append("provisional weights (trained on generated pairs, not a simulated "
-                     "dataset): hypotheses show the method, not realistic SLAM error")
+        warns.append("provisional weights (reduced CPU training, see their note): the "
+                     "hypotheses show the method; they do not meet the realism target "
+                     "against simulated SLAM maps (docs/learn_ab.md)")
     for w in warns:
         warnings.warn(w, stacklevel=2)
     for m in maps:
