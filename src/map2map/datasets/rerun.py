@@ -14,6 +14,10 @@ pair's own crop window (the union of the plan's and the pair's ``B``'s content) 
 preprocessed as the pair's ``B`` (thesis 4.1), so it lies on the same pixels as the
 dataset's ``A.png``/``B.png``.
 
+:func:`parametric_on_trajectory` drives the parametric model (thesis 3.2) along a
+simulation's true trajectory and cuts its map the same way: the parametric map of the
+same plan *and the same path* (Fig. 5.14).
+
 Examples
 --------
 >>> import tempfile
@@ -46,7 +50,7 @@ from .pair import (
 )
 from .plans import PlanSource, load_plan
 
-__all__ = ["RerunResult", "rerun_pair"]
+__all__ = ["RerunResult", "rerun_pair", "parametric_on_trajectory", "parametric_on_run"]
 
 
 @dataclass
@@ -138,3 +142,29 @@ def rerun_pair(ds: str | os.PathLike, index: int, run: int = 2, *,
                 fov=params.fov)
     return RerunResult(int(index), int(run), a_n, b_n, bool(np.array_equal(a_n, a_file)),
                        info, plan, box, keep[0])
+
+
+def parametric_on_trajectory(plan, sim, box, size: int, thicken: int, fov: float,
+                             rng: np.random.Generator, method: str = "additive"
+                             ) -> np.ndarray:
+    """The parametric model (thesis 3.2, :func:`map2map.parametric.pipeline.deform`)
+    driven along simulation ``sim``'s true trajectory (its poses at the scan times) through
+    ``plan``, cut with the pair window ``box`` and preprocessed as a pair's ``B``:
+    ``(size, size)`` uint8 on the pair's pixels. The model draws its own odometry and
+    LIDAR errors (``rng``); only the path is shared with the simulation."""
+    from ..parametric.params import ParametricParams
+    from ..parametric.pipeline import deform
+    from ..trajectory.timing import trajectory_from_poses
+
+    p = sim.true_poses
+    traj = trajectory_from_poses(p[:, 0], p[:, 1], p[:, 2], t=sim.times)
+    res = deform(plan, traj, method, ParametricParams(fov_deg=float(fov)), rng)
+    return preprocess_pair(plan, res.map, int(size), int(thicken), box=box)[1]
+
+
+def parametric_on_run(rr, method: str = "additive", seed: int = 0) -> np.ndarray:
+    """:func:`parametric_on_trajectory` along re-run ``rr``'s trajectory
+    (:class:`~map2map.datasets.rerun.RerunResult`), seeded by ``(seed, index, run)``."""
+    return parametric_on_trajectory(
+        rr.plan, rr.sim, rr.box, rr.meta["size"], rr.meta["thicken"], rr.meta["fov"],
+        np.random.default_rng([int(seed), int(rr.index), int(rr.run)]), method)

@@ -12,7 +12,7 @@ given in memory):
   180 degree LIDAR, ``rbpf``);
 * **parametric** -- :func:`map2map.parametric.pipeline.deform` (additive, thesis 3.2)
   along the *same* trajectory: the simulation's true poses at its scan times
-  (:func:`map2map.learn.realism.parametric_on_trajectory`; the model draws its own
+  (:func:`map2map.datasets.rerun.parametric_on_trajectory`; the model draws its own
   odometry and LIDAR errors);
 * **Model_AB** -- the generator's single output for the preprocessed plan (dropout off,
   :func:`map2map.learn.synthesize.synthesize_squares`).
@@ -215,8 +215,8 @@ class Fig514:
 def _from_dataset(ds, n, seed, split, progress):
     from ..datasets.build import pair_dir
     from ..datasets.pair import read_pair_meta
-    from ..datasets.rerun import rerun_pair
-    from .realism import _read_png, parametric_on_run, split_indices
+    from ..datasets.rerun import parametric_on_run, rerun_pair
+    from .realism import _read_png, split_indices
 
     idx = split_indices(ds, split)[:n]
     out = []
@@ -235,8 +235,8 @@ def _from_dataset(ds, n, seed, split, progress):
 
 def _from_plans(plans, seed, progress, params):
     from ..datasets.pair import BuildParams, crop_box, preprocess_pair
+    from ..datasets.rerun import parametric_on_trajectory
     from ..sim.runner import simulate
-    from .realism import parametric_on_trajectory
 
     p = params or BuildParams()
     out = []

@@ -68,7 +68,7 @@ from ..core.grid import FREE, OCCUPIED, UNKNOWN
 
 __all__ = ["STATS", "STAT_INFO", "TARGET_RATIO", "map_stats", "stats_of", "RealismRow",
            "realism_table", "format_realism_table", "References", "simulated_references",
-           "parametric_on_trajectory", "parametric_on_run", "split_indices"]
+           "split_indices"]
 
 STATS = ("wall_err", "wall_seen", "free_mapped", "unknown", "spurious", "thickness", "bend")
 #: What each statistic is (units).
@@ -307,33 +307,6 @@ def _read_png(path: Path) -> np.ndarray:
     return img
 
 
-def parametric_on_trajectory(plan, sim, box, size: int, thicken: int, fov: float,
-                             rng: np.random.Generator, method: str = "additive"
-                             ) -> np.ndarray:
-    """The parametric model (thesis 3.2, :func:`map2map.parametric.pipeline.deform`)
-    driven along simulation ``sim``'s true trajectory (its poses at the scan times) through
-    ``plan``, cut with the pair window ``box`` and preprocessed as a pair's ``B``:
-    ``(size, size)`` uint8 on the pair's pixels. The model draws its own odometry and
-    LIDAR errors (``rng``); only the path is shared with the simulation."""
-    from ..datasets.pair import preprocess_pair
-    from ..parametric.params import ParametricParams
-    from ..parametric.pipeline import deform
-    from ..trajectory.timing import trajectory_from_poses
-
-    p = sim.true_poses
-    traj = trajectory_from_poses(p[:, 0], p[:, 1], p[:, 2], t=sim.times)
-    res = deform(plan, traj, method, ParametricParams(fov_deg=float(fov)), rng)
-    return preprocess_pair(plan, res.map, int(size), int(thicken), box=box)[1]
-
-
-def parametric_on_run(rr, method: str = "additive", seed: int = 0) -> np.ndarray:
-    """:func:`parametric_on_trajectory` along re-run ``rr``'s trajectory
-    (:class:`~map2map.datasets.rerun.RerunResult`), seeded by ``(seed, index, run)``."""
-    return parametric_on_trajectory(
-        rr.plan, rr.sim, rr.box, rr.meta["size"], rr.meta["thicken"], rr.meta["fov"],
-        np.random.default_rng([int(seed), int(rr.index), int(rr.run)]), method)
-
-
 def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int | None = None,
                          run: int = 2, cache: str | os.PathLike | None = None,
                          progress: bool = True) -> References:
@@ -362,7 +335,7 @@ def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int |
     """
     from ..core._io import atomic_path
     from ..datasets.build import pair_dir
-    from ..datasets.rerun import rerun_pair
+    from ..datasets.rerun import parametric_on_run, rerun_pair
 
     ds = Path(ds)
     idx = split_indices(ds, split)
