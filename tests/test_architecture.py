@@ -5,7 +5,7 @@ functions and under ``TYPE_CHECKING`` alike, relative and absolute) and every im
 another map2map package is checked against :data:`LAYERS`, bottom to top::
 
     core < maps < trajectory < robotlog < parametric | sim | slam < evaluate
-         < jobs < datasets < learn < demo < cli
+         < jobs < datasets < learn < reports < demo < cli
 
 A package may import its own modules and any package of a lower layer; packages of
 one layer (``parametric``, ``sim``, ``slam``) do not import each other. ``datasets``
@@ -44,6 +44,7 @@ LAYERS: dict[str, float] = {
     "jobs": 6,
     "datasets": 7,
     "learn": 8,
+    "reports": 8.5,
     "demo": 9,
     "cli": 10,
     "__main__": 11,
