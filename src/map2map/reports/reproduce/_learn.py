@@ -1,16 +1,16 @@
-"""Shared by the two learning sections: is the ``learn`` extra (torch) installed?"""
+"""Shared by the two learning sections: is the ``learn`` extra (torch) installed?
+
+torch itself is imported only by :mod:`map2map.learn` (tests/test_architecture.py).
+"""
 
 from __future__ import annotations
+
+from importlib.util import find_spec
 
 from ._base import Skipped
 
 
 def need_torch() -> None:
     """Raise :class:`Skipped` when torch (``pip install -e '.[learn]'``) is missing."""
-    try:
-        import torch  # noqa: F401
-    except ImportError:
-        raise Skipped("needs the learn extra (torch): pip install -e '.[learn]'") from None
-    import torch as _t
-
-    _t.set_num_threads(1)
+    if find_spec("torch") is None:
+        raise Skipped("needs the learn extra (torch): pip install -e '.[learn]'")

@@ -32,7 +32,7 @@ def run(ctx: Context, out: Output) -> None:
     from map2map.datasets.clean import COVERAGE_COMPLETE, clean_dataset
     from map2map.datasets.pair import BuildParams
 
-    n = ctx.size(10, 3, 1)
+    n = ctx.size(12, 4, 1)
     params = BuildParams() if not ctx.tiny else BuildParams(duration=60.0, size=64)
     ds = ctx.work / "dataset"
     t0, c0 = time.perf_counter(), time.process_time()
@@ -96,7 +96,8 @@ def run(ctx: Context, out: Output) -> None:
     out.compare("cleaning yield", f"{THESIS_MAPS:,} -> {THESIS_CLEAN1:,} -> {THESIS_CLEAN2:,} "
                 f"({100 * THESIS_CLEAN2 / THESIS_MAPS:.0f} % kept)",
                 f"{complete}/{done} complete ({100 * complete / max(done, 1):.0f} %)"
-                + (f"; cleaner: {decisions}" if decisions else ""),
+                + ("; cleaner: " + ", ".join(f"{v} {k}" for k, v in sorted(decisions.items()))
+                   if decisions else ""),
                 "our robot never gets stuck at the start (the thesis's first cleaning step) "
                 "and the labels come from the simulator's coverage, not by hand; a small "
                 "build gives only a rough share.")  # fmt: skip

@@ -35,7 +35,7 @@ def run(ctx: Context, out: Output) -> None:
     from map2map.learn.synthesize import synthesize
     from map2map.maps.formats import load_map
 
-    plans = ctx.size(3, 1, 1)
+    plans = ctx.size(4, 2, 1)
     params = BuildParams(source="both") if not ctx.tiny else \
         BuildParams(source="both", duration=60.0, size=64)
     ds = ctx.work / "both"
