@@ -10,6 +10,7 @@ import os
 import re
 import subprocess
 import sys
+from html import escape as html_escape
 from pathlib import Path
 
 import cv2
@@ -34,7 +35,7 @@ def _check_report(out: Path, expect_sections: list[str]) -> dict:
     md = (out / "report.md").read_text(encoding="utf-8")
     for title in expect_sections:
         assert title in md, title
-        assert title.replace("<", "&lt;") in html, title
+        assert html_escape(title) in html, title
     assert "Summary: thesis vs map2map" in md and "About this run" in md
     images = re.findall(r'src="data:image/png;base64,([^"]+)"', html)
     assert images, "no figure embedded"
