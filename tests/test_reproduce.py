@@ -101,15 +101,26 @@ def test_quick_end_to_end(quick_report):
 
 
 @pytest.mark.slow
-def test_quick_report_in_a_browser(quick_report):
+def test_quick_report_in_a_browser(quick_report, request, tmp_path):
     """Rendered by a real headless chromium: every figure loaded, key numbers visible."""
     browser = pytest.importorskip("browser", reason="tests/browser.py not available")
+    try:
+        chromium = request.getfixturevalue("chromium")  # skips (or fails in CI) without it
+    except pytest.FixtureLookupError:
+        pytest.skip("no chromium fixture (tests/conftest.py)")
     out, proc = quick_report
-    assert proc.returncode == 0
-    page = browser.render(out / "report.html")
+    assert proc.returncode == 0, proc.stderr
+    page = browser.render(out / "report.html", tmp_path, browser=chromium)
     total = len(re.findall(r"<img\s", (out / "report.html").read_text()))
-    assert page.figures == f"{total}/{total}"
-    assert "Table 5.4" in page.text and "thesis" in page.text
+    assert total > 0 and page.figures == f"{total}/{total}"
+    text = page.text
+    for title in _titles():
+        assert title in text, title
+    results = json.loads((out / "results.json").read_text())
+    ekf64 = results["sections"]["parametric_time"]["results"]["run_time"]["ekf_64"]["wall_s"]
+    assert f"{ekf64:.2f} s" in text  # a key number of the report is on the page
+    assert "15-94 s" in text and "About this run" in text
+    assert page.screenshot.stat().st_size > 10_000
 
 
 def test_failed_section_keeps_the_report(tmp_path, monkeypatch):

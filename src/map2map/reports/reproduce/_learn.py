@@ -1,6 +1,11 @@
 """Shared by the two learning sections: is the ``learn`` extra (torch) installed?
 
 torch itself is imported only by :mod:`map2map.learn` (tests/test_architecture.py).
+
+Examples
+--------
+>>> need_torch() is None or True      # raises Skipped without torch
+True
 """
 
 from __future__ import annotations

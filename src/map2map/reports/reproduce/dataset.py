@@ -10,6 +10,11 @@ minutes, 180-degree lidar, 256 x 256 pairs: the thesis's settings) into a scratc
 folder, in this process; pairs/hour from the wall clock and, independent of the
 machine's load, from the CPU seconds per pair; then the coverage labels and, when both
 classes are present, the thesis's cleaner (:func:`map2map.datasets.clean.clean_dataset`).
+
+Examples
+--------
+>>> round(THESIS_MAPS / (THESIS_DAYS * 24))        # the thesis's pairs per hour
+86
 """
 
 from __future__ import annotations

@@ -11,6 +11,11 @@ Model_AB's hypothesis of the same plan (:func:`map2map.learn.synthesize.synthesi
 pretrained weights), all three drawn side by side and measured against the plan with
 the same numbers (:func:`map2map.evaluate.wallmetrics.wall_metrics`: wall recall,
 boundary F1, Chamfer distance; unknown share).
+
+Examples
+--------
+>>> KINDS
+('simulated', 'parametric', 'Model_AB')
 """
 
 from __future__ import annotations

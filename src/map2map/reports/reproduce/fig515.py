@@ -6,6 +6,11 @@ ground truth for assessing alignment methods. Here: a generated apartment at 256
 (thesis 4.1 size), a 5-node tour, the additive conversion (the one the thesis kept),
 drawn by :func:`map2map.parametric.figures.deform_figure`; its numbers (path length, key
 poses, mean and max displacement) go to ``results.json``.
+
+Examples
+--------
+>>> TITLE.split(":")[0]
+'Fig. 5.15'
 """
 
 from __future__ import annotations

@@ -10,6 +10,13 @@ pixels (the same metric plan, only the resolution changes), one trajectory per p
 (wall clock and CPU of this process; trajectory planning excluded) for EKF at 64 and 256
 and additive at 256 and 1600, and the two conversions' displacement fields side by
 side (Fig. 5.13).
+
+Examples
+--------
+>>> TITLE.split(":")[0], max(v[0] for v in THESIS_TABLE54.values())   # the thesis's worst EKF
+('Table 5.4 / Fig. 5.13', 94.4141)
+>>> _additive_sentence(3.1, 0.03, 1.0).split(",")[0]
+"at 256x256 103x faster than the thesis's mean 3.1 s"
 """
 
 from __future__ import annotations

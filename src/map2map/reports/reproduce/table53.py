@@ -10,6 +10,11 @@ map: :func:`map2map.learn.synthetic.make_pairs`), the pretrained Model_BA
 (:func:`map2map.learn.autocorrect.autocorrect_many`), the same metric
 (:func:`map2map.evaluate.evaluate_maps`, chosen chain's mean, pixels), the one-sided
 sign test, and wall recall as a guard against maps that score low errors by losing walls.
+
+Examples
+--------
+>>> sum(v > 0 for v in THESIS), len(THESIS)      # the thesis's "75 % improved"
+(15, 20)
 """
 
 from __future__ import annotations
