@@ -21,3 +21,18 @@ def shared_data() -> Path:
     if not SHARED_DATA.is_dir():
         pytest.skip(f"shared data not found at {SHARED_DATA}")
     return SHARED_DATA
+
+
+@pytest.fixture(scope="session")
+def chromium() -> str:
+    """Path of headless Chromium (tests/browser.py); skips when absent, unless CI
+    (``MAP2MAP_REQUIRE_BROWSER=1``, set by ``.ci/run``) requires it: then it fails."""
+    from browser import find_chromium  # tests/ is on sys.path (pytest's rootdir import)
+
+    path = find_chromium()
+    if path is None:
+        message = "chromium not found (apt-get install chromium)"
+        if os.environ.get("MAP2MAP_REQUIRE_BROWSER") == "1":
+            pytest.fail(f"{message}; MAP2MAP_REQUIRE_BROWSER=1 requires it")
+        pytest.skip(message)
+    return path

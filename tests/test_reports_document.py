@@ -117,6 +117,17 @@ def test_bad_inputs_are_refused():
         s.figure("picture.png", "x")
 
 
+def test_numbers_formatted_as_strings_are_right_aligned():
+    r = Report("x")
+    r.section("s").table(
+        ["id", "dev (cm)", "seen", "status"],
+        [[1, "12.50", "83%", "pass"], [2, "-", "100%", "not observed"]],
+    )
+    md = r.to_markdown()[0]
+    assert "|---:|---:|---:|---|" in md
+    assert '<td class="num">12.50</td>' in r.to_html()
+
+
 def test_anchors_are_unique():
     r = Report("x")
     assert [r.section(t).anchor for t in ("Walls", "walls", "", "Été 2")] == [

@@ -56,6 +56,19 @@ def register(sub: argparse._SubParsersAction) -> None:
         default="m",
         help="report errors in metres (needs a resolution) or pixels only (default: m)",
     )
+    p.add_argument(
+        "--report",
+        metavar="HTML",
+        help="also write an as-built inspection report: HTML (self-contained, prints to PDF), "
+        "its Markdown twin and a CSV of every plan wall segment with pass / fail / not "
+        "observed (with --pairs: one report per pair, HTML_<pair>.html)",
+    )
+    p.add_argument(
+        "--tolerance",
+        type=float,
+        metavar="M",
+        help="largest acceptable wall deviation for --report, metres (default: 0.05)",
+    )
     p.add_argument("--no-auto-anchors", action="store_true", help="do not look for anchor points")
     p.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
     add_input_options(p, resolution=False, several=True)
@@ -64,10 +77,23 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..core.errors import InputError
     from ..evaluate.metric import summary_lines
     from ..jobs.evaluate import EvaluateSpec, evaluate
     from .align import report_warnings
 
+    tolerance = 0.05
+    if args.report is not None:  # checked before any work
+        from ..reports.inspection import check_report_path, check_tolerance
+
+        if args.tolerance is not None:
+            tolerance = check_tolerance(args.tolerance)
+        if args.units == "px":
+            raise InputError("--report", "the inspection report needs errors in metres, "
+                             "not --units px")  # fmt: skip
+        check_report_path(args.report, "--report")
+    elif args.tolerance is not None:
+        raise InputError("--tolerance", "applies to the inspection report: add --report FILE")
     run = evaluate(
         EvaluateSpec(
             args.slam,
@@ -94,8 +120,20 @@ def run(args: argparse.Namespace) -> int:
                 + ("  (WARNING)" if r["warnings"] else "")
             )
         print(f"wrote {args.out}/pairs.csv and {args.out}/errors_boxplot.png")
+        _inspection(run, args, tolerance)
         return report_warnings(run.warnings, args.strict)
     for line in summary_lines(run.evaluation.report):
         print(line)
     print(f"wrote report.json, overlay.png, error_map.png in {args.out}")
+    _inspection(run, args, tolerance)
     return report_warnings(run.warnings, args.strict)
+
+
+def _inspection(run, args: argparse.Namespace, tolerance: float) -> None:
+    """Write the inspection report(s) of ``--report`` and say what they found."""
+    if args.report is None:
+        return
+    from ..reports.inspection import write_run_inspections
+
+    for f in write_run_inspections(run, args.report, tolerance=tolerance):
+        print(f"wrote {f.html}, {f.md.name} and {f.csv.name}: walls {f.summary()}")

@@ -414,11 +414,13 @@ class EvaluateSpec:
 class EvaluateRun:
     """What :func:`evaluate` wrote (name -> path; ``PAIR/name`` for a pairs file), the
     :class:`~map2map.evaluate.pipeline.Evaluation` of every pair (``evaluation``: the
-    only one of a single pair) and, for a pairs file, its table (``rows``)."""
+    only one of a single pair), for a pairs file its table (``rows``), and the plan
+    each pair was evaluated against (``plans``, as read: resolution and origin)."""
 
     written: dict[str, Path]
     evaluations: list[Evaluation] = field(default_factory=list)
     rows: list[dict[str, Any]] = field(default_factory=list)
+    plans: list[OccupancyMap] = field(default_factory=list)
 
     @property
     def evaluation(self) -> Evaluation | None:
@@ -483,7 +485,7 @@ def evaluate(spec: EvaluateSpec) -> EvaluateRun:
     ev = _evaluate(src, tgt, anch, res, spec.seed, spec.auto_anchor)
     with atomic_dir(spec.out, protect=inputs) as out_dir:
         written = write_evaluation(ev, tgt.map, out_dir, res, figures=spec.figures)
-    return EvaluateRun(final_paths(written, out_dir, spec.out), [ev])
+    return EvaluateRun(final_paths(written, out_dir, spec.out), [ev], plans=[tgt.map])
 
 
 def run_evaluate(
@@ -571,7 +573,8 @@ def _evaluate_pairs(spec: EvaluateSpec) -> EvaluateRun:
         if spec.figures:
             error_boxplot(dists, out_dir / "errors_boxplot.png", unit=unit)
             written["boxplot"] = out_dir / "errors_boxplot.png"
-    return EvaluateRun(final_paths(written, out_dir, spec.out), evs, rows)
+    plans = [tgt.map for _, tgt, _, _ in loaded]
+    return EvaluateRun(final_paths(written, out_dir, spec.out), evs, rows, plans)
 
 
 def _pair_row(name: str, src: MapInput, tgt: MapInput, ev: Evaluation) -> dict[str, Any]:

@@ -112,7 +112,13 @@ def _cell(value: Any) -> str:
     return str(value)
 
 
+_NUMBER = re.compile(r"^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*%?$")
+
+
 def _is_number(value: Any) -> bool:
+    """A number, or a string the caller formatted from one ("12.50", "83%")."""
+    if isinstance(value, str):
+        return bool(_NUMBER.match(value.strip()))
     return isinstance(value, int | float | np.integer | np.floating) and not isinstance(value, bool)
 
 
@@ -192,7 +198,9 @@ class Section:
             Column headers.
         rows : list of list
             One list per row, as long as ``columns``; ``None`` shows as an empty cell,
-            floats as ``format(x, "g")``. Columns of numbers only are right-aligned.
+            floats as ``format(x, "g")``. Columns of numbers only (numbers formatted as
+            strings, e.g. ``"12.50"`` or ``"83%"``, and blanks ``""``, ``"-"`` included)
+            are right-aligned.
         caption : str, optional
             Caption above the table.
 
@@ -205,8 +213,12 @@ class Section:
         for i, row in enumerate(rows):
             if len(row) != len(cols):
                 raise ValueError(f"table row {i} has {len(row)} cells, expected {len(cols)}")
+        def blank(v: Any) -> bool:
+            return v is None or (isinstance(v, str) and v.strip() in {"", "-", "n/a"})
+
         numeric = [
-            bool(rows) and all(_is_number(r[j]) or r[j] is None for r in rows)
+            any(_is_number(r[j]) for r in rows)
+            and all(_is_number(r[j]) or blank(r[j]) for r in rows)
             for j in range(len(cols))
         ]
         cells = [[_cell(v) for v in row] for row in rows]
@@ -261,7 +273,9 @@ footer{margin-top:2em;border-top:1px solid var(--rule);padding-top:.4em;color:va
 font-size:.85em}
 @page{margin:15mm}
 @media print{body{max-width:none;padding:0;font-size:10.5pt}nav{display:none}
-figure,table,.numbers,.warnings{break-inside:avoid;page-break-inside:avoid}
+figure,table,.numbers,.warnings,tr{break-inside:avoid;page-break-inside:avoid}
+table.long{break-inside:auto;page-break-inside:auto}thead{display:table-header-group}
+.number{min-width:6em;padding:.3em .6em}.number .value{font-size:1.5em}
 h2{break-after:avoid;page-break-after:avoid}figure img{max-height:22cm}
 *{-webkit-print-color-adjust:exact;print-color-adjust:exact}a{color:inherit}}
 """.strip()
@@ -419,7 +433,8 @@ class Report:
             return f'<div class="numbers">{items}</div>'
         if kind == "table":
             _, cols, cells, caption, numeric = block
-            out = ["<table>"]
+            # a table longer than a page breaks between rows (its header repeats)
+            out = ['<table class="long">' if len(cells) > 25 else "<table>"]
             if caption:
                 out.append(f"<caption>{e(caption)}</caption>")
             out.append("<thead><tr>" + "".join(f"<th>{e(c)}</th>" for c in cols) + "</tr></thead>")

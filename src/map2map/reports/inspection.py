@@ -1,0 +1,902 @@
+"""The as-built inspection report: a SLAM map of the building against its plan, wall by wall.
+
+For a construction inspector (the appendix paper's purpose): the as-built SLAM map is
+aligned to the as-planned drawing and the local error of every SLAM wall point is
+measured (appendix paper, Fig. 1 and Algorithm 1; :func:`map2map.evaluate.pipeline.
+evaluate_maps`). This module turns that evaluation into walls:
+
+1. **Wall segments of the plan.** The plan's walls are cut into straight segments
+   (:func:`map2map.maps.segments.straight_segments`: centre lines, axis snapping,
+   merged collinear pieces; door openings of ``min_gap_m`` 0.4 m or more stay gaps).
+   Endpoints are given in plan metres (the map's ROS frame,
+   :meth:`~map2map.core.grid.OccupancyMap.pixel_to_world`).
+2. **As-built evidence of each segment.** Every SLAM wall point counted in the wall
+   statistics (matched to a plan wall, not a corner: :data:`map2map.evaluate.metric.
+   EXCLUDED_RULE`) has a correspondence ``X_corr`` on a plan wall surface (Algorithm 1,
+   lines 1-13) and a local error ``|X_rigid - X_corr|`` (point to plane). It is given
+   to the plan segment nearest its correspondence, within half the plan's wall
+   thickness plus 1.5 px.
+3. **Deviation of a segment.** ``p95`` of its points' local errors decides: 95 % of
+   the wall's observed evidence lies within it. The maximum would let a single stray
+   lidar return fail a wall; the mean would let a wall built right over most of its
+   length but off by a hand's width over its last metre pass. ``mean``, ``max`` and the
+   signed ``offset`` (the median displacement across the wall, + toward +y for an
+   east-west wall and toward +x for a north-south one: where it was built) are given
+   beside it.
+4. **Status.** ``pass`` when the deviation is at most the tolerance, ``fail`` above
+   it, and ``not observed`` when the SLAM map holds too little evidence of the wall:
+   fewer than ``min_points`` points, or less than ``min_coverage`` of its length
+   (2-px bins) seen. A wall not observed is *never* counted as passed. When SLAM wall
+   points that match no plan wall (more than 0.3 m from any, see the metric) lie
+   within ``nearby_m`` of an unobserved segment, its note says so: the wall may have
+   been built more than 0.3 m off, or clutter stands in front of it.
+
+:func:`inspect_walls` computes the segments, :func:`write_segments_csv` writes one row
+per segment (opens in a spreadsheet), :func:`inspection_report` builds the
+:class:`~map2map.reports.document.Report` (warnings on top, key numbers, aligned overlay,
+error heat map in cm, walls by status, the walls that deviate most, every segment) and
+:func:`write_inspection` writes ``REPORT.html``, ``REPORT.md`` and ``REPORT.csv``.
+
+Examples
+--------
+>>> import numpy as np
+>>> from map2map.core.grid import OccupancyMap
+>>> from map2map.evaluate.pipeline import evaluate_maps
+>>> from map2map.maps.synthetic import draw_walls, office_walls
+>>> plan = OccupancyMap(draw_walls((240, 300), office_walls(300, 240)), 0.05)
+>>> built = draw_walls((240, 300), office_walls(300, 240, partition_shift=(2.0, 0.0)))
+>>> ev = evaluate_maps(OccupancyMap(built, 0.05), plan, resolution=0.05)
+>>> walls = inspect_walls(ev, plan, tolerance=0.05)
+>>> walls.counts["fail"] >= 1, walls.counts["pass"] > walls.counts["fail"]
+(True, True)
+>>> worst = walls.worst(1)[0]                  # a partition built 10 cm off
+>>> worst.status, round(worst.deviation_cm)    # the alignment absorbs about 1 cm
+('fail', 9)
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..core._io import atomic_path
+from ..core.errors import InputError
+from ..core.grid import OCCUPIED, UNKNOWN, OccupancyMap
+from ..maps.segments import straight_segments
+from .document import Report
+
+__all__ = [
+    "STATUSES",
+    "WallSegment",
+    "WallInspection",
+    "check_tolerance",
+    "inspect_walls",
+    "write_segments_csv",
+    "inspection_report",
+    "InspectionFiles",
+    "write_inspection",
+    "write_run_inspections",
+    "check_report_path",
+]
+
+#: The three statuses of a wall segment, in the order they are counted.
+STATUSES = ("pass", "fail", "not observed")
+STATUS_COLOURS = {"pass": "#1a9850", "fail": "#d73027", "not observed": "#8c8c8c"}
+
+CSV_COLUMNS = [
+    "id",
+    "x0_m",
+    "y0_m",
+    "x1_m",
+    "y1_m",
+    "length_m",
+    "status",
+    "deviation_cm",
+    "mean_cm",
+    "max_cm",
+    "offset_cm",
+    "points",
+    "coverage",
+    "unmatched_nearby",
+    "note",
+]
+
+
+@dataclass
+class WallSegment:
+    """One straight wall segment of the plan and its as-built evidence.
+
+    ``x0_m .. y1_m`` are the endpoints in plan metres (ROS frame), ``px`` the same in
+    plan pixels (x = column, y = row, continuous: a pixel's centre is at +0.5).
+    ``deviation_cm`` (p95 of the local errors of its points) decides the status;
+    ``mean_cm``, ``max_cm`` and ``offset_cm`` (signed, median across the wall) are
+    given beside it; all four are NaN for a wall not observed. ``coverage`` is the
+    share of its length seen, ``points`` the SLAM wall points matched to it,
+    ``unmatched_nearby`` SLAM points that match no plan wall within ``nearby_m``.
+    """
+
+    id: int
+    x0_m: float
+    y0_m: float
+    x1_m: float
+    y1_m: float
+    length_m: float
+    status: str
+    deviation_cm: float
+    mean_cm: float
+    max_cm: float
+    offset_cm: float
+    points: int
+    coverage: float
+    unmatched_nearby: int
+    note: str
+    px: np.ndarray = field(repr=False)
+
+    @property
+    def centre_m(self) -> tuple[float, float]:
+        """The segment's midpoint in plan metres."""
+        return (0.5 * (self.x0_m + self.x1_m), 0.5 * (self.y0_m + self.y1_m))
+
+    def row(self) -> dict[str, Any]:
+        """The CSV row: metres to 3 decimals, centimetres to 2, NaN as an empty cell."""
+
+        def f(v: float, nd: int) -> str:
+            return "" if not math.isfinite(v) else f"{v:.{nd}f}"
+
+        return {
+            "id": self.id,
+            "x0_m": f(self.x0_m, 3),
+            "y0_m": f(self.y0_m, 3),
+            "x1_m": f(self.x1_m, 3),
+            "y1_m": f(self.y1_m, 3),
+            "length_m": f(self.length_m, 3),
+            "status": self.status,
+            "deviation_cm": f(self.deviation_cm, 2),
+            "mean_cm": f(self.mean_cm, 2),
+            "max_cm": f(self.max_cm, 2),
+            "offset_cm": f(self.offset_cm, 2),
+            "points": self.points,
+            "coverage": f(self.coverage, 2),
+            "unmatched_nearby": self.unmatched_nearby,
+            "note": self.note,
+        }
+
+
+@dataclass
+class WallInspection:
+    """Every wall segment of a plan with its status, and how they were judged."""
+
+    segments: list[WallSegment]
+    tolerance_m: float
+    resolution: float
+    min_points: int
+    min_coverage: float
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def counts(self) -> dict[str, int]:
+        """Segments per status (every status present, zero included)."""
+        out = dict.fromkeys(STATUSES, 0)
+        for s in self.segments:
+            out[s.status] += 1
+        return out
+
+    def worst(self, n: int = 10) -> list[WallSegment]:
+        """The ``n`` observed segments that deviate most (largest deviation first)."""
+        seen = [s for s in self.segments if s.status != "not observed"]
+        return sorted(seen, key=lambda s: (-s.deviation_cm, s.id))[:n]
+
+
+def check_tolerance(tolerance: float, name: str = "tolerance") -> float:
+    """A tolerance in metres: finite, > 0 and under 10 m; :class:`InputError` otherwise.
+
+    Examples
+    --------
+    >>> check_tolerance(0.05)
+    0.05
+    >>> check_tolerance(-1)
+    Traceback (most recent call last):
+    ...
+    map2map.core.errors.InputError: tolerance: must be a length in metres > 0 and < 10, got -1
+    """
+    try:
+        t = float(tolerance)
+    except (TypeError, ValueError):
+        raise InputError(name, f"must be a number of metres, got {tolerance!r}") from None
+    if not (math.isfinite(t) and 0.0 < t < 10.0):
+        raise InputError(name, f"must be a length in metres > 0 and < 10, got {tolerance!r}")
+    return t
+
+
+def _plan_segments(plan: OccupancyMap, min_gap_m: float, min_length_m: float) -> np.ndarray:
+    """Straight segments (K, 4) of the plan's walls in continuous pixels (centre +0.5)."""
+    walls = plan.data == OCCUPIED
+    if not walls.any():
+        return np.zeros((0, 4))
+    cell = max(2.0, min_gap_m / plan.resolution)
+    segs = straight_segments(walls, cell) + 0.5
+    length = np.hypot(segs[:, 2] - segs[:, 0], segs[:, 3] - segs[:, 1])
+    segs = segs[length >= max(2.0, min_length_m / plan.resolution)]
+    # a stable, readable order: top to bottom, then left to right (ids follow it)
+    key = np.round(np.minimum(segs[:, 1], segs[:, 3])) * 1e6 + np.minimum(segs[:, 0], segs[:, 2])
+    return segs[np.argsort(key, kind="stable")]
+
+
+def _to_segments(
+    points: np.ndarray, segs: np.ndarray, chunk: int = 4096
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Nearest segment of every point, its distance and position along it (pixels)."""
+    n = len(points)
+    best = np.full(n, -1, np.int64)
+    dist = np.full(n, np.inf)
+    along = np.zeros(n)
+    if n == 0 or len(segs) == 0:
+        return best, dist, along
+    a = segs[:, :2]
+    d = segs[:, 2:] - a
+    ll = np.maximum((d**2).sum(1), 1e-12)
+    for i in range(0, n, chunk):
+        p = points[i : i + chunk, None, :]
+        t = np.clip(((p - a) * d).sum(2) / ll, 0.0, 1.0)
+        q = a + t[..., None] * d
+        r = np.hypot(*(p - q).transpose(2, 0, 1))
+        k = np.argmin(r, axis=1)
+        rows = np.arange(len(k))
+        best[i : i + chunk] = k
+        dist[i : i + chunk] = r[rows, k]
+        along[i : i + chunk] = t[rows, k] * np.sqrt(ll[k])
+    return best, dist, along
+
+
+def inspect_walls(
+    evaluation,
+    plan: OccupancyMap,
+    *,
+    tolerance: float = 0.05,
+    min_points: int = 5,
+    min_coverage: float = 0.3,
+    min_gap_m: float = 0.4,
+    min_length_m: float = 0.2,
+    nearby_m: float = 0.6,
+) -> WallInspection:
+    """Wall segments of ``plan`` with their deviation and pass / fail / not observed status.
+
+    Parameters
+    ----------
+    evaluation : map2map.evaluate.pipeline.Evaluation
+        The evaluation of the SLAM map against ``plan`` (its chosen chain is used).
+    plan : OccupancyMap
+        The plan it was evaluated against (its resolution and origin give metres).
+    tolerance : float
+        Largest acceptable deviation, metres.
+    min_points : int
+        Fewest matched SLAM wall points for a segment to count as observed.
+    min_coverage : float
+        Smallest share of a segment's length (2-px bins) with evidence to count as observed.
+    min_gap_m : float
+        Wall openings (doors) at least this wide split segments; shorter gaps are bridged.
+    min_length_m : float
+        Shorter segments (furniture corners, wall stubs) are left out.
+    nearby_m : float
+        Radius around an unobserved segment in which unmatched SLAM points are counted.
+
+    Returns
+    -------
+    WallInspection
+        The segments (ids from top to bottom, left to right), counts, warnings.
+
+    Raises
+    ------
+    InputError
+        A bad tolerance.
+    """
+    tol = check_tolerance(tolerance)
+    res = float(plan.resolution)
+    ch = evaluation.errors[evaluation.chosen]
+    segs = _plan_segments(plan, min_gap_m, min_length_m)
+    half = 0.5 * float(evaluation.registration.fields.wall_thickness) + 1.5
+    valid = ch.valid
+    corr = ch.X_corr[valid]
+    err_px = ch.distances[valid]
+    disp = ch.X_rigid[valid] - corr
+    k, dist, along = _to_segments(corr, segs)
+    k[dist > half] = -1
+    unm = np.zeros(len(ch.distances), bool) if ch.unmatched is None else ch.unmatched
+    ku, du, _ = _to_segments(ch.X_rigid[unm], segs)
+    ku[du > nearby_m / res] = -1
+
+    out: list[WallSegment] = []
+    for i, s in enumerate(segs):
+        sel = k == i
+        e = err_px[sel] * res * 100.0
+        length_px = float(np.hypot(s[2] - s[0], s[3] - s[1]))
+        bins = max(1, int(math.ceil(length_px / 2.0)))
+        hit = np.unique(np.clip((along[sel] / 2.0).astype(np.int64), 0, bins - 1))
+        coverage = len(hit) / bins
+        # world endpoints: continuous pixel x -> column index x - 0.5 (centres are integers)
+        wx, wy = plan.pixel_to_world(s[[1, 3]] - 0.5, s[[0, 2]] - 0.5)
+        u = np.array([wx[1] - wx[0], wy[1] - wy[0]])
+        u = u / max(np.hypot(*u), 1e-12)
+        normal = np.array([-u[1], u[0]])  # world normal; + toward +y (E-W) or +x (N-S)
+        if abs(normal[1]) >= abs(normal[0]):
+            normal = normal if normal[1] >= 0 else -normal
+        else:
+            normal = normal if normal[0] >= 0 else -normal
+        n_unm = int((ku == i).sum())
+        observed = e.size >= min_points and coverage >= min_coverage
+        if observed:
+            # displacement in world axes: columns to the right are +x, rows down are -y
+            dw = disp[sel] @ _pixel_to_world_linear(plan)
+            offset = float(np.median(dw @ normal)) * res * 100.0
+            dev = float(np.percentile(e, 95))
+            status = "pass" if dev <= tol * 100.0 + 1e-9 else "fail"
+            stats = (dev, float(e.mean()), float(e.max()), offset)
+            note = ""
+            if coverage < 0.6:
+                note = f"only {coverage:.0%} of its length seen"
+        else:
+            status = "not observed"
+            stats = (math.nan,) * 4
+            why = (
+                "no SLAM wall evidence"
+                if e.size == 0
+                else f"too little SLAM evidence ({e.size} points, {coverage:.0%} of its length)"
+            )
+            if n_unm >= min_points:
+                why += (
+                    f"; {n_unm} SLAM points within {nearby_m:g} m match no plan wall: "
+                    "built more than 0.3 m off, or clutter in front of it? check on site"
+                )
+            note = why
+        out.append(
+            WallSegment(
+                id=i + 1,
+                x0_m=float(wx[0]),
+                y0_m=float(wy[0]),
+                x1_m=float(wx[1]),
+                y1_m=float(wy[1]),
+                length_m=length_px * res,
+                status=status,
+                deviation_cm=stats[0],
+                mean_cm=stats[1],
+                max_cm=stats[2],
+                offset_cm=stats[3],
+                points=int(e.size),
+                coverage=coverage,
+                unmatched_nearby=n_unm,
+                note=note,
+                px=s.copy(),
+            )
+        )
+    insp = WallInspection(out, tol, res, min_points, min_coverage)
+    insp.warnings = _judgement_warnings(insp)
+    return insp
+
+
+def _pixel_to_world_linear(plan: OccupancyMap) -> np.ndarray:
+    """2x2 matrix taking a pixel displacement (dx columns, dy rows) to world axes (in px)."""
+    yaw = float(plan.origin[2])
+    c, s = math.cos(yaw), math.sin(yaw)
+    # (dx, dy_rows) -> local (dx, -dy) -> rotated by yaw; row vector convention: v @ M
+    return np.array([[c, s], [s, -c]])
+
+
+def _judgement_warnings(insp: WallInspection) -> list[str]:
+    """Plain-words warnings about the wall verdicts themselves."""
+    w = []
+    c = insp.counts
+    n = len(insp.segments)
+    if n == 0:
+        w.append("No wall segment was found in the plan: there is nothing to pass or fail.")
+        return w
+    if c["not observed"] > 0.5 * n:
+        w.append(
+            f"{c['not observed']} of {n} plan wall segments were not observed by the SLAM map: "
+            "the pass and fail counts cover only part of the building."
+        )
+    if insp.tolerance_m < insp.resolution:
+        w.append(
+            f"The tolerance ({insp.tolerance_m * 100:g} cm) is finer than one plan pixel "
+            f"({insp.resolution * 100:g} cm): the plan itself cannot place a wall that "
+            "precisely, so walls near the tolerance may pass or fail by chance."
+        )
+    seen = n - c["not observed"]
+    if seen and c["fail"] > 0.5 * seen:
+        w.append(
+            f"{c['fail']} of the {seen} observed wall segments fail. Before concluding that "
+            "they were built off, consider the SLAM map's own error: its drift bends and "
+            "shifts walls too (see the heat map: a smooth trend across the building points "
+            "to the map, single walls off to the building), and a map can only judge a "
+            "tolerance a few times coarser than its accuracy."
+        )
+    near = [
+        s
+        for s in insp.segments
+        if s.status != "not observed"
+        and abs(s.deviation_cm - insp.tolerance_m * 100.0) < 0.5 * insp.resolution * 100.0
+    ]
+    if near:
+        w.append(
+            f"{len(near)} wall segment(s) deviate within half a plan pixel of the tolerance "
+            f"(ids {', '.join(str(s.id) for s in near[:10])}{', ...' if len(near) > 10 else ''}): "
+            "their verdict is not certain; check them on site."
+        )
+    return w
+
+
+def write_segments_csv(inspection: WallInspection, path: str | os.PathLike) -> Path:
+    """One row per wall segment (:data:`CSV_COLUMNS`), written atomically.
+
+    Parameters
+    ----------
+    inspection : WallInspection
+        The segments.
+    path : path-like
+        The CSV file.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> insp = WallInspection([], 0.05, 0.05, 5, 0.3)
+    >>> p = write_segments_csv(insp, pathlib.Path(tempfile.mkdtemp()) / "walls.csv")
+    >>> p.read_text().split(",")[:3]
+    ['id', 'x0_m', 'y0_m']
+    """
+    p = Path(path)
+    with atomic_path(p) as tmp, open(tmp, "w", newline="", encoding="utf-8") as fh:
+        w = csv.DictWriter(fh, fieldnames=CSV_COLUMNS)
+        w.writeheader()
+        for s in inspection.segments:
+            w.writerow(s.row())
+    return p
+
+
+def _cm(v: float | None) -> str:
+    return "n/a" if v is None or not math.isfinite(v) else f"{v:.1f} cm"
+
+
+def _num(v: float, nd: int = 1) -> str:
+    """A figure with ``nd`` decimals, ``-`` when not measured."""
+    return f"{v:.{nd}f}" if math.isfinite(v) else "-"
+
+
+def status_figure(plan: OccupancyMap, inspection: WallInspection):
+    """The plan with its wall segments coloured by status (ids of failed walls written).
+
+    Parameters
+    ----------
+    plan : OccupancyMap
+        The plan.
+    inspection : WallInspection
+        Its segments.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (the caller closes it).
+    """
+    from matplotlib.lines import Line2D
+
+    from ..core.viz import add_scale_bar, new_figure
+
+    known = plan.data != UNKNOWN
+    rows = np.flatnonzero(known.any(1))
+    cols = np.flatnonzero(known.any(0))
+    if rows.size:
+        r0, r1 = max(0, rows[0] - 10), min(plan.height, rows[-1] + 11)
+        c0, c1 = max(0, cols[0] - 10), min(plan.width, cols[-1] + 11)
+    else:
+        r0, r1, c0, c1 = 0, plan.height, 0, plan.width
+    view = plan.data[r0:r1, c0:c1]
+    bg = np.ones((*view.shape, 3))
+    bg[view == UNKNOWN] = 0.93
+    bg[view == OCCUPIED] = 0.75
+    fig, ax = new_figure(OccupancyMap(view.copy(), plan.resolution), panel_inches=7.0)
+    ax.imshow(bg, interpolation="antialiased", extent=(c0, c1, r1, r0))
+    style = {"pass": ("-", 2.2), "fail": ("-", 3.4), "not observed": ((0, (2, 1.5)), 1.6)}
+    for s in inspection.segments:
+        ls, lw = style[s.status]
+        x0, y0, x1, y1 = s.px
+        ax.plot([x0, x1], [y0, y1], color=STATUS_COLOURS[s.status], ls=ls, lw=lw,
+                solid_capstyle="butt")  # fmt: skip
+    for s in inspection.worst(10):
+        if s.status == "fail":
+            x0, y0, x1, y1 = s.px
+            ax.annotate(
+                str(s.id), (0.5 * (x0 + x1), 0.5 * (y0 + y1)), fontsize=8, ha="center",
+                va="center", color="white", fontweight="bold",
+                bbox={"boxstyle": "round,pad=0.15", "fc": STATUS_COLOURS["fail"], "lw": 0},
+            )  # fmt: skip
+    counts = inspection.counts
+    handles = [
+        Line2D([], [], color=STATUS_COLOURS[k], ls=style[k][0], lw=style[k][1],
+               label=f"{k} ({counts[k]})")  # fmt: skip
+        for k in STATUSES
+    ]
+    ax.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.9)
+    ax.set_xlim(c0, c1)
+    ax.set_ylim(r1, r0)
+    ax.set_xlabel("plan x (px)")
+    ax.set_ylabel("plan y (px)")
+    ax.set_title(
+        f"Plan wall segments against a tolerance of {inspection.tolerance_m * 100:g} cm "
+        "(failed walls numbered)",
+        fontsize=10,
+    )
+    add_scale_bar(ax, plan.resolution, c1 - c0)
+    return fig
+
+
+def _png_of(draw, *args, **kwargs) -> bytes:
+    """PNG bytes of one of the figure functions that write to a path."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory(prefix="map2map-report-") as d:
+        path = Path(d) / "figure.png"
+        draw(*args, path, **kwargs)
+        return path.read_bytes()
+
+
+def inspection_report(
+    evaluation,
+    plan: OccupancyMap,
+    *,
+    tolerance: float = 0.05,
+    inspection: WallInspection | None = None,
+    warnings: list[str] | None = None,
+    overlay_png: bytes | None = None,
+    error_map_png: bytes | None = None,
+    csv_name: str | None = None,
+    max_table_rows: int = 300,
+) -> Report:
+    """The as-built inspection report of an evaluation (see the module docstring).
+
+    Parameters
+    ----------
+    evaluation : map2map.evaluate.pipeline.Evaluation
+        The SLAM map evaluated against ``plan``.
+    plan : OccupancyMap
+        The plan (its resolution gives centimetres, its origin plan metres).
+    tolerance : float
+        Largest acceptable deviation of a wall, metres.
+    inspection : WallInspection, optional
+        The wall segments, when already computed with :func:`inspect_walls`.
+    warnings : list of str, optional
+        Warnings of the alignment and evaluation (``EvaluateRun.warnings``; the
+        evaluation's own by default), printed at the top with the wall verdicts' own.
+    overlay_png, error_map_png : bytes, optional
+        The figures ``map2map evaluate`` already wrote (drawn again when absent).
+    csv_name : str, optional
+        Name of the CSV beside the report, mentioned in the text.
+    max_table_rows : int
+        Rows of the table of every segment (the CSV has them all).
+
+    Returns
+    -------
+    Report
+        Ready to :meth:`~map2map.reports.document.Report.write`.
+    """
+    import matplotlib.pyplot as plt
+
+    from ..evaluate.figures import error_map_figure, overlay_figure
+
+    insp = inspection or inspect_walls(evaluation, plan, tolerance=tolerance)
+    rep = evaluation.report
+    chain = evaluation.chosen
+    e = rep["errors"][chain]
+    res = float(plan.resolution)
+    src, tgt = rep.get("source") or "SLAM map", rep.get("target") or "plan"
+    r = Report("As-built inspection", f"{src} (as built) against {tgt} (as planned)")
+    doubts = list(rep["warnings"] if warnings is None else warnings)
+    if doubts:
+        r.warn(
+            "The alignment of the SLAM map to the plan is doubtful (the points below): every "
+            "error and wall verdict in this report depends on it. Check the aligned overlay "
+            "before acting on any of them."
+        )
+    for w in doubts:
+        r.warn(f"Alignment: {w}")
+    for w in insp.warnings:
+        r.warn(w)
+    counts = insp.counts
+
+    def cm(key: str) -> float:
+        v = e.get(f"{key}_px")
+        return float(v) * res * 100.0 if v is not None else math.nan
+
+    s = r.section("Summary")
+    s.numbers(
+        {
+            "mean wall error": _cm(cm("mean")),
+            "p95 wall error": _cm(cm("p95")),
+            "max wall error": _cm(cm("max")),
+            "walls pass": str(counts["pass"]),
+            "walls fail": str(counts["fail"]),
+            "walls not observed": str(counts["not observed"]),
+        }
+    )
+    s.text(
+        f"{len(insp.segments)} straight wall segments were cut from the plan and judged "
+        f"against a tolerance of {insp.tolerance_m * 100:g} cm: a segment passes when 95 % "
+        "of the as-built wall evidence matched to it lies within the tolerance of the "
+        "planned wall (its deviation, the 95th percentile of the local errors), fails "
+        "otherwise, and is not observed when the SLAM map saw too little of it (fewer than "
+        f"{insp.min_points} wall points or under {insp.min_coverage:.0%} of its length): "
+        "a wall not observed is never counted as passed."
+    )
+    s.text(
+        f"Errors are those of the {chain} chain ({rep['chosen_reason']}; appendix paper, "
+        f"Fig. 1), over the {e['points']} SLAM wall points matched to a plan wall; "
+        f"{e['unmatched_points']} points ({100 * e['unmatched_share']:.1f} %) match no "
+        "plan wall (clutter, furniture or structure not in the plan, or walls built more "
+        f"than 0.3 m off) and {e['corner_points_excluded']} corner points are left out. "
+        f"Plan resolution {res * 100:g} cm per pixel."
+    )
+    if csv_name:
+        s.note(f"Every segment, one row each, is in {csv_name} beside this report.")
+
+    s = r.section("Aligned overlay")
+    if overlay_png is None:
+        overlay_png = _png_of(
+            overlay_figure, plan, evaluation.warped[chain],
+            title=f"SLAM map aligned to the plan ({chain} chain)",
+        )  # fmt: skip
+    s.figure(
+        overlay_png,
+        "The as-built SLAM map aligned to the plan: plan walls in blue, SLAM walls in "
+        "orange, black where they agree.",
+        alt="overlay of the aligned SLAM map on the plan",
+    )
+
+    s = r.section("Local error heat map")
+    if error_map_png is None:
+        ch = evaluation.errors[chain]
+        error_map_png = _png_of(
+            error_map_figure, plan, ch.X_rigid, ch.distances, resolution=res,
+            excluded=ch.corner, unmatched=ch.unmatched,
+            title=f"Local error, {chain} chain (Algorithm 1)",
+        )  # fmt: skip
+    s.figure(
+        error_map_png,
+        "Local error of every SLAM wall point in centimetres (colour bar): its distance "
+        "across the plan wall it matches. Magenta crosses match no plan wall; grey dots "
+        "are corners, left out.",
+        alt="heat map of the local wall error in centimetres",
+    )
+
+    s = r.section("Walls by status")
+    fig = status_figure(plan, insp)
+    s.figure(
+        fig,
+        "Plan wall segments: green pass, red fail (numbered with their id), grey dashed "
+        "not observed.",
+        alt="plan with wall segments coloured by pass, fail, not observed",
+    )
+    plt.close(fig)
+    total = max(1, len(insp.segments))
+    length = {k: sum(w.length_m for w in insp.segments if w.status == k) for k in STATUSES}
+    s.table(
+        ["status", "segments", "share", "length (m)"],
+        [[k, counts[k], f"{counts[k] / total:.0%}", _num(length[k], 2)] for k in STATUSES],
+        caption="Segments per status",
+    )
+
+    s = r.section("Walls that deviate most")
+    worst = insp.worst(10)
+    if worst:
+        s.table(
+            ["id", "centre x (m)", "centre y (m)", "length (m)", "deviation (cm)",
+             "mean (cm)", "max (cm)", "offset (cm)", "status"],  # fmt: skip
+            [
+                [w.id, _num(w.centre_m[0], 2), _num(w.centre_m[1], 2), _num(w.length_m, 2),
+                 _num(w.deviation_cm), _num(w.mean_cm), _num(w.max_cm), _num(w.offset_cm),
+                 w.status]  # fmt: skip
+                for w in worst
+            ],
+            caption=f"The {len(worst)} observed wall segments with the largest deviation",
+        )
+        s.note(
+            "Location in plan metres (the plan's ROS frame). Offset: the median "
+            "displacement of the built wall across the planned one, + toward +y for an "
+            "east-west wall, toward +x for a north-south wall."
+        )
+    else:
+        s.note("No wall segment was observed: nothing to rank.")
+
+    s = r.section("Every wall segment")
+    rows = [
+        [w.id, _num(w.x0_m, 3), _num(w.y0_m, 3), _num(w.x1_m, 3), _num(w.y1_m, 3),
+         _num(w.length_m, 2), w.status, _num(w.deviation_cm), w.points,
+         f"{w.coverage:.0%}", w.note]  # fmt: skip
+        for w in insp.segments
+    ]
+    s.table(
+        ["id", "x0 (m)", "y0 (m)", "x1 (m)", "y1 (m)", "length (m)", "status",
+         "deviation (cm)", "points", "seen", "note"],  # fmt: skip
+        rows[:max_table_rows],
+    )
+    if len(rows) > max_table_rows:
+        s.note(f"{len(rows) - max_table_rows} more segments in the CSV.")
+    return r
+
+
+def _report_paths(path: str | os.PathLike) -> tuple[Path, Path]:
+    p = Path(path)
+    if p.suffix.lower() in {".html", ".htm", ".md"}:
+        p = p.with_suffix("")
+    return p.with_name(p.name + ".html"), p.with_name(p.name + ".csv")
+
+
+def check_report_path(path: str | os.PathLike, name: str = "report") -> Path:
+    """Check, before any work, that a report can be written at ``path`` (nothing created).
+
+    Parameters
+    ----------
+    path : path-like
+        ``REPORT.html`` (or ``REPORT``); ``.md`` and ``.csv`` go beside it.
+    name : str
+        The option named in the error.
+
+    Returns
+    -------
+    pathlib.Path
+        The HTML path.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> check_report_path(pathlib.Path(tempfile.mkdtemp()) / "new" / "insp.html").name
+    'insp.html'
+    """
+    html_path, _ = _report_paths(path)
+    suffix = Path(path).suffix.lower()
+    if suffix not in {"", ".html", ".htm"}:
+        raise InputError(name, f"{path}: the report is an HTML file (.html), not {suffix}")
+    if html_path.is_dir():
+        raise InputError(name, f"{html_path} is a folder")
+    anc = html_path.parent.resolve()
+    while not anc.exists():
+        anc = anc.parent
+    if not anc.is_dir() or not os.access(anc, os.W_OK | os.X_OK):
+        raise InputError(name, f"{path}: {anc} is not a writable folder")
+    try:  # os.access says yes to root everywhere: try it (the probe is removed at once)
+        import tempfile
+
+        with tempfile.TemporaryFile(dir=anc):
+            pass
+    except OSError as exc:
+        raise InputError(name, f"{path}: cannot write in {anc} ({exc.strerror})") from None
+    return html_path
+
+
+@dataclass
+class InspectionFiles:
+    """What :func:`write_inspection` wrote, and the wall verdicts behind it."""
+
+    html: Path
+    md: Path
+    csv: Path
+    inspection: WallInspection
+
+    def summary(self) -> str:
+        """``"12 pass, 2 fail, 3 not observed at 5 cm"``."""
+        c = self.inspection.counts
+        return (
+            f"{c['pass']} pass, {c['fail']} fail, {c['not observed']} not observed "
+            f"at {self.inspection.tolerance_m * 100:g} cm"
+        )
+
+
+def write_inspection(
+    evaluation,
+    plan: OccupancyMap,
+    path: str | os.PathLike,
+    *,
+    tolerance: float = 0.05,
+    warnings: list[str] | None = None,
+    overlay_png: bytes | None = None,
+    error_map_png: bytes | None = None,
+) -> InspectionFiles:
+    """Write ``PATH.html``, ``PATH.md`` (+ ``PATH_files/``) and ``PATH.csv`` of an evaluation.
+
+    Parameters
+    ----------
+    evaluation : map2map.evaluate.pipeline.Evaluation
+        The SLAM map evaluated against ``plan``.
+    plan : OccupancyMap
+        The plan.
+    path : path-like
+        The report (``inspection.html``).
+    tolerance : float
+        Largest acceptable deviation of a wall, metres.
+    warnings : list of str, optional
+        Warnings of the alignment and evaluation (the evaluation's own by default).
+    overlay_png, error_map_png : bytes, optional
+        Figures already drawn by ``map2map evaluate``.
+
+    Returns
+    -------
+    InspectionFiles
+        The three paths and the wall verdicts.
+    """
+    html_path, csv_path = _report_paths(path)
+    insp = inspect_walls(evaluation, plan, tolerance=tolerance)
+    report = inspection_report(
+        evaluation, plan, tolerance=tolerance, inspection=insp, warnings=warnings,
+        overlay_png=overlay_png, error_map_png=error_map_png, csv_name=csv_path.name,
+    )  # fmt: skip
+    try:
+        write_segments_csv(insp, csv_path)
+        h, m = report.write(html_path)
+    except OSError as exc:
+        raise InputError(html_path, f"cannot write the report ({exc.strerror})") from None
+    return InspectionFiles(h, m, csv_path, insp)
+
+
+def write_run_inspections(
+    run, path: str | os.PathLike, *, tolerance: float = 0.05
+) -> list[InspectionFiles]:
+    """The inspection report of every pair of a ``map2map evaluate`` run.
+
+    One pair: ``PATH.html``, ``PATH.md`` and ``PATH.csv``, the run's warnings on top and
+    the figures it wrote embedded. A pairs file: one report per pair,
+    ``PATH_<pair>.html`` (and ``.md``, ``.csv``) with that pair's warnings.
+
+    Parameters
+    ----------
+    run : map2map.jobs.evaluate.EvaluateRun
+        What :func:`map2map.jobs.evaluate.evaluate` returned (errors in metres).
+    path : path-like
+        The report (``inspection.html``).
+    tolerance : float
+        Largest acceptable deviation of a wall, metres.
+
+    Returns
+    -------
+    list of InspectionFiles
+        Per pair, the paths written and the wall verdicts.
+
+    Raises
+    ------
+    InputError
+        A bad tolerance, or a run without what a report needs.
+    """
+    tol = check_tolerance(tolerance)
+    if len(run.plans) != len(run.evaluations) or not run.evaluations:
+        raise InputError("report", "the evaluation run carries no plan to report against")
+    html_path, _ = _report_paths(path)
+    stem = html_path.with_suffix("")
+
+    def png(key: str) -> bytes | None:
+        p = run.written.get(key)
+        return Path(p).read_bytes() if p is not None and Path(p).is_file() else None
+
+    if not run.rows:
+        ev, plan = run.evaluations[0], run.plans[0]
+        return [
+            write_inspection(
+                ev, plan, html_path, tolerance=tol, warnings=run.warnings,
+                overlay_png=png("overlay"), error_map_png=png("error_map"),
+            )  # fmt: skip
+        ]
+    out = []
+    for row, ev, plan in zip(run.rows, run.evaluations, run.plans, strict=True):
+        name = row["pair"]
+        out.append(
+            write_inspection(
+                ev, plan, stem.with_name(f"{stem.name}_{name}.html"), tolerance=tol,
+                overlay_png=png(f"{name}/overlay"), error_map_png=png(f"{name}/error_map"),
+            )  # fmt: skip
+        )
+    return out
