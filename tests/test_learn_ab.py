@@ -382,3 +382,58 @@ def test_pretrained_weights_load_and_synthesize():
     with pytest.warns(UserWarning, match="provisional"):
         res = synthesize(plan, "pretrained", samples=2, seed=1)
     assert [m.shape for m in res.maps] == [plan.shape] * 2
+
+
+# ------------------------------------------------------------------ decoder-only growth
+def test_decoder_growth_shapes_at_each_stage_and_fade_end_points():
+    """growth="decoder" (anime2clothing's): the generator always reads the last stage's
+    size, its output is the stage's; alpha 0 is the upsampled previous exit, alpha 1 the
+    new one; the discriminators are the full growth's."""
+    torch.manual_seed(0)
+    cfg = ABConfig(schedule=((8, 1), (16, 1), (32, 1)), g_channels=8, g_max_channels=16,
+                   d_channels=8, d_layers=1, d_scales=2, growth="decoder", dropout=0.0)
+    g, dd, dr = build_ab_networks(cfg)
+    g.eval()
+    x = torch.rand(2, 1, 32, 32) * 2 - 1
+    for r in (8, 16, 32):
+        g.out_size = r
+        for alpha in (None, torch.tensor(0.3)):
+            y = g(x, alpha)
+            assert y.shape == (2, 1, r, r)
+            xr = F.adaptive_avg_pool2d(x, r)
+            assert [o[-1].shape[-1] for o in dd(torch.cat([xr, y], 1), alpha)] == [4, 2]
+    with pytest.raises(ValueError):
+        g(torch.zeros(1, 1, 16, 16))                        # not the full-size input
+    with torch.no_grad():
+        g.out_size = 8
+        coarse = g(x)
+        g.out_size = 16
+        up = torch.tanh(F.interpolate(torch.atanh(coarse.clamp(-0.999999, 0.999999)),
+                                      scale_factor=2, mode="bilinear", align_corners=False))
+        assert torch.allclose(g(x, torch.tensor(0.0)), up, atol=1e-4)
+        assert torch.equal(g(x, torch.tensor(1.0)), g(x))
+    with pytest.raises(ValueError):
+        ABConfig(growth="encoder")
+
+
+def test_decoder_growth_trains_feeds_full_size_inputs_and_loads(monkeypatch, tmp_path):
+    inputs = []
+    real = TA.gan_step
+
+    def step(*args, **kw):
+        g_input = args[12] if len(args) > 12 else kw.get("g_input")
+        inputs.append((args[5].shape[-1], args[6].shape[-1], g_input.shape[-1]))
+        return real(*args, **kw)
+
+    monkeypatch.setattr(TA, "gan_step", step)
+    res = TA.train_ab(_pairs(), tmp_path / "run", ABConfig(**TINY, growth="decoder"),
+                      progress=False, figures=False)
+    # D_d's input and the target at the stage's size, the generator's input always 16 px
+    assert inputs == [(8, 8, 16)] * 3 + [(16, 16, 16)] * 6
+    assert [r["resolution"] for r in res.history] == [8, 16, 16]
+    from map2map.learn.synthesize import load_ab_model, synthesize_squares
+
+    net = load_ab_model(tmp_path / "run")
+    assert net.generator.growth == "decoder" and net.resolution == 16
+    out = synthesize_squares(net, _pairs().a[:3])
+    assert out.shape == (3, 16, 16) and set(np.unique(out)) <= {OCCUPIED, UNKNOWN, FREE}

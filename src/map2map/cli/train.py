@@ -77,6 +77,10 @@ def register_ab(tsub) -> None:
                    "--fade-share)")
     b.add_argument("--dropout", type=float, default=0.5,
                    help="decoder dropout, the hypotheses' noise source (0.5)")
+    b.add_argument("--growth", choices=("full", "decoder"), default="full",
+                   help="full: generator and discriminators at each stage's resolution "
+                   "(the thesis's reading, default); decoder: the generator always reads "
+                   "the last stage's size and its decoder exits early (anime2clothing's)")
     b.add_argument("--device", default="auto", help="auto (CUDA when present), cpu, cuda, ...")
     b.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     b.add_argument("--lambda-l1", type=float, default=100.0, help="weight of eq. 3.7 (100)")
@@ -114,7 +118,7 @@ def run_ab(args: argparse.Namespace) -> int:
             seed=args.seed, lambda_l1=args.lambda_l1, g_channels=args.g_channels,
             g_max_channels=args.g_max_channels, d_channels=args.d_channels,
             d_layers=args.d_layers, false_targets=not args.no_false_targets,
-            amp=not args.no_amp, compile=args.compile)
+            amp=not args.no_amp, compile=args.compile, growth=args.growth)
     except ValueError as exc:
         raise InputError("--schedule", str(exc)) from None
     res = train_ab(args.data, args.out, cfg, resume=args.resume,

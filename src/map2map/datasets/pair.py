@@ -64,6 +64,9 @@ __all__ = [
     "write_pair",
     "read_pair_meta",
     "wall_error",
+    "crop_box",
+    "preprocess_pair",
+    "rerun_seed",
     "MIN_PATH_M",
 ]
 
@@ -213,6 +216,12 @@ def wall_error(a: OccupancyMap, b: OccupancyMap) -> tuple[float | None, float | 
     return round(float(d.mean()), 6), round(float(np.percentile(d, 95)), 6)
 
 
+def crop_box(a: OccupancyMap, b: OccupancyMap) -> tuple[int, int, int, int] | None:
+    """The window :func:`preprocess_pair` cuts (before its margin): the union of both
+    maps' content boxes ``(r0, r1, c0, c1)``, ``None`` when both are empty."""
+    return _union_box(a, b)
+
+
 def _union_box(a: OccupancyMap, b: OccupancyMap) -> tuple[int, int, int, int] | None:
     boxes = [m.content_bbox() for m in (a, b)]
     boxes = [x for x in boxes if x is not None]
@@ -232,13 +241,18 @@ def _window(m: OccupancyMap, box, k: int) -> OccupancyMap:
                    left=max(0, k - c0), right=max(0, c1 + k - m.width))  # fmt: skip
 
 
-def preprocess_pair(a: OccupancyMap, b: OccupancyMap, size: int, thicken: int):
+def preprocess_pair(a: OccupancyMap, b: OccupancyMap, size: int, thicken: int, box=None):
     """Thesis 4.1 preprocessing of an aligned pair: one crop window (the union of both
     maps' content plus :data:`CROP_MARGIN_PX`), square, resize to ``size``, harmonise;
-    the plan's walls thickened by ``thicken`` pixels. Returns ``(a_n, b_n)`` uint8."""
+    the plan's walls thickened by ``thicken`` pixels. Returns ``(a_n, b_n)`` uint8.
+
+    ``box`` (``(r0, r1, c0, c1)``, default :func:`crop_box` of ``a`` and ``b``) forces the
+    window: a second SLAM map of a dataset's plan cut with the pair's own window lands
+    on the same pixels as the pair's ``B``."""
     from ..maps.preprocess import preprocess
 
-    box = _union_box(a, b)
+    if box is None:
+        box = _union_box(a, b)
     if box is not None:
         a, b = _window(a, box, CROP_MARGIN_PX), _window(b, box, CROP_MARGIN_PX)
     a_n = preprocess(a, size=size, thicken=thicken, crop=False)
@@ -255,13 +269,31 @@ def _reachable(plan: OccupancyMap, start) -> np.ndarray:
     return world.reachable_cells(start, radius, REACH_MARGIN)
 
 
-def _simulate(spec: PairSpec, plan: OccupancyMap, ss: np.random.SeedSequence):
+def rerun_seed(sim_seed: int, run: int) -> int:
+    """Simulation seed of run ``run`` (>= 2) of a simulated pair whose run 1 had
+    ``sim_seed`` (its ``meta.json``): independent of run 1, a pure function of both.
+
+    Examples
+    --------
+    >>> rerun_seed(4088532484, 2) == rerun_seed(4088532484, 2) != rerun_seed(4088532484, 3)
+    True
+    """
+    return int(np.random.SeedSequence([int(sim_seed), int(run)]).generate_state(1)[0])
+
+
+def _simulate(spec: PairSpec, plan: OccupancyMap, ss: np.random.SeedSequence,
+              sim_seed: int | None = None, start=None, keep: list | None = None):
+    """The simulated pair's SLAM map, field (None) and metadata; ``sim_seed`` and
+    ``start`` override the pair's (a re-run); ``keep`` receives the SimResult."""
     from ..sim.runner import simulate
 
     p = spec.params
-    sim_seed = int(ss.generate_state(1)[0])
+    if sim_seed is None:
+        sim_seed = int(ss.generate_state(1)[0])
     res = simulate(plan, seed=sim_seed, duration=p.duration, fov=p.fov, mapper=p.mapper,
-                   progress=False, source=f"plan {spec.index}")  # fmt: skip
+                   start=start, progress=False, source=f"plan {spec.index}")  # fmt: skip
+    if keep is not None:
+        keep.append(res)
     rep = res.report()
     if res.path_length < MIN_PATH_M:
         raise InputError(None, f"the robot could not move (drove {res.path_length:.2f} m)")

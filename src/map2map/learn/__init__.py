@@ -19,7 +19,11 @@ PyTorch is imported only inside this package (``pip install 'map2map[learn]'``);
   Table 5.2's schedule, the fade-in alpha, :class:`ABConfig`;
 * :mod:`~map2map.learn.train_ab` -- :func:`train_ab` (``map2map train ab``, Fig. 5.1);
 * :mod:`~map2map.learn.synthesize` -- K SLAM-map hypotheses of a plan (``map2map
-  synthesize``) and their diversity.
+  synthesize``) and their diversity;
+* :mod:`~map2map.learn.realism` -- issue #15's realism statistics of generated SLAM maps
+  against two simulated runs of the same plans (numpy only);
+* :mod:`~map2map.learn.fig514` -- Fig. 5.14: simulated | parametric (same trajectory) |
+  Model_AB, with appendix-metric error and wall recall.
 
 Wall recall, boundary F1, Chamfer distance and per-class IoU (the guards of
 ``benchmarks/table53.py``) live in :mod:`map2map.evaluate.wallmetrics`, a layer above.

@@ -109,6 +109,8 @@ class ResidentPairs:
         Batches in channels-last memory format (CUDA).
     input_reduce : {"area", "classes"}
         See :func:`reduce_input`.
+    target_size : int, optional
+        Resolution of the targets when it differs from ``size`` (the inputs').
 
     Examples
     --------
@@ -122,14 +124,15 @@ class ResidentPairs:
 
     def __init__(self, inputs: np.ndarray, targets: np.ndarray, size: int,
                  device: torch.device, channels_last: bool = False,
-                 input_reduce: str = "area"):
+                 input_reduce: str = "area", target_size: int | None = None):
         if len(inputs) != len(targets):
             raise ValueError("inputs and targets differ in length")
         if inputs.shape[-1] < size:
             raise InputError(None, f"dataset maps are {inputs.shape[-1]} px, smaller than "
                                    f"the training size {size}")
         self.x = torch.from_numpy(reduce_input(inputs, size, input_reduce))[:, None].to(device)
-        self.y = torch.from_numpy(downsample_target(targets, size))[:, None].to(device)
+        ts = size if target_size is None else target_size
+        self.y = torch.from_numpy(downsample_target(targets, ts))[:, None].to(device)
         self.channels_last = channels_last
 
     def __len__(self) -> int:

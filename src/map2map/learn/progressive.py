@@ -61,12 +61,15 @@ from torch.nn.utils.parametrizations import spectral_norm
 from .config import TrainConfig, batch_size
 from .networks import UNetGenerator
 
-__all__ = ["TABLE_5_2", "ABConfig", "parse_schedule", "stage_of", "fade_alpha",
+__all__ = ["TABLE_5_2", "GROWTHS", "ABConfig", "parse_schedule", "stage_of", "fade_alpha",
            "fade_steps", "StochasticUNet", "ProgPatchDiscriminator",
            "ProgMultiScaleDiscriminator", "build_ab_networks"]
 
 #: Table 5.2: (current resolution, epochs at it).
 TABLE_5_2 = ((32, 15), (64, 30), (128, 60), (256, 100))
+#: Generator growths: the thesis's reading (everything at the stage's resolution) and
+#: anime2clothing's (full-size input, the decoder exits early).
+GROWTHS = ("full", "decoder")
 
 
 def parse_schedule(text: str) -> tuple[tuple[int, int], ...]:
@@ -123,6 +126,12 @@ class ABConfig(TrainConfig):
         Dropout on the three coarsest decoder levels (pix2pix's noise source), active in
         training and, for :func:`~map2map.learn.synthesize.synthesize`, at test time: one
         plan, several SLAM-map hypotheses.
+    growth : {"full", "decoder"}
+        ``"full"`` (default, the thesis's reading): at stage ``r`` the generator reads
+        and writes ``r x r`` maps. ``"decoder"`` (anime2clothing's): the generator always
+        reads the last stage's ``size`` input and its decoder exits at ``r``; the
+        discriminators grow alike in both (they see the ``r`` output either way), so
+        the two differ only in the generator's growth.
     """
 
     schedule: tuple = TABLE_5_2
@@ -133,8 +142,11 @@ class ABConfig(TrainConfig):
     fade_batches: int | None = None
     dropout: float = 0.5
     g_max_channels: int = 256
+    growth: str = "full"
 
     def __post_init__(self):
+        if self.growth not in GROWTHS:
+            raise ValueError(f"growth must be one of {', '.join(GROWTHS)}, got {self.growth!r}")
         self.schedule = _check_schedule(self.schedule)
         if not self.size:
             self.size = self.schedule[-1][0]
@@ -204,14 +216,57 @@ class StochasticUNet(UNetGenerator):
     False
     """
 
-    def __init__(self, *args, dropout: float = 0.5, **kwargs):
+    def __init__(self, *args, dropout: float = 0.5, growth: str = "full", **kwargs):
         super().__init__(*args, **kwargs)
+        if growth not in GROWTHS:
+            raise ValueError(f"growth must be one of {', '.join(GROWTHS)}, got {growth!r}")
         self.dropout = float(dropout)
         self.stochastic = False
+        self.growth = growth
+        #: Output resolution of a ``"decoder"`` growth generator (its current stage).
+        self.out_size = self.size
         self.config["dropout"] = self.dropout
+        self.config["growth"] = growth
         levels = sorted(int(r) for r in self.up)[:3]
         for r in levels:
             self.up[str(r)].register_forward_hook(self._drop)
+
+    def forward(self, x: torch.Tensor, alpha: torch.Tensor | None = None) -> torch.Tensor:
+        if self.growth == "full":
+            return super().forward(x, alpha)
+        return self._forward_decoder(x, alpha, self.out_size)
+
+    def _forward_decoder(self, x: torch.Tensor, alpha: torch.Tensor | None, r_out: int
+                         ) -> torch.Tensor:
+        """anime2clothing's growth: the encoder always reads the ``size`` input, the
+        decoder stops at ``r_out`` (its ``to_map``); with ``alpha`` the ``r_out`` block
+        fades in against the upsampled ``r_out / 2`` output."""
+        r = x.shape[-1]
+        if r != self.size or x.shape[-2] != r:
+            raise ValueError(f"a decoder-growth generator reads {self.size} px inputs, got "
+                             f"{tuple(x.shape[-2:])}")
+        if str(r_out) not in self.to_map:
+            raise ValueError(f"output resolution {r_out} not in {list(self.to_map)}")
+        h = self.from_map[str(r)](x)
+        skips = []
+        while r > self.bottleneck:
+            skips.append(h)
+            h = self.down[str(r)](h)
+            r //= 2
+        h = self.middle(h)
+        fade = alpha is not None and r_out > self.min_size
+        old = None
+        while r < r_out:
+            if fade and r * 2 == r_out:
+                old = F.interpolate(self._head(h, r), scale_factor=2, mode="bilinear",
+                                    align_corners=False)
+            h = F.interpolate(h, scale_factor=2, mode="bilinear", align_corners=False)
+            r *= 2
+            h = self.up[str(r)](torch.cat([h, skips.pop()], 1))
+        out = self._head(h, r)
+        if old is not None:
+            out = alpha * out + (1 - alpha) * old
+        return torch.tanh(out)
 
     def _drop(self, module, inputs, output):
         if self.dropout <= 0:
@@ -325,7 +380,7 @@ def build_ab_networks(cfg: ABConfig) -> tuple[StochasticUNet, ProgMultiScaleDisc
                          f"for {cfg.d_layers} stride-2 layers")
     torch.manual_seed(cfg.seed)
     g = StochasticUNet(cfg.size, cfg.g_channels, cfg.g_max_channels, cfg.bottleneck,
-                       min_size=cfg.min_size, dropout=cfg.dropout)
+                       min_size=cfg.min_size, dropout=cfg.dropout, growth=cfg.growth)
     dd = ProgMultiScaleDiscriminator(2, cfg.d_channels, cfg.d_layers, cfg.d_scales, cfg.size,
                                      cfg.min_size)
     dr = ProgMultiScaleDiscriminator(1, cfg.d_channels, cfg.d_layers, cfg.d_scales, cfg.size,

@@ -55,7 +55,7 @@ from .networks import from_unit
 from .progressive import StochasticUNet
 
 __all__ = ["ABModel", "SynthesisResult", "load_ab_model", "pretrained_ab_path",
-           "synthesize", "snap", "pairwise_disagreement", "export_ab_model",
+           "synthesize", "synthesize_squares", "snap", "pairwise_disagreement", "export_ab_model",
            "save_synthesis_figure"]
 
 PRETRAINED = "model_ab.safetensors"
@@ -82,17 +82,29 @@ class ABModel:
     @torch.no_grad()
     def sample(self, inputs: np.ndarray, samples: int, seed: int = 0) -> np.ndarray:
         """(data_size, data_size) uint8 plan -> (samples, r, r) float32 grey SLAM maps."""
+        return self.sample_many(inputs[None], samples, seed)[0]
+
+    @torch.no_grad()
+    def sample_many(self, inputs: np.ndarray, samples: int = 1, seed: int = 0) -> np.ndarray:
+        """(N, data_size, data_size) uint8 plans -> (N, samples, r, r) float32 grey maps,
+        one batch (dropout masks drawn from ``seed``; ``samples == 1``: dropout off)."""
         how = self.header.get("train", {}).get("input_reduce", "area")
-        x = torch.from_numpy(reduce_input(inputs[None], self.resolution, how))[:, None]
-        x = (x.float() / 127.5 - 1.0).to(self.device).expand(samples, -1, -1, -1)
-        alpha = torch.tensor(self.alpha, device=self.device) if self.alpha < 1.0 else None
         g = self.generator
+        decoder = getattr(g, "growth", "full") == "decoder"
+        size = g.size if decoder else self.resolution
+        g.out_size = self.resolution
+        n = len(inputs)
+        x = torch.from_numpy(reduce_input(np.asarray(inputs, np.uint8), size, how))[:, None]
+        x = (x.float() / 127.5 - 1.0).to(self.device)
+        x = x[:, None].expand(-1, samples, -1, -1, -1).reshape(n * samples, 1, size, size)
+        alpha = torch.tensor(self.alpha, device=self.device) if self.alpha < 1.0 else None
         g.stochastic = samples > 1
         with torch.random.fork_rng(devices=[self.device] if self.device.type == "cuda" else []):
             torch.manual_seed(seed)
             y = g(x.contiguous(), alpha)
         g.stochastic = False
-        return from_unit(y[:, 0])
+        out = from_unit(y[:, 0])
+        return out.reshape(n, samples, *out.shape[-2:])
 
 
 def load_ab_model(model: str | os.PathLike | ABModel | None = "pretrained",
@@ -236,13 +248,42 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
         warns.append(f"the {samples} hypotheses differ in only {div:.2%} of the plan's pixels: "
                      "the dropout noise barely changes this model's output")
     if "PROVISIONAL" in str(net.header.get("note", "")):
-        warns.append("provisional weights (trained on generated pairs, not a simulated "
-                     "dataset): hypotheses show the method, not realistic SLAM error")
+        warns.append("provisional weights (reduced CPU training, see their note): the "
+                     "hypotheses show the method; they do not meet the realism target "
+                     "against simulated SLAM maps (docs/learn_ab.md)")
     for w in warns:
         warnings.warn(w, stacklevel=2)
     for m in maps:
         m.meta["synthesize"] = {"model": net.source, "seed": seed, "samples": samples}
     return SynthesisResult(maps, div, pw, warns, net.source)
+
+
+def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndarray, *,
+                       seed: int = 0, device: str = "cpu", batch: int = 16) -> np.ndarray:
+    """Model_AB's SLAM map of each preprocessed dataset plan (``A.png``: already square,
+    resized and thickened as the training inputs were), snapped to the three values and
+    brought back to the plans' size (nearest neighbour): (N, S, S) uint8, the thesis's
+    single output (dropout off). For evaluations on a dataset's own pixels
+    (:mod:`map2map.learn.realism`, :mod:`map2map.learn.fig514`).
+
+    Examples
+    --------
+    >>> net = ABModel(StochasticUNet(size=16, channels=8), resolution=16, alpha=1.0,
+    ...               data_size=32, header={}, source="untrained")
+    >>> synthesize_squares(net, np.full((3, 32, 32), 255, np.uint8)).shape
+    (3, 32, 32)
+    """
+    import cv2
+
+    net = load_ab_model(model, device)
+    plans = np.asarray(plans, np.uint8)
+    S = plans.shape[-1]
+    out = np.empty(plans.shape, np.uint8)
+    for i in range(0, len(plans), batch):
+        grey = net.sample_many(plans[i:i + batch], 1, seed)[:, 0]
+        for j, gmap in enumerate(grey):
+            out[i + j] = cv2.resize(snap(gmap), (S, S), interpolation=cv2.INTER_NEAREST)
+    return out
 
 
 def save_synthesis_figure(plan: OccupancyMap, result: SynthesisResult,

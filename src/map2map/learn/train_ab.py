@@ -115,14 +115,17 @@ def schedule_table(cfg: ABConfig, n_train: int) -> list[dict]:
 
 
 def gan_step(g_run, dd_run, dr_run, opt_g, opt_d, x: torch.Tensor, y: torch.Tensor,
-             alpha: torch.Tensor | None, cfg, shift: int, autocast, freeze=()) -> dict:
+             alpha: torch.Tensor | None, cfg, shift: int, autocast, freeze=(),
+             g_input: torch.Tensor | None = None) -> dict:
     """One step of eq. 3.2: the discriminators (max side, false targets rolled by
     ``shift``), then the generator (min side). ``alpha`` (None or a 0-d tensor) is passed
-    to every network. Returns the logged values as tensors."""
+    to every network. ``x`` is the input at the stage's resolution (what ``D_d`` sees);
+    the generator reads ``g_input`` when given (decoder growth: the full-size input),
+    else ``x``. Returns the logged values as tensors."""
     k = len(x)
     use_false = cfg.false_targets and k > 1
     with autocast:
-        fake = g_run(x, alpha)
+        fake = g_run(x if g_input is None else g_input, alpha)
         real_pair = torch.cat([x, y], 1)
         groups = [real_pair, torch.cat([x, fake.detach()], 1)]
         if use_false:
@@ -200,7 +203,7 @@ def model_header_ab(cfg: ABConfig, meta: dict, extra: dict) -> dict:
     return {"format": FORMAT_AB,
             "generator": dict(size=cfg.size, channels=cfg.g_channels,
                               max_channels=cfg.g_max_channels, bottleneck=cfg.bottleneck,
-                              min_size=cfg.min_size, dropout=cfg.dropout),
+                              min_size=cfg.min_size, dropout=cfg.dropout, growth=cfg.growth),
             "train": cfg.to_dict(), "dataset": meta, **extra}
 
 
@@ -314,6 +317,8 @@ def train_ab(data: str | os.PathLike | PackedPairs, out: str | os.PathLike,
     alpha_t = torch.zeros((), device=dev)  # updated in place: one tensor for the whole run
     n = len(train)
     resident: dict[int, tuple[ResidentPairs, ResidentPairs]] = {}
+    decoder = cfg.growth == "decoder"
+    full_inputs: dict[str, ResidentPairs] = {}
 
     def stage_data(r: int):
         if r not in resident:
@@ -323,7 +328,16 @@ def train_ab(data: str | os.PathLike | PackedPairs, out: str | os.PathLike,
                               input_reduce=cfg.input_reduce),
                 ResidentPairs(show.a[:cfg.samples], show.b[:cfg.samples], r, dev,
                               channels_last=amp, input_reduce=cfg.input_reduce))
+            g.out_size = r
+        if decoder and not full_inputs:  # the generator's input: always cfg.size
+            for name, part in (("train", train.a), ("show", show.a[:cfg.samples])):
+                full_inputs[name] = ResidentPairs(part, part[:, :1, :1], cfg.size, dev,
+                                                  channels_last=amp, input_reduce=cfg.input_reduce,
+                                                  target_size=1)
         return resident[r]
+
+    def g_input(name: str, idx: torch.Tensor) -> torch.Tensor | None:
+        return full_inputs[name].batch(idx)[0] if decoder else None
 
     def n_batches_at(r: int) -> int:
         B = cfg.stage_batch(r)
@@ -377,8 +391,10 @@ def train_ab(data: str | os.PathLike | PackedPairs, out: str | os.PathLike,
             return
         g.eval()
         with torch.no_grad(), autocast:
-            x, y = shown.batch(torch.arange(len(shown)))
-            o = g(x, alpha)
+            idx = torch.arange(len(shown))
+            x, y = shown.batch(idx)
+            gi = g_input("show", idx)
+            o = g(x if gi is None else gi, alpha)
         g.train()
         save_sample_grid(from_unit(x[:, 0]), from_unit(o[:, 0]), from_unit(y[:, 0]),
                          out / "samples" / f"epoch_{ep:04d}.png")
@@ -432,7 +448,7 @@ def train_ab(data: str | os.PathLike | PackedPairs, out: str | os.PathLike,
                     idx = idx[dist.rank * per_rank:(dist.rank + 1) * per_rank]
                 x, y = res.batch(idx)
                 vals = gan_step(g_run, dd_run, dr_run, opt_g, opt_d, x, y, alpha, cfg,
-                                int(shifts[b]), autocast, freeze)
+                                int(shifts[b]), autocast, freeze, g_input("train", idx))
                 k = len(idx)
                 for key, v in vals.items():
                     sums[key] = sums.get(key, 0.0) + float(v.detach()) * k

@@ -1,0 +1,326 @@
+"""Thesis Fig. 5.14 reproduced, with numbers: for the same plan and the same trajectory,
+the simulated SLAM map, the parametric model (``deform``, additive) and Model_AB, side by
+side, each with its appendix-metric error against the plan and its wall recall.
+
+For each held-out plan (the test split of a ``map2map dataset build`` dataset, or plans
+given in memory):
+
+* **simulated SLAM map** -- the dataset's own run, re-simulated with the pair's
+  ``sim_seed`` and start pose (:func:`map2map.datasets.rerun.rerun_pair`; the re-run
+  gives the dataset's ``B`` pixel for pixel, checked, and its trajectory); for a plan in
+  memory, a new simulation (``map2map dataset build``'s defaults: 7 simulated minutes,
+  180 degree LIDAR, ``rbpf``);
+* **parametric** -- :func:`map2map.parametric.pipeline.deform` (additive, thesis 3.2)
+  along the *same* trajectory: the simulation's true poses at its scan times
+  (:func:`map2map.learn.realism.parametric_on_trajectory`; the model draws its own
+  odometry and LIDAR errors);
+* **Model_AB** -- the generator's single output for the preprocessed plan (dropout off,
+  :func:`map2map.learn.synthesize.synthesize_squares`).
+
+All three are cut and preprocessed as the dataset's ``B`` (thesis 4.1: the pair's crop
+window, square, ``S`` px) and measured the same way against the preprocessed plan: the
+appendix paper's metric (:func:`map2map.evaluate.evaluate_maps`, the chosen chain's mean
+local error, px of the ``S`` square, default settings) and the wall recall (share of plan
+wall pixels within 2 px of a map wall, :func:`map2map.evaluate.wallmetrics.wall_metrics`).
+A map whose alignment fails gets NaN and says so, never a number.
+
+Examples
+--------
+>>> f = Fig514(["p"], [0], np.full((1, 8, 8), 255, np.uint8),
+...            {m: np.full((1, 8, 8), 255, np.uint8) for m in METHODS},
+...            [{"plan": "p", "method": m, "error_px": 1.0, "wall_recall": 0.5}
+...             for m in METHODS], {}, "untrained")
+>>> f.summary["model_ab"]["error_px_mean"]
+1.0
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..core.grid import OccupancyMap
+
+__all__ = ["METHODS", "METHOD_TITLES", "Fig514", "run_fig514", "measure"]
+
+METHODS = ("simulated", "parametric", "model_ab")
+METHOD_TITLES = {"simulated": "simulated SLAM map", "parametric": "parametric (additive)",
+                 "model_ab": "Model_AB"}
+
+
+def measure(m: np.ndarray, plan: np.ndarray) -> dict:
+    """Appendix-metric error (px, NaN when the alignment fails), wall recall and wall
+    precision (2 px) of map ``m`` against ``plan`` (same square, internal convention).
+    Recall alone flatters thick walls (a blurred 8 px wall covers every plan wall within
+    2 px); precision, the share of the map's wall pixels within 2 px of a plan wall,
+    says what they cost.
+
+    Examples
+    --------
+    >>> plan = np.full((64, 64), 255, np.uint8); plan[[8, 56], 8:57] = 0
+    >>> plan[8:57, [8, 56]] = 0; plan[8:40, 30] = 0
+    >>> round(measure(plan, plan)["wall_recall"], 2)
+    1.0
+    """
+    from ..evaluate.pipeline import evaluate_maps
+    from ..evaluate.wallmetrics import wall_metrics
+
+    out = {"error_px": float("nan"), "wall_recall": float("nan"),
+           "wall_precision": float("nan"), "note": ""}
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            ev = evaluate_maps(OccupancyMap(m, 0.05), OccupancyMap(plan, 0.05))
+        out["error_px"] = float(ev.report["chosen_errors"]["mean_px"])
+    except Exception as exc:  # noqa: BLE001 - an alignment failure is a result, reported
+        out["note"] = f"alignment failed: {type(exc).__name__}: {str(exc)[:80]}"
+    wm = wall_metrics(m, plan)
+    out["wall_recall"] = float(wm["wall_recall"])
+    out["wall_precision"] = float(wm["wall_precision"])
+    return out
+
+
+@dataclass
+class Fig514:
+    """Fig. 5.14's maps and numbers.
+
+    Attributes
+    ----------
+    plan_ids, indices : list
+        Per plan: its id and its pair index (-1 for a plan given in memory).
+    plans : (N, S, S) uint8
+        The preprocessed plans.
+    maps : dict
+        ``{method: (N, S, S) uint8}`` for :data:`METHODS`.
+    rows : list of dict
+        Per plan and method: ``plan``, ``index``, ``method``, ``error_px`` (appendix
+        metric), ``wall_recall``, ``note``.
+    info : dict
+        Per plan: the simulation's coverage, ATE, path length, whether the re-run gave
+        the dataset's map.
+    model : str
+        The Model_AB weights used.
+    warnings : list of str
+    """
+
+    plan_ids: list
+    indices: list
+    plans: np.ndarray
+    maps: dict
+    rows: list
+    info: dict
+    model: str
+    warnings: list = field(default_factory=list)
+
+    @property
+    def summary(self) -> dict:
+        """Per method: mean and median error (over the aligned maps), how many failed to
+        align, mean wall recall; plus ``n`` and ``model``."""
+        out: dict = {"n": len(self.plan_ids), "model": self.model}
+        for m in METHODS:
+            rs = [r for r in self.rows if r["method"] == m]
+            e = np.array([r["error_px"] for r in rs], float)
+            rec = np.array([r["wall_recall"] for r in rs], float)
+            pre = np.array([r.get("wall_precision", np.nan) for r in rs], float)
+            ok = np.isfinite(e)
+            out[m] = {"error_px_mean": float(e[ok].mean()) if ok.any() else float("nan"),
+                      "error_px_median": float(np.median(e[ok])) if ok.any() else float("nan"),
+                      "alignment_failed": int((~ok).sum()),
+                      "wall_recall_mean": float(np.nanmean(rec)) if np.isfinite(rec).any()
+                      else float("nan"),
+                      "wall_precision_mean": float(np.nanmean(pre)) if np.isfinite(pre).any()
+                      else float("nan")}
+        return out
+
+    def table(self) -> str:
+        """The rows as text, then the summary per method."""
+        lines = [f"{'plan':>14} {'method':>22} {'error px':>9} {'recall':>7} {'precision':>9}"]
+        for r in self.rows:
+            lines.append(f"{r['plan']:>14} {METHOD_TITLES[r['method']]:>22} "
+                         f"{r['error_px']:>9.2f} {r['wall_recall']:>7.2f} "
+                         f"{r.get('wall_precision', float('nan')):>9.2f}"
+                         + (f"  ({r['note']})" if r.get("note") else ""))
+        s = self.summary
+        for m in METHODS:
+            v = s[m]
+            lines.append(f"{'mean':>14} {METHOD_TITLES[m]:>22} {v['error_px_mean']:>9.2f} "
+                         f"{v['wall_recall_mean']:>7.2f} {v['wall_precision_mean']:>9.2f}"
+                         f"  (median error "
+                         f"{v['error_px_median']:.2f}; {v['alignment_failed']} not aligned)")
+        return "\n".join(lines)
+
+    def figure(self, path: str | os.PathLike | None = None, dpi: int = 90):
+        """Rows = plans; columns = plan | simulated SLAM map | parametric | Model_AB,
+        each titled with its error and wall recall; saved to ``path`` (atomically) when
+        given. Returns the matplotlib figure."""
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        n = len(self.plan_ids)
+        fig, axes = plt.subplots(max(n, 1), 4, figsize=(12, 3.1 * max(n, 1)), squeeze=False)
+        by = {(r["plan"], r["method"]): r for r in self.rows}
+        for i, pid in enumerate(self.plan_ids):
+            panels = [(self.plans[i], f"{pid}: plan")]
+            for m in METHODS:
+                r = by.get((pid, m), {})
+                e = r.get("error_px", float("nan"))
+                err = f"{e:.2f} px" if math.isfinite(e) else "not aligned"
+                panels.append((self.maps[m][i], f"{METHOD_TITLES[m]}\nerror {err}, "
+                               f"recall {r.get('wall_recall', float('nan')):.2f}, "
+                               f"precision {r.get('wall_precision', float('nan')):.2f}"))
+            rows, cols = np.nonzero(self.plans[i] != 127)
+            box = (rows.min(), rows.max(), cols.min(), cols.max()) if rows.size else None
+            for ax, (img, title) in zip(axes[i], panels, strict=True):
+                ax.imshow(img, cmap="gray", vmin=0, vmax=255, interpolation="nearest")
+                ax.set_title(title, fontsize=8)
+                ax.set_xticks([])
+                ax.set_yticks([])
+                if box is not None:
+                    ax.set_xlim(box[2] - 3, box[3] + 3)
+                    ax.set_ylim(box[1] + 3, box[0] - 3)
+        fig.suptitle(f"Fig. 5.14 reproduced: same plan, same trajectory (appendix-metric "
+                     f"error px of the {self.plans.shape[-1]} px square; wall recall 2 px); "
+                     f"Model_AB: {Path(self.model).name}", fontsize=9)
+        fig.tight_layout(rect=(0, 0, 1, 1 - 0.45 / (3.1 * max(n, 1))))
+        if path is not None:
+            from ..core._io import atomic_path
+
+            with atomic_path(path) as tmp:
+                fig.savefig(tmp, dpi=dpi, format="png")
+            plt.close(fig)
+        return fig
+
+    def write_csv(self, path: str | os.PathLike) -> None:
+        """The rows as CSV (atomically)."""
+        import csv
+
+        from ..core._io import atomic_path
+
+        keys = ["plan", "index", "method", "error_px", "wall_recall", "wall_precision", "note"]
+        with atomic_path(path) as tmp:
+            with open(tmp, "w", newline="") as fh:
+                w = csv.DictWriter(fh, fieldnames=keys, extrasaction="ignore")
+                w.writeheader()
+                w.writerows(self.rows)
+
+
+def _from_dataset(ds, n, seed, split, progress):
+    from ..datasets.build import pair_dir
+    from ..datasets.pair import read_pair_meta
+    from ..datasets.rerun import rerun_pair
+    from .realism import _read_png, parametric_on_run, split_indices
+
+    idx = split_indices(ds, split)[:n]
+    out = []
+    for i in _bar(idx, progress, "simulate + parametric"):
+        meta = read_pair_meta(pair_dir(ds, i))
+        rr = rerun_pair(ds, i, sim_seed=int(meta["sim_seed"]))
+        b_file = _read_png(pair_dir(ds, i) / "B.png")
+        same = bool(np.array_equal(rr.b_n, b_file))
+        info = {k: rr.meta.get(k) for k in ("coverage", "ate_rmse_m", "path_length_m",
+                                             "stop_reason", "sim_seed")}
+        info["reproduces_dataset_map"] = same
+        out.append((meta["plan_id"], i, rr.a_n, rr.b_n, parametric_on_run(rr, seed=seed),
+                    info))
+    return out
+
+
+def _from_plans(plans, seed, progress, params):
+    from ..datasets.pair import BuildParams, crop_box, preprocess_pair
+    from ..sim.runner import simulate
+    from .realism import parametric_on_trajectory
+
+    p = params or BuildParams()
+    out = []
+    for k, plan in enumerate(_bar(list(plans), progress, "simulate + parametric")):
+        sim = simulate(plan, seed=seed + k, duration=p.duration, fov=p.fov, mapper=p.mapper,
+                       progress=False)
+        box = crop_box(plan, sim.slam_map_plan)
+        a_n, b_n = preprocess_pair(plan, sim.slam_map_plan, p.size, p.thicken, box=box)
+        par = parametric_on_trajectory(plan, sim, box, p.size, p.thicken, p.fov,
+                                       np.random.default_rng([int(seed), k]))
+        rep = sim.report()
+        info = {k2: rep.get(k2) for k2 in ("coverage", "ate_rmse_m", "path_length_m",
+                                            "stop_reason")}
+        out.append((f"plan {k}", -1, a_n, b_n, par, info))
+    return out
+
+
+def _bar(items, progress, desc):
+    if not progress:
+        return items
+    from tqdm.auto import tqdm
+
+    return tqdm(items, desc=desc, unit="plan")
+
+
+def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
+               model="pretrained", seed: int = 0, *, split: str = "test",
+               params=None, progress: bool = True) -> Fig514:
+    """Fig. 5.14 for ``n`` held-out plans (module doc).
+
+    Parameters
+    ----------
+    source : path or sequence of OccupancyMap
+        A ``map2map dataset build`` folder (its ``split`` pairs, by index) or plans.
+    n : int
+        Number of plans (the first ``n`` of the split; all given plans otherwise).
+    model : "pretrained", run folder, weights file or ABModel
+        Model_AB.
+    seed : int
+        Seeds the parametric model (and the simulations of plans given in memory).
+    split : str
+        The dataset split (``"test"``: plans never seen in training).
+    params : BuildParams, optional
+        For plans in memory: simulation and preprocessing (default ``map2map dataset
+        build``'s: 420 s, 180 degrees, ``rbpf``, 256 px, walls thickened by 1).
+    progress : bool
+
+    Returns
+    -------
+    Fig514
+        ``.rows``, ``.summary``, ``.figure()``, ``.table()``.
+    """
+    from .synthesize import load_ab_model, synthesize_squares
+
+    if isinstance(source, str | os.PathLike):
+        made = _from_dataset(Path(source), int(n), int(seed), split, progress)
+    else:
+        made = _from_plans(list(source)[:int(n)], int(seed), progress, params)
+    if not made:
+        from ..core.errors import InputError
+
+        raise InputError(source if isinstance(source, str | os.PathLike) else None,
+                         f"no simulated '{split}' pairs to draw")
+    net = load_ab_model(model)
+    plans = np.stack([m[2] for m in made])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        gen = synthesize_squares(net, plans, seed=seed)
+    warns = []
+    if "PROVISIONAL" in str(net.header.get("note", "")):
+        warns.append("Model_AB weights are provisional (their note says so)")
+    warns += sorted({str(w.message) for w in caught})
+    maps = {"simulated": np.stack([m[3] for m in made]),
+            "parametric": np.stack([m[4] for m in made]), "model_ab": gen}
+    rows = []
+    for i, (pid, idx, *_rest) in enumerate(_bar(made, progress, "evaluate")):
+        for m in METHODS:
+            rows.append({"plan": pid, "index": int(idx), "method": m,
+                         **measure(maps[m][i], plans[i])})
+    info = {m[0]: m[5] for m in made}
+    bad = [pid for pid, v in info.items() if v.get("reproduces_dataset_map") is False]
+    if bad:
+        warns.append(f"the re-run of {len(bad)} pair(s) ({', '.join(bad[:4])}) did not give "
+                     "the dataset's map; the figure shows the re-run (whose trajectory the "
+                     "parametric model follows)")
+    return Fig514([m[0] for m in made], [int(m[1]) for m in made], plans, maps, rows, info,
+                  net.source, warns)

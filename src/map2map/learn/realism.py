@@ -1,0 +1,414 @@
+"""Realism of generated SLAM maps, measured (issue #15; the thesis judged Model_AB's maps
+by eye, sec. 5.1-5.2).
+
+A generated SLAM map of a plan is *realistic* if it is as close to a simulated SLAM map of
+the same plan as two independent simulated runs are to each other. On held-out plans
+(the test split of a ``map2map dataset build`` dataset: plans never seen in training),
+per map, on the dataset's square (``N x N`` px, thesis 4.1 preprocessing):
+
+* ``wall_err``     mean distance (px) of the map's occupied cells to the nearest plan wall
+  (the issue's "mean distance of occupied cells to plan walls"; no alignment, so drift
+  counts);
+* ``wall_seen``    share of plan wall pixels with an occupied cell within 2 px;
+* ``free_mapped``  share of plan free pixels that are free in the map;
+* ``unknown``      unknown share of the plan's known pixels;
+* ``spurious``     occupied 8-connected fragments farther than 3 px from every plan wall;
+* ``thickness``    wall thickness (px), :func:`map2map.learn.postprocess.wall_thickness_px`;
+* ``bend``         bent-wall curvature: along the map's wall centre lines (skeleton), the
+  RMS distance (px) of the centre line within a disc of radius :data:`BEND_RADIUS` px to
+  its own best-fitting line (the square root of the local scatter's smaller eigenvalue),
+  averaged over the centre-line pixels that lie within 3 px of a plan wall that is
+  straight there (the plan's own local value below 0.25 px: corners, T-junctions and
+  door jambs of the plan are left out, so only bending the map added counts; 0 for a
+  straight wall).
+
+Each statistic's distribution over the generated maps is compared with its distribution
+over simulated run 1 (the dataset's own SLAM maps) by the 1-D Wasserstein distance, and
+normalised by the same distance between simulated run 2 (:func:`map2map.datasets.rerun.
+rerun_pair`: same plan, same start pose, another simulation seed) and run 1:
+
+    ratio = W(generated, run 1) / W(run 2, run 1)
+
+Target (issue #15): every ratio <= 1.5. A ratio near 1 means the generator's maps differ
+from simulated ones no more than a second simulation does.
+
+The module needs numpy and scipy only (no torch): :func:`simulated_references` builds
+the references (simulations, slow: ~10-60 s per plan), :func:`realism_table` the table.
+
+Examples
+--------
+>>> import numpy as np
+>>> plan = np.full((32, 32), 255, np.uint8); plan[:, 0] = plan[:, -1] = 0
+>>> slam = plan.copy(); slam[:, 10:] = 127
+>>> s = map_stats(slam, plan)
+>>> round(s["wall_seen"], 2), round(s["free_mapped"], 2), s["spurious"]
+(0.5, 0.3, 0.0)
+>>> rng = np.random.default_rng(0)
+>>> runs = [np.stack([plan] * 4) for _ in range(3)]
+>>> for r in runs[1:]:
+...     r[:, rng.integers(1, 31), 5] = 0                 # a spurious dot per map
+>>> rows = realism_table(runs[0], runs[1], runs[2], np.stack([plan] * 4))
+>>> [(r.statistic, r.ratio) for r in rows][4]           # no dots vs dots: W = 1, ref W = 0
+('spurious', inf)
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy import ndimage
+from scipy.stats import wasserstein_distance
+
+from ..core.grid import FREE, OCCUPIED, UNKNOWN
+
+__all__ = ["STATS", "STAT_INFO", "TARGET_RATIO", "map_stats", "stats_of", "RealismRow",
+           "realism_table", "format_realism_table", "References", "simulated_references",
+           "parametric_on_trajectory", "parametric_on_run", "split_indices"]
+
+STATS = ("wall_err", "wall_seen", "free_mapped", "unknown", "spurious", "thickness", "bend")
+#: What each statistic is (units).
+STAT_INFO = {
+    "wall_err": "mean distance of occupied cells to plan walls (px)",
+    "wall_seen": "share of plan walls with an occupied cell within 2 px",
+    "free_mapped": "share of plan free space mapped free",
+    "unknown": "unknown share of the plan's known pixels",
+    "spurious": "occupied fragments > 3 px from every plan wall (count)",
+    "thickness": "wall thickness (px)",
+    "bend": "bent-wall curvature: RMS px off a fragment's principal line",
+}
+#: Issue #15's target for every statistic's Wasserstein ratio.
+TARGET_RATIO = 1.5
+
+
+def map_stats(m: np.ndarray, plan: np.ndarray) -> dict[str, float]:
+    """The statistics of the module doc for SLAM map ``m`` of ``plan`` (same square).
+
+    Parameters
+    ----------
+    m, plan : (N, N) uint8
+        Ternary maps in the internal convention (occupied 0, unknown 127, free 255).
+
+    Returns
+    -------
+    dict
+        One float per name of :data:`STATS` (``wall_err`` is NaN for a map without
+        occupied cells).
+    """
+    from .postprocess import wall_thickness_px
+
+    m, plan = np.asarray(m), np.asarray(plan)
+    if m.shape != plan.shape:
+        raise ValueError(f"map {m.shape} and plan {plan.shape} differ in shape")
+    walls = plan == OCCUPIED
+    d_wall = ndimage.distance_transform_edt(~walls) if walls.any() else np.full(m.shape, 1e9)
+    occ = m == OCCUPIED
+    known_plan = plan != UNKNOWN
+    near = ndimage.binary_dilation(occ, iterations=2)
+    lab, n = ndimage.label(occ, structure=np.ones((3, 3)))
+    spurious = 0
+    if n:
+        mind = ndimage.minimum(d_wall, lab, np.arange(1, n + 1))
+        spurious = int(np.count_nonzero(np.asarray(mind) > 3))
+    bend = _bend(occ, walls, d_wall)
+    free_plan = plan == FREE
+    return {
+        "wall_err": float(d_wall[occ].mean()) if occ.any() else float("nan"),
+        "wall_seen": float(near[walls].mean()) if walls.any() else float("nan"),
+        "free_mapped": float((m[free_plan] == FREE).mean()) if free_plan.any() else 0.0,
+        "unknown": float((m[known_plan] == UNKNOWN).mean()) if known_plan.any() else 1.0,
+        "spurious": float(spurious),
+        "thickness": float(wall_thickness_px(m[None])) if occ.any() else 0.0,
+        "bend": bend,
+    }
+
+
+#: Radius (px) of the disc over which ``bend`` fits a line to the wall centre line.
+BEND_RADIUS = 4
+
+
+def _local_deviation(skel: np.ndarray, radius: int = BEND_RADIUS):
+    """At every pixel: the number of ``skel`` pixels in the disc around it and the RMS
+    distance of those pixels to their best-fitting line (sqrt of the smaller eigenvalue
+    of their scatter), by six convolutions (no loop over pixels)."""
+    yy, xx = np.mgrid[-radius:radius + 1, -radius:radius + 1]
+    disc = (xx**2 + yy**2 <= radius**2).astype(float)
+    m = skel.astype(float)
+    Y, X = np.mgrid[:m.shape[0], :m.shape[1]].astype(float)
+
+    def conv(a):
+        return ndimage.convolve(a, disc, mode="constant")
+
+    n = conv(m)
+    safe = np.maximum(n, 1.0)
+    mx, my = conv(m * X) / safe, conv(m * Y) / safe
+    cxx = conv(m * X * X) / safe - mx**2
+    cyy = conv(m * Y * Y) / safe - my**2
+    cxy = conv(m * X * Y) / safe - mx * my
+    lam = 0.5 * (cxx + cyy) - np.sqrt(np.maximum(0.25 * (cxx - cyy) ** 2 + cxy**2, 0.0))
+    return n, np.sqrt(np.maximum(lam, 0.0))
+
+
+def _bend(occ: np.ndarray, walls: np.ndarray, d_wall: np.ndarray) -> float:
+    from skimage.morphology import skeletonize
+
+    if not occ.any() or not walls.any():
+        return 0.0
+    skel = skeletonize(occ)
+    n_map, dev_map = _local_deviation(skel)
+    n_plan, dev_plan = _local_deviation(skeletonize(walls))
+    use = skel & (d_wall <= 3) & (n_plan >= BEND_RADIUS) & (dev_plan < 0.25) & \
+        (n_map >= BEND_RADIUS)
+    return float(dev_map[use].mean()) if use.any() else 0.0
+
+
+def stats_of(maps, plans) -> dict[str, np.ndarray]:
+    """:func:`map_stats` of every ``(map, plan)``: ``{statistic: (N,) array}``."""
+    rows = [map_stats(m, p) for m, p in zip(maps, plans, strict=True)]
+    return {s: np.array([r[s] for r in rows], float) for s in STATS}
+
+
+@dataclass
+class RealismRow:
+    """One statistic: means over the generated maps and the two simulated runs, the
+    Wasserstein distances ``W(generated, run 1)`` and ``W(run 2, run 1)``, their ratio
+    and whether it meets :data:`TARGET_RATIO` (``None``: no values)."""
+
+    statistic: str
+    generated: float
+    sim1: float
+    sim2: float
+    w_generated: float
+    w_sims: float
+    ratio: float
+    met: bool | None
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def _ratio(w_g: float, w_r: float) -> float:
+    if w_r > 1e-12:
+        return w_g / w_r
+    return 1.0 if w_g <= 1e-12 else math.inf
+
+
+def realism_table(generated, sim1, sim2, plans) -> list[RealismRow]:
+    """Wasserstein ratio per statistic (module doc) of ``generated`` maps against two
+    simulated runs of the same ``plans``.
+
+    Parameters
+    ----------
+    generated, sim1, sim2, plans : (N, S, S) uint8 or dicts of :func:`stats_of`
+        Maps in the same order (map ``i`` of each is of plan ``i``); precomputed
+        statistics may be passed instead of maps.
+
+    Returns
+    -------
+    list of RealismRow
+        One per :data:`STATS`. A ratio is ``inf`` when the two runs agree exactly on a
+        statistic and the generated maps do not; NaN values (a map with no wall) are
+        left out of that statistic.
+    """
+    st = [g if isinstance(g, dict) else stats_of(g, plans) for g in (generated, sim1, sim2)]
+    rows = []
+    for s in STATS:
+        g, r1, r2 = (v[s][np.isfinite(v[s])] for v in st)
+        if not (len(g) and len(r1) and len(r2)):
+            rows.append(RealismRow(s, *(float("nan"),) * 6, None))
+            continue
+        w_g, w_r = float(wasserstein_distance(g, r1)), float(wasserstein_distance(r2, r1))
+        ratio = _ratio(w_g, w_r)
+        rows.append(RealismRow(s, float(g.mean()), float(r1.mean()), float(r2.mean()), w_g,
+                               w_r, ratio, bool(ratio <= TARGET_RATIO)))
+    return rows
+
+
+def format_realism_table(rows: list[RealismRow], name: str = "generated") -> str:
+    """The table as text, the worst ratio and the verdict on the last line.
+
+    Examples
+    --------
+    >>> r = RealismRow("unknown", 0.3, 0.2, 0.21, 0.1, 0.05, 2.0, False)
+    >>> print(format_realism_table([r], "Model_AB"))  # doctest: +NORMALIZE_WHITESPACE
+    statistic Model_AB  sim 1  sim 2  W(gen,1)  W(2,1)  ratio
+      unknown    0.300  0.200  0.210     0.100   0.050   2.00
+    worst ratio 2.00 (unknown); target <= 1.5: NOT met (1 of 1 statistics above)
+    """
+    w = max(9, len(name))
+    out = [f"{'statistic':>11} {name:>{w}} {'sim 1':>8} {'sim 2':>8} {'W(gen,1)':>9} "
+           f"{'W(2,1)':>8} {'ratio':>7}"]
+    for r in rows:
+        out.append(f"{r.statistic:>11} {r.generated:>{w}.3f} {r.sim1:>8.3f} {r.sim2:>8.3f} "
+                   f"{r.w_generated:>9.3f} {r.w_sims:>8.3f} {r.ratio:>7.2f}")
+    valid = [r for r in rows if r.met is not None]
+    if not valid:
+        return "\n".join(out + ["no values"])
+    worst = max(valid, key=lambda r: r.ratio)
+    bad = sum(not r.met for r in valid)
+    verdict = "met" if bad == 0 else f"NOT met ({bad} of {len(valid)} statistics above)"
+    out.append(f"worst ratio {worst.ratio:.2f} ({worst.statistic}); target <= "
+               f"{TARGET_RATIO:g}: {verdict}")
+    return "\n".join(out)
+
+
+@dataclass
+class References:
+    """Held-out plans of a dataset with two simulated SLAM maps each and the parametric
+    model's map on run 2's trajectory.
+
+    Attributes
+    ----------
+    indices : (N,) int
+        Pair indices in the dataset.
+    plan_ids : list of str
+    a : (N, S, S) uint8
+        Preprocessed plans (the dataset's ``A.png``).
+    sim1, sim2 : (N, S, S) uint8
+        Run 1 (the dataset's ``B.png``) and run 2 (:func:`~map2map.datasets.rerun.
+        rerun_pair`), same pixels.
+    parametric : (N, S, S) uint8
+        :func:`map2map.parametric.pipeline.deform` (additive) driven along run 2's true
+        trajectory, cut and preprocessed as the pair's ``B``.
+    meta : list of dict
+        Per plan: run 2's coverage, ATE, path length, seed.
+    """
+
+    indices: np.ndarray
+    plan_ids: list
+    a: np.ndarray
+    sim1: np.ndarray
+    sim2: np.ndarray
+    parametric: np.ndarray
+    meta: list
+
+
+def split_indices(ds: str | os.PathLike, split: str = "test") -> list[int]:
+    """Indices of the simulated pairs of ``split`` in dataset ``ds``, sorted."""
+    from ..datasets.build import open_dataset
+
+    with open_dataset(ds) as man:
+        rows = man.rows("done")
+    return sorted(int(r["idx"]) for r in rows if r["split"] == split and r["kind"] == "simulate")
+
+
+def _read_png(path: Path) -> np.ndarray:
+    import cv2
+
+    img = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
+    if img is None:
+        from ..core.errors import InputError
+
+        raise InputError(path, "unreadable pair picture")
+    return img
+
+
+def parametric_on_trajectory(plan, sim, box, size: int, thicken: int, fov: float,
+                             rng: np.random.Generator, method: str = "additive"
+                             ) -> np.ndarray:
+    """The parametric model (thesis 3.2, :func:`map2map.parametric.pipeline.deform`)
+    driven along simulation ``sim``'s true trajectory (its poses at the scan times) through
+    ``plan``, cut with the pair window ``box`` and preprocessed as a pair's ``B``:
+    ``(size, size)`` uint8 on the pair's pixels. The model draws its own odometry and
+    LIDAR errors (``rng``); only the path is shared with the simulation."""
+    from ..datasets.pair import preprocess_pair
+    from ..parametric.params import ParametricParams
+    from ..parametric.pipeline import deform
+    from ..trajectory.timing import trajectory_from_poses
+
+    p = sim.true_poses
+    traj = trajectory_from_poses(p[:, 0], p[:, 1], p[:, 2], t=sim.times)
+    res = deform(plan, traj, method, ParametricParams(fov_deg=float(fov)), rng)
+    return preprocess_pair(plan, res.map, int(size), int(thicken), box=box)[1]
+
+
+def parametric_on_run(rr, method: str = "additive", seed: int = 0) -> np.ndarray:
+    """:func:`parametric_on_trajectory` along re-run ``rr``'s trajectory
+    (:class:`~map2map.datasets.rerun.RerunResult`), seeded by ``(seed, index, run)``."""
+    return parametric_on_trajectory(
+        rr.plan, rr.sim, rr.box, rr.meta["size"], rr.meta["thicken"], rr.meta["fov"],
+        np.random.default_rng([int(seed), int(rr.index), int(rr.run)]), method)
+
+
+def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int | None = None,
+                         run: int = 2, cache: str | os.PathLike | None = None,
+                         progress: bool = True) -> References:
+    """Two simulated SLAM maps (and the parametric model's) of the ``split`` plans of
+    dataset ``ds`` (see :class:`References`).
+
+    Parameters
+    ----------
+    ds : path
+        A ``map2map dataset build`` folder (read only).
+    split : str
+        Which plans (``"test"``: never seen in training).
+    n : int, optional
+        The first ``n`` pairs of the split (by index).
+    run : int
+        Run number of the second simulation (:func:`~map2map.datasets.pair.rerun_seed`).
+    cache : path, optional
+        An ``.npz`` kept between calls (written atomically after every plan): plans
+        already there are not simulated again. Tied to the dataset's folder and ``run``.
+    progress : bool
+        tqdm bar over the plans.
+
+    Returns
+    -------
+    References
+    """
+    from ..core._io import atomic_path
+    from ..datasets.build import pair_dir
+    from ..datasets.rerun import rerun_pair
+
+    ds = Path(ds)
+    idx = split_indices(ds, split)
+    if n is not None:
+        idx = idx[:n]
+    have: dict[int, dict] = {}
+    key = {"dataset": str(ds.resolve()), "run": int(run), "version": 1}
+    if cache is not None and Path(cache).is_file():
+        with np.load(cache, allow_pickle=False) as z:
+            if json.loads(str(z["key"])) == key:
+                for j, i in enumerate(z["indices"]):
+                    have[int(i)] = {k: z[k][j] for k in ("sim2", "parametric")}
+                    have[int(i)]["meta"] = json.loads(str(z["meta"][j]))
+
+    def save():
+        if cache is None:
+            return
+        ks = sorted(have)
+        with atomic_path(cache) as tmp:
+            with open(tmp, "wb") as fh:
+                np.savez_compressed(
+                    fh, key=json.dumps(key), indices=np.array(ks, int),
+                    sim2=np.stack([have[i]["sim2"] for i in ks]),
+                    parametric=np.stack([have[i]["parametric"] for i in ks]),
+                    meta=np.array([json.dumps(have[i]["meta"]) for i in ks]))
+
+    todo = [i for i in idx if i not in have]
+    bar = None
+    if progress and todo:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=len(todo), desc=f"simulating run {run}", unit="plan")
+    for i in todo:
+        rr = rerun_pair(ds, i, run)
+        have[i] = {"sim2": rr.b_n, "parametric": parametric_on_run(rr),
+                   "meta": {k: rr.meta.get(k) for k in ("sim_seed", "coverage", "ate_rmse_m",
+                                                          "path_length_m", "stop_reason",
+                                                          "wall_error_m", "plan_id")}}
+        save()
+        if bar is not None:
+            bar.update(1)
+    if bar is not None:
+        bar.close()
+    a = np.stack([_read_png(pair_dir(ds, i) / "A.png") for i in idx])
+    sim1 = np.stack([_read_png(pair_dir(ds, i) / "B.png") for i in idx])
+    return References(np.array(idx, int), [have[i]["meta"]["plan_id"] for i in idx], a, sim1,
+                      np.stack([have[i]["sim2"] for i in idx]),
+                      np.stack([have[i]["parametric"] for i in idx]),
+                      [have[i]["meta"] for i in idx])

@@ -1,0 +1,156 @@
+"""Realism statistics (issue #15) and the second simulated run of a dataset pair that
+they are normalised by. Tiny maps and a 2-pair, 8 s simulated dataset."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from map2map.datasets.build import build_dataset, pair_dir
+from map2map.datasets.pair import BuildParams, read_pair_meta
+from map2map.datasets.rerun import rerun_pair
+from map2map.learn.realism import (
+    STATS,
+    format_realism_table,
+    map_stats,
+    realism_table,
+    simulated_references,
+)
+from map2map.maps.ros import save_ros_map
+
+
+def _plan(n=48) -> np.ndarray:
+    p = np.full((n, n), UNKNOWN, np.uint8)
+    p[4:-4, 4:-4] = FREE
+    p[4, 4:-4] = p[-5, 4:-4] = p[4:-4, 4] = p[4:-4, -5] = OCCUPIED
+    p[4:-4, n // 2] = OCCUPIED
+    return p
+
+
+def test_map_stats_of_hand_made_maps():
+    plan = _plan()
+    s = map_stats(plan, plan)
+    assert s["wall_err"] == 0 and s["wall_seen"] == 1 and s["free_mapped"] == 1
+    assert s["unknown"] == 0 and s["spurious"] == 0
+    m = plan.copy()
+    m[:, 30:] = np.where(m[:, 30:] == FREE, UNKNOWN, m[:, 30:])
+    m[10:12, 12:14] = OCCUPIED                      # a spurious blob 8 px from any wall
+    m2 = np.roll(plan, 2, axis=0)                    # drift: walls 2 px off
+    s, s2 = map_stats(m, plan), map_stats(m2, plan)
+    assert s["spurious"] == 1 and 0 < s["free_mapped"] < 1 and s["unknown"] > 0.2
+    assert s2["wall_err"] > 0.5 and s2["spurious"] == 0
+    bent = plan.copy()
+    bent[4:-4, plan.shape[0] // 2] = FREE
+    rr = np.arange(5, plan.shape[0] - 5)
+    bent[rr, (plan.shape[0] // 2 + 4 * np.sin(rr / 6)).astype(int)] = OCCUPIED
+    assert map_stats(bent, plan)["bend"] > map_stats(plan, plan)["bend"]
+    with pytest.raises(ValueError):
+        map_stats(plan[:10], plan)
+
+
+def test_realism_table_ratios():
+    plan = np.stack([_plan()] * 6)
+    rng = np.random.default_rng(0)
+
+    def runs(shift):
+        out = plan.copy()
+        for k in range(len(out)):
+            out[k] = np.roll(out[k], int(rng.integers(0, shift + 1)), axis=1)
+        return out
+
+    sim1, sim2 = runs(1), runs(1)
+    rows = realism_table(sim2, sim1, sim2, plan)
+    assert [r.statistic for r in rows] == list(STATS)
+    assert all(r.ratio == 1.0 or math.isnan(r.ratio) or r.w_sims == 0 for r in rows)
+    far = realism_table(runs(6), sim1, sim2, plan)
+    err = next(r for r in far if r.statistic == "wall_err")
+    assert err.ratio > 1.5 and err.met is False
+    text = format_realism_table(far, "far")
+    assert "NOT met" in text and "wall_err" in text
+
+
+@pytest.fixture(scope="module")
+def tiny_dataset(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("plans")
+    d = np.full((50, 70), 127, np.uint8)
+    d[2:-2, 2:-2] = 0
+    d[4:-4, 4:-4] = 255
+    d[4:-4, 35] = 0
+    d[10:30, 35] = 255
+    save_ros_map(OccupancyMap(d, 0.05), folder / "room.yaml")
+    ds = tmp_path_factory.mktemp("ds") / "DS"
+    p = BuildParams(source="simulate", duration=8.0, size=32, fov=360.0)
+    build_dataset(ds, str(folder), 2, 3, p, workers=0, progress=False)
+    return ds
+
+
+def test_rerun_reproduces_run_1_and_run_2_is_another_run_on_the_same_pixels(tiny_dataset):
+    import cv2
+
+    ds = tiny_dataset
+    meta = read_pair_meta(pair_dir(ds, 0))
+    b1 = cv2.imread(str(pair_dir(ds, 0) / "B.png"), 0)
+    same = rerun_pair(ds, 0, sim_seed=meta["sim_seed"])     # the pair code, run 1's seed
+    assert same.a_matches and np.array_equal(same.b_n, b1)
+    assert tuple(same.meta["start_pose"]) == tuple(meta["start_pose"])
+    two = rerun_pair(ds, 0, 2)
+    assert two.a_matches and two.b_n.shape == b1.shape
+    assert two.meta["sim_seed"] != meta["sim_seed"]
+    assert tuple(two.meta["start_pose"]) == tuple(meta["start_pose"])
+    assert np.array_equal(rerun_pair(ds, 0, 2).b_n, two.b_n)   # seeded
+
+
+def test_simulated_references_are_cached(tiny_dataset, tmp_path, monkeypatch):
+    from map2map.datasets.build import open_dataset
+
+    with open_dataset(tiny_dataset) as man:
+        split = man.rows("done")[0]["split"]
+    cache = tmp_path / "refs.npz"
+    refs = simulated_references(tiny_dataset, split=split, n=1, cache=cache, progress=False)
+    assert refs.a.shape == refs.sim1.shape == refs.sim2.shape == refs.parametric.shape
+    assert refs.a.shape[1:] == (32, 32) and cache.is_file()
+    import map2map.datasets.rerun as R
+
+    monkeypatch.setattr(R, "rerun_pair", lambda *a, **k: pytest.fail("simulated again"))
+    again = simulated_references(tiny_dataset, split=split, n=1, cache=cache, progress=False)
+    assert np.array_equal(again.sim2, refs.sim2)
+    rows = realism_table(refs.parametric, refs.sim1, refs.sim2, refs.a)
+    assert len(rows) == len(STATS)
+
+
+def _untrained(size):
+    torch = pytest.importorskip("torch")
+    from map2map.learn.progressive import StochasticUNet
+    from map2map.learn.synthesize import ABModel
+
+    torch.manual_seed(0)
+    return ABModel(StochasticUNet(size=16, channels=8), resolution=16, alpha=1.0,
+                   data_size=size, header={}, source="untrained")
+
+
+def test_fig514_from_a_dataset_and_from_plans(tiny_dataset, tmp_path):
+    from map2map.datasets.build import open_dataset
+    from map2map.learn.fig514 import METHODS, run_fig514
+
+    with open_dataset(tiny_dataset) as man:
+        split = man.rows("done")[0]["split"]
+    f = run_fig514(tiny_dataset, 1, _untrained(32), split=split, progress=False)
+    assert [r["method"] for r in f.rows] == list(METHODS)
+    assert all(set(r) >= {"plan", "method", "error_px", "wall_recall"} for r in f.rows)
+    assert f.info[f.plan_ids[0]]["reproduces_dataset_map"] is True
+    assert set(f.summary) >= {"n", "model", *METHODS} and f.summary["n"] == 1
+    for m in METHODS:
+        assert f.maps[m].shape == (1, 32, 32)
+    f.figure(tmp_path / "f.png")
+    f.write_csv(tmp_path / "f.csv")
+    assert (tmp_path / "f.png").stat().st_size > 1000
+    assert len((tmp_path / "f.csv").read_text().splitlines()) == 1 + len(METHODS)
+    d = np.full((50, 70), 127, np.uint8)
+    d[2:-2, 2:-2] = 0
+    d[4:-4, 4:-4] = 255
+    p = BuildParams(source="simulate", duration=8.0, size=32, fov=360.0)
+    g = run_fig514([OccupancyMap(d, 0.05)], 1, _untrained(32), params=p, progress=False)
+    assert g.plan_ids == ["plan 0"] and len(g.rows) == len(METHODS)
