@@ -129,8 +129,7 @@ def test_failed_section_keeps_the_report(tmp_path, monkeypatch):
         raise RuntimeError("the alignment exploded")
 
     monkeypatch.setattr(table2_module, "run", boom)
-    s = reproduce(tmp_path / "r", sections=["fig515", "table2"], tiny=True, progress=False,
-                  data=tmp_path / "absent")  # fmt: skip
+    s = reproduce(tmp_path / "r", sections=["fig515", "table2"], tiny=True, progress=False)
     assert s.exit_code == EXIT_SECTION_FAILED == 1
     assert [(r.key, r.status) for r in s.sections] == [("fig515", "ok"), ("table2", "failed")]
     md = (tmp_path / "r" / "report.md").read_text()
@@ -143,8 +142,9 @@ def test_failed_section_keeps_the_report(tmp_path, monkeypatch):
 
 
 def test_halmstad_skipped_without_data(tmp_path):
+    (tmp_path / "empty").mkdir()
     s = reproduce(tmp_path / "r", sections=["halmstad"], tiny=True, progress=False,
-                  data=tmp_path / "absent")  # fmt: skip
+                  data=tmp_path / "empty")  # fmt: skip
     assert s.exit_code == 0 and s.sections[0].status == "skipped"
     assert "skipped: the Halmstad maps" in (tmp_path / "r" / "report.md").read_text()
 
@@ -156,3 +156,9 @@ def test_cli_rejects_unknown_section(tmp_path):
                           text=True, env=env)  # fmt: skip
     assert proc.returncode == 2
     assert "unknown section table9" in proc.stderr and "Traceback" not in proc.stderr
+    proc = subprocess.run([sys.executable, "-m", "map2map", "reproduce", "--out",
+                           str(tmp_path / "r"), "--data", str(tmp_path / "nowhere")],
+                          capture_output=True, text=True, env=env)  # fmt: skip
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert "nowhere: the real data folder (--data) does not exist" in proc.stderr
+    assert not (tmp_path / "r").exists()  # nothing written

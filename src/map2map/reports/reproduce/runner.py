@@ -155,7 +155,8 @@ def reproduce(
     Raises
     ------
     InputError
-        An unknown section key, an unwritable output folder.
+        An unknown section key, an unwritable output folder, a ``data`` folder that
+        does not exist.
 
     Examples
     --------
@@ -171,6 +172,8 @@ def reproduce(
         raise InputError("--only", f"unknown section {', '.join(bad)}; "
                          f"known: {', '.join(SECTIONS)}")  # fmt: skip
     keys = [k for k in SECTIONS if k in keys]
+    if data is not None and not Path(data).is_dir():
+        raise InputError(data, "the real data folder (--data) does not exist")
     out = Path(out)
     try:
         out.mkdir(parents=True, exist_ok=True)
