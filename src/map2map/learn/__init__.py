@@ -21,6 +21,9 @@ PyTorch is imported only inside this package (``pip install 'map2map[learn]'``);
 * :mod:`~map2map.learn.synthesize` -- K SLAM-map hypotheses of a plan (``map2map
   synthesize``) and their diversity.
 
-Wall recall, boundary F1, Chamfer distance and per-class IoU (the guards of
-``benchmarks/table53.py``) live in :mod:`map2map.evaluate.wallmetrics`, a layer above.
+* :mod:`~map2map.learn.table53` -- thesis Table 5.3 / Fig. 5.12 (:func:`run_table53`) on
+  held-out pairs of a dataset build (:func:`heldout_pairs_from_dataset`) or generated ones.
+
+Wall recall, boundary F1, Chamfer distance and per-class IoU (the guards of Table 5.3)
+live in :mod:`map2map.evaluate.wallmetrics`, a lower layer.
 """
