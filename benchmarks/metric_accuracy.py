@@ -24,11 +24,12 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
 from map2map.core.grid import OccupancyMap  # noqa: E402
-from map2map.evaluate.pipeline import evaluate_maps  # noqa: E402
+from map2map.evaluate.validation import known_error_case  # noqa: E402
 from map2map.maps.synthetic import (  # noqa: E402
     deform,
     draw_walls,
     gaussian_field,
+    min_jacobian,
     office_walls,
     true_errors,
     wall_displacement,
@@ -38,32 +39,25 @@ W, H = 320, 240
 
 
 def case(name, plan, slam, u, rows, field=None):
-    ev = evaluate_maps(OccupancyMap(slam, 0.05), OccupancyMap(plan, 0.05), resolution=0.05)
-    reg, chain = ev.registration, ev.errors[ev.chosen]
-    true = np.abs(true_errors(reg.X, reg.normals, reg.alignment.rigid, plan, u))[chain.valid]
-    rep = ev.report["errors"][ev.chosen]
-    dm = rep["mean_px"] / true.mean() - 1
-    dx = rep["max_px"] / true.max() - 1
+    """Evaluate one map with known errors (library: known_error_case) and print it."""
+    c = known_error_case(name, plan, slam, u)
+    rep, true = c.reported[c.chosen], c.true[c.chosen]
+    dm, dx = c.relative()
     rows.append((dm, dx))
     extra = ""
     if field is not None:
         # the field's own (continuous) displacement of the same faces: the map draws
         # each face on whole pixels, so this differs from the drawn truth by rounding
+        reg = c.evaluation.registration
         tf = np.abs(true_errors(reg.X, reg.normals, reg.alignment.rigid, plan, u, field))
-        extra = f"  [field itself: mean {tf[chain.valid].mean():.3f}]"
+        tf = tf[c.evaluation.errors[c.chosen].valid].mean()
+        extra = f"  [field itself: mean {tf:.3f}]"
     print(
-        f"{name:<44s} {ev.chosen:<8s} mean {rep['mean_px']:6.3f} / {true.mean():6.3f} px "
-        f"({100 * dm:+5.1f}%)  max {rep['max_px']:6.2f} / {true.max():6.2f} px ({100 * dx:+5.1f}%)"
-        + extra,
+        f"{name:<44s} {c.chosen:<8s} mean {rep['mean_px']:6.3f} / {true['mean_px']:6.3f} px "
+        f"({100 * dm:+5.1f}%)  max {rep['max_px']:6.2f} / {true['max_px']:6.2f} px "
+        f"({100 * dx:+5.1f}%)" + extra,
         flush=True,
     )
-
-
-def min_jacobian(field):
-    """Smallest determinant of the Jacobian of ``p -> p + field(p)`` (> 0: no folding)."""
-    dxx, dxy = np.gradient(field[..., 0], axis=1), np.gradient(field[..., 0], axis=0)
-    dyx, dyy = np.gradient(field[..., 1], axis=1), np.gradient(field[..., 1], axis=0)
-    return float(((1 + dxx) * (1 + dyy) - dxy * dyx).min())
 
 
 def main() -> int:

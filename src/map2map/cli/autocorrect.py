@@ -26,6 +26,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--figure", metavar="PNG", help="before/after figure (folder INPUT: folder)")
     p.add_argument("--no-straighten", action="store_true",
                    help="only upsample and snap the output (no straight walls)")
+    p.add_argument("--no-anchor", action="store_true",
+                   help="place the walls where the network's low-resolution output says, "
+                        "not on the input's observed wall faces (the default anchors them)")
     p.add_argument("--device", default="cpu", help="torch device (default cpu)")
     add_input_options(p)
     p.set_defaults(func=run)
@@ -68,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         results = autocorrect_many(maps, model, straighten=not args.no_straighten,
-                                   device=args.device)
+                                   anchor=not args.no_anchor, device=args.device)
     for i, (f, r) in enumerate(zip(files, results, strict=True)):
         save_map(r.map, outs[i])
         if dxfs:

@@ -33,6 +33,7 @@ COMMANDS = [
     "train",
     "autocorrect",
     "synthesize",
+    "reproduce",
 ]
 
 

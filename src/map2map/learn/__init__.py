@@ -25,6 +25,9 @@ PyTorch is imported only inside this package (``pip install 'map2map[learn]'``);
 * :mod:`~map2map.learn.fig514` -- Fig. 5.14: simulated | parametric (same trajectory) |
   Model_AB, with appendix-metric error and wall recall.
 
-Wall recall, boundary F1, Chamfer distance and per-class IoU (the guards of
-``benchmarks/table53.py``) live in :mod:`map2map.evaluate.wallmetrics`, a layer above.
+* :mod:`~map2map.learn.table53` -- thesis Table 5.3 / Fig. 5.12 (:func:`run_table53`) on
+  held-out pairs of a dataset build (:func:`heldout_pairs_from_dataset`) or generated ones.
+
+Wall recall, boundary F1, Chamfer distance and per-class IoU (the guards of Table 5.3)
+live in :mod:`map2map.evaluate.wallmetrics`, a lower layer.
 """

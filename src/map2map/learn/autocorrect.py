@@ -14,8 +14,11 @@
    the same path the training inputs took;
 3. the generator's output is post-processed back to the square *at the input's own
    resolution* (:func:`map2map.learn.postprocess.postprocess`: upsampling, snapping to the
-   three values, straightened walls moved onto the input's wall pixels, walls redrawn
-   with the training targets' thickness scaled to the input);
+   three values, straight walls; by default (``anchor=True``) the input's own walls,
+   straightened at full resolution on the median of their observed faces and given the
+   training targets' thickness, plus the network's walls the input does not show;
+   ``anchor=False`` draws the network's walls, moved by at most half a model cell onto
+   the input's);
 4. the square is cut back into the input's grid: the result has the input's shape,
    resolution and origin, so every corrected wall lies in the same world frame. Cells
    outside the square (all unknown in the input) stay unknown.
@@ -223,7 +226,8 @@ def _unrotate_segments(segs: np.ndarray, angle: float, n: int) -> np.ndarray:
 
 def autocorrect_many(maps: list[OccupancyMap], model: str | os.PathLike | BAModel | None =
                      "pretrained", *, straighten: bool = True, deskew: bool = True,
-                     device: str = "cpu", batch: int = 256) -> list[Correction]:
+                     anchor: bool = True, device: str = "cpu", batch: int = 256
+                     ) -> list[Correction]:
     """:func:`autocorrect` for several maps, the network run in batches."""
     net = load_model(model, device)
     squares = [_prepare(m, net.data_size, deskew) for m in maps]
@@ -246,7 +250,7 @@ def autocorrect_many(maps: list[OccupancyMap], model: str | os.PathLike | BAMode
         scale = n / net.data_size
         data_sq, segs = postprocess(outputs[k], (n, n), model_sq,
                                     wall_px=max(1.0, net.target_wall_px * scale),
-                                    straighten=straighten)
+                                    straighten=straighten, anchor=anchor, data_px=scale)
         k += 1
         if angle:  # back from the deskewed frame
             data_sq = _rotate(data_sq, -angle)[pad:pad + side, pad:pad + side]
@@ -269,8 +273,10 @@ def autocorrect_many(maps: list[OccupancyMap], model: str | os.PathLike | BAMode
             warns.append(f"only {support:.0%} of the output's wall pixels lie near a wall of "
                          "the input: the model may have invented structure; check the figure")
         if "PROVISIONAL" in str(net.header.get("note", "")):
-            warns.append("provisional Model_BA weights (small CPU training run): they find "
-                         "walls but place them less exactly than a good SLAM map (docs/learn.md)")
+            warns.append("provisional Model_BA weights (small CPU training run): walls the "
+                         "input does not show are placed only to within a few pixels, and "
+                         "the appendix-metric error is not reliably lower than the input's "
+                         "(docs/learn.md)")
         out = m.copy(data=data)
         out.meta["autocorrect"] = {"model": net.source, "warnings": warns,
                                    "support": support, "segments_px": seg_px.tolist(),
@@ -299,8 +305,8 @@ def _support(inp: np.ndarray, out: np.ndarray, tol: float) -> float | None:
 
 
 def autocorrect(m: OccupancyMap, model: str | os.PathLike | BAModel | None = "pretrained",
-                *, straighten: bool = True, deskew: bool = True, device: str = "cpu"
-                ) -> OccupancyMap:
+                *, straighten: bool = True, deskew: bool = True, anchor: bool = True,
+                device: str = "cpu") -> OccupancyMap:
     """Auto-correct a SLAM map into a CAD-like plan with Model_BA (module docstring).
 
     Parameters
@@ -313,6 +319,9 @@ def autocorrect(m: OccupancyMap, model: str | os.PathLike | BAModel | None = "pr
         Post-processing steps 3-5 (straight walls); False keeps the snapped upsampling.
     deskew : bool
         Rotate maps whose walls are not along the grid to the axes first (step 1).
+    anchor : bool
+        Walls anchored on the input's observed wall faces at full resolution (step 3,
+        default); False places them where the network's low-resolution output says.
     device : str
         Torch device for the network.
 
@@ -325,7 +334,7 @@ def autocorrect(m: OccupancyMap, model: str | os.PathLike | BAModel | None = "pr
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = autocorrect_many([m], model, straighten=straighten, deskew=deskew,
-                               device=device)[0]
+                               anchor=anchor, device=device)[0]
     for w in res.warnings:
         warnings.warn(w, stacklevel=2)
     return res.map

@@ -28,6 +28,22 @@ needs 8x (or more) upsampling, and plain upsampling gives grey, blurred walls.
    onto the mean position of the input map's occupied pixels in that band, when they
    cover at least 30 % of its length. The input's walls are bent, noisy and doubled in
    places; averaging them along a straight segment keeps only their mean position.
+4b. **Anchored walls** (``anchor=True``, the default when a ``guide`` is given; replaces
+   steps 4-5): a SLAM map's wall faces are already where the laser hit them, within a
+   pixel or so of the plan's, and a 64 px network cannot place a wall better than a few
+   pixels of a 256 map (docs/learn.md measures it). So the walls are the input's own,
+   straightened at full resolution: its wall pixels are cut into straight segments
+   (step 3 on the input, ``ANCHOR_CELL`` = 4 dataset pixels), and each wall is drawn
+   with its faces at the **median** position of the input's faces along it
+   (:func:`anchored_walls`, within ``ANCHOR_BAND`` = 3 dataset pixels): a noisy, jagged
+   face becomes one straight face where it was seen; a wall seen from one side only
+   gets the training targets' thickness behind its face (the plan's thick walls, so
+   wall recall rises), never into space the input saw free. The network decides what
+   the input does not show: its straight walls lying farther than ``ANCHOR_NEW`` (4
+   dataset pixels) from any input wall over 70 % of their length are added (walls the
+   robot never saw). Input wall pixels that no straight wall explains (corners, short
+   pieces) are kept; those a straight wall replaces take the value of their nearest
+   non-wall neighbour. Free and unknown space come from the input.
 5. **Redrawing**: the segments are drawn with the thickness of the training targets'
    walls (``wall_px``, measured on the dataset at training time and scaled to the frame),
    occupied blobs of step 2 that no segment explains (columns, furniture) are kept when at
@@ -62,7 +78,7 @@ from scipy import ndimage
 from ..core.grid import FREE, OCCUPIED, UNKNOWN
 from ..maps.segments import straight_segments
 
-__all__ = ["postprocess", "wall_thickness_px", "straight_segments"]
+__all__ = ["postprocess", "wall_thickness_px", "straight_segments", "anchored_walls"]
 
 #: Grey level below which an upsampled output pixel is wall (step 2).
 WALL_BELOW = 96
@@ -126,9 +142,183 @@ def _refine(segs: np.ndarray, guide_occ: np.ndarray, shift: float) -> np.ndarray
     return out
 
 
+def _surface_masks(data: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Occupied pixels with a free neighbour above, below, left, right (the wall surfaces
+    a laser saw, facing that way)."""
+    occ, free = data == OCCUPIED, data == FREE
+    up, dn, lf, rt = (np.zeros_like(occ) for _ in range(4))
+    up[1:] = occ[1:] & free[:-1]
+    dn[:-1] = occ[:-1] & free[1:]
+    lf[:, 1:] = occ[:, 1:] & free[:, :-1]
+    rt[:, :-1] = occ[:, :-1] & free[:, 1:]
+    return up, dn, lf, rt
+
+
+def _face(mask: np.ndarray, top: bool, offset: int, min_cover: float) -> int | None:
+    """Median position (+ ``offset``) of the first (``top``) or last face pixel of each
+    column of ``mask`` (rows across the wall), or None when under ``min_cover`` of the
+    columns have one."""
+    has = mask.any(0)
+    if has.sum() < min_cover * max(1, mask.shape[1]):
+        return None
+    idx = np.argmax(mask, 0) if top else mask.shape[0] - 1 - np.argmax(mask[::-1], 0)
+    return offset + int(np.round(np.median(idx[has])))
+
+
+def _align_faces(found: list, tol: float) -> None:
+    """Put faces of one orientation and side that lie within ``tol`` of each other on one
+    line (in place): their length-weighted median, rounded."""
+    for horiz in (True, False):
+        for k in (1, 2):  # the first (top/left) faces, then the last (bottom/right) ones
+            items = [f for f in found if f[0] == horiz and f[k] is not None]
+            items.sort(key=lambda f: f[k])
+            group: list = []
+            for f in items + [None]:
+                if f is not None and group and f[k] - group[0][k] <= tol:
+                    group.append(f)
+                    continue
+                if len(group) > 1:
+                    pos = np.array([g[k] for g in group], float)
+                    w = np.array([g[4] - g[3] + 1 for g in group], float)
+                    order = np.argsort(pos)
+                    cum = np.cumsum(w[order])
+                    med = pos[order][np.searchsorted(cum, cum[-1] / 2)]
+                    for g in group:
+                        g[k] = int(med)
+                group = [f] if f is not None else []
+
+
+def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px: float,
+                   min_cover: float = 0.3, align: float = 0.0, grow: int = 0
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """Walls of axis-aligned segments placed on the guide's observed surfaces (step 4b).
+
+    For each segment, the guide's (input map's) wall surfaces facing free space within
+    ``band`` pixels across it are found column by column (row by row for a vertical
+    one); when they cover at least ``min_cover`` of its length, the wall face on that
+    side is put at their **median** position (a straight face through the noisy,
+    observed one). A wall seen from both sides spans its two faces; a wall seen from one
+    side gets ``wall_px`` of thickness behind its face, stopping at space the input saw
+    free; a wall with no observed face keeps the segment's position and ``wall_px``.
+    With ``align > 0``, faces of one orientation and side within ``align`` pixels of each
+    other (pieces of one wall line cut by doors, bent apart by drift) are put on one
+    line, their length-weighted median. ``grow`` moves every observed face that many
+    pixels out into the free space it faces (a plan drawn with thicker walls than the
+    laser sees).
+
+    Returns
+    -------
+    mask : ndarray (H, W) bool
+        The walls.
+    centre : ndarray (K, 4)
+        Their centre lines (x0, y0, x1, y1) in pixels.
+
+    Examples
+    --------
+    >>> g = np.full((20, 30), 255, np.uint8)
+    >>> g[9:11, 2:28] = 0; g[11, 2:28:3] = 0            # a noisy wall: faces rows 9, 10
+    >>> m, c = anchored_walls(g, np.array([[2.0, 11.0, 27.0, 11.0]]), band=3, wall_px=2)
+    >>> sorted(set(np.nonzero(m)[0].tolist())), c[0].tolist()
+    ([9, 10], [2.0, 9.5, 27.0, 9.5])
+    """
+    H, W = guide.shape
+    free = guide == FREE
+    up, dn, lf, rt = _surface_masks(guide)
+    t = max(1, int(round(wall_px)))
+    found = []
+    for x0, y0, x1, y1 in np.asarray(segs, float).reshape(-1, 4):
+        horiz, vert = y0 == y1, x0 == x1
+        if horiz == vert:
+            continue
+        c = y0 if horiz else x0
+        lo = int(round(min(x0, x1) if horiz else min(y0, y1)))
+        hi = int(round(max(x0, x1) if horiz else max(y0, y1)))
+        lim = H if horiz else W
+        a, b = int(max(0, np.floor(c - band))), int(min(lim - 1, np.ceil(c + band)))
+        span = slice(max(0, lo), min(W if horiz else H, hi + 1))
+        if horiz:
+            first, last = up[a:b + 1, span], dn[a:b + 1, span]
+        else:
+            first, last = lf[span, a:b + 1].T, rt[span, a:b + 1].T
+        f0, f1 = _face(first, True, a, min_cover), _face(last, False, a, min_cover)
+        found.append([horiz, None if f0 is None else f0 - grow,
+                      None if f1 is None else f1 + grow, lo, hi, c])
+    if align > 0:
+        _align_faces(found, align)
+    faces, extended, centres = [], [], []
+    for horiz, f0, f1, lo, hi, c in found:
+        if f0 is not None and f1 is not None and f0 <= f1:
+            r0, r1, ext = f0, f1, False
+        elif f0 is not None:
+            r0, r1, ext = f0, f0 + t - 1, True
+        elif f1 is not None:
+            r0, r1, ext = f1 - t + 1, f1, True
+        else:
+            r0 = int(round(c - (t - 1) / 2))
+            r1, ext = r0 + t - 1, True
+        (extended if ext else faces).append((horiz, r0, r1, lo, hi))
+        mid = (r0 + r1) / 2
+        centres.append([lo, mid, hi, mid] if horiz else [mid, lo, mid, hi])
+    mask = np.zeros((H, W), bool)
+    for group, stop_at_free in ((faces, False), (extended, True)):
+        for horiz, r0, r1, lo, hi in group:
+            z = np.zeros((H, W), bool)
+            if horiz:
+                z[max(0, r0):r1 + 1, max(0, lo):hi + 1] = True
+            else:
+                z[max(0, lo):hi + 1, max(0, r0):r1 + 1] = True
+            if stop_at_free:
+                z &= ~free | mask
+            mask |= z
+    return mask, np.array(centres, float).reshape(-1, 4)
+
+
+#: Anchoring scales in pixels of the dataset's 256 px maps (multiplied by ``data_px``).
+ANCHOR_CELL, ANCHOR_BAND, ANCHOR_NEW = 4.0, 3.0, 4.0
+#: Faces closer than this (dataset pixels) are put on one line (0: off).
+ANCHOR_ALIGN = 0.0
+#: Pixels (dataset) each observed face moves out into its free space.
+ANCHOR_GROW = 0.0
+
+
+def _anchored(output_segs: np.ndarray, guide: np.ndarray, wall_px: float, data_px: float
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """Step 4 in ``anchor`` mode: the guide's own walls straightened at full resolution,
+    plus the network's walls the guide does not show (module docstring)."""
+    occ = guide == OCCUPIED
+    own = straight_segments(occ, ANCHOR_CELL * data_px)
+    segs = own
+    if len(output_segs):
+        d = ndimage.distance_transform_edt(~occ) if occ.any() else np.full(occ.shape, np.inf)
+        new = []
+        for x0, y0, x1, y1 in output_segs:
+            k = max(2, int(np.hypot(x1 - x0, y1 - y0)))
+            ys = np.clip(np.round(np.linspace(y0, y1, k)).astype(int), 0, occ.shape[0] - 1)
+            xs = np.clip(np.round(np.linspace(x0, x1, k)).astype(int), 0, occ.shape[1] - 1)
+            if np.mean(d[ys, xs] > ANCHOR_NEW * data_px) > 0.7:
+                new.append([x0, y0, x1, y1])
+        if new:
+            segs = np.concatenate([own, np.array(new, float)])
+    mask, centres = anchored_walls(guide, segs, band=ANCHOR_BAND * data_px, wall_px=wall_px,
+                                   align=ANCHOR_ALIGN * data_px,
+                                   grow=int(round(ANCHOR_GROW * data_px)))
+    other = own[(own[:, 0] != own[:, 2]) & (own[:, 1] != own[:, 3])] if len(own) else own
+    # the input's walls: replaced by their nearest non-wall value where a straight wall
+    # explains them, kept where none does (corners, short pieces, what Hough missed)
+    if occ.any() and not occ.all():
+        _, (ri, ci) = ndimage.distance_transform_edt(occ, return_indices=True)
+        data = np.asarray(guide)[ri, ci].copy()
+    else:
+        data = np.asarray(guide).copy()
+    near = cv2.dilate(mask.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
+    data[occ & ~near] = OCCUPIED
+    data[mask] = OCCUPIED
+    return data, np.concatenate([centres, other.reshape(-1, 4)])
+
+
 def postprocess(output: np.ndarray, shape: tuple[int, int], guide: np.ndarray | None = None,
-                *, wall_px: float = 2.0, straighten: bool = True
-                ) -> tuple[np.ndarray, np.ndarray]:
+                *, wall_px: float = 2.0, straighten: bool = True, anchor: bool = True,
+                data_px: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """Model output (grey, [0, 255], model size) -> (ternary uint8 map of ``shape``,
     wall segments (K, 4) in its pixels); the steps are in the module docstring.
 
@@ -144,6 +334,10 @@ def postprocess(output: np.ndarray, shape: tuple[int, int], guide: np.ndarray | 
         Thickness of the redrawn walls, pixels of the frame.
     straighten : bool
         Steps 3-5; False stops after snapping.
+    anchor : bool
+        With a ``guide``: step 4b (anchored walls) instead of 4-5.
+    data_px : float
+        Pixels of the frame per pixel of the dataset's maps (scales step 4b).
     """
     H, W = shape
     low = np.asarray(output, np.float32)
@@ -162,6 +356,8 @@ def postprocess(output: np.ndarray, shape: tuple[int, int], guide: np.ndarray | 
         return data, np.zeros((0, 4))
     cell = H / low.shape[0]
     segs = straight_segments(walls, cell)
+    if guide is not None and anchor:
+        return _anchored(segs, np.asarray(guide), wall_px, data_px)
     if guide is not None and len(segs):
         segs = _refine(segs, np.asarray(guide) == OCCUPIED, cell / 2)
     drawn = np.zeros((H, W), np.uint8)

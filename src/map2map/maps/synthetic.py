@@ -39,6 +39,9 @@ __all__ = [
     "draw_walls",
     "wall_displacement",
     "gaussian_field",
+    "affine_field",
+    "bump_field",
+    "min_jacobian",
     "deform",
     "true_errors",
 ]
@@ -254,6 +257,138 @@ def gaussian_field(
     yy, xx = np.mgrid[0:H, 0:W] + 0.5
     g = np.exp(-((xx - centre[0]) ** 2 + (yy - centre[1]) ** 2) / (2 * sigma**2))
     return np.stack([amplitude[0] * g, amplitude[1] * g], axis=-1)
+
+
+def affine_field(
+    shape: tuple[int, int],
+    *,
+    rotation_deg: float = 0.0,
+    translation: tuple[float, float] = (0.0, 0.0),
+    scale: tuple[float, float] = (1.0, 1.0),
+    shear: float = 0.0,
+    centre: tuple[float, float] | None = None,
+) -> np.ndarray:
+    """(H, W, 2) displacement of a global affine map about ``centre`` (appendix Table 2).
+
+    The map ``p -> c + R S H (p - c) + t`` with ``S = diag(scale)``, ``H`` the shear
+    ``[[1, shear], [0, 1]]`` and ``R`` the rotation, as a displacement ``u(p)`` at the
+    cell centres: the rigid (rotation + translation) and the global scale/shear errors
+    of the appendix paper's synthetic maps (its section 5.1).
+
+    Parameters
+    ----------
+    shape : (H, W)
+        Image size.
+    rotation_deg : float
+        Rotation, degrees (counter-clockwise in x right, y down pixels: clockwise on screen).
+    translation : (tx, ty)
+        Pixels.
+    scale : (sx, sy)
+        Global scale along x and y.
+    shear : float
+        Global shear of x by y.
+    centre : (x, y), optional
+        Fixed point of the linear part (default the image centre).
+
+    Returns
+    -------
+    (H, W, 2) float array
+
+    Examples
+    --------
+    >>> u = affine_field((40, 60), translation=(2.0, -1.0))
+    >>> u[0, 0].tolist(), u[39, 59].tolist()
+    ([2.0, -1.0], [2.0, -1.0])
+    >>> u = affine_field((40, 60), scale=(1.1, 1.1), centre=(0.5, 0.5))
+    >>> [round(v, 6) for v in u[0, 10].tolist()]      # 10 px right of the centre
+    [1.0, 0.0]
+    """
+    H, W = shape
+    cx, cy = centre if centre is not None else (W / 2, H / 2)
+    a = np.deg2rad(rotation_deg)
+    R = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    A = R @ np.diag(scale) @ np.array([[1.0, shear], [0.0, 1.0]])
+    yy, xx = np.mgrid[0:H, 0:W] + 0.5
+    px, py = xx - cx, yy - cy
+    ux = A[0, 0] * px + A[0, 1] * py - px + translation[0]
+    uy = A[1, 0] * px + A[1, 1] * py - py + translation[1]
+    return np.stack([ux, uy], axis=-1)
+
+
+def bump_field(
+    shape: tuple[int, int],
+    amplitude: float,
+    sigma: float,
+    count: int,
+    rng: np.random.Generator,
+    margin: float = 0.15,
+) -> np.ndarray:
+    """(H, W, 2) local shear: ``count`` seeded Gaussian bumps of random direction.
+
+    Each bump is :func:`gaussian_field` with its centre uniform in the image (``margin``
+    of each side left out), its displacement of length ``amplitude`` px in a uniform
+    random direction and width ``sigma`` px; the bumps add up. Low and high local shear
+    of the appendix paper's synthetic maps (Table 2) are two amplitudes.
+
+    Parameters
+    ----------
+    shape : (H, W)
+        Image size.
+    amplitude : float
+        Displacement at each bump's centre, pixels.
+    sigma : float
+        Bump width, pixels.
+    count : int
+        Number of bumps.
+    rng : numpy.random.Generator
+        Source of the centres and directions.
+    margin : float
+        Share of the width/height on each side where no centre falls.
+
+    Returns
+    -------
+    (H, W, 2) float array
+
+    Examples
+    --------
+    >>> f = bump_field((50, 60), 3.0, 10.0, 2, np.random.default_rng(0))
+    >>> f.shape, bool(np.abs(f).max() <= 6.0)
+    ((50, 60, 2), True)
+    """
+    H, W = shape
+    out = np.zeros((H, W, 2))
+    for _ in range(count):
+        cx = rng.uniform(margin, 1 - margin) * W
+        cy = rng.uniform(margin, 1 - margin) * H
+        ang = rng.uniform(0, 2 * np.pi)
+        out += gaussian_field(shape, (cx, cy), (amplitude * np.cos(ang), amplitude * np.sin(ang)),
+                              sigma)  # fmt: skip
+    return out
+
+
+def min_jacobian(field: np.ndarray) -> float:
+    """Smallest determinant of the Jacobian of ``p -> p + field(p)`` (> 0: no folding).
+
+    A field that folds (determinant <= 0) has no true error; one that squeezes walls
+    (determinant well below 1) leaves walls too thin to have two faces.
+
+    Parameters
+    ----------
+    field : (H, W, 2) float array
+        Displacement (x, y), pixels.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> round(min_jacobian(affine_field((20, 20), scale=(0.5, 1.0))), 6)
+    0.5
+    """
+    dxx, dxy = np.gradient(field[..., 0], axis=1), np.gradient(field[..., 0], axis=0)
+    dyx, dyy = np.gradient(field[..., 1], axis=1), np.gradient(field[..., 1], axis=0)
+    return float(((1 + dxx) * (1 + dyy) - dxy * dyx).min())
 
 
 def deform(
