@@ -253,6 +253,86 @@ def test_dask_local_cluster_gives_the_same_pairs(plans, reference, tmp_path):
     _assert_same(tmp_path / "DS", reference)
 
 
+def test_dask_dead_workers_are_retried_then_recorded(plans, reference, tmp_path, monkeypatch):
+    """A LocalCluster worker that dies is restarted by its nanny and the pair run again
+    (Dask's retries); a pair that kills every worker it runs on is recorded failed."""
+    pytest.importorskip("distributed")
+    import dask
+
+    monkeypatch.setenv("M2M_CRASH_DIR", str(tmp_path))  # the workers inherit it
+    # one retry instead of Dask's three: two deaths make a KilledWorker (quicker test)
+    with dask.config.set({"distributed.scheduler.allowed-failures": 1}):
+        s = build_dataset(tmp_path / "DS", str(plans), 4, 5, PARAMS, workers=1,
+                          scheduler="local", progress=False, figures=False,
+                          task=crashing_task)  # fmt: skip
+    assert (s.done, s.failed) == (3, 1)
+    ((idx, _, why),) = dataset_status(tmp_path / "DS")["failed"]
+    assert idx == 2 and "dask workers died running it (2 workers" in why
+    assert (tmp_path / "crashed-1").exists()  # pair 1 did kill its first worker ...
+    ref, got = _tree(reference), _tree(tmp_path / "DS")
+    assert any(k.startswith("000001/") for k in got)  # ... and was made on the next one
+    assert got and all(got[k] == ref[k] for k in got)
+
+
+class _FakeFuture:
+    def __init__(self, value):
+        self.value = value
+
+    def result(self):
+        return self.value
+
+    def release(self):
+        pass
+
+    def cancel(self):
+        pass
+
+
+class _FakeClient:
+    """Runs a task when submitted; records how many were in flight at once."""
+
+    def __init__(self, threads: dict):
+        self.threads, self.live, self.most = threads, set(), 0
+
+    def nthreads(self):
+        return dict(self.threads)
+
+    def submit(self, fn, task, key, pure):
+        fut = _FakeFuture(fn(task))
+        self.live.add(fut)
+        self.most = max(self.most, len(self.live))
+        return fut
+
+    def wait(self, futures, timeout, return_when):
+        from types import SimpleNamespace
+
+        done = {futures[0]}  # one finishes at a time
+        self.live -= done
+        return SimpleNamespace(done=done)
+
+
+def test_dask_submission_is_greedy_and_warns_on_threads():
+    """No more pairs in flight than the cluster has threads (the next one goes to whichever
+    worker frees first), every task run once, in order; threaded workers are warned about."""
+    pytest.importorskip("distributed")
+    from collections import deque
+    from types import SimpleNamespace
+
+    from map2map.datasets.dask_backend import _run
+
+    tasks = [SimpleNamespace(index=i) for i in range(7)]
+    got = []
+    client = _FakeClient({"w1": 1, "w2": 1})
+    _run(client, deque(tasks), lambda t: t.index * 10, lambda t, r, w: got.append(r),
+         None, "k", RuntimeError, client.wait)  # fmt: skip
+    assert got == [i * 10 for i in range(7)] and client.most == 2
+    client = _FakeClient({"w1": 3})
+    with pytest.warns(RuntimeWarning, match="3 threads each"):
+        _run(client, deque(tasks), lambda t: 0, lambda t, r, w: None, None, "k", RuntimeError,
+             client.wait)  # fmt: skip
+    assert client.most == 3
+
+
 def _free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))

@@ -4,11 +4,27 @@ The same tasks as the local pool (:func:`map2map.datasets.pair.run_pair` on a
 :class:`~map2map.datasets.pair.PairSpec`) are submitted to a scheduler, either an
 existing one (``tcp://host:8786``, started with ``dask scheduler`` and ``dask worker``;
 every worker needs map2map installed) or a :class:`distributed.LocalCluster` started
-here (``"local"``: one single-threaded worker process per requested worker). Results
-come back to this process, which writes the pairs and the manifest: workers need no
-shared file system. Retries after a worker's death and work stealing are Dask's
+here (``"local"``: one single-threaded worker process per requested worker, with
+``OMP_NUM_THREADS=1`` and its kin, as Dask's nanny sets them). Results come back to this
+process, which writes the pairs and the manifest: workers need no shared file system.
+Retries after a worker's death and work stealing are Dask's
 (``distributed.scheduler.allowed-failures``, 3 by default); a pair whose workers kept
 dying arrives as :class:`distributed.KilledWorker` and is reported to ``on_crash``.
+
+Scheduling is greedy, like the local pool's: no more tasks are in flight than the
+cluster has worker threads (asked again at every completion and every few seconds, so
+workers that join are used), and a new task is submitted as soon as one finishes. The
+scheduler therefore always hands the next pair to an idle worker; submitting every task
+at once let Dask queue two pairs on one single-threaded worker while another sat idle at
+the end of a build (the main cause of the LocalCluster's measured +28 % wall time over
+the local pool on 8 pairs, with its start-up and shutdown: see
+``benchmarks/bench_dataset.py``). It also keeps the scheduler's memory flat for a
+35,000-pair build. Each task carries only the one plan file it uses
+(:meth:`~map2map.datasets.plans.PlanSource.only`), not the folder's whole file list.
+
+A cluster whose workers run several threads each gets a :class:`RuntimeWarning`: pairs
+are CPU-bound Python and numba code, so threads of one worker process share its GIL
+(start workers with ``--nthreads 1 --nworkers K``).
 
 Dask is imported only in this module.
 
@@ -19,12 +35,18 @@ Examples
 
 from __future__ import annotations
 
+import logging
+import warnings
+from collections import deque
 from collections.abc import Callable, Iterable
 from typing import Any
 
 from ..core.errors import InputError
 
 __all__ = ["run_dask"]
+
+#: Seconds between two looks at the cluster's size while every slot is busy.
+POLL_SECONDS = 2.0
 
 
 def run_dask(
@@ -43,7 +65,7 @@ def run_dask(
     Parameters
     ----------
     tasks : iterable
-        Tasks with an ``index`` attribute (used in the Dask keys).
+        Tasks with an ``index`` attribute (used in the Dask keys), run in this order.
     fn : callable
         The task function (importable on the workers).
     scheduler : str
@@ -65,20 +87,22 @@ def run_dask(
         Dask is not installed, or the scheduler cannot be reached.
     """
     try:
-        from distributed import Client, KilledWorker, LocalCluster, as_completed
+        from distributed import Client, KilledWorker, LocalCluster, wait
     except ImportError:
         raise InputError(
             "--scheduler", "dask.distributed is not installed (pip install 'map2map[dask]')"
         ) from None
-    tasks = list(tasks)
-    if not tasks:
+    queue = deque(tasks)
+    if not queue:
         return
     cluster = None
     try:
         if scheduler == "local":
             cluster = LocalCluster(n_workers=max(1, int(workers)), threads_per_worker=1,
-                                   processes=True, dashboard_address=":0")  # fmt: skip
-            client = Client(cluster)
+                                   processes=True, dashboard_address=":0",
+                                   silence_logs=logging.ERROR)  # fmt: skip
+            # same machine: results come straight from the workers, not via the scheduler
+            client = Client(cluster, direct_to_workers=True)
         else:
             _probe(scheduler)
             try:
@@ -86,28 +110,67 @@ def run_dask(
             except (OSError, TimeoutError) as exc:
                 raise InputError("--scheduler", f"cannot reach {scheduler} ({exc})") from None
         try:
-            by_key = {}
-            futures = []
-            for t in tasks:
-                fut = client.submit(fn, t, key=f"{key_prefix}-{t.index}", pure=False)
-                by_key[fut.key] = t
-                futures.append(fut)
-            done = as_completed(futures)
-            del futures  # as_completed holds them; each is dropped once handled
-            for fut in done:
-                task = by_key.pop(fut.key)
-                try:
-                    result = fut.result()
-                except KilledWorker as exc:
-                    on_crash(task, f"dask workers died running it ({exc})")
-                else:
-                    on_result(task, result, "dask")
-                fut.release()
+            _run(client, queue, fn, on_result, on_crash, key_prefix, KilledWorker, wait)
         finally:
             client.close()
     finally:
         if cluster is not None:
             cluster.close()
+
+
+def _slots(client, warned: list) -> int:
+    """Worker threads of the cluster now (at least 1: a task waits for a worker)."""
+    nthreads = client.nthreads()
+    if not warned and any(n > 1 for n in nthreads.values()):
+        warned.append(True)
+        warnings.warn(
+            f"dask workers run {max(nthreads.values())} threads each: pairs are CPU-bound and "
+            "share one process's GIL; start workers with --nthreads 1 --nworkers K",
+            RuntimeWarning, stacklevel=3)  # fmt: skip
+    return max(1, sum(nthreads.values()))
+
+
+def _run(client, queue: deque, fn, on_result, on_crash, key_prefix, killed_worker, wait) -> None:
+    in_flight: dict[Any, Any] = {}  # future -> task
+    warned: list = []
+
+    def top_up() -> None:
+        slots = _slots(client, warned)
+        while queue and len(in_flight) < slots:
+            t = queue.popleft()
+            in_flight[client.submit(fn, t, key=f"{key_prefix}-{t.index}", pure=False)] = t
+
+    try:
+        while queue or in_flight:
+            top_up()
+            try:
+                done = wait(list(in_flight), timeout=POLL_SECONDS,
+                            return_when="FIRST_COMPLETED").done  # fmt: skip
+            except TimeoutError:
+                continue  # every slot still busy: look at the cluster's size again
+            finished = [(fut, in_flight.pop(fut)) for fut in done]
+            top_up()  # the next pairs start before these are written
+            for fut, task in finished:
+                try:
+                    result = fut.result()
+                except killed_worker as exc:
+                    on_crash(task, _killed_reason(exc))
+                else:
+                    on_result(task, result, "dask")
+                fut.release()
+    finally:
+        for fut in in_flight:  # interrupted: do not leave pairs running on the cluster
+            fut.cancel()
+
+
+def _killed_reason(exc) -> str:
+    """One line for :class:`distributed.KilledWorker` (its own text is a paragraph)."""
+    try:
+        times = int(exc.allowed_failures) + 1
+        last = getattr(exc.last_worker, "address", exc.last_worker)
+    except (AttributeError, IndexError, TypeError, ValueError):
+        return f"dask workers died running it ({exc})"
+    return f"dask workers died running it ({times} workers, the last {last})"
 
 
 def _probe(address: str, timeout: float = 5.0) -> None:
