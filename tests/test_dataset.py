@@ -183,6 +183,24 @@ def test_resume_after_kill_9(plans, reference, tmp_path):
     assert "Traceback" not in bad.stderr
 
 
+def test_resume_after_a_kill_in_either_write_window(plans, reference, tmp_path):
+    """The two moments a kill -9 can leave traces, made deterministic: mid-write (a
+    temporary folder) and between the rename and the manifest's transaction (a pair
+    folder without its row). The next run removes both and makes those pairs again."""
+    ds = tmp_path / "DS"
+    build_dataset(ds, str(plans), 2, 5, PARAMS, workers=0, progress=False, figures=False)
+    with sqlite3.connect(ds / "manifest.sqlite") as con:
+        con.execute("DELETE FROM pairs WHERE idx = 1")  # renamed, never recorded
+    half = ds / "pairs" / ".tmp-000002-4242"
+    half.mkdir()
+    (half / "A.pgm").write_bytes(b"P5 half a file")
+    (ds / "pairs" / "000001" / "B.png").write_bytes(b"torn")  # an unrecorded folder is not trusted
+    s = build_dataset(ds, str(plans), 3, 5, PARAMS, workers=0, progress=False, figures=False)
+    assert (s.made_now, s.done) == (2, 3)
+    ref = {k: v for k, v in _tree(reference).items() if k[:6] in ("000000", "000001", "000002")}
+    assert _tree(ds) == ref
+
+
 def _done(ds: Path) -> int:
     db = ds / "manifest.sqlite"
     if not db.exists():
