@@ -52,14 +52,19 @@ __all__ = ["run_dask"]
 
 #: Seconds between two looks at the cluster's size while every slot is busy.
 POLL_SECONDS = 2.0
-#: Dask settings of a LocalCluster started here. Dask's defaults serve interactive work:
-#: a statistical profiler sampling every thread's stack every 10 ms in each worker, an
-#: event-loop tick every 20 ms, system and memory monitors every 0.5 and 0.1 s, work
-#: stealing every 0.1 s. Idle, that machinery took 0.076 CPU s per second on this
-#: machine (2 workers: 3.8 % of its 2 cores, taken from the pairs, and the profiler also
-#: takes the GIL from the pair being computed); with these, 0.011. Stealing has nothing
-#: to steal here: no worker ever holds a second pair (see ``_run``).
+#: Dask settings of a LocalCluster started here. Dask's nanny starts workers with
+#: ``MALLOC_TRIM_THRESHOLD_=65536``, which also turns off glibc's dynamic mmap threshold:
+#: every large numpy array is then mmapped and faulted in afresh, and a pair took 0.6 CPU s
+#: more (+20 %, 29 times the page faults; measured on 3 generated pairs, rbpf, 420 s).
+#: Dask's other defaults serve interactive work: a statistical profiler sampling every
+#: thread's stack every 10 ms in each worker, an event-loop tick every 20 ms, system and
+#: memory monitors every 0.5 and 0.1 s, work stealing every 0.1 s. Idle, that machinery
+#: took 0.076 CPU s per second on this machine (2 workers: 3.8 % of its 2 cores, taken
+#: from the pairs, and the profiler also takes the GIL from the pair being computed); with
+#: these, 0.011. Stealing has nothing to steal here: no worker ever holds a second pair
+#: (see ``_run``). ``OMP_NUM_THREADS=1`` and its kin stay as Dask sets them.
 LOCAL_CLUSTER_CONFIG = {
+    "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,  # None: not set
     "distributed.worker.profile.enabled": False,
     "distributed.admin.tick.interval": "1s",
     "distributed.admin.system-monitor.interval": "5s",
