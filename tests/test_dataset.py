@@ -315,6 +315,9 @@ class _FakeClient:
     def nthreads(self):
         return dict(self.threads)
 
+    def run(self, fn):
+        return {w: {"malloc_trim": "65536", "profile": w == "w1"} for w in self.threads}
+
     def submit(self, fn, task, key, pure):
         fut = _FakeFuture(fn(task))
         self.live.add(fut)
@@ -345,10 +348,17 @@ def test_dask_submission_is_greedy_and_warns_on_threads():
          None, "k", RuntimeError, client.wait)  # fmt: skip
     assert got == [i * 10 for i in range(7)] and client.most == 2
     client = _FakeClient({"w1": 3})
-    with pytest.warns(RuntimeWarning, match="3 threads each"):
+    from map2map.datasets.dask_backend import DaskSettingsWarning
+
+    with pytest.warns(DaskSettingsWarning, match="3 threads each"):
         _run(client, deque(tasks), lambda t: 0, lambda t, r, w: None, None, "k", RuntimeError,
              client.wait)  # fmt: skip
     assert client.most == 3
+    from map2map.datasets.dask_backend import _check_workers
+
+    match = "MALLOC_TRIM_THRESHOLD_=65536.*profiler on .1 of 2"
+    with pytest.warns(DaskSettingsWarning, match=match):
+        _check_workers(_FakeClient({"w1": 1, "w2": 1}))
 
 
 def _free_port() -> int:
@@ -357,8 +367,26 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
+#: The Dask configuration map2map.datasets.dask_backend (and the README) tell users to give
+#: their own workers.
+WORKER_CONFIG = """\
+distributed:
+  nanny:
+    pre-spawn-environ:
+      MALLOC_TRIM_THRESHOLD_: null
+  worker:
+    profile:
+      enabled: false
+"""
+
+
 def test_dask_separate_scheduler_and_worker(plans, reference, tmp_path):
     pytest.importorskip("distributed")
+    from map2map.datasets import dask_backend
+
+    assert WORKER_CONFIG in dask_backend.__doc__.replace("\n    ", "\n")  # documented as tested
+    (tmp_path / "daskcfg").mkdir()
+    (tmp_path / "daskcfg" / "map2map.yaml").write_text(WORKER_CONFIG)
     port = _free_port()
     addr = f"tcp://127.0.0.1:{port}"
     procs = []
@@ -371,7 +399,8 @@ def test_dask_separate_scheduler_and_worker(plans, reference, tmp_path):
         procs.append(subprocess.Popen(
             [sys.executable, "-m", "distributed.cli.dask_worker", addr, "--nthreads", "1",
              "--nworkers", "1", "--no-dashboard", "--host", "127.0.0.1"],
-            env=_env(), start_new_session=True, stdout=subprocess.DEVNULL,
+            env={**_env(), "DASK_CONFIG": str(tmp_path / "daskcfg")}, start_new_session=True,
+            stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL))  # fmt: skip
         from distributed import Client
 
@@ -384,6 +413,7 @@ def test_dask_separate_scheduler_and_worker(plans, reference, tmp_path):
                  "--no-figures"),
             env=_env(), capture_output=True, text=True, timeout=240)  # fmt: skip
         assert out.returncode == 0, out.stderr
+        assert "warning" not in out.stderr  # the configuration above is what it asks for
         _assert_same(tmp_path / "DS", reference)
     finally:
         for p in procs:

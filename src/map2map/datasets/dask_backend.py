@@ -7,29 +7,39 @@ every worker needs map2map installed) or a :class:`distributed.LocalCluster` sta
 here (``"local"``: one single-threaded worker process per requested worker, with
 ``OMP_NUM_THREADS=1`` and its kin, as Dask's nanny sets them). Results come back to this
 process, which writes the pairs and the manifest: workers need no shared file system.
-Retries after a worker's death and work stealing are Dask's
+Retries after a worker's death are Dask's
 (``distributed.scheduler.allowed-failures``, 3 by default); a pair whose workers kept
 dying arrives as :class:`distributed.KilledWorker` and is reported to ``on_crash``.
 
 Scheduling is greedy, like the local pool's: no more tasks are in flight than the
 cluster has worker threads (asked again at every completion and every few seconds, so
-workers that join are used), and a new task is submitted as soon as one finishes. The
-scheduler therefore always hands the next pair to an idle worker; submitting every task
-at once let Dask queue two pairs on one single-threaded worker while another sat idle at
-the end of a build (the main cause of the LocalCluster's measured +28 % wall time over
-the local pool on 8 pairs, with its start-up and shutdown: see
-``benchmarks/bench_dataset.py``). It also keeps the scheduler's memory flat for a
-35,000-pair build. Each task carries only the one plan file it uses
+workers that join are used), and the next task is submitted as soon as one finishes,
+before its pair is written. The scheduler therefore always hands the next pair to an
+idle worker; submitting every task at once let Dask queue two pairs on one
+single-threaded worker while another sat idle at the end of a build (8 pairs: one
+worker ran 5, the other 3). It also keeps the scheduler's memory flat for a 35,000-pair
+build. Each task carries only the one plan file it uses
 (:meth:`~map2map.datasets.plans.PlanSource.only`), not the folder's whole file list.
 
-A LocalCluster runs with :data:`LOCAL_CLUSTER_CONFIG` (no statistical profiler, slower
-monitors: Dask's interactive defaults cost the pairs several per cent of the CPU); give
-a cluster of your own the same settings through the environment of ``dask worker`` and
-``dask scheduler``, e.g. ``DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED=False``.
+A LocalCluster runs with :data:`LOCAL_CLUSTER_CONFIG`: without the
+``MALLOC_TRIM_THRESHOLD_`` Dask's nanny gives its workers (+20 % CPU per pair), without
+the statistical profiler, with slower monitors. Those were the LocalCluster's
+overhead over the local pool (+27.7 % wall on 8 pairs; with them gone a pair costs
+2.83 CPU s against the pool's 2.71, start-up included: ``benchmarks/bench_dataset.py``).
+A cluster of your own gets the same settings from a Dask configuration file in the
+directory ``DASK_CONFIG`` names, in the environment of ``dask worker``::
 
-A cluster whose workers run several threads each gets a :class:`RuntimeWarning`: pairs
-are CPU-bound Python and numba code, so threads of one worker process share its GIL
-(start workers with ``--nthreads 1 --nworkers K``).
+    distributed:
+      nanny:
+        pre-spawn-environ:
+          MALLOC_TRIM_THRESHOLD_: null
+      worker:
+        profile:
+          enabled: false
+
+Workers left at Dask's defaults, or running several threads each (pairs are CPU-bound
+Python and numba code: threads of one worker process share its GIL; start workers with
+``--nthreads 1 --nworkers K``), get a :class:`DaskSettingsWarning`.
 
 Dask is imported only in this module.
 
@@ -46,9 +56,14 @@ from collections import deque
 from collections.abc import Callable, Iterable
 from typing import Any
 
-from ..core.errors import InputError
+from ..core.errors import InputError, MapWarning
 
-__all__ = ["run_dask"]
+__all__ = ["run_dask", "DaskSettingsWarning", "LOCAL_CLUSTER_CONFIG"]
+
+
+class DaskSettingsWarning(MapWarning):
+    """A Dask cluster set up in a way that slows pairs down (the pairs stay right);
+    the command line prints it as one line."""
 
 #: Seconds between two looks at the cluster's size while every slot is busy.
 POLL_SECONDS = 2.0
@@ -137,12 +152,45 @@ def run_dask(
             except (OSError, TimeoutError) as exc:
                 raise InputError("--scheduler", f"cannot reach {scheduler} ({exc})") from None
         try:
+            if cluster is None:
+                _check_workers(client)
             _run(client, queue, fn, on_result, on_crash, key_prefix, KilledWorker, wait)
         finally:
             client.close()
     finally:
         if cluster is not None:
             cluster.close()
+
+
+def _worker_settings() -> dict:
+    import os
+
+    import dask
+
+    return {
+        "malloc_trim": os.environ.get("MALLOC_TRIM_THRESHOLD_"),
+        "profile": bool(dask.config.get("distributed.worker.profile.enabled", True)),
+    }
+
+
+def _check_workers(client) -> None:
+    """Warn when a cluster's workers run with the Dask defaults that slow pairs down."""
+    try:
+        found = client.run(_worker_settings)
+    except Exception:  # a worker without map2map, a timeout: the tasks will tell
+        return
+    trim = sorted({v["malloc_trim"] for v in found.values() if v["malloc_trim"] is not None})
+    prof = sum(v["profile"] for v in found.values())
+    what = []
+    if trim:
+        what.append(f"MALLOC_TRIM_THRESHOLD_={trim[0]} (about +20 % CPU per pair)")
+    if prof:
+        what.append(f"the statistical profiler on ({prof} of {len(found)} workers)")
+    if what:
+        warnings.warn(
+            f"dask workers run with {' and '.join(what)}: give them the settings of "
+            "map2map.datasets.dask_backend.LOCAL_CLUSTER_CONFIG (README: Paired datasets)",
+            DaskSettingsWarning, stacklevel=3)  # fmt: skip
 
 
 def _slots(client, warned: list) -> int:
@@ -153,7 +201,7 @@ def _slots(client, warned: list) -> int:
         warnings.warn(
             f"dask workers run {max(nthreads.values())} threads each: pairs are CPU-bound and "
             "share one process's GIL; start workers with --nthreads 1 --nworkers K",
-            RuntimeWarning, stacklevel=3)  # fmt: skip
+            DaskSettingsWarning, stacklevel=3)  # fmt: skip
     return max(1, sum(nthreads.values()))
 
 
