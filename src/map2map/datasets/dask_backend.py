@@ -39,7 +39,7 @@ directory ``DASK_CONFIG`` names, in the environment of ``dask worker``::
 
 Workers left at Dask's defaults, or running several threads each (pairs are CPU-bound
 Python and numba code: threads of one worker process share its GIL; start workers with
-``--nthreads 1 --nworkers K``), get a :class:`DaskSettingsWarning`.
+``--nthreads 1 --nworkers K``), get a :class:`DaskWarning`.
 
 Dask is imported only in this module.
 
@@ -51,6 +51,7 @@ Examples
 from __future__ import annotations
 
 import logging
+import time
 import warnings
 from collections import deque
 from collections.abc import Callable, Iterable
@@ -58,15 +59,18 @@ from typing import Any
 
 from ..core.errors import InputError, MapWarning
 
-__all__ = ["run_dask", "DaskSettingsWarning", "LOCAL_CLUSTER_CONFIG"]
+__all__ = ["run_dask", "DaskWarning", "LOCAL_CLUSTER_CONFIG"]
 
 
-class DaskSettingsWarning(MapWarning):
-    """A Dask cluster set up in a way that slows pairs down (the pairs stay right);
-    the command line prints it as one line."""
+class DaskWarning(MapWarning):
+    """A Dask cluster set up in a way that slows pairs down, or without workers (the
+    pairs stay right); the command line prints it as one line."""
 
 #: Seconds between two looks at the cluster's size while every slot is busy.
 POLL_SECONDS = 2.0
+#: Seconds without any worker after which a LocalCluster counts as broken (an error: run
+#: the command again to continue) and a cluster of one's own gets a warning (it waits).
+NO_WORKER_SECONDS = 60.0
 #: Dask settings of a LocalCluster started here. Dask's nanny starts workers with
 #: ``MALLOC_TRIM_THRESHOLD_=65536``, which also turns off glibc's dynamic mmap threshold:
 #: every large numpy array is then mmapped and faulted in afresh, and a pair took 0.6 CPU s
@@ -154,7 +158,8 @@ def run_dask(
         try:
             if cluster is None:
                 _check_workers(client)
-            _run(client, queue, fn, on_result, on_crash, key_prefix, KilledWorker, wait)
+            _run(client, queue, fn, on_result, on_crash, key_prefix, KilledWorker, wait,
+                 local=cluster is not None, where=scheduler)
         finally:
             client.close()
     finally:
@@ -190,28 +195,47 @@ def _check_workers(client) -> None:
         warnings.warn(
             f"dask workers run with {' and '.join(what)}: give them the settings of "
             "map2map.datasets.dask_backend.LOCAL_CLUSTER_CONFIG (README: Paired datasets)",
-            DaskSettingsWarning, stacklevel=3)  # fmt: skip
+            DaskWarning, stacklevel=3)  # fmt: skip
 
 
-def _slots(client, warned: list) -> int:
-    """Worker threads of the cluster now (at least 1: a task waits for a worker)."""
+def _threads(client, warned: set) -> int:
+    """Worker threads of the cluster now (0 while it has no worker)."""
     nthreads = client.nthreads()
-    if not warned and any(n > 1 for n in nthreads.values()):
-        warned.append(True)
+    if "threads" not in warned and any(n > 1 for n in nthreads.values()):
+        warned.add("threads")
         warnings.warn(
             f"dask workers run {max(nthreads.values())} threads each: pairs are CPU-bound and "
             "share one process's GIL; start workers with --nthreads 1 --nworkers K",
-            DaskSettingsWarning, stacklevel=3)  # fmt: skip
-    return max(1, sum(nthreads.values()))
+            DaskWarning, stacklevel=4)  # fmt: skip
+    return sum(nthreads.values())
 
 
-def _run(client, queue: deque, fn, on_result, on_crash, key_prefix, killed_worker, wait) -> None:
+def _run(
+    client, queue: deque, fn, on_result, on_crash, key_prefix, killed_worker, wait, *,
+    local: bool = False, where: str = "", no_worker_s: float | None = None,
+) -> None:  # fmt: skip
     in_flight: dict[Any, Any] = {}  # future -> task
-    warned: list = []
+    warned: set[str] = set()
+    no_worker_s = NO_WORKER_SECONDS if no_worker_s is None else no_worker_s
+    seen = time.monotonic()  # when the cluster last had a worker
 
     def top_up() -> None:
-        slots = _slots(client, warned)
-        while queue and len(in_flight) < slots:
+        nonlocal seen
+        threads = _threads(client, warned)
+        now = time.monotonic()
+        if threads:
+            seen = now
+        elif now - seen > no_worker_s:
+            if local:
+                raise InputError("--scheduler", f"the LocalCluster has had no worker for "
+                                 f"{now - seen:.0f} s (they died and were not restarted); "
+                                 "run the same command again to continue")  # fmt: skip
+            if "empty" not in warned:
+                warned.add("empty")
+                warnings.warn(f"no dask worker at {where} for {now - seen:.0f} s; waiting "
+                              f"(start one: dask worker {where} --nthreads 1)", DaskWarning,
+                              stacklevel=3)  # fmt: skip
+        while queue and len(in_flight) < max(1, threads):  # no worker: one task waits
             t = queue.popleft()
             in_flight[client.submit(fn, t, key=f"{key_prefix}-{t.index}", pure=False)] = t
 
