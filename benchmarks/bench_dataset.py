@@ -16,7 +16,7 @@ Usage::
 Every configuration builds the same pairs (generated plans, seed 0: the default
 HouseExpo-like mix of sizes) into a fresh folder. Wall-clock pairs/hour is what a user
 sees and depends on the machine being free; the CPU seconds per pair of the 1-worker
-run (the worker processes' CPU time) give the load-independent figure
+run (this process's and its workers' CPU time) give the load-independent figure
 ``2 cores x 3600 / CPU s per pair``. The cleaner is cross-validated on ``--ds`` (a
 dataset built beforehand with ``map2map dataset build``), since a few benchmark pairs
 would say nothing.

@@ -39,7 +39,11 @@ directory ``DASK_CONFIG`` names, in the environment of ``dask worker``::
 
 Workers left at Dask's defaults, or running several threads each (pairs are CPU-bound
 Python and numba code: threads of one worker process share its GIL; start workers with
-``--nthreads 1 --nworkers K``), get a :class:`DaskWarning`.
+``--nthreads 1 --nworkers K``), get a :class:`DaskWarning`, as does a cluster without
+any worker for :data:`NO_WORKER_SECONDS` (the build waits for one). A LocalCluster in
+that state (its nannies failed to restart dead workers, seen once on a very loaded
+machine) stops the build with an :class:`~map2map.core.errors.InputError` instead: the
+same command continues it.
 
 Dask is imported only in this module.
 
@@ -65,6 +69,7 @@ __all__ = ["run_dask", "DaskWarning", "LOCAL_CLUSTER_CONFIG"]
 class DaskWarning(MapWarning):
     """A Dask cluster set up in a way that slows pairs down, or without workers (the
     pairs stay right); the command line prints it as one line."""
+
 
 #: Seconds between two looks at the cluster's size while every slot is busy.
 POLL_SECONDS = 2.0
