@@ -183,6 +183,24 @@ def test_resume_after_kill_9(plans, reference, tmp_path):
     assert "Traceback" not in bad.stderr
 
 
+def test_resume_after_a_kill_in_either_write_window(plans, reference, tmp_path):
+    """The two moments a kill -9 can leave traces, made deterministic: mid-write (a
+    temporary folder) and between the rename and the manifest's transaction (a pair
+    folder without its row). The next run removes both and makes those pairs again."""
+    ds = tmp_path / "DS"
+    build_dataset(ds, str(plans), 2, 5, PARAMS, workers=0, progress=False, figures=False)
+    with sqlite3.connect(ds / "manifest.sqlite") as con:
+        con.execute("DELETE FROM pairs WHERE idx = 1")  # renamed, never recorded
+    half = ds / "pairs" / ".tmp-000002-4242"
+    half.mkdir()
+    (half / "A.pgm").write_bytes(b"P5 half a file")
+    (ds / "pairs" / "000001" / "B.png").write_bytes(b"torn")  # an unrecorded folder is not trusted
+    s = build_dataset(ds, str(plans), 3, 5, PARAMS, workers=0, progress=False, figures=False)
+    assert (s.made_now, s.done) == (2, 3)
+    ref = {k: v for k, v in _tree(reference).items() if k[:6] in ("000000", "000001", "000002")}
+    assert _tree(ds) == ref
+
+
 def _done(ds: Path) -> int:
     db = ds / "manifest.sqlite"
     if not db.exists():
@@ -253,14 +271,137 @@ def test_dask_local_cluster_gives_the_same_pairs(plans, reference, tmp_path):
     _assert_same(tmp_path / "DS", reference)
 
 
+def test_dask_dead_workers_are_retried_then_recorded(plans, reference, tmp_path, monkeypatch):
+    """A LocalCluster worker that dies is restarted by its nanny and the pair run again
+    (Dask's retries); a pair that kills every worker it runs on is recorded failed."""
+    pytest.importorskip("distributed")
+    import dask
+
+    monkeypatch.setenv("M2M_CRASH_DIR", str(tmp_path))  # the workers inherit it
+    # one retry instead of Dask's three: two deaths make a KilledWorker (quicker test)
+    with dask.config.set({"distributed.scheduler.allowed-failures": 1}):
+        kw = dict(workers=1, scheduler="local", progress=False, figures=False,
+                  task=crashing_task)  # fmt: skip
+        try:
+            s = build_dataset(tmp_path / "DS", str(plans), 4, 5, PARAMS, **kw)
+        except InputError as exc:
+            # on a very loaded machine a nanny can fail to restart its worker (Dask gives
+            # up after its connect timeout): the build stops with this error, and the
+            # same command continues, as the message says
+            assert "run the same command again" in str(exc)
+            s = build_dataset(tmp_path / "DS", str(plans), 4, 5, PARAMS, **kw)
+    assert (s.done, s.failed) == (3, 1)
+    ((idx, _, why),) = dataset_status(tmp_path / "DS")["failed"]
+    assert idx == 2 and "dask workers died running it (2 workers" in why
+    assert (tmp_path / "crashed-1").exists()  # pair 1 did kill its first worker ...
+    ref, got = _tree(reference), _tree(tmp_path / "DS")
+    assert any(k.startswith("000001/") for k in got)  # ... and was made on the next one
+    assert got and all(got[k] == ref[k] for k in got)
+
+
+class _FakeFuture:
+    def __init__(self, value):
+        self.value = value
+
+    def result(self):
+        return self.value
+
+    def release(self):
+        pass
+
+    def cancel(self):
+        pass
+
+
+class _FakeClient:
+    """Runs a task when submitted; records how many were in flight at once."""
+
+    def __init__(self, threads: dict):
+        self.threads, self.live, self.most = threads, set(), 0
+
+    def nthreads(self):
+        return dict(self.threads)
+
+    def run(self, fn):
+        return {w: {"malloc_trim": "65536", "profile": w == "w1"} for w in self.threads}
+
+    def submit(self, fn, task, key, pure):
+        fut = _FakeFuture(fn(task))
+        self.live.add(fut)
+        self.most = max(self.most, len(self.live))
+        return fut
+
+    def wait(self, futures, timeout, return_when):
+        from types import SimpleNamespace
+
+        done = {futures[0]}  # one finishes at a time
+        self.live -= done
+        return SimpleNamespace(done=done)
+
+
+def test_dask_submission_is_greedy_and_warns_on_threads():
+    """No more pairs in flight than the cluster has threads (the next one goes to whichever
+    worker frees first), every task run once, in order; threaded workers are warned about."""
+    pytest.importorskip("distributed")
+    from collections import deque
+    from types import SimpleNamespace
+
+    from map2map.datasets.dask_backend import _run
+
+    tasks = [SimpleNamespace(index=i) for i in range(7)]
+    got = []
+    client = _FakeClient({"w1": 1, "w2": 1})
+    _run(client, deque(tasks), lambda t: t.index * 10, lambda t, r, w: got.append(r),
+         None, "k", RuntimeError, client.wait)  # fmt: skip
+    assert got == [i * 10 for i in range(7)] and client.most == 2
+    client = _FakeClient({"w1": 3})
+    from map2map.datasets.dask_backend import DaskWarning
+
+    with pytest.warns(DaskWarning, match="3 threads each"):
+        _run(client, deque(tasks), lambda t: 0, lambda t, r, w: None, None, "k", RuntimeError,
+             client.wait)  # fmt: skip
+    assert client.most == 3
+    from map2map.datasets.dask_backend import _check_workers
+
+    # a cluster without workers: ours (a LocalCluster) is broken, one's own gets a warning
+    with pytest.raises(InputError, match="LocalCluster has had no worker"):
+        _run(_FakeClient({}), deque(tasks), abs, None, None, "k", RuntimeError, None,
+             local=True, no_worker_s=0.0)  # fmt: skip
+    client = _FakeClient({})
+    with pytest.warns(DaskWarning, match="no dask worker at tcp://h:1"):
+        _run(client, deque(tasks), lambda t: 0, lambda t, r, w: None, None, "k", RuntimeError,
+             client.wait, where="tcp://h:1", no_worker_s=0.0)  # fmt: skip
+    match = "MALLOC_TRIM_THRESHOLD_=65536.*profiler on .1 of 2"
+    with pytest.warns(DaskWarning, match=match):
+        _check_workers(_FakeClient({"w1": 1, "w2": 1}))
+
+
 def _free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
 
 
+#: The Dask configuration map2map.datasets.dask_backend (and the README) tell users to give
+#: their own workers.
+WORKER_CONFIG = """\
+distributed:
+  nanny:
+    pre-spawn-environ:
+      MALLOC_TRIM_THRESHOLD_: null
+  worker:
+    profile:
+      enabled: false
+"""
+
+
 def test_dask_separate_scheduler_and_worker(plans, reference, tmp_path):
     pytest.importorskip("distributed")
+    from map2map.datasets import dask_backend
+
+    assert WORKER_CONFIG in dask_backend.__doc__.replace("\n    ", "\n")  # documented as tested
+    (tmp_path / "daskcfg").mkdir()
+    (tmp_path / "daskcfg" / "map2map.yaml").write_text(WORKER_CONFIG)
     port = _free_port()
     addr = f"tcp://127.0.0.1:{port}"
     procs = []
@@ -273,7 +414,8 @@ def test_dask_separate_scheduler_and_worker(plans, reference, tmp_path):
         procs.append(subprocess.Popen(
             [sys.executable, "-m", "distributed.cli.dask_worker", addr, "--nthreads", "1",
              "--nworkers", "1", "--no-dashboard", "--host", "127.0.0.1"],
-            env=_env(), start_new_session=True, stdout=subprocess.DEVNULL,
+            env={**_env(), "DASK_CONFIG": str(tmp_path / "daskcfg")}, start_new_session=True,
+            stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL))  # fmt: skip
         from distributed import Client
 
@@ -286,6 +428,7 @@ def test_dask_separate_scheduler_and_worker(plans, reference, tmp_path):
                  "--no-figures"),
             env=_env(), capture_output=True, text=True, timeout=240)  # fmt: skip
         assert out.returncode == 0, out.stderr
+        assert "warning" not in out.stderr  # the configuration above is what it asks for
         _assert_same(tmp_path / "DS", reference)
     finally:
         for p in procs:

@@ -291,7 +291,10 @@ def build_dataset(
         finished = man.finished()
         _tidy(ds, {r["idx"] for r in man.rows("done")})
         todo = [i for i in range(count) if i not in finished]
-        specs = [PairSpec(i, seed, src, params) for i in todo]
+        # each task carries only its own plan file (load_plan gives the same plan)
+        specs = [
+            PairSpec(i, seed, src.only(pair_layout(i, params.source)[1]), params) for i in todo
+        ]
         made = failed = 0
         failures: list[tuple[int, str, str]] = []
         t0 = time.perf_counter()
@@ -324,9 +327,12 @@ def build_dataset(
             kind, plan_index = pair_layout(spec.index, params.source)
             plan_id = f"plan {plan_index}"
             n = man.record_crash(spec.index, plan_id, kind, reason, split="")
-            if n < max_attempts and not reason.startswith("dask"):
+            if reason.startswith("dask"):  # Dask has retried already and says how often
+                why = reason
+            elif n < max_attempts:
                 return True
-            why = f"{reason}; gave up after {n} attempt{'s' if n > 1 else ''}"
+            else:
+                why = f"{reason}; gave up after {n} attempt{'s' if n > 1 else ''}"
             man.record_failed(spec.index, plan_id, kind, why, split="")
             failures.append((spec.index, plan_id, why))
             failed += 1

@@ -68,12 +68,19 @@ class _Worker:
         child.close()
         self.name = name
         self.task: Any = None
+        self.asked = False
 
-    def stop(self, timeout: float = 5.0) -> None:
+    def ask_to_stop(self) -> None:
+        if self.asked:
+            return
+        self.asked = True
         try:
             self.conn.send(None)
         except (BrokenPipeError, OSError):
             pass
+
+    def stop(self, timeout: float = 5.0) -> None:
+        self.ask_to_stop()
         self.proc.join(timeout)
         if self.proc.is_alive():
             self.proc.kill()
@@ -138,6 +145,9 @@ def run_pool(
                             got = False
                     task, w.task = w.task, None
                     if got:
+                        if queue:  # the worker starts its next pair while this one is written
+                            w.task = queue.popleft()
+                            w.conn.send(w.task)
                         on_result(task, result, w.name)
                         continue
                     w.proc.join(5.0)
@@ -147,7 +157,10 @@ def run_pool(
                     if on_crash(task, reason):
                         queue.appendleft(task)
     finally:
-        for w in pool:
+        for w in pool:  # all exit at once (an interpreter's exit takes ~0.5 s)
             if w.task is not None:  # interrupted: do not wait for a long pair
                 w.proc.kill()
+            else:
+                w.ask_to_stop()
+        for w in pool:
             w.stop()
