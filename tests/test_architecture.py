@@ -9,10 +9,12 @@ another map2map package is checked against :data:`LAYERS`, bottom to top::
 
 A package may import its own modules and any package of a lower layer; packages of
 one layer (``parametric``, ``sim``, ``slam``) do not import each other. ``datasets``
-sits above ``jobs`` because the dataset builder runs the jobs; ``learn`` trains on the
-datasets. Heavy optional dependencies stay where they are needed: ``torch`` only in
-``map2map.learn``, ``dask`` only in ``map2map.learn`` and ``map2map.datasets`` (the
-scale-out), and ``import map2map`` loads neither them nor matplotlib nor numba.
+sits above ``jobs`` so that it may use them (today the pair builder calls the domain
+functions directly, for the reasons in ``datasets.pair``); ``learn`` trains on the
+datasets; ``reports`` reads every layer below. Heavy optional dependencies stay where
+they are needed: ``torch`` only in ``map2map.learn``, ``dask`` only in ``map2map.learn``
+and ``map2map.datasets`` (the scale-out), and ``import map2map`` loads neither them nor
+matplotlib nor numba.
 """
 
 from __future__ import annotations
