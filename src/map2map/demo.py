@@ -397,11 +397,15 @@ def stage_evaluate(ctx: DemoContext) -> None:
     error of its walls measured (appendix paper eq. 7); wall mean / max leave out
     points that match no plan wall (clutter, stray points), counted beside them.
     Writes ``report.json``, ``overlay.png``, ``error_map.png`` and ``points.csv`` per map
-    under ``evaluate/<name>/``. Without maps from earlier steps it bends the plan by a
-    smooth *known* field and prints the measured errors beside the true ones.
+    under ``evaluate/<name>/``, and for the first map (the simulated SLAM map) the
+    as-built inspection report an inspector reads (``map2map evaluate --report``):
+    ``inspection.html`` with its Markdown twin and one CSV row per plan wall, pass or
+    fail at 5 cm. Without maps from earlier steps it bends the plan by a smooth *known*
+    field and prints the measured errors beside the true ones.
     """
     from .evaluate.pipeline import evaluate_maps
     from .jobs.evaluate import write_evaluation
+    from .reports.inspection import write_inspection
 
     plan = ctx.plan
     if plan is None:
@@ -422,6 +426,19 @@ def stage_evaluate(ctx: DemoContext) -> None:
         paths = write_evaluation(ev, ref, out, res)
         for what, p in paths.items():
             ctx.wrote(f"evaluation of the {made_by}: {what.replace('_', ' ')}", p)
+        inspected = None
+        if name == maps[0][0]:
+            files = write_inspection(
+                ev, ref, out / "inspection.html", tolerance=0.05,
+                overlay_png=paths["overlay"].read_bytes(),
+                error_map_png=paths["error_map"].read_bytes(),
+            )  # fmt: skip
+            ctx.wrote(f"as-built inspection report of the {made_by} (HTML)", files.html)
+            ctx.wrote("as-built inspection report (Markdown)", files.md)
+            for k, fig in enumerate(sorted(files.md.parent.glob(files.md.stem + "_files/*"))):
+                ctx.wrote(f"as-built inspection report, figure {k + 1}", fig)
+            ctx.wrote("as-built inspection, one row per plan wall (CSV)", files.csv)
+            inspected = f"inspect {name}: plan walls {files.summary()} (inspection.html)"
         e = ev.report["errors"][ev.chosen]
         ctx.evaluation[name] = e
         line = (
@@ -441,6 +458,8 @@ def stage_evaluate(ctx: DemoContext) -> None:
         for w in ev.report["warnings"]:
             line += f"\n  warning: {w}"
         ctx.say(line)
+        if inspected:
+            ctx.say(inspected)
 
 
 #: (name, step) of the demo, in order.
