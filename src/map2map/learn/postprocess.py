@@ -41,8 +41,11 @@ needs 8x (or more) upsampling, and plain upsampling gives grey, blurred walls.
    the input does not show: its straight walls lying farther than ``ANCHOR_NEW`` (4
    dataset pixels) from any input wall over 70 % of their length are added (walls the
    robot never saw). Input wall pixels that no straight wall explains (corners, short
-   pieces) are kept; those a straight wall replaces take the value of their nearest
-   non-wall pixel. Free and unknown space come from the input.
+   pieces) are kept where the network has a wall within a model cell (elsewhere they
+   are clutter: furniture, people); those a straight wall replaces take the value of
+   their nearest non-wall pixel. Free and unknown space come from the input, except
+   free space the network calls unknown more than two model cells from any wall (laser
+   streaks through windows and open doors), which becomes unknown.
 5. **Redrawing**: the segments are drawn with the thickness of the training targets'
    walls (``wall_px``, measured on the dataset at training time and scaled to the frame),
    occupied blobs of step 2 that no segment explains (columns, furniture) are kept when at
@@ -376,8 +379,9 @@ ANCHOR_ALIGN = 0.0
 ANCHOR_GROW = 0.0
 
 
-def _anchored(output_segs: np.ndarray, guide: np.ndarray, wall_px: float, data_px: float
-              ) -> tuple[np.ndarray, np.ndarray]:
+def _anchored(output_segs: np.ndarray, guide: np.ndarray, wall_px: float, data_px: float,
+              net_walls: np.ndarray | None = None, net_space: np.ndarray | None = None,
+              cell: float = 8.0) -> tuple[np.ndarray, np.ndarray]:
     """Step 4 in ``anchor`` mode: the guide's own walls straightened at full resolution,
     plus the network's walls the guide does not show (module docstring)."""
     occ = guide == OCCUPIED
@@ -409,7 +413,17 @@ def _anchored(output_segs: np.ndarray, guide: np.ndarray, wall_px: float, data_p
     else:
         data = np.asarray(guide).copy()
     near = cv2.dilate(mask.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
-    data[occ & ~near] = OCCUPIED
+    keep = occ & ~near
+    if net_walls is not None and net_space is not None:
+        # the network cleans what the input shows but a plan does not: unexplained wall
+        # pixels (clutter, furniture) are kept only within a model cell of its walls, and
+        # free space it calls unknown (laser streaks through windows and doors) becomes
+        # unknown when farther than two model cells from any wall
+        k = 2 * int(np.ceil(cell)) + 1
+        keep &= cv2.dilate(net_walls.astype(np.uint8), np.ones((k, k), np.uint8)) > 0
+        far = cv2.distanceTransform((~(net_walls | mask)).astype(np.uint8), cv2.DIST_L2, 5)
+        data[(data == FREE) & (net_space == UNKNOWN) & (far > 2 * cell)] = UNKNOWN
+    data[keep] = OCCUPIED
     data[mask] = OCCUPIED
     return data, np.concatenate([centres, other.reshape(-1, 4)])
 
@@ -455,7 +469,7 @@ def postprocess(output: np.ndarray, shape: tuple[int, int], guide: np.ndarray | 
     cell = H / low.shape[0]
     segs = straight_segments(walls, cell)
     if guide is not None and anchor:
-        return _anchored(segs, np.asarray(guide), wall_px, data_px)
+        return _anchored(segs, np.asarray(guide), wall_px, data_px, walls, data, cell)
     if guide is not None and len(segs):
         segs = _refine(segs, np.asarray(guide) == OCCUPIED, cell / 2)
     drawn = np.zeros((H, W), np.uint8)
