@@ -175,3 +175,20 @@ def test_postprocess_anchor_keeps_the_input_faces_and_completes_unseen_walls():
     assert any(95 <= c <= 106 for c in right)        # completed from the network's output
     old, _ = postprocess(out, (n, n), guide, wall_px=3, anchor=False)
     assert not (old[20, 30:90] == FREE).all() or not (old[19, 30:90] == OCCUPIED).all()
+
+
+def test_postprocess_anchor_drops_clutter_the_network_does_not_see_as_wall():
+    n = 128
+    guide = np.full((n, n), UNKNOWN, np.uint8)
+    guide[20:100, 20:100] = FREE
+    guide[19, 19:101] = guide[100, 19:101] = OCCUPIED
+    guide[19:101, 19] = guide[19:101, 100] = OCCUPIED
+    guide[55:58, 55:58] = OCCUPIED                   # a chair in the middle of the room
+    guide[30:33, 70:73] = OCCUPIED                   # a pillar the network keeps
+    out = np.full((32, 32), 255.0, np.float32)
+    out[4:26, 4] = out[4:26, 25] = out[4, 4:26] = out[25, 4:26] = 0.0
+    out[8, 18] = 0.0                                 # the pillar's cell
+    data, _ = postprocess(out, (n, n), guide, wall_px=3, data_px=n / 256)
+    assert (data[55:58, 55:58] == FREE).all()
+    assert (data[30:33, 70:73] == OCCUPIED).all()
+    assert (data[19, 30:90] == OCCUPIED).all() and (data[20, 30:90] == FREE).all()

@@ -292,15 +292,15 @@ def autocorrect_many(maps: list[OccupancyMap], model: str | os.PathLike | BAMode
 
 def _support(inp: np.ndarray, out: np.ndarray, tol: float) -> float | None:
     """Share of output wall pixels within ``tol`` pixels of an input wall pixel."""
-    from scipy import ndimage
-
     ow = out == OCCUPIED
     iw = inp == OCCUPIED
     if not ow.any():
         return None
     if not iw.any():
         return 0.0
-    dist = ndimage.distance_transform_edt(~iw)
+    import cv2
+
+    dist = cv2.distanceTransform((~iw).astype(np.uint8), cv2.DIST_L2, 5)
     return float((dist[ow] <= tol).mean())
 
 
