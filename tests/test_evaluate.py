@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import re
 
 import cv2
 import numpy as np
@@ -456,11 +457,13 @@ def test_demo_stage_evaluates_a_known_bend(tmp_path, capsys):
     stage_evaluate(ctx)
     line = capsys.readouterr().out
     assert "true: mean" in line
-    assert {p.name for _, p in ctx.written} == {
-        "report.json",
-        "overlay.png",
-        "error_map.png",
-        "points.csv",
-    }
+    names = {p.name for _, p in ctx.written}
+    reports = {"inspection.html", "inspection.md", "inspection.csv"}
+    assert {"report.json", "overlay.png", "error_map.png", "points.csv"} | reports <= names
+    figures = {p for _, p in ctx.written if p.parent.name == "inspection_files"}
+    assert names == {"report.json", "overlay.png", "error_map.png", "points.csv"} | reports | {
+        p.name for p in figures
+    } and len(figures) >= 3  # the inspection report's own figures, written beside it
+    assert re.search(r"inspect known_bend: plan walls \d+ pass, \d+ fail", line)
     e = ctx.evaluation["known_bend"]
     assert 0.0 < e["mean_m"] < e["max_m"]
