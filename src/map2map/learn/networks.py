@@ -207,16 +207,25 @@ class UNetGenerator(nn.Module):
             h = self.down[str(r)](h)
             r //= 2
         h = self.middle(h)
-        top = x.shape[-1]
+        return self._decode(h, skips, r, x.shape[-1], alpha if fade else None)
+
+    def _decode(self, h: torch.Tensor, skips: list[torch.Tensor], r: int, top: int,
+                alpha: torch.Tensor | None) -> torch.Tensor:
+        """Decoder from the bottleneck (side ``r``) up to side ``top``, skips popped.
+
+        With ``alpha`` the ``top`` block fades in against the upsampled output of the
+        level below (the progressive fade-in of thesis 3.1).
+        """
+        old = None
         while r < top:
-            if fade and r * 2 == top:
+            if alpha is not None and r * 2 == top:
                 old = F.interpolate(self._head(h, r), scale_factor=2, mode="bilinear",
                                     align_corners=False)
             h = F.interpolate(h, scale_factor=2, mode="bilinear", align_corners=False)
             r *= 2
             h = self.up[str(r)](torch.cat([h, skips.pop()], 1))
         out = self._head(h, r)
-        if fade:
+        if old is not None:
             out = alpha * out + (1 - alpha) * old
         return torch.tanh(out)
 

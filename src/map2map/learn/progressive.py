@@ -255,18 +255,7 @@ class StochasticUNet(UNetGenerator):
             r //= 2
         h = self.middle(h)
         fade = alpha is not None and r_out > self.min_size
-        old = None
-        while r < r_out:
-            if fade and r * 2 == r_out:
-                old = F.interpolate(self._head(h, r), scale_factor=2, mode="bilinear",
-                                    align_corners=False)
-            h = F.interpolate(h, scale_factor=2, mode="bilinear", align_corners=False)
-            r *= 2
-            h = self.up[str(r)](torch.cat([h, skips.pop()], 1))
-        out = self._head(h, r)
-        if old is not None:
-            out = alpha * out + (1 - alpha) * old
-        return torch.tanh(out)
+        return self._decode(h, skips, r, r_out, alpha if fade else None)
 
     def _drop(self, module, inputs, output):
         if self.dropout <= 0:
