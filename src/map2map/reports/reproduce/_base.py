@@ -146,6 +146,19 @@ def png_of(fig) -> bytes:
     return buf.getvalue()
 
 
+def show_overlay(ax, plan: np.ndarray, other: np.ndarray, title: str, fontsize: int = 8) -> None:
+    """Draw plan walls black and ``other``'s walls red on white into ``ax``, no ticks."""
+    from map2map.core.grid import OCCUPIED
+
+    rgb = np.full((*plan.shape, 3), 255, np.uint8)
+    rgb[plan == OCCUPIED] = (0, 0, 0)
+    rgb[other == OCCUPIED] = (220, 30, 30)
+    ax.imshow(rgb, interpolation="nearest")
+    ax.set_title(title, fontsize=fontsize)
+    ax.set_xticks([])
+    ax.set_yticks([])
+
+
 def fmt(v: float, digits: int = 2) -> str:
     """A number for a table (``-`` when not finite)."""
     if v is None or not np.isfinite(v):

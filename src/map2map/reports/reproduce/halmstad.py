@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._base import Context, Output, Skipped, fmt, png_of
+from ._base import Context, Output, Skipped, fmt, png_of, show_overlay
 
 TITLE = "Appendix Tables 3-4: real sensor maps against their plans (Halmstad)"
 #: Appendix Tables 3-4, SLAM map vs as-planned (cm): nonrigid mean, max, rigid mean, max.
@@ -102,16 +102,9 @@ def _overlay(name, tgt, ev):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from map2map.core.grid import OCCUPIED
 
     w = ev.warped[ev.chosen]
-    rgb = np.full((*tgt.shape, 3), 255, np.uint8)
-    rgb[tgt.data == OCCUPIED] = (0, 0, 0)
-    rgb[w == OCCUPIED] = (220, 30, 30)
     fig, ax = plt.subplots(figsize=(6, 6))
-    ax.imshow(rgb, interpolation="nearest")
-    ax.set_title(f"{name} on its layout ({ev.chosen})", fontsize=9)
-    ax.set_xticks([])
-    ax.set_yticks([])
+    show_overlay(ax, tgt.data, w, f"{name} on its layout ({ev.chosen})", fontsize=9)
     fig.tight_layout()
     return png_of(fig)

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._base import Context, Output, fmt, png_of
+from ._base import Context, Output, fmt, png_of, show_overlay
 
 TITLE = "Appendix Table 2: synthetic maps with known errors"
 #: Appendix Table 2: map -> (nonrigid mean, max, rigid mean, max, validation max), pixels.
@@ -121,17 +121,10 @@ def _figure(plans, cases):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from map2map.core.grid import OCCUPIED
 
     fig, axes = plt.subplots(1, len(cases), figsize=(2.8 * len(cases), 2.6), squeeze=False)
     for ax, (_, name, slam, c) in zip(axes[0], cases, strict=True):
         plan = plans[name.rsplit(".", 1)[0]]
-        rgb = np.full((*plan.shape, 3), 255, np.uint8)
-        rgb[plan == OCCUPIED] = (0, 0, 0)
-        rgb[slam == OCCUPIED] = (220, 30, 30)
-        ax.imshow(rgb, interpolation="nearest")
-        ax.set_title(f"{name}: true mean {c.true[c.chosen]['mean_px']:.1f} px", fontsize=8)
-        ax.set_xticks([])
-        ax.set_yticks([])
+        show_overlay(ax, plan, slam, f"{name}: true mean {c.true[c.chosen]['mean_px']:.1f} px")
     fig.tight_layout()
     return png_of(fig)
