@@ -53,7 +53,6 @@ import math
 import os
 import warnings
 from dataclasses import dataclass, field
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -77,7 +76,9 @@ MAX_SHRINK = 4.0  # content squares more than 4x the dataset's size get a warnin
 
 def pretrained_path() -> Path:
     """The weights shipped in the package (``map2map/learn/weights/model_ba.safetensors``)."""
-    return Path(str(resources.files("map2map.learn") / "weights" / PRETRAINED))
+    from .checkpoint import shipped_weights
+
+    return shipped_weights(PRETRAINED)
 
 
 @dataclass

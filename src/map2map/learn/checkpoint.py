@@ -44,6 +44,19 @@ __all__ = ["read_model_file", "save_checkpoint", "load_checkpoint", "module_tens
 _META_KEY = "map2map"
 
 
+def shipped_weights(name: str) -> Path:
+    """Path of a weights file shipped in the package (``map2map/learn/weights/NAME``).
+
+    Examples
+    --------
+    >>> shipped_weights("model_ba.safetensors").name
+    'model_ba.safetensors'
+    """
+    from importlib import resources
+
+    return Path(str(resources.files("map2map.learn") / "weights" / name))
+
+
 def save_checkpoint(path: str | os.PathLike, tensors: dict[str, torch.Tensor],
                     state: dict) -> None:
     """Write ``tensors`` and the JSON-serialisable ``state`` atomically to ``path``."""

@@ -40,7 +40,6 @@ import json
 import os
 import warnings
 from dataclasses import dataclass, field
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -64,7 +63,9 @@ FORMAT_AB = "map2map-model-ab"
 
 def pretrained_ab_path() -> Path:
     """The shipped weights (``map2map/learn/weights/model_ab.safetensors``)."""
-    return Path(str(resources.files("map2map.learn") / "weights" / PRETRAINED))
+    from .checkpoint import shipped_weights
+
+    return shipped_weights(PRETRAINED)
 
 
 @dataclass
