@@ -45,10 +45,10 @@ from pathlib import Path
 
 import torch
 
-from ..core._io import atomic_path
 from ..core.errors import InputError
 from ..datasets.packed import PackedPairs
 from .data import ResidentPairs
+from .figures import save_loss_curves
 from .loop import (
     EpochPlan,
     GANRun,
@@ -90,7 +90,8 @@ def schedule_table(cfg: ABConfig, n_train: int) -> list[dict]:
 def save_prog_loss_curves(history: list[dict], path: str | os.PathLike,
                           title: str = "Model_AB") -> None:
     """G and D losses per epoch as thesis Fig. 5.1, a dashed line and the new resolution
-    at every stage switch, the terms of eq. 3.2 in a second panel.
+    at every stage switch, the terms of eq. 3.2 in a second panel
+    (:func:`~map2map.learn.figures.save_loss_curves` with Fig. 5.1's title).
 
     Examples
     --------
@@ -101,36 +102,7 @@ def save_prog_loss_curves(history: list[dict], path: str | os.PathLike,
     >>> p.stat().st_size > 1000
     True
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from .figures import TERMS
-
-    ep = [r["epoch"] for r in history]
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
-    axes[0].plot(ep, [r["loss_G"] for r in history], label="G")
-    axes[0].plot(ep, [r["loss_D"] for r in history], label="D")
-    axes[0].set(xlabel="epoch", ylabel="loss", title=f"{title}: G and D losses (Fig. 5.1)")
-    terms = [t for t in TERMS if history and t in history[0]]
-    for t in terms:
-        axes[1].plot(ep, [max(r[t], 1e-6) for r in history], label=t)
-    axes[1].set(xlabel="epoch", yscale="log", title="terms of eq. 3.2 (l1 unweighted)")
-    for prev, row in zip(history, history[1:], strict=False):
-        if row.get("resolution") != prev.get("resolution"):
-            for ax in axes:
-                ax.axvline(row["epoch"] - 0.5, color="0.5", ls="--", lw=0.8)
-            axes[0].annotate(f"{row['resolution']} px", (row["epoch"] - 0.5, 1.0),
-                             xycoords=("data", "axes fraction"), fontsize=7, ha="left",
-                             va="top", rotation=90)
-    axes[0].legend()
-    if terms:
-        axes[1].legend(fontsize=7)
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=90, format="png")
-    plt.close(fig)
+    save_loss_curves(history, path, title, figure="5.1")
 
 
 def model_header_ab(cfg: ABConfig, meta: dict, extra: dict) -> dict:
