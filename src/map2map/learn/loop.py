@@ -58,7 +58,7 @@ from .checkpoint import (
 )
 from .config import TrainConfig, lr_factor
 from .data import ResidentPairs, load_pairs
-from .figures import save_sample_grid
+from .figures import save_loss_curves, save_sample_grid
 from .losses import discriminator_loss_3_2, generator_loss_3_2
 from .networks import count_parameters, from_unit
 
@@ -323,9 +323,10 @@ class EpochPlan:
 class GANRun:
     """One training run of ``G``, ``D_d`` and ``D_r`` (see the module's docstring).
 
-    Subclasses set :attr:`fmt`, :attr:`desc`, :attr:`torch_rng` and implement
+    Subclasses set :attr:`fmt`, :attr:`desc`, :attr:`torch_rng`, :attr:`title` and
+    :attr:`figure` and implement
     :meth:`epoch_plan`, :meth:`batches_in` and :meth:`step`; :meth:`generate`,
-    :meth:`model_state`, :meth:`postfix` and :meth:`loss_curves` have defaults.
+    :meth:`model_state` and :meth:`postfix` have defaults.
 
     Parameters
     ----------
@@ -345,6 +346,8 @@ class GANRun:
     desc = "train"
     #: also checkpoint torch's global random state (dropout draws from it)
     torch_rng = False
+    #: the model's name and thesis figure in the title of ``losses.png``
+    title, figure = "Model_BA", "5.2"
 
     def __init__(self, start: RunStart, nets, header: dict, *, progress: bool = True,
                  figures: bool = True):
@@ -401,11 +404,6 @@ class GANRun:
     def postfix(self, epoch: int, b: int) -> str:
         """Text of the progress bar after the epoch counter for batch ``b`` (done)."""
         return ""
-
-    def loss_curves(self, history: list[dict], path: Path) -> None:
-        from .figures import save_loss_curves
-
-        save_loss_curves(history, path)
 
     # ----------------------------------------------------------------- what is shared
     def _load(self, tensors: dict, state: dict) -> None:
@@ -474,7 +472,7 @@ class GANRun:
     def _write_logs(self, curves: bool) -> None:
         write_log_csv(self.history, self.out / "log.csv")
         if curves:
-            self.loss_curves(self.history, self.out / "losses.png")
+            save_loss_curves(self.history, self.out / "losses.png", self.title, self.figure)
 
     def run(self) -> TrainResult:
         """Write ``config.json`` and train from where the run stands to ``cfg.epochs``."""

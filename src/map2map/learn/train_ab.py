@@ -8,13 +8,14 @@ matching (3.5), input consistency (3.6) and L1 (3.7) are the functions of
 :mod:`~map2map.learn.losses`; the networks are those of :mod:`~map2map.learn.progressive`
 (generator and both discriminators grown coarse to fine, each new block faded in).
 
-The machinery is Model_BA's (:mod:`~map2map.learn.loop`): data resident on the device
+The training loop is the one Model_BA uses (:mod:`~map2map.learn.loop`; this module
+states only the stages, the fade-in and the stage switches): data resident on the device
 (:class:`~map2map.learn.data.ResidentPairs`, one per stage, built when the stage starts),
 Adam 2e-4 / (0.55, 0.99) with the learning rate a pure function of the epoch
 (:func:`~map2map.learn.config.lr_factor` over all the epochs), safetensors checkpoints
 written atomically after every epoch and on Ctrl-C, exact ``--resume`` (the dropout's
-random state is saved too) (the stage and the
-fade-in alpha are functions of (epoch, batch), so nothing else has to be stored), DDP under
+random state is saved too; the stage and the fade-in alpha are functions of (epoch,
+batch), so nothing else has to be stored), DDP under
 ``torchrun`` (``find_unused_parameters``: the blocks of the stages not reached have no
 gradient), bf16 autocast + channels_last on CUDA.
 
@@ -41,7 +42,6 @@ from __future__ import annotations
 
 import math
 import os
-from pathlib import Path
 
 import torch
 
@@ -172,11 +172,11 @@ class _ABRun(GANRun):
     fmt = FORMAT_AB
     desc = "train ab"
     torch_rng = True  # the dropout masks draw from torch's global generator
+    title, figure = "Model_AB", "5.1"
 
     def __init__(self, start: RunStart, nets, header: dict, **kw):
         super().__init__(start, nets, header, **kw)
-        pairs = start.pairs
-        val = pairs.select("val")
+        val = start.pairs.select("val")
         self.show = val if len(val) else start.train
         self.alpha_t = torch.zeros((), device=self.dev)  # updated in place for the whole run
         self.decoder = self.cfg.growth == "decoder"
@@ -258,6 +258,3 @@ class _ABRun(GANRun):
         a_done = self.alpha_at(last_ep, last_b if last_b is not None
                                else self._n_batches_at(r_done) - 1)[0]
         return {"resolution": r_done, "alpha": a_done}
-
-    def loss_curves(self, history: list[dict], path: Path) -> None:
-        save_prog_loss_curves(history, path)
