@@ -3,6 +3,7 @@ safetensors without pickle, autocorrect's frame handling, the command lines."""
 
 from __future__ import annotations
 
+import json
 import math
 import subprocess
 import sys
@@ -447,3 +448,28 @@ def test_autocorrect_warns_about_provisional_weights():
     with pytest.warns(UserWarning, match="provisional"):
         (res,) = autocorrect_many([m], net)
     assert any("provisional" in w for w in res.warnings)
+
+
+def test_exporters_write_fp16_with_header_and_refuse_the_other_model(tmp_path):
+    """export_model / export_ab_model (one core): float16 tensors, the run's header plus
+    the note, a readable .json beside; a file of the other model is refused, nothing
+    written."""
+    from safetensors import safe_open
+
+    from map2map.core.errors import InputError
+    from map2map.learn.autocorrect import export_model, pretrained_path
+    from map2map.learn.synthesize import export_ab_model
+
+    run = tmp_path / "run"
+    T.train_ba(_pairs(6), run, TrainConfig(**{**TINY, "epochs": 1, "samples": 0}),
+               progress=False, figures=False)
+    dest = export_model(run, tmp_path / "out" / "ba.safetensors", note="exported")
+    with safe_open(str(dest), "pt") as f:
+        assert {f.get_tensor(k).dtype for k in f.keys()} == {torch.float16}
+    head = load_model(dest).header
+    assert head["note"] == "exported" and head["epochs_trained"] == 1
+    assert head == load_model(run).header | {"note": "exported"}
+    assert json.loads(dest.with_suffix(".json").read_text()) == head
+    with pytest.raises(InputError):
+        export_ab_model(pretrained_path(), tmp_path / "ab.safetensors")
+    assert not (tmp_path / "ab.safetensors").exists()

@@ -48,7 +48,6 @@ Examples
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import warnings
@@ -378,7 +377,8 @@ def save_segments_dxf(segments: np.ndarray, path: str | os.PathLike, *, layer: s
 
 def export_model(run: str | os.PathLike, dest: str | os.PathLike, *, note: str = "") -> Path:
     """Copy a run's generator to ``dest`` in float16 with its header (and ``note``), plus a
-    readable ``.json`` beside it: how the shipped ``model_ba.safetensors`` is made.
+    readable ``.json`` beside it: how the shipped ``model_ba.safetensors`` is made
+    (:func:`~map2map.learn.checkpoint.export_generator` with :func:`load_model`).
 
     Examples
     --------
@@ -388,23 +388,6 @@ def export_model(run: str | os.PathLike, dest: str | os.PathLike, *, note: str =
     >>> load_model(p).header["note"]
     'copy'
     """
-    from safetensors import safe_open
-    from safetensors.torch import save_file
+    from .checkpoint import export_generator
 
-    from ..core._io import atomic_path
-
-    src = Path(run)
-    if src.is_dir():
-        src = src / "model.safetensors"
-    net = load_model(src)
-    header = dict(net.header)
-    if note:
-        header["note"] = note
-    with safe_open(str(src), framework="pt", device="cpu") as f:
-        tensors = {k: f.get_tensor(k).to(torch.float16).contiguous() for k in f.keys()}
-    dest = Path(dest)
-    with atomic_path(dest) as tmp:
-        save_file(tensors, str(tmp), metadata={"map2map": json.dumps(header, sort_keys=True)})
-    with atomic_path(dest.with_suffix(".json")) as tmp:
-        tmp.write_text(json.dumps(header, indent=2, sort_keys=True))
-    return dest
+    return export_generator(run, dest, lambda p: load_model(p).header, note=note)

@@ -39,7 +39,7 @@ from ..core._io import atomic_path
 from ..core.errors import InputError
 
 __all__ = ["read_model_file", "save_checkpoint", "load_checkpoint", "module_tensors", "load_module",
-           "optimizer_tensors", "load_optimizer"]
+           "optimizer_tensors", "load_optimizer", "export_generator"]
 
 _META_KEY = "map2map"
 
@@ -157,3 +157,39 @@ def read_model_file(model, pretrained: Path, fmt: str, name: str, *, no_pretrain
     if header.get("format") != fmt:
         raise InputError(path, wrong)
     return path, header, tensors
+
+
+def export_generator(run: str | os.PathLike, dest: str | os.PathLike, read_header, *,
+                     note: str = "") -> Path:
+    """Copy a run's generator to ``dest`` in float16 with its header (plus ``note``) and a
+    readable ``.json`` of that header beside it: how the shipped weights are made.
+
+    ``run`` is a training run folder (its ``model.safetensors``) or such a file;
+    ``read_header(path)`` loads it as its model (checking its format, one-line errors)
+    and returns its header: ``export_model`` (Model_BA) and ``export_ab_model``
+    (Model_AB) are this with their loaders.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> save_checkpoint(d / "model.safetensors", {"w": torch.ones(2)}, {"format": "x"})
+    >>> p = export_generator(d, d / "out.safetensors", lambda p: load_checkpoint(p)[1],
+    ...                      note="copy")
+    >>> back, header = load_checkpoint(p)
+    >>> back["w"].dtype, header["note"], p.with_suffix(".json").is_file()
+    (torch.float16, 'copy', True)
+    """
+    src = Path(run)
+    if src.is_dir():
+        src = src / "model.safetensors"
+    header = dict(read_header(src))
+    if note:
+        header["note"] = note
+    with safe_open(str(src), framework="pt", device="cpu") as f:
+        tensors = {k: f.get_tensor(k).to(torch.float16).contiguous() for k in f.keys()}
+    dest = Path(dest)
+    save_checkpoint(dest, tensors, header)
+    with atomic_path(dest.with_suffix(".json")) as tmp:
+        tmp.write_text(json.dumps(header, indent=2, sort_keys=True))
+    return dest

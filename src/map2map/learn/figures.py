@@ -28,10 +28,12 @@ TERMS = ("gan_domain_3_3", "gan_real_fake_3_4", "fm_3_5", "ic_3_6", "l1_3_7",
          "d_domain_3_3", "d_real_fake_3_4")
 
 
-def save_loss_curves(history: list[dict], path: str | os.PathLike, title: str = "Model_BA"
-                     ) -> None:
-    """Generator (G) and discriminator (D) losses per epoch, as thesis Fig. 5.2, and every
-    term of eq. 3.2 in a second panel."""
+def save_loss_curves(history: list[dict], path: str | os.PathLike, title: str = "Model_BA",
+                     figure: str = "5.2") -> None:
+    """Generator (G) and discriminator (D) losses per epoch, as thesis Fig. 5.2 (Model_BA;
+    ``figure="5.1"`` for Model_AB), and every term of eq. 3.2 in a second panel. Where
+    the rows carry a ``resolution`` (progressive training), every switch is marked by a
+    dashed line and the new resolution."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -41,12 +43,20 @@ def save_loss_curves(history: list[dict], path: str | os.PathLike, title: str = 
     fig, axes = plt.subplots(1, 2, figsize=(11, 4))
     axes[0].plot(ep, [r["loss_G"] for r in history], label="G")
     axes[0].plot(ep, [r["loss_D"] for r in history], label="D")
-    axes[0].set(xlabel="epoch", ylabel="loss", title=f"{title}: G and D losses (Fig. 5.2)")
-    axes[0].legend()
+    axes[0].set(xlabel="epoch", ylabel="loss",
+                title=f"{title}: G and D losses (Fig. {figure})")
     terms = [t for t in TERMS if history and t in history[0]]
     for t in terms:
         axes[1].plot(ep, [max(r[t], 1e-6) for r in history], label=t)
     axes[1].set(xlabel="epoch", yscale="log", title="terms of eq. 3.2 (l1 unweighted)")
+    for prev, row in zip(history, history[1:], strict=False):
+        if row.get("resolution") != prev.get("resolution"):
+            for ax in axes:
+                ax.axvline(row["epoch"] - 0.5, color="0.5", ls="--", lw=0.8)
+            axes[0].annotate(f"{row['resolution']} px", (row["epoch"] - 0.5, 1.0),
+                             xycoords=("data", "axes fraction"), fontsize=7, ha="left",
+                             va="top", rotation=90)
+    axes[0].legend()
     if terms:
         axes[1].legend(fontsize=7)
     fig.tight_layout()

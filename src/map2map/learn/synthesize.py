@@ -36,7 +36,6 @@ True
 
 from __future__ import annotations
 
-import json
 import os
 import warnings
 from dataclasses import dataclass, field
@@ -347,22 +346,6 @@ def export_ab_model(run: str | os.PathLike, dest: str | os.PathLike, *, note: st
                     ) -> Path:
     """A run's generator in float16 with its header (and ``note``) plus a readable
     ``.json`` beside it: how the shipped ``model_ab.safetensors`` is made."""
-    from safetensors import safe_open
-    from safetensors.torch import save_file
+    from .checkpoint import export_generator
 
-    from ..core._io import atomic_path
-
-    src = Path(run)
-    if src.is_dir():
-        src = src / "model.safetensors"
-    header = dict(load_ab_model(src).header)
-    if note:
-        header["note"] = note
-    with safe_open(str(src), framework="pt", device="cpu") as f:
-        tensors = {k: f.get_tensor(k).to(torch.float16).contiguous() for k in f.keys()}
-    dest = Path(dest)
-    with atomic_path(dest) as tmp:
-        save_file(tensors, str(tmp), metadata={"map2map": json.dumps(header, sort_keys=True)})
-    with atomic_path(dest.with_suffix(".json")) as tmp:
-        tmp.write_text(json.dumps(header, indent=2, sort_keys=True))
-    return dest
+    return export_generator(run, dest, lambda p: load_ab_model(p).header, note=note)
