@@ -199,16 +199,18 @@ def render(grey: np.ndarray, size: int, how: str = "slam",
 
 
 def save_render_figure(grey: np.ndarray, result: SlamRender, path: str | os.PathLike,
-                       plan: np.ndarray | None = None, title: str = "") -> None:
+                       plan: np.ndarray | None = None, title: str = "",
+                       reference: np.ndarray | None = None) -> None:
     """The steps side by side: (plan |) network output | previous output (plain) |
-    upsampled memberships snapped | SLAM-like walls (wall pixels turned unknown in red).
+    upsampled memberships snapped | SLAM-like walls (wall pixels turned unknown in red)
+    (| ``reference``, a simulated SLAM map of the plan).
 
     Examples
     --------
     >>> import tempfile, pathlib
     >>> g = np.full((16, 16), 255.0, np.float32); g[:, 6:9] = 0.0
     >>> p = pathlib.Path(tempfile.mkdtemp()) / "r.png"
-    >>> save_render_figure(g, render_slam(g, 64, 2.0), p)
+    >>> save_render_figure(g, render_slam(g, 64, 2.0), p, reference=np.zeros((64, 64)))
     >>> p.stat().st_size > 1000
     True
     """
@@ -228,6 +230,8 @@ def save_render_figure(grey: np.ndarray, result: SlamRender, path: str | os.Path
                (render_plain(grey, size), "plain: snap + nearest"),
                (result.snapped, "memberships bilinear, snapped"),
                (over, f"SLAM walls ({result.wall_px:.1f} px faces; red -> unknown)")]
+    if reference is not None:
+        panels.append((reference, "simulated SLAM map (reference)"))
     fig, axes = plt.subplots(1, len(panels), figsize=(3.2 * len(panels), 3.6), squeeze=False)
     for ax, (img, name) in zip(axes[0], panels, strict=True):
         ax.imshow(img, cmap="gray", vmin=0, vmax=255, interpolation="nearest")
