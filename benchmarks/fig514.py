@@ -5,6 +5,7 @@ the work; this script writes ``fig514.png`` and ``fig514.csv`` into ``--out`` an
 the table.
 
     python3 benchmarks/fig514.py --data DS --n 6 --out DIR [--model pretrained|RUN] [--seed 0]
+        [--render slam|plain]
 """
 
 from __future__ import annotations
@@ -27,10 +28,13 @@ def main(argv=None) -> int:
     ap.add_argument("--model", default="pretrained")
     ap.add_argument("--split", default="test")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--render", choices=("slam", "plain"), default="slam",
+                    help="Model_AB's resolution raising (slam: SLAM-like walls, default)")
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    f = run_fig514(args.data, args.n, args.model, args.seed, split=args.split)
+    f = run_fig514(args.data, args.n, args.model, args.seed, split=args.split,
+                   render=args.render)
     f.figure(out / "fig514.png")
     f.write_csv(out / "fig514.csv")
     (out / "fig514_summary.json").write_text(json.dumps(

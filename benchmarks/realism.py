@@ -11,7 +11,15 @@ parametric model (``deform`` additive along run 2's trajectory), as a baseline. 
 statistic: W(generated, run 1) / W(run 2, run 1); target every ratio <= 1.5.
 
     python3 benchmarks/realism.py --data DS [--model pretrained RUN ...] [--plans N]
-        [--cache refs.npz] [--csv out.csv]
+        [--cache refs.npz] [--csv out.csv] [--render slam plain] [--measures]
+
+``--render`` measures each model with each resolution raising
+(:mod:`map2map.learn.slam_render`: ``slam``, SLAM-like walls, the default of ``map2map
+synthesize``; ``plain``, the previous snap + nearest upsampling). ``--measures`` adds Fig.
+5.14's measures on every plan (:func:`map2map.learn.fig514.measure`: appendix-metric error
+after alignment, wall recall and precision at 2 px) for the simulated runs, the parametric
+model and every generator: mean (median) error, plans not aligned, mean recall, mean
+precision.
 """
 
 from __future__ import annotations
@@ -42,6 +50,11 @@ def main(argv=None) -> int:
     ap.add_argument("--cache", help=".npz keeping the second runs between calls")
     ap.add_argument("--csv", help="write every row here")
     ap.add_argument("--seed", type=int, default=0, help="Model_AB's seed (dropout off)")
+    ap.add_argument("--render", nargs="+", choices=("slam", "plain"), default=["slam"],
+                    help="Model_AB's resolution raising(s) to measure (default slam)")
+    ap.add_argument("--measures", action="store_true",
+                    help="also Fig. 5.14's measures (appendix error, wall recall/precision) "
+                    "on every plan")
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
     refs = simulated_references(args.data, split=args.split, n=args.plans, cache=args.cache)
@@ -53,10 +66,12 @@ def main(argv=None) -> int:
 
         for m in args.model:
             net = load_ab_model(m)
-            name = "Model_AB" if m == "pretrained" else f"AB:{Path(m).name}"
-            gens[name] = synthesize_squares(net, plans, seed=args.seed)
-            print(f"{name}: {net.source} ({net.resolution} px, note: "
-                  f"{str(net.header.get('note', ''))[:90]})")
+            base = "Model_AB" if m == "pretrained" else f"AB:{Path(m).name}"
+            for how in args.render:
+                name = base if len(args.render) == 1 else f"{base} [{how}]"
+                gens[name] = synthesize_squares(net, plans, seed=args.seed, render=how)
+            print(f"{base}: {net.source} ({net.resolution} px, target walls "
+                  f"{net.wall_px:.2f} px, note: {str(net.header.get('note', ''))[:90]})")
     print(f"{len(plans)} held-out '{args.split}' plans of {args.data} "
           f"({plans.shape[-1]} px); run 1: the dataset's simulated SLAM maps, run 2: a second "
           "simulation (same plan and start, another seed); parametric: deform additive on "
@@ -67,6 +82,8 @@ def main(argv=None) -> int:
         print()
         print(format_realism_table(rows, name))
         out_rows += [{"generator": name, **r.as_dict()} for r in rows]
+    if args.measures:
+        _measures({"simulated run 1": refs.sim1, "simulated run 2": refs.sim2, **gens}, plans)
     if args.csv:
         with open(args.csv, "w", newline="") as fh:
             w = csv.DictWriter(fh, fieldnames=list(out_rows[0]))
@@ -74,6 +91,26 @@ def main(argv=None) -> int:
             w.writerows(out_rows)
     print(f"\n{time.perf_counter() - t0:.0f} s")
     return 0
+
+
+def _measures(gens: dict, plans) -> None:
+    """Fig. 5.14's measures of every generator on every plan, one line each."""
+    import numpy as np
+
+    from map2map.learn.fig514 import measure
+
+    print(f"\nFig. 5.14 measures on {len(plans)} plans (appendix metric, px of the "
+          f"{plans.shape[-1]} px square; wall recall / precision at 2 px)")
+    print(f"{'maps':<28} {'error mean (median)':>20} {'not aligned':>12} {'recall':>7} "
+          f"{'precision':>9}")
+    for name, maps in gens.items():
+        rows = [measure(m, p) for m, p in zip(maps, plans, strict=True)]
+        err = np.array([r["error_px"] for r in rows])
+        ok = np.isfinite(err)
+        e = f"{err[ok].mean():.2f} ({np.median(err[ok]):.2f})" if ok.any() else "-"
+        print(f"{name:<28} {e:>20} {int((~ok).sum()):>12} "
+              f"{np.nanmean([r['wall_recall'] for r in rows]):>7.2f} "
+              f"{np.nanmean([r['wall_precision'] for r in rows]):>9.2f}")
 
 
 if __name__ == "__main__":

@@ -308,6 +308,32 @@ def test_synthesize_keeps_the_plan_frame_and_gives_seeded_distinct_hypotheses(ti
         synthesize(OccupancyMap(np.full((9, 9), UNKNOWN, np.uint8), 0.05), tiny_run)
 
 
+@pytest.mark.filterwarnings("ignore::UserWarning")
+def test_synthesize_render_slam_draws_faces_and_plain_is_the_previous_output(tiny_run):
+    from map2map.errors import InputError
+    from map2map.learn.slam_render import render_plain, render_slam
+    from map2map.learn.synthesize import load_ab_model, synthesize, synthesize_squares
+
+    net = load_ab_model(tiny_run)
+    assert net.wall_px == pytest.approx(net.header["target_wall_px"])
+    plan = _plan()
+    slam = synthesize(plan, net, samples=2, seed=1)
+    plain = synthesize(plan, net, samples=2, seed=1, render="plain")
+    assert slam.maps[0].meta["synthesize"]["render"] == "slam"
+    plans = _pairs().a[:2]
+    grey = net.sample_many(plans, 1, 0)[:, 0]
+    S = plans.shape[-1]
+    wall = net.wall_px * S / net.data_size
+    got = synthesize_squares(net, plans)
+    assert np.array_equal(got[1], render_slam(grey[1], S, wall).map)
+    assert np.array_equal(synthesize_squares(net, plans, render="plain")[1],
+                          render_plain(grey[1], S))
+    for a, b in zip(slam.maps, plain.maps, strict=True):     # same frame, other walls
+        assert a.shape == b.shape and a.origin == b.origin
+    with pytest.raises(InputError, match="render"):
+        synthesize(plan, net, render="blur")
+
+
 def test_cli_synthesize_writes_maps_summary_and_figure(tiny_run, tmp_path, capsys):
     import json
 
@@ -324,9 +350,10 @@ def test_cli_synthesize_writes_maps_summary_and_figure(tiny_run, tmp_path, capsy
     summary = json.loads((out / "plan_synthesize.json").read_text())
     assert summary["samples"] == 3 and 0 < summary["diversity_mean_pairwise_disagreement"] < 1
     assert (out / "plan_synthesize.png").stat().st_size > 1000
+    assert summary["render"] == "slam"
     assert main(["synthesize", str(tmp_path / "plan.yaml"), "--out", str(tmp_path / "p"),
                  "--samples", "2", "--format", "png", "--no-figure", "--model",
-                 str(tiny_run)]) == 0
+                 str(tiny_run), "--render", "plain"]) == 0
     assert sorted(p.name for p in (tmp_path / "p").iterdir()) == \
         ["plan_hyp00.png", "plan_hyp01.png", "plan_synthesize.json"]
     err = capsys.readouterr().err

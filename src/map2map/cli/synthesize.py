@@ -27,6 +27,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of the dropout masks (0)")
     p.add_argument("--format", choices=("ros", "png"), default="ros",
                    help="ros: .yaml + .pgm (default); png: pictures")
+    p.add_argument("--render", choices=("slam", "plain"), default="slam",
+                   help="slam (default): walls as a SLAM map draws them, the faces next to "
+                   "free space with the training maps' wall thickness, wall interiors "
+                   "unknown; plain: the network's output snapped and upsampled (nearest)")
     p.add_argument("--no-figure", action="store_true", help="do not write the figure")
     p.add_argument("--device", default="cpu", help="torch device (default cpu)")
     add_input_options(p)
@@ -59,11 +63,11 @@ def run(args: argparse.Namespace) -> int:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = synthesize(plan, args.model, samples=args.samples, seed=args.seed,
-                         device=args.device)
+                         device=args.device, render=args.render)
     ensure_output_dir(out)
     for path, m in zip(names, res.maps, strict=True):
         save_map(m, path)
-    summary = {"plan": str(src), "seed": args.seed,
+    summary = {"plan": str(src), "seed": args.seed, "render": args.render,
                "files": [p.name for p in names], **res.summary()}
     with atomic_path(out / f"{src.stem}_synthesize.json") as tmp:
         tmp.write_text(json.dumps(summary, indent=2))

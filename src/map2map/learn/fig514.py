@@ -264,7 +264,7 @@ def _bar(items, progress, desc):
 
 def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
                model="pretrained", seed: int = 0, *, split: str = "test",
-               params=None, progress: bool = True) -> Fig514:
+               params=None, progress: bool = True, render: str = "slam") -> Fig514:
     """Fig. 5.14 for ``n`` held-out plans (module doc).
 
     Parameters
@@ -283,6 +283,9 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
         For plans in memory: simulation and preprocessing (default ``map2map dataset
         build``'s: 420 s, 180 degrees, ``rbpf``, 256 px, walls thickened by 1).
     progress : bool
+    render : {"slam", "plain"}
+        How Model_AB's output is raised to the plans' size
+        (:func:`~map2map.learn.synthesize.synthesize_squares`).
 
     Returns
     -------
@@ -304,7 +307,7 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
     plans = np.stack([m[2] for m in made])
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        gen = synthesize_squares(net, plans, seed=seed)
+        gen = synthesize_squares(net, plans, seed=seed, render=render)
     warns = []
     if "PROVISIONAL" in str(net.header.get("note", "")):
         warns.append("Model_AB weights are provisional (their note says so)")

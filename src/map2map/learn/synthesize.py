@@ -14,8 +14,11 @@ collapsed (pix2pix's known limitation); it is reported with a warning.
 Frame: the plan's known part is cut into a square (as the datasets are,
 :func:`map2map.learn.autocorrect` does the same), resized to the model's data size and
 its walls thickened as in the training pairs, reduced to the resolution the model was
-trained up to, run, snapped to the three values, brought back to the square's size
-(nearest neighbour) and pasted into a map of the plan's shape, resolution and origin,
+trained up to, run, raised to the square's size with SLAM-like walls
+(:func:`map2map.learn.slam_render.render_slam`: bilinear class memberships, walls kept as
+the band of the training targets' wall thickness along the faces that border free space,
+wall interiors unknown; ``render="plain"``: the previous output, snapped and upsampled by
+nearest neighbour) and pasted into a map of the plan's shape, resolution and origin,
 unknown outside.
 
 Examples
@@ -47,10 +50,12 @@ import torch
 from ..core.errors import InputError
 from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from ..maps.preprocess import square_resize, thicken
+from . import slam_render
 from .autocorrect import _square
 from .data import reduce_input
 from .networks import from_unit
 from .progressive import StochasticUNet
+from .slam_render import DEFAULT_WALL_PX, RENDERS, snap
 
 __all__ = ["ABModel", "SynthesisResult", "load_ab_model", "pretrained_ab_path",
            "synthesize", "synthesize_squares", "snap", "pairwise_disagreement", "export_ab_model",
@@ -78,6 +83,12 @@ class ABModel:
     header: dict
     source: str
     device: torch.device = field(default_factory=lambda: torch.device("cpu"))
+
+    @property
+    def wall_px(self) -> float:
+        """The training targets' wall thickness (px of a ``data_size`` square; header
+        ``target_wall_px``, :data:`~map2map.learn.slam_render.DEFAULT_WALL_PX` if absent)."""
+        return float(self.header.get("target_wall_px", DEFAULT_WALL_PX))
 
     @torch.no_grad()
     def sample(self, inputs: np.ndarray, samples: int, seed: int = 0) -> np.ndarray:
@@ -138,20 +149,6 @@ def load_ab_model(model: str | os.PathLike | ABModel | None = "pretrained",
                    int(header.get("data_size", 256)), header, str(path), dev)
 
 
-def snap(grey: np.ndarray) -> np.ndarray:
-    """Grey values -> the nearest of occupied 0, unknown 127, free 255.
-
-    Examples
-    --------
-    >>> snap(np.array([10.0, 100.0, 200.0])).tolist()
-    [0, 127, 255]
-    """
-    out = np.full(np.shape(grey), UNKNOWN, np.uint8)
-    out[grey < 63.5] = OCCUPIED
-    out[grey > 191.0] = FREE
-    return out
-
-
 def pairwise_disagreement(maps: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
     """(K, H, W) ternary maps -> (K, K) share of the ``mask`` pixels whose class differs.
 
@@ -192,7 +189,8 @@ class SynthesisResult:
 
 
 def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "pretrained",
-               *, samples: int = 4, seed: int = 0, device: str = "cpu") -> SynthesisResult:
+               *, samples: int = 4, seed: int = 0, device: str = "cpu",
+               render: str = "slam") -> SynthesisResult:
     """``samples`` SLAM-map hypotheses of ``plan`` (module doc), in its frame.
 
     Parameters
@@ -205,6 +203,10 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     seed : int
         Seeds the dropout masks.
     device : str
+    render : {"slam", "plain"}
+        ``"slam"``: walls as a SLAM map draws them, the faces bordering free space with
+        the training targets' thickness (:func:`~map2map.learn.slam_render.render_slam`);
+        ``"plain"``: the previous output (snap, nearest-neighbour upsampling).
 
     Returns
     -------
@@ -212,6 +214,8 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     """
     if samples < 1:
         raise InputError("--samples", f"must be >= 1, got {samples}")
+    if render not in RENDERS:
+        raise InputError("--render", f"must be one of {', '.join(RENDERS)}, got {render!r}")
     net = load_ab_model(model, device)
     sq = _square(plan, net.data_size)
     if sq is None:
@@ -220,14 +224,13 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     k_thick = int(net.header.get("dataset", {}).get("thicken", 0) or 0)
     inp = thicken(square_resize(square, net.data_size), k_thick)
     grey = net.sample(inp, samples, seed)
-    import cv2
-
+    wall_px = net.wall_px * side / net.data_size
     H, W = plan.shape
     rs, re = max(0, row0), min(H, row0 + side)
     cs, ce = max(0, col0), min(W, col0 + side)
     maps, squares = [], []
     for k in range(samples):
-        s = cv2.resize(snap(grey[k]), (side, side), interpolation=cv2.INTER_NEAREST)
+        s = slam_render.render(grey[k], side, render, wall_px)
         squares.append(s)
         data = np.full((H, W), UNKNOWN, np.uint8)
         data[rs:re, cs:ce] = s[rs - row0:re - row0, cs - col0:ce - col0]
@@ -241,9 +244,11 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
                      f"(alpha {net.alpha:.2f}); it is run with that blend")
     cell = side / net.resolution
     if cell > 2:
+        drawn = (f"walls drawn {wall_px:.1f} px thick along their free faces, but placed"
+                 if render == "slam" else "walls drawn and placed")
         warns.append(f"the model was trained up to {net.resolution} px: one output cell is "
-                     f"{cell:.1f} plan pixels ({cell * plan.resolution:.2f} m); finer SLAM "
-                     "detail is not modelled")
+                     f"{cell:.1f} plan pixels ({cell * plan.resolution:.2f} m); {drawn} "
+                     "to a cell; finer SLAM detail is not modelled")
     if samples > 1 and div < 0.005:
         warns.append(f"the {samples} hypotheses differ in only {div:.2%} of the plan's pixels: "
                      "the dropout noise barely changes this model's output")
@@ -254,16 +259,18 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     for w in warns:
         warnings.warn(w, stacklevel=2)
     for m in maps:
-        m.meta["synthesize"] = {"model": net.source, "seed": seed, "samples": samples}
+        m.meta["synthesize"] = {"model": net.source, "seed": seed, "samples": samples,
+                                "render": render, "wall_px": round(wall_px, 3)}
     return SynthesisResult(maps, div, pw, warns, net.source)
 
 
 def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndarray, *,
-                       seed: int = 0, device: str = "cpu", batch: int = 16) -> np.ndarray:
+                       seed: int = 0, device: str = "cpu", batch: int = 16,
+                       render: str = "slam") -> np.ndarray:
     """Model_AB's SLAM map of each preprocessed dataset plan (``A.png``: already square,
-    resized and thickened as the training inputs were), snapped to the three values and
-    brought back to the plans' size (nearest neighbour): (N, S, S) uint8, the thesis's
-    single output (dropout off). For evaluations on a dataset's own pixels
+    resized and thickened as the training inputs were), raised to the plans' size as
+    ``render`` says (:func:`synthesize`): (N, S, S) uint8, the thesis's single output
+    (dropout off). For evaluations on a dataset's own pixels
     (:mod:`map2map.learn.realism`, :mod:`map2map.learn.fig514`).
 
     Examples
@@ -273,16 +280,17 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
     >>> synthesize_squares(net, np.full((3, 32, 32), 255, np.uint8)).shape
     (3, 32, 32)
     """
-    import cv2
-
+    if render not in RENDERS:
+        raise ValueError(f"render must be one of {RENDERS}, got {render!r}")
     net = load_ab_model(model, device)
     plans = np.asarray(plans, np.uint8)
     S = plans.shape[-1]
+    wall_px = net.wall_px * S / net.data_size
     out = np.empty(plans.shape, np.uint8)
     for i in range(0, len(plans), batch):
         grey = net.sample_many(plans[i:i + batch], 1, seed)[:, 0]
         for j, gmap in enumerate(grey):
-            out[i + j] = cv2.resize(snap(gmap), (S, S), interpolation=cv2.INTER_NEAREST)
+            out[i + j] = slam_render.render(gmap, S, render, wall_px)
     return out
 
 

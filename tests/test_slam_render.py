@@ -1,0 +1,97 @@
+"""Model_AB's resolution raising with SLAM-like walls (map2map.learn.slam_render), on
+hand-made network outputs (numpy only, no torch)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import ndimage
+
+from map2map.core.grid import FREE, OCCUPIED, UNKNOWN
+from map2map.learn.postprocess import wall_thickness_px
+from map2map.learn.slam_render import (
+    class_memberships,
+    render,
+    render_plain,
+    render_slam,
+    save_render_figure,
+    snap,
+)
+
+
+def _rooms(n: int = 16) -> np.ndarray:
+    """A grey n x n output: two rooms split by a 3-cell wall, a 3-cell outer wall, unknown
+    outside the building."""
+    g = np.full((n, n), float(UNKNOWN), np.float32)
+    g[1:n - 1, 1:n - 1] = 0.0                     # building block, all wall
+    g[4:n - 4, 4:7] = 240.0                      # room 1
+    g[4:n - 4, 10:n - 4] = 240.0                 # room 2 (wall between: cells 7-9)
+    return g
+
+
+@pytest.mark.parametrize("wall_px", [1.0, 2.0, 3.0])
+def test_walls_come_out_with_the_given_thickness(wall_px):
+    r = render_slam(_rooms(), 128, wall_px=wall_px)   # 8 px per cell: walls 24 px thick
+    occ = r.map == OCCUPIED
+    assert set(np.unique(r.map)) <= {OCCUPIED, UNKNOWN, FREE}
+    # every straight face is exactly wall_px thick: across the split wall, row 64
+    row = r.map[64]
+    runs = np.diff(np.flatnonzero(np.diff(np.r_[0, row == OCCUPIED, 0])))[::2]
+    assert runs.tolist() == [int(wall_px)] * 4     # outer left, split wall x2, outer right
+    assert wall_thickness_px(r.map[None]) == pytest.approx(wall_px, abs=0.35)
+    # the walls' insides are unknown, as a SLAM map shows them; nothing else changed
+    assert np.all(r.map[r.snapped != OCCUPIED] == r.snapped[r.snapped != OCCUPIED])
+    assert np.all(r.map[(r.snapped == OCCUPIED) & ~occ] == UNKNOWN)
+    assert r.interior == int(((r.snapped == OCCUPIED) & ~occ).sum()) > 0
+
+
+def test_no_wall_is_lost_where_a_face_exists():
+    rng = np.random.default_rng(3)
+    g = rng.choice([0.0, 127.0, 250.0], size=(24, 24), p=[0.3, 0.3, 0.4]).astype(np.float32)
+    r = render_slam(g, 96, wall_px=2.0)
+    occ0, free0 = r.snapped == OCCUPIED, r.snapped == FREE
+    face = occ0 & ndimage.binary_dilation(free0, structure=np.ones((3, 3)))
+    assert face.any() and np.all(r.map[face] == OCCUPIED)   # every face pixel kept
+    lab, n = ndimage.label(occ0, structure=np.ones((3, 3)))
+    touching = np.unique(lab[face])
+    kept = np.unique(lab[r.map == OCCUPIED])
+    assert set(touching.tolist()) <= set(kept.tolist())    # every faced wall survives
+
+
+def test_wall_without_free_space_beside_it_becomes_unknown():
+    g = np.full((8, 8), float(UNKNOWN), np.float32)
+    g[3:5, 2:6] = 0.0                               # a wall floating in unknown space
+    g[0, 0] = 255.0                                 # free space far away
+    r = render_slam(g, 32, wall_px=2.0)
+    assert not np.any(r.map == OCCUPIED) and np.any(r.snapped == OCCUPIED)
+    assert not np.any(render_slam(np.zeros((4, 4)), 16).map == OCCUPIED)   # no free at all
+
+
+def test_thin_walls_stay_whole_and_no_unknown_halo_between_wall_and_room():
+    g = np.full((16, 16), 250.0, np.float32)
+    g[:, 8] = 5.0                                   # one cell: 4 px at 64
+    r = render_slam(g, 64, wall_px=3.0)
+    row = r.map[30]
+    assert np.count_nonzero(row == UNKNOWN) == 0     # wall meets its rooms directly
+    assert 3 <= np.count_nonzero(row == OCCUPIED) <= 5
+    plain = render_plain(g, 64)[30]
+    assert np.count_nonzero(plain == OCCUPIED) == 4 and np.count_nonzero(plain == UNKNOWN) == 0
+
+
+def test_memberships_argmax_is_snap_and_plain_is_the_previous_output():
+    g = np.random.default_rng(0).uniform(0, 255, (12, 12)).astype(np.float32)
+    p = class_memberships(g)
+    assert np.allclose(p.sum(-1), 1.0) and p.min() >= 0
+    same = render_slam(g, 12, wall_px=100.0)         # no upsampling, no thinning
+    assert np.array_equal(same.snapped, snap(g)) and np.array_equal(same.map, snap(g))
+    assert np.array_equal(render(g, 12, "plain"), snap(g))
+    assert np.array_equal(render(g, 48, "slam", 2.0), render_slam(g, 48, 2.0).map)
+    with pytest.raises(ValueError, match="render"):
+        render(g, 12, "blur")
+
+
+def test_render_figure_is_written(tmp_path):
+    g = _rooms()
+    save_render_figure(g, render_slam(g, 64, 2.0), tmp_path / "r.png",
+                       plan=np.full((64, 64), FREE, np.uint8), title="t")
+    assert (tmp_path / "r.png").stat().st_size > 1000
