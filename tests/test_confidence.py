@@ -62,6 +62,18 @@ def test_thresholds_on_measured_halmstad_figures():
     assert alignment_notes({**E5_01_GOOD, "free_agreement": 0.6}) == []
 
 
+def test_an_ambiguity_at_another_scale_asks_for_the_resolutions():
+    # E5_01: the runner-up lies at 0.6 x the scale and fits 88% as well
+    q = {**E5_01_GOOD, "runner_up_ratio": 0.88, "runner_up_rotation_deg": -3.1,
+         "runner_up_scale": 0.596}  # fmt: skip
+    (w,) = alignment_warnings(q)
+    assert w.startswith("ambiguous alignment") and "--source-resolution" in w
+    # known scale, or a runner-up at the same scale (a building turned 180 deg): no hint
+    assert "--source-resolution" not in alignment_warnings({**q, "metric_scale": 0.83})[0]
+    q180 = {**q, "runner_up_rotation_deg": 180.0, "runner_up_scale": 1.0}
+    assert "--source-resolution" not in alignment_warnings(q180)[0]
+
+
 def test_unmatched_walls_are_a_note_until_the_maps_share_none():
     # good Halmstad pairs: 41-83% unmatched; wrong maps up to 97%
     assert evaluation_warnings(0.93, 0.75) == []
@@ -121,3 +133,22 @@ def test_halmstad_good_pair_has_notes_not_warnings_and_a_wrong_map_warns(shared_
     assert any(n.startswith("the maps differ") for n in ev.report["notes"])
     wrong = evaluate_maps(load_halmstad(root, "HIH_03"), load_halmstad(root, "E5_layout"))
     assert any(w.startswith("ambiguous alignment") for w in wrong.report["warnings"])
+
+
+def test_halmstad_ambiguity_goes_once_the_scale_is_known(shared_data):
+    from map2map.maps.halmstad import load_halmstad
+
+    root = shared_data / "halmstad"
+    src, tgt = load_halmstad(root, "E5_04").data, load_halmstad(root, "E5_layout").data
+    res = align_maps(src, tgt)
+    assert any("--source-resolution" in w for w in res.warnings)  # runner-up at 0.61 x
+    # the E5 sensor maps are at 0.83 x the layout's scale: told so, no doubt is left
+    assert align_maps(src, tgt, params=AlignParams(metric_scale=0.83)).warnings == []
+
+
+def test_notes_are_printed_and_never_make_strict_fail(capsys):
+    from map2map.cli.align import report_warnings
+
+    assert report_warnings([], True, ["the maps differ: 41% ..."]) == 0
+    assert "map2map: note: the maps differ" in capsys.readouterr().err
+    assert report_warnings(["ambiguous alignment: ..."], True, ["x"]) == 3

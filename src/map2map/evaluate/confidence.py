@@ -58,8 +58,14 @@ building's layout; the synthetic cases of ``tests/test_trust.py`` and
   of different synthetic plans 0.77-0.95, of a symmetric room 1.0: no threshold
   separates them (0.90 on a good pair, 0.90 on a wrong one), so 0.8 stays and
   the warning fires on 5 of 35 good pairs — the maps alone *are* ambiguous there
-  (a runner-up at 0.6 x the scale fits 88% as well). Its free-space agreement
-  does not settle it either (runner-ups 0.94-0.97, as high as the winners');
+  (a runner-up at 0.6 x the scale fits 88% as well). Neither its free-space
+  agreement (runner-ups 0.94-0.97, as high as the winners') nor its eq. 8 fitness
+  refined at full resolution (0.69-0.87 of the winner's on good pairs, 0.72-0.74
+  on wrong maps) settles it. What does: a known metric scale. With the E5 scale
+  given (0.83), E5_01 and E5_04 score a runner-up of 0.75 and 0.52 (no warning,
+  same transform) and E5_12 keeps 0.81 (its runner-up is the building turned
+  180 deg: truly ambiguous); so when the runner-up lies at another scale and no
+  resolutions were given, the warning says to give them;
 * the unmatched share of good Halmstad pairs is 0.41-0.83, of the wrong maps
   0.77-0.97, of correct synthetic alignments < 0.1: above 0.9 the maps share no
   walls (a warning), above 0.5 it is a fact about what the statistics describe.
@@ -85,6 +91,7 @@ Examples
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -130,11 +137,19 @@ def alignment_warnings(q: dict[str, Any], params: ConfidenceParams | None = None
     if r >= p.ambiguity:
         rot = q.get("runner_up_rotation_deg", 180.0)
         sc = q.get("runner_up_scale", 1.0)
+        hint = "check the overlay or give --anchors"
+        if q.get("metric_scale") is None and abs(math.log(max(sc, 1e-9))) > math.log(1.1):
+            # the runner-up is at another scale: a known metric scale would rule it out
+            hint = (
+                "check the overlay, give --anchors, or give both maps' resolutions "
+                "(--source-resolution, --target-resolution): the search then keeps to "
+                "their scale, which rules out a placement at another"
+            )
         out.append(
             f"ambiguous alignment: a placement rotated by {rot:.1f} deg, scale {sc:.3f} from "
             f"the chosen one fits {100 * r:.0f}% as well in the search (symmetric or "
             "repetitive layout, or a small map that fits several places of a large one); "
-            "the maps alone cannot tell which is right: check the overlay or give --anchors"
+            f"the maps alone cannot tell which is right: {hint}"
         )
     fit = q.get("fitness")
     if fit is not None and fit < p.min_fitness:
