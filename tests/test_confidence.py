@@ -152,3 +152,18 @@ def test_notes_are_printed_and_never_make_strict_fail(capsys):
     assert report_warnings([], True, ["the maps differ: 41% ..."]) == 0
     assert "map2map: note: the maps differ" in capsys.readouterr().err
     assert report_warnings(["ambiguous alignment: ..."], True, ["x"]) == 3
+
+
+def test_the_inspection_report_shows_notes_apart_from_the_warnings():
+    from test_inspection import _maps
+
+    from map2map.reports.inspection import inspection_report
+
+    slam, plan = _maps()
+    ev = evaluate_maps(slam, plan, resolution=0.05)
+    assert ev.report["warnings"] == [] and ev.report["notes"] == []
+    ev.report["notes"] = evaluation_notes(0.75)
+    r = inspection_report(ev, plan)
+    assert r.warnings == []  # a fact, not a doubt: no "alignment is doubtful" box
+    md, _ = r.to_markdown()
+    assert "Note: the wall error figures describe 25%" in md
