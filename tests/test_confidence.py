@@ -58,8 +58,12 @@ def test_thresholds_on_measured_halmstad_figures():
     w = [x.split(":")[0] for x in alignment_warnings(E5_01_ON_HIH)]
     assert w == ["ambiguous alignment", "poor fit", "free space disagrees"]
     assert alignment_notes(E5_01_ON_HIH) == []
-    # a note never stands in for a warning: rooms that disagree give no "maps differ" note
-    assert alignment_notes({**E5_01_GOOD, "free_agreement": 0.6}) == []
+    # walls and rooms both doubtful (two different synthetic plans: fitness 0.37, free
+    # space 0.89; HIH_01 on the E5 layout: 0.21, 0.946): a warning, not a note
+    for fit, fa in ((0.37, 0.89), (0.21, 0.946)):
+        q = {**E5_01_GOOD, "fitness": fit, "free_agreement": fa}
+        assert [w.split(":")[0] for w in alignment_warnings(q)] == ["poor fit"]
+        assert alignment_notes(q) == []
 
 
 def test_an_ambiguity_at_another_scale_asks_for_the_resolutions():
