@@ -20,6 +20,16 @@ the warnings on good and bad pairs. Wrong-map pairs (a sensor map against the ot
 building's layout, skipped with ``--no-wrong``) are bad by construction: every one
 of them must warn. ``--json`` writes every figure, warning and transform (for a
 before/after comparison of a change: the transforms must not move unless meant to).
+
+Measured 2026-11-23 (2.3 min for the 40 pairs on a loaded, shared 2-core machine):
+35 good pairs, 1 bad (E5_layout -> E5_01, 1.96 x the floor), 4 wrong maps. Before
+the recalibration of :mod:`map2map.evaluate.confidence` every good pair carried a
+warning (alignment warnings on 30/35: poor fit on 30, ambiguity 5, weak hypothesis
+2; "most wall points match no plan wall" on 32); after, 7/35 (ambiguity 5: E5_01,
+E5_04, E5_12 both ways, which a known metric scale clears on E5_01/E5_04; weak
+hypothesis 2: HIH_04), every good pair carrying notes instead, and all 5 bad or
+wrong-map pairs still warn (ambiguity 5, poor fit 3, free space 2, no shared walls
+2). Transforms and error figures identical before and after on all 40 pairs.
 """
 
 from __future__ import annotations
