@@ -457,6 +457,8 @@ def stage_evaluate(ctx: DemoContext) -> None:
             line += f" (true: mean {100 * true.mean():.1f} cm, max {100 * true.max():.1f} cm)"
         for w in ev.report["warnings"]:
             line += f"\n  warning: {w}"
+        for w in ev.report.get("notes", []):
+            line += f"\n  note: {w}"
         ctx.say(line)
         if inspected:
             ctx.say(inspected)

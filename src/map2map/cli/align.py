@@ -64,10 +64,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def report_warnings(warnings: list[str], strict: bool) -> int:
-    """Print each warning on stderr; the exit status: 3 with ``strict`` and a warning, else 0."""
+def report_warnings(warnings: list[str], strict: bool, notes: list[str] = ()) -> int:
+    """Print each note and warning on stderr; the exit status: 3 with ``strict`` and a
+    warning, else 0 (notes never change it)."""
     import sys
 
+    for n in notes:
+        print(f"map2map: note: {n}", file=sys.stderr)
     for w in warnings:
         print(f"map2map: warning: {w}", file=sys.stderr)
     if warnings and strict:
@@ -102,4 +105,4 @@ def run(args: argparse.Namespace) -> int:
     )
     for what, path in run.written.items():
         print(f"  {what:<10s} {path}")
-    return report_warnings(run.warnings, args.strict)
+    return report_warnings(run.warnings, args.strict, run.notes)

@@ -121,12 +121,12 @@ def run(args: argparse.Namespace) -> int:
             )
         print(f"wrote {args.out}/pairs.csv and {args.out}/errors_boxplot.png")
         _inspection(run, args, tolerance)
-        return report_warnings(run.warnings, args.strict)
+        return report_warnings(run.warnings, args.strict, run.notes)
     for line in summary_lines(run.evaluation.report):
         print(line)
     print(f"wrote report.json, overlay.png, error_map.png in {args.out}")
     _inspection(run, args, tolerance)
-    return report_warnings(run.warnings, args.strict)
+    return report_warnings(run.warnings, args.strict, run.notes)
 
 
 def _inspection(run, args: argparse.Namespace, tolerance: float) -> None:

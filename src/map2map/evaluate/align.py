@@ -56,7 +56,7 @@ from scipy import ndimage, optimize
 from ..core.errors import InputError
 from ..core.grid import FREE, OCCUPIED, UNKNOWN
 from .anchors import Anchors, anchor, auto_anchors
-from .confidence import ConfidenceParams, alignment_warnings
+from .confidence import ConfidenceParams, alignment_notes, alignment_warnings
 from .decomposition import Face, decompose
 from .features import (
     downsample,
@@ -155,6 +155,7 @@ class Alignment:
     faces: dict[str, Any] = field(default_factory=dict)
     fields: SideFields | None = None
     timings: dict[str, float] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
         s, a, tx, ty = decompose_similarity(self.similarity)
@@ -175,6 +176,7 @@ class Alignment:
             "hypotheses": self.hypotheses,
             "orientation_deg": {k: math.degrees(v) for k, v in self.orientation.items()},
             "warnings": list(self.warnings),
+            "notes": list(self.notes),
             "timings_s": self.timings,
         }
 
@@ -896,6 +898,7 @@ def align_maps(
             "offset_target": (c0t, r0t),
         },
         timings=timings,
+        notes=alignment_notes(quality, p.confidence),
     )
 
 

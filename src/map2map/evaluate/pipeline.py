@@ -32,7 +32,7 @@ from scipy.spatial import cKDTree
 from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from .align import Alignment, AlignParams, align_maps, check_map
 from .anchors import Anchors
-from .confidence import evaluation_warnings
+from .confidence import evaluation_notes, evaluation_warnings
 from .features import edge_points, subsample
 from .icp import icp
 from .metric import ChainErrors, choose_chain, iou, local_errors
@@ -297,6 +297,8 @@ def evaluate_maps(
             errors[chosen].summary(None)["unmatched_share"],
             p.align.confidence,
         ),
+        "notes": list(al.notes)
+        + evaluation_notes(errors[chosen].summary(None)["unmatched_share"], p.align.confidence),
         "timings_s": {k: round(v, 4) for k, v in timings.items()},
     }
     report["iou"][chosen]["free_known"] = _iou_known(warped[chosen], target.data)

@@ -242,6 +242,11 @@ class AlignRun:
         """Why the alignment is doubtful (empty when it is not)."""
         return list(self.report.get("warnings", []))
 
+    @property
+    def notes(self) -> list[str]:
+        """Facts that limit what the alignment's numbers describe (no doubt on it)."""
+        return list(self.report.get("notes", []))
+
 
 def _check_common(seed, resolutions: dict[str, float | None]) -> None:
     check_seed(seed)
@@ -434,6 +439,13 @@ class EvaluateRun:
             return [w for ev in self.evaluations for w in ev.report["warnings"]]
         return [f"{r['pair']}: {w}" for r in self.rows for w in r["warnings"].split("; ") if w]
 
+    @property
+    def notes(self) -> list[str]:
+        """Every note (prefixed by the pair's name for a pairs file)."""
+        if not self.rows:
+            return [w for ev in self.evaluations for w in ev.report.get("notes", [])]
+        return [f"{r['pair']}: {w}" for r in self.rows for w in r["notes"].split("; ") if w]
+
 
 def _check_evaluate(spec: EvaluateSpec) -> None:
     _check_common(spec.seed, {"resolution": spec.resolution,
@@ -597,6 +609,7 @@ def _pair_row(name: str, src: MapInput, tgt: MapInput, ev: Evaluation) -> dict[s
         "fitness": ev.report["alignment"]["fitness"],
         "seconds": ev.report["timings_s"]["total"],
         "warnings": "; ".join(ev.report["warnings"]),
+        "notes": "; ".join(ev.report.get("notes", [])),
     }
 
 

@@ -609,6 +609,7 @@ def inspection_report(
         r.warn(f"Alignment: {w}")
     for w in insp.warnings:
         r.warn(w)
+    notes = rep.get("notes", [])
     counts = insp.counts
 
     def cm(key: str) -> float:
@@ -643,6 +644,8 @@ def inspection_report(
         f"than 0.3 m off) and {e['corner_points_excluded']} corner points are left out. "
         f"Plan resolution {res * 100:g} cm per pixel."
     )
+    for n in notes:  # facts that limit what the figures describe, not doubts
+        s.note(f"Note: {n}.")
     if csv_name:
         s.note(f"Every segment, one row each, is in {csv_name} beside this report.")
 
