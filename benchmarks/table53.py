@@ -46,6 +46,8 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="12 pairs")
     ap.add_argument("--seed", type=int, default=0, help="metric seed")
     ap.add_argument("--out", default="table53_out")
+    ap.add_argument("--no-anchor", action="store_true", help="walls placed by the network, "
+                    "not anchored on the input (autocorrect --no-anchor)")
     args = ap.parse_args(argv)
     n = 12 if args.quick else args.n
     out = Path(args.out)
@@ -66,7 +68,7 @@ def main(argv=None) -> int:
         pairs = PackedPairs(pairs.a[:n], pairs.b[:n], pairs.plan_id[:n], pairs.split[:n],
                             pairs.meta)
     save_packed(out / "heldout.npz", pairs)
-    table = run_table53(pairs, args.model, seed=args.seed)
+    table = run_table53(pairs, args.model, seed=args.seed, anchor=not args.no_anchor)
     print(table.format())
     table.to_csv(out / "table53.csv")
     table.figure(out / "fig512.png")
