@@ -56,6 +56,7 @@ from pathlib import Path
 
 import numpy as np
 import torch
+from numba import njit
 
 from ..core.errors import InputError
 from ..core.grid import OCCUPIED, UNKNOWN, OccupancyMap
@@ -71,6 +72,7 @@ PRETRAINED = "model_ba.safetensors"
 MARGIN_PX = 4  # dataset crop margin at the dataset's size (learn.synthetic, dataset build)
 MIN_SKEW_DEG = 3.0  # smaller rotations are left alone
 MAX_SHRINK = 4.0  # content squares more than 4x the dataset's size get a warning
+CPU_CHUNK = 16  # maps per forward pass on the CPU (BAModel.predict)
 
 
 def pretrained_path() -> Path:
@@ -92,11 +94,20 @@ class BAModel:
     source: str
     device: torch.device = field(default_factory=lambda: torch.device("cpu"))
 
-    @torch.no_grad()
     def predict(self, inputs: np.ndarray, batch: int = 256) -> np.ndarray:
-        """(N, data_size, data_size) uint8 maps -> (N, size, size) float32 grey outputs."""
+        """(N, data_size, data_size) uint8 maps -> (N, size, size) float32 grey outputs.
+
+        On the CPU the network runs on chunks of at most :data:`CPU_CHUNK` maps whatever
+        ``batch`` says: a small chunk's activations stay in the cache (measured about 1.5x
+        faster than one batch of 256 on 2 cores); the outputs do not depend on it."""
         how = self.header.get("train", {}).get("input_reduce", "area")
         small = reduce_input(inputs, self.size, how)
+        if self.device.type == "cpu":
+            batch = min(batch, CPU_CHUNK)
+        with torch.inference_mode():
+            return self._run(small, batch)
+
+    def _run(self, small: np.ndarray, batch: int) -> np.ndarray:
         out = []
         for i in range(0, len(small), batch):
             x = torch.from_numpy(small[i:i + batch])[:, None].to(self.device)
@@ -181,12 +192,30 @@ def dominant_angle(data: np.ndarray) -> tuple[float, float]:
     occ = cv2.GaussianBlur((np.asarray(data) == OCCUPIED).astype(np.float32), (0, 0), 2.0)
     gx = cv2.Sobel(occ, cv2.CV_32F, 1, 0, ksize=3)
     gy = cv2.Sobel(occ, cv2.CV_32F, 0, 1, ksize=3)
-    mag = np.hypot(gx, gy)
-    total = float(mag.sum())
+    zr, zi, total = _quadrupled_gradient_sum(gx, gy)
     if total <= 0:
         return 0.0, 0.0
-    z = np.sum(mag * np.exp(4j * np.arctan2(gy, gx)))
-    return float(np.degrees(np.angle(z) / 4)), float(abs(z) / total)
+    return float(np.degrees(np.arctan2(zi, zr) / 4)), float(np.hypot(zr, zi) / total)
+
+
+@njit(cache=True)
+def _quadrupled_gradient_sum(gx: np.ndarray, gy: np.ndarray) -> tuple[float, float, float]:
+    """sum(|g| exp(4i angle(g))) as (real, imaginary) and sum(|g|), in float64, without
+    trigonometry: with g = |g| (c + i s), exp(4i angle) = (c + i s)^4."""
+    zr = zi = total = 0.0
+    for i in range(gx.shape[0]):
+        for j in range(gx.shape[1]):
+            x, y = float(gx[i, j]), float(gy[i, j])
+            m2 = x * x + y * y
+            if m2 == 0.0:
+                continue
+            m = np.sqrt(m2)
+            c2 = (x * x - y * y) / m2  # cos 2a, sin 2a
+            s2 = 2.0 * x * y / m2
+            zr += m * (c2 * c2 - s2 * s2)  # cos 4a = cos^2 2a - sin^2 2a
+            zi += m * (2.0 * c2 * s2)
+            total += m
+    return zr, zi, total
 
 
 def _rotate(data: np.ndarray, angle: float) -> np.ndarray:

@@ -76,6 +76,7 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
+from numba import njit
 from scipy import ndimage
 
 from ..core.grid import FREE, OCCUPIED, UNKNOWN
@@ -160,12 +161,75 @@ def _surface_masks(data: np.ndarray) -> tuple[np.ndarray, ...]:
 def _face(mask: np.ndarray, top: bool, offset: int, min_cover: float) -> int | None:
     """Median position (+ ``offset``) of the first (``top``) or last face pixel of each
     column of ``mask`` (rows across the wall), or None when under ``min_cover`` of the
-    columns have one."""
+    columns have one. (The reference for :func:`_faces_kernel`, which does the same for
+    every segment at once.)"""
     has = mask.any(0)
     if has.sum() < min_cover * max(1, mask.shape[1]):
         return None
     idx = np.argmax(mask, 0) if top else mask.shape[0] - 1 - np.argmax(mask[::-1], 0)
     return offset + int(np.round(np.median(idx[has])))
+
+
+@njit(cache=True)
+def _median_round(v: np.ndarray, n: int) -> int:
+    """``int(np.round(np.median(v[:n])))`` of integers (round half to even, as numpy)."""
+    w = np.sort(v[:n])
+    if n % 2:
+        return int(w[n // 2])
+    return int(np.round((w[n // 2 - 1] + w[n // 2]) / 2.0))
+
+
+@njit(cache=True)
+def _faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, min_cover):
+    """:func:`_face` of both sides for every segment k (rows ``a[k]..b[k]`` across it,
+    ``lo[k]..hi[k]`` along it, clipped to the map): (first, last) face positions, -1
+    where under ``min_cover`` of the positions along it see one."""
+    H, W = up.shape
+    K = horiz.shape[0]
+    out = np.full((K, 2), -1, np.int64)
+    buf0 = np.empty(max(H, W), np.int64)
+    buf1 = np.empty(max(H, W), np.int64)
+    for k in range(K):
+        s0 = max(0, lo[k])
+        s1 = min(W if horiz[k] else H, hi[k] + 1)
+        length = max(0, s1 - s0)
+        n0 = 0
+        n1 = 0
+        for j in range(s0, s1):
+            for i in range(a[k], b[k] + 1):  # first face pixel across the wall
+                if (up[i, j] if horiz[k] else lf[j, i]):
+                    buf0[n0] = i - a[k]
+                    n0 += 1
+                    break
+            for i in range(b[k], a[k] - 1, -1):  # last face pixel
+                if (dn[i, j] if horiz[k] else rt[j, i]):
+                    buf1[n1] = i - a[k]
+                    n1 += 1
+                    break
+        need = min_cover * max(1, length)
+        if n0 > 0 and n0 >= need:
+            out[k, 0] = a[k] + _median_round(buf0, n0)
+        if n1 > 0 and n1 >= need:
+            out[k, 1] = a[k] + _median_round(buf1, n1)
+    return out
+
+
+@njit(cache=True)
+def _paint_walls(mask, free, horiz, r0, r1, lo, hi, stop_at_free):
+    """Fill each wall's box (rows ``r0..r1`` across, ``lo..hi`` along; negative starts
+    clip to 0) in ``mask``, in order; where ``stop_at_free``, only non-free pixels."""
+    H, W = mask.shape
+    for k in range(horiz.shape[0]):
+        a0, a1 = max(0, r0[k]), max(0, r1[k] + 1)
+        b0, b1 = max(0, lo[k]), max(0, hi[k] + 1)
+        if horiz[k]:
+            rs, re, cs, ce = a0, min(H, a1), b0, min(W, b1)
+        else:
+            rs, re, cs, ce = b0, min(H, b1), a0, min(W, a1)
+        for i in range(rs, re):
+            for j in range(cs, ce):
+                if not (stop_at_free[k] and free[i, j]):
+                    mask[i, j] = True
 
 
 def _align_faces(found: list, tol: float) -> None:
@@ -228,28 +292,27 @@ def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px:
     free = guide == FREE
     up, dn, lf, rt = _surface_masks(guide)
     t = max(1, int(round(wall_px)))
-    found = []
-    for x0, y0, x1, y1 in np.asarray(segs, float).reshape(-1, 4):
-        horiz, vert = y0 == y1, x0 == x1
-        if horiz == vert:
-            continue
-        c = y0 if horiz else x0
-        lo = int(round(min(x0, x1) if horiz else min(y0, y1)))
-        hi = int(round(max(x0, x1) if horiz else max(y0, y1)))
-        lim = H if horiz else W
-        a, b = int(max(0, np.floor(c - band))), int(min(lim - 1, np.ceil(c + band)))
-        span = slice(max(0, lo), min(W if horiz else H, hi + 1))
-        if horiz:
-            first, last = up[a:b + 1, span], dn[a:b + 1, span]
-        else:
-            first, last = lf[span, a:b + 1].T, rt[span, a:b + 1].T
-        f0, f1 = _face(first, True, a, min_cover), _face(last, False, a, min_cover)
-        found.append([horiz, None if f0 is None else f0 - grow,
-                      None if f1 is None else f1 + grow, lo, hi, c])
+    s = np.asarray(segs, float).reshape(-1, 4)
+    horiz, vert = s[:, 1] == s[:, 3], s[:, 0] == s[:, 2]
+    s = s[horiz != vert]
+    horiz = s[:, 1] == s[:, 3]
+    c = np.where(horiz, s[:, 1], s[:, 0])
+    # np.round as Python's round on these floats: both round half to even
+    lo = np.round(np.where(horiz, np.minimum(s[:, 0], s[:, 2]),
+                           np.minimum(s[:, 1], s[:, 3]))).astype(np.int64)
+    hi = np.round(np.where(horiz, np.maximum(s[:, 0], s[:, 2]),
+                           np.maximum(s[:, 1], s[:, 3]))).astype(np.int64)
+    lim = np.where(horiz, H, W)
+    a = np.maximum(0, np.floor(c - band)).astype(np.int64)
+    b = np.minimum(lim - 1, np.ceil(c + band)).astype(np.int64)
+    f = _faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, float(min_cover))
+    found = [[bool(h), None if f0 < 0 else int(f0) - grow, None if f1 < 0 else int(f1) + grow,
+              int(lo_), int(hi_), float(c_)]
+             for h, (f0, f1), lo_, hi_, c_ in zip(horiz, f, lo, hi, c, strict=True)]
     if align > 0:
         _align_faces(found, align)
     faces, extended, centres = [], [], []
-    for horiz, f0, f1, lo, hi, c in found:
+    for horiz_k, f0, f1, lo_k, hi_k, c_k in found:
         if f0 is not None and f1 is not None and f0 <= f1:
             r0, r1, ext = f0, f1, False
         elif f0 is not None:
@@ -257,22 +320,15 @@ def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px:
         elif f1 is not None:
             r0, r1, ext = f1 - t + 1, f1, True
         else:
-            r0 = int(round(c - (t - 1) / 2))
+            r0 = int(round(c_k - (t - 1) / 2))
             r1, ext = r0 + t - 1, True
-        (extended if ext else faces).append((horiz, r0, r1, lo, hi))
+        (extended if ext else faces).append((horiz_k, r0, r1, lo_k, hi_k, ext))
         mid = (r0 + r1) / 2
-        centres.append([lo, mid, hi, mid] if horiz else [mid, lo, mid, hi])
+        centres.append([lo_k, mid, hi_k, mid] if horiz_k else [mid, lo_k, mid, hi_k])
     mask = np.zeros((H, W), bool)
-    for group, stop_at_free in ((faces, False), (extended, True)):
-        for horiz, r0, r1, lo, hi in group:
-            if horiz:
-                box = (slice(max(0, r0), max(0, r1 + 1)), slice(max(0, lo), max(0, hi + 1)))
-            else:
-                box = (slice(max(0, lo), max(0, hi + 1)), slice(max(0, r0), max(0, r1 + 1)))
-            if stop_at_free:
-                mask[box] |= ~free[box]
-            else:
-                mask[box] = True
+    walls = np.array(faces + extended, np.int64).reshape(-1, 6)  # faces first, as drawn
+    _paint_walls(mask, free, walls[:, 0].astype(bool), walls[:, 1], walls[:, 2], walls[:, 3],
+                 walls[:, 4], walls[:, 5].astype(bool))
     return mask, np.array(centres, float).reshape(-1, 4)
 
 
