@@ -6,7 +6,7 @@ the table.
 
     python3 benchmarks/fig514.py --data DS --n 6 --out DIR [--model pretrained|RUN] [--seed 0]
         [--render slam|plain] [--drift parametric|none] [--drift-method additive|ekf]
-        [--drift-scale 1]
+        [--drift-scale F]
 """
 
 from __future__ import annotations
@@ -33,9 +33,10 @@ def main(argv=None) -> int:
                     help="Model_AB's resolution raising (slam: SLAM-like walls, default)")
     ap.add_argument("--drift", choices=("parametric", "none"), default="parametric",
                     help="Model_AB's parametric drift (default) or none")
-    ap.add_argument("--drift-method", choices=("additive", "ekf"), default="additive")
-    ap.add_argument("--drift-scale", type=float, default=1.0,
-                    help="factor on the drift field (default 1)")
+    ap.add_argument("--drift-method", choices=("additive", "ekf"), default=None,
+                    help="the drift's odometry-to-map conversion (default additive)")
+    ap.add_argument("--drift-scale", type=float, default=None,
+                    help="factor on the drift field (default: the tuned drift's)")
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -67,10 +67,11 @@ def main(argv=None) -> int:
     ap.add_argument("--drift", nargs="+", choices=("parametric", "none"),
                     default=["parametric"],
                     help="Model_AB's drift(s) to measure (default parametric)")
-    ap.add_argument("--drift-method", choices=("additive", "ekf"), default="additive",
-                    help="the parametric drift's odometry-to-map conversion")
-    ap.add_argument("--drift-scale", nargs="+", type=float, default=[1.0],
-                    help="factor(s) on the drift field (default 1)")
+    ap.add_argument("--drift-method", choices=("additive", "ekf"), default=None,
+                    help="the parametric drift's odometry-to-map conversion (default "
+                    "additive)")
+    ap.add_argument("--drift-scale", nargs="+", type=float, default=[None],
+                    help="factor(s) on the drift field (default: the tuned drift's)")
     ap.add_argument("--diversity", type=int, default=0, metavar="K",
                     help="also the mean pairwise disagreement of K hypotheses per plan")
     ap.add_argument("--measures", action="store_true",
@@ -87,7 +88,7 @@ def main(argv=None) -> int:
         from map2map.learn.synthesize import load_ab_model, synthesize_squares
 
         variants = [(how, d, sc) for how in args.render for d in args.drift
-                    for sc in (args.drift_scale if d == "parametric" else [1.0])]
+                    for sc in (args.drift_scale if d == "parametric" else [None])]
         for m in args.model:
             net = load_ab_model(m)
             base = "Model_AB" if m == "pretrained" else f"AB:{Path(m).name}"
@@ -105,6 +106,10 @@ def main(argv=None) -> int:
                     div[name] = _diversity(net, plans, refs.resolution, args.diversity,
                                            args.seed, how, d, args.drift_method, sc)
                 print(f"{name}: {time.perf_counter() - t1:.0f} s")
+            if "parametric" in args.drift:
+                from map2map.learn.drift import drift_params
+
+                print("drift: " + drift_params("parametric", args.drift_method).describe())
             print(f"{base}: {net.source} ({net.resolution} px, target walls "
                   f"{net.wall_px:.2f} px, note: {str(net.header.get('note', ''))[:90]})")
     print(f"{len(plans)} held-out '{args.split}' plans of {args.data} "

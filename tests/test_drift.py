@@ -7,12 +7,15 @@ import pytest
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from map2map.errors import InputError
 from map2map.learn.drift import (
+    DriftParams,
     apply_drift,
-    check_drift,
     drift_field,
     drift_maps,
+    drift_params,
     drift_rng,
 )
+
+WHOLE = DriftParams(duration=None, smooth_m=0.0, coverage="map")   # the plain model's field
 
 
 def _plan() -> OccupancyMap:
@@ -26,14 +29,15 @@ def _plan() -> OccupancyMap:
     return OccupancyMap(data, resolution=0.1)
 
 
-def test_drift_field_is_seeded_per_hypothesis_and_bit_identical():
+@pytest.mark.parametrize("params", [WHOLE, DriftParams()])
+def test_drift_field_is_seeded_per_hypothesis_and_bit_identical(params):
     plan = _plan()
-    a = drift_field(plan, drift_rng(3, 0))
-    b = drift_field(plan, drift_rng(3, 0))
-    c = drift_field(plan, drift_rng(3, 1))
+    a = drift_field(plan, drift_rng(3, 0), params)
+    b = drift_field(plan, drift_rng(3, 0), params)
+    c = drift_field(plan, drift_rng(3, 1), params)
     assert np.array_equal(a.field.dx, b.field.dx) and np.array_equal(a.field.dy, b.field.dy)
     assert not np.array_equal(a.field.dx, c.field.dx)          # hypothesis 1 drifts otherwise
-    assert a.field.stats(a.observed)["mean"] > 0.1             # it does move the map
+    assert a.stats()["mean"] > 0.1                             # it does move the map
     assert np.array_equal(apply_drift(plan.data, a), apply_drift(plan.data, b))
     assert not np.array_equal(apply_drift(plan.data, a), apply_drift(plan.data, c))
     # carried to the unobserved pixels: every pixel takes its nearest observed one's value
@@ -41,30 +45,45 @@ def test_drift_field_is_seeded_per_hypothesis_and_bit_identical():
     assert np.count_nonzero(a.field.magnitude[~a.observed] == 0) < np.count_nonzero(~a.observed)
 
 
-def test_drift_scale_zero_is_the_identity_and_unknown_cells_stay():
+def test_scale_magnitude_and_coverage():
     plan = _plan()
     m = plan.data.copy()
     m[:, 40:] = UNKNOWN                                        # a map that saw one room
-    d0 = drift_field(plan, drift_rng(0, 0), scale=0.0)
-    assert np.array_equal(apply_drift(m, d0), m)
-    d = drift_field(plan, drift_rng(0, 0), scale=2.0)
-    one = drift_field(plan, drift_rng(0, 0))
-    assert np.allclose(d.field.dx, 2 * one.field.dx)
-    out = apply_drift(m, d)
+    d0 = drift_field(plan, drift_rng(0, 0), DriftParams(scale=0.0, coverage="map"))
+    assert np.array_equal(apply_drift(m, d0), m)               # no drift: the map itself
+    one = drift_field(plan, drift_rng(0, 0), WHOLE)
+    two = drift_field(plan, drift_rng(0, 0), DriftParams(duration=None, smooth_m=0.0,
+                                                         coverage="map", scale=2.0))
+    assert np.allclose(two.field.dx, 2 * one.field.dx)
+    out = apply_drift(m, two)
     assert set(np.unique(out).tolist()) <= {OCCUPIED, UNKNOWN, FREE}
     assert np.count_nonzero(out[:, 50:] != UNKNOWN) == 0       # nothing invented far out
+    mag = drift_field(plan, drift_rng(0, 0), DriftParams(magnitude_px=1.5))
+    assert mag.stats()["mean"] == pytest.approx(1.5, rel=1e-4)  # set in map pixels
+    short = drift_field(plan, drift_rng(0, 0), DriftParams(duration=5.0, coverage="route",
+                                                           margin_px=0))
+    assert short.trajectory.t[-1] <= 5.0 + 1e-9
+    routed = apply_drift(plan.data, short)
+    assert not short.observed.all()               # 5 s of route: unknown where it did not see
+    assert np.count_nonzero(routed == UNKNOWN) > np.count_nonzero(plan.data == UNKNOWN) + 100
 
 
 def test_drift_methods_and_bad_choices():
     plan = _plan()
-    e = drift_field(plan, drift_rng(0, 0), method="ekf")
-    assert e.method == "ekf" and e.field.shape == plan.shape
+    e = drift_field(plan, drift_rng(0, 0), DriftParams(method="ekf"))
+    assert e.params.method == "ekf" and e.field.shape == plan.shape
+    assert drift_params("parametric", "ekf", 2.0) == DriftParams(method="ekf", scale=2.0)
+    assert drift_params("none") is None
     with pytest.raises(InputError, match="--drift-method"):
-        drift_field(plan, drift_rng(0, 0), method="rigid")
+        DriftParams(method="rigid")
+    with pytest.raises(InputError, match="--drift-method"):
+        drift_params("none", "rigid")
     with pytest.raises(InputError, match="--drift-scale"):
-        drift_field(plan, drift_rng(0, 0), scale=-1)
+        drift_params("parametric", scale=-1)
     with pytest.raises(InputError, match="--drift:"):
-        check_drift("wobble", "additive")
+        drift_params("wobble")
+    with pytest.raises(InputError, match="coverage"):
+        DriftParams(coverage="all")
 
 
 def test_drift_maps_per_plan_and_a_plan_without_room_keeps_its_map():

@@ -149,7 +149,8 @@ def test_fig514_from_a_dataset_and_from_plans(tiny_dataset, tmp_path):
     assert [r["method"] for r in f.rows] == list(METHODS)
     assert all(set(r) >= {"plan", "method", "error_px", "wall_recall"} for r in f.rows)
     assert f.info[f.plan_ids[0]]["reproduces_dataset_map"] is True
-    assert f.drift == "parametric additive x1" and f.info[f.plan_ids[0]]["square_resolution_m"]
+    assert f.drift.startswith("parametric (additive x1")
+    assert f.info[f.plan_ids[0]]["square_resolution_m"] > 0
     assert set(f.summary) >= {"n", "model", *METHODS} and f.summary["n"] == 1
     for m in METHODS:
         assert f.maps[m].shape == (1, 32, 32)

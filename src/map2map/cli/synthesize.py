@@ -39,8 +39,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--drift-method", choices=("additive", "ekf"), default="additive",
                    help="the drift's odometry-to-map conversion (additive: thesis eqs. "
                    "3.81-3.90, default; ekf: 3.54-3.80)")
-    p.add_argument("--drift-scale", type=float, default=1.0,
-                   help="factor on the drift field (1: the parametric model's magnitude)")
+    p.add_argument("--drift-scale", type=float, default=None,
+                   help="factor on the drift field (default: the tuned drift's, see "
+                   "docs/learn_ab.md)")
     p.add_argument("--no-figure", action="store_true", help="do not write the figure")
     p.add_argument("--device", default="cpu", help="torch device (default cpu)")
     add_input_options(p)
@@ -79,8 +80,9 @@ def run(args: argparse.Namespace) -> int:
     for path, m in zip(names, res.maps, strict=True):
         save_map(m, path)
     summary = {"plan": str(src), "seed": args.seed, "render": args.render,
-               "drift": args.drift, "drift_method": args.drift_method,
-               "drift_scale": args.drift_scale, "files": [p.name for p in names], **res.summary()}
+               "drift": args.drift,
+               "drift_params": res.maps[0].meta["synthesize"].get("drift_params"),
+               "files": [p.name for p in names], **res.summary()}
     with atomic_path(out / f"{src.stem}_synthesize.json") as tmp:
         tmp.write_text(json.dumps(summary, indent=2))
     if not args.no_figure:

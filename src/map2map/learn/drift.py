@@ -48,7 +48,8 @@ True
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import math
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy import ndimage
@@ -60,20 +61,18 @@ from ..parametric.params import ParametricParams
 from ..parametric.pipeline import METHODS, deform, make_trajectory
 from ..trajectory.timing import Trajectory
 
-__all__ = ["DRIFTS", "DRIFT_METHODS", "DEFAULT_TOUR", "DEFAULT_FOV_DEG", "DEFAULT_SCALE",
-           "DEFAULT_SQUARE_RESOLUTION", "DriftField", "drift_rng", "drift_field",
-           "apply_drift", "drift_maps", "check_drift"]
+__all__ = ["DRIFTS", "DRIFT_METHODS", "COVERAGES", "DEFAULT_FOV_DEG",
+           "DEFAULT_SQUARE_RESOLUTION", "DriftParams", "DriftField", "drift_params",
+           "drift_rng", "drift_field", "apply_drift", "drift_maps"]
 
 #: ``drift`` choices of :func:`map2map.learn.synthesize.synthesize`.
 DRIFTS = ("parametric", "none")
 #: The parametric model's odometry-to-map conversions (``drift_method``).
 DRIFT_METHODS = METHODS
-#: Roadmap nodes the drift trajectory tours (``map2map dataset build``'s ``tour``).
-DEFAULT_TOUR = 12
+#: What a drifted map shows (:func:`apply_drift`).
+COVERAGES = ("map", "route")
 #: LIDAR field of view of the drift model (the dataset build's simulated LIDAR).
 DEFAULT_FOV_DEG = 180.0
-#: Factor on the parametric field (1: the model's own magnitude).
-DEFAULT_SCALE = 1.0
 #: Metres per pixel assumed for a dataset square whose resolution is not given: the
 #: median of the 256 px squares of ``map2map dataset build --plans generated`` (0.025 to
 #: 0.12 m over the first 60 pairs of gen6300).
@@ -82,23 +81,117 @@ DEFAULT_SQUARE_RESOLUTION = 0.06
 _STREAM = 0xD21F7
 
 
-def check_drift(drift: str, method: str) -> None:
-    """:class:`InputError` naming ``--drift`` / ``--drift-method`` for an unknown choice.
+@dataclass(frozen=True)
+class DriftParams:
+    """How a drift field is drawn and applied (module doc).
+
+    Parameters
+    ----------
+    method : {"additive", "ekf"}
+        The parametric model's odometry-to-map conversion (thesis eqs. 3.81-3.90 or
+        3.54-3.80).
+    scale : float
+        Final factor on the field (>= 0; 1: as drawn).
+    tour : int
+        Roadmap nodes the route tours (``map2map dataset build``'s ``tour``: 12).
+    duration : float or None
+        Seconds of the route kept (its first ``duration`` s), as a simulated exploration
+        runs out of time (the dataset build's 420 s); ``None``: the whole tour.
+    smooth_m : float
+        Standard deviation [m] of a Gaussian filter on the carried field (0: none): keeps
+        the drift (rooms moved, walls bent), drops the pixel-scale part of ``d``, which
+        erodes thin features of the generated map under the warp's nearest sampling.
+    magnitude_px : float or None
+        Rescale the field so that its mean ``|d|`` over the observed pixels is
+        ``magnitude_px * exp(spread * z)`` map pixels (``z`` a standard normal draw):
+        keeps the model's spatial structure, sets its size in pixels of the map; ``None``:
+        the model's metric magnitude at the plan's resolution.
+    spread : float
+        Log-normal spread of that magnitude across draws.
+    coverage : {"map", "route"}
+        ``"map"``: the generated map's own mapped area is kept; ``"route"``: also unknown
+        where the drift's route did not see (the parametric model's partial mapping,
+        thesis Fig. 5.13), grown by ``margin_px``.
+    margin_px : int
+        Pixels by which ``coverage="route"`` grows what the route saw (the route sees a
+        wall's first pixel; the generated map draws it thicker).
+    """
+
+    method: str = "additive"
+    scale: float = 1.0
+    tour: int = 12
+    duration: float | None = 420.0
+    smooth_m: float = 0.2
+    magnitude_px: float | None = None
+    spread: float = 0.0
+    coverage: str = "route"
+    margin_px: int = 2
+
+    def __post_init__(self):
+        if self.method not in DRIFT_METHODS:
+            raise InputError("--drift-method",
+                             f"must be one of {', '.join(DRIFT_METHODS)}, got {self.method!r}")
+        if not (math.isfinite(self.scale) and self.scale >= 0):
+            raise InputError("--drift-scale", f"must be >= 0, got {self.scale}")
+        if self.coverage not in COVERAGES:
+            raise InputError("coverage", f"must be one of {', '.join(COVERAGES)}, "
+                                         f"got {self.coverage!r}")
+        bad = [n for n in ("smooth_m", "spread", "margin_px") if not getattr(self, n) >= 0]
+        bad += [n for n in ("duration", "magnitude_px")
+                if getattr(self, n) is not None and not getattr(self, n) > 0]
+        if self.tour < 2:
+            bad.append("tour")
+        if bad:
+            raise InputError(bad[0], f"out of range: {getattr(self, bad[0])!r}")
+
+    def describe(self) -> str:
+        """One line naming every setting.
+
+        Examples
+        --------
+        >>> DriftParams(scale=2.0).describe()[:30]
+        'additive x2, tour 12 for 420 s'
+        """
+        out = f"{self.method} x{self.scale:g}, tour {self.tour}"
+        out += f" for {self.duration:g} s" if self.duration else ""
+        if self.magnitude_px is not None:
+            out += f", mean {self.magnitude_px:g} px (spread {self.spread:g})"
+        out += f", smoothed {self.smooth_m:g} m, coverage {self.coverage}"
+        return out + (f" +{self.margin_px} px" if self.coverage == "route" else "")
+
+
+def drift_params(drift: str | DriftParams, method: str | None = None,
+                 scale: float | None = None) -> DriftParams | None:
+    """``drift`` (``"parametric"``: the default :class:`DriftParams`, ``"none"``: None, or
+    a :class:`DriftParams`) with ``method`` and ``scale`` replaced where given.
 
     Examples
     --------
-    >>> check_drift("none", "additive")
+    >>> drift_params("parametric", "ekf").method
+    'ekf'
+    >>> drift_params("none") is None
+    True
     >>> try:
-    ...     check_drift("wobble", "additive")
+    ...     drift_params("wobble")
     ... except InputError as exc:
     ...     print(exc)
     --drift: must be one of parametric, none, got 'wobble'
     """
-    if drift not in DRIFTS:
+    if isinstance(drift, DriftParams):
+        p = drift
+    elif drift == "parametric":
+        p = DriftParams()
+    elif drift == "none":
+        if method is not None and method not in DRIFT_METHODS:
+            DriftParams(method=method)                   # the error names the choice
+        return None
+    else:
         raise InputError("--drift", f"must be one of {', '.join(DRIFTS)}, got {drift!r}")
-    if method not in DRIFT_METHODS:
-        raise InputError("--drift-method",
-                         f"must be one of {', '.join(DRIFT_METHODS)}, got {method!r}")
+    if method is not None:
+        p = replace(p, method=method)
+    if scale is not None:
+        p = replace(p, scale=float(scale))
+    return p
 
 
 def drift_rng(seed: int, k: int) -> np.random.Generator:
@@ -122,26 +215,25 @@ class DriftField:
     Attributes
     ----------
     field : DisplacementField
-        Displacement [px] of every pixel, ``scale`` applied, carried to unobserved pixels.
+        Displacement [px] of every pixel, carried to the unobserved ones, smoothed and
+        scaled as ``params`` say.
     observed : (H, W) bool
         Pixels the parametric model's LIDAR saw along ``trajectory``.
-    trajectory : Trajectory or None
-    method : str
-    scale : float
+    trajectory : Trajectory
+    params : DriftParams
     drawn : dict
         The parametric model's drawn coefficients (``DeformResult.drawn``).
     """
 
     field: DisplacementField
     observed: np.ndarray
-    trajectory: Trajectory | None
-    method: str
-    scale: float
+    trajectory: Trajectory
+    params: DriftParams
     drawn: dict = field(default_factory=dict)
 
     def stats(self) -> dict:
-        """Mean and maximum ``|d|`` [px] over the observed pixels, and the method."""
-        return {**self.field.stats(self.observed), "method": self.method, "scale": self.scale}
+        """Mean and maximum ``|d|`` [px] over the observed pixels."""
+        return self.field.stats(self.observed)
 
 
 def _carry(f: DisplacementField, observed: np.ndarray) -> DisplacementField:
@@ -153,9 +245,9 @@ def _carry(f: DisplacementField, observed: np.ndarray) -> DisplacementField:
     return DisplacementField(f.dx[idx[0], idx[1]], f.dy[idx[0], idx[1]])
 
 
-def drift_field(plan: OccupancyMap, rng: np.random.Generator, *, method: str = "additive",
-                scale: float = DEFAULT_SCALE, tour: int = DEFAULT_TOUR,
-                params: ParametricParams | None = None) -> DriftField:
+def drift_field(plan: OccupancyMap, rng: np.random.Generator,
+                params: DriftParams | None = None,
+                model: ParametricParams | None = None) -> DriftField:
     """A parametric drift field for ``plan`` (module doc, steps 1-4).
 
     Parameters
@@ -163,15 +255,13 @@ def drift_field(plan: OccupancyMap, rng: np.random.Generator, *, method: str = "
     plan : OccupancyMap
         The plan, at its true resolution (the error model is metric).
     rng : numpy.random.Generator
-        Every random draw (route, LIDAR and odometry errors); see :func:`drift_rng`.
-    method : {"additive", "ekf"}
-        The parametric model's odometry-to-map conversion.
-    scale : float
-        Factor on the field (>= 0).
-    tour : int
-        Roadmap nodes the route tours.
-    params : ParametricParams, optional
-        Default: the parametric defaults with a :data:`DEFAULT_FOV_DEG` LIDAR.
+        Every random draw (route, LIDAR and odometry errors, magnitude); see
+        :func:`drift_rng`.
+    params : DriftParams, optional
+        Default :class:`DriftParams`.
+    model : ParametricParams, optional
+        The parametric model's parameters; default its defaults with a
+        :data:`DEFAULT_FOV_DEG` LIDAR.
 
     Returns
     -------
@@ -180,27 +270,37 @@ def drift_field(plan: OccupancyMap, rng: np.random.Generator, *, method: str = "
     Raises
     ------
     InputError
-        Unknown method, negative scale, or a plan the robot cannot drive (no free space
-        wider than the robot, nodes not connected).
+        A plan the robot cannot drive (no free space wider than the robot, nodes not
+        connected).
     """
-    if method not in DRIFT_METHODS:
-        raise InputError("--drift-method",
-                         f"must be one of {', '.join(DRIFT_METHODS)}, got {method!r}")
-    if not (np.isfinite(scale) and scale >= 0):
-        raise InputError("--drift-scale", f"must be >= 0, got {scale}")
-    p = params or ParametricParams(fov_deg=DEFAULT_FOV_DEG)
-    traj, _ = make_trajectory(plan, p, rng, tour=tour)
-    res = deform(plan, traj, method, p, rng)
+    dp = params or DriftParams()
+    p = model or ParametricParams(fov_deg=DEFAULT_FOV_DEG)
+    traj, _ = make_trajectory(plan, p, rng, tour=dp.tour)
+    if dp.duration is not None and traj.t[-1] > dp.duration:
+        n = max(2, int(np.searchsorted(traj.t, dp.duration, side="right")))
+        traj = Trajectory(traj.t[:n], traj.x[:n], traj.y[:n], traj.theta[:n], traj.v[:n],
+                          traj.omega[:n], dict(traj.meta))
+    res = deform(plan, traj, dp.method, p, rng)
     f = _carry(res.field, res.observed)
-    if scale != 1.0:
-        f = DisplacementField(f.dx * np.float32(scale), f.dy * np.float32(scale))
-    return DriftField(f, res.observed, traj, method, float(scale), res.drawn)
+    if dp.smooth_m > 0:
+        sig = dp.smooth_m / plan.resolution
+        f = DisplacementField(ndimage.gaussian_filter(f.dx, sig, mode="nearest"),
+                              ndimage.gaussian_filter(f.dy, sig, mode="nearest"))
+    k = dp.scale
+    if dp.magnitude_px is not None:
+        target = dp.magnitude_px * math.exp(dp.spread * float(rng.standard_normal()))
+        now = f.stats(res.observed)["mean"]
+        k *= target / now if now > 1e-9 else 0.0
+    if k != 1.0:
+        f = DisplacementField(f.dx * np.float32(k), f.dy * np.float32(k))
+    return DriftField(f, res.observed, traj, dp, res.drawn)
 
 
 def apply_drift(m: np.ndarray, drift: DriftField) -> np.ndarray:
     """Map ``m`` (plan frame, same shape as the drift's plan) warped along the drift:
-    content at ``p`` moves to ``p + d(p)``
-    (:func:`map2map.parametric.field.warp_map`); ``m``'s own unknown cells stay unknown.
+    content at ``p`` moves to ``p + d(p)`` (:func:`map2map.parametric.field.warp_map`);
+    ``m``'s own unknown cells stay unknown, and with ``coverage="route"`` so do the cells
+    the route did not see.
 
     Parameters
     ----------
@@ -215,12 +315,18 @@ def apply_drift(m: np.ndarray, drift: DriftField) -> np.ndarray:
     m = np.asarray(m, np.uint8)
     if m.shape != drift.field.shape:
         raise ValueError(f"map {m.shape} and drift field {drift.field.shape} differ in shape")
-    return warp_map(m, drift.field, np.ones(m.shape, bool))
+    dp = drift.params
+    if dp.coverage == "map":
+        seen = np.ones(m.shape, bool)
+    elif dp.margin_px > 0:
+        seen = ndimage.binary_dilation(drift.observed, iterations=int(dp.margin_px))
+    else:
+        seen = drift.observed
+    return warp_map(m, drift.field, seen)
 
 
-def drift_maps(maps, plans, resolutions, seed: int = 0, *, method: str = "additive",
-               scale: float = DEFAULT_SCALE, tour: int = DEFAULT_TOUR,
-               params: ParametricParams | None = None) -> tuple[np.ndarray, list[str]]:
+def drift_maps(maps, plans, resolutions, seed: int = 0, params: DriftParams | None = None,
+               model: ParametricParams | None = None) -> tuple[np.ndarray, list[str]]:
     """Map ``i`` of ``maps`` warped along a drift field of plan ``i`` drawn from
     :func:`drift_rng` ``(seed, i)``.
 
@@ -231,7 +337,7 @@ def drift_maps(maps, plans, resolutions, seed: int = 0, *, method: str = "additi
     resolutions : float or (N,) floats
         Metres per pixel of each plan.
     seed : int
-    method, scale, tour, params
+    params, model
         As :func:`drift_field`.
 
     Returns
@@ -248,11 +354,9 @@ def drift_maps(maps, plans, resolutions, seed: int = 0, *, method: str = "additi
     warns = []
     for i in range(len(maps)):
         try:
-            d = drift_field(OccupancyMap(plans[i], float(res[i])), drift_rng(seed, i),
-                            method=method, scale=scale, tour=tour, params=params)
+            d = drift_field(OccupancyMap(plans[i], float(res[i])), drift_rng(seed, i), params,
+                            model)
         except InputError as exc:
-            if exc.source in ("--drift-method", "--drift-scale"):
-                raise
             warns.append(f"map {i}: no drift ({exc.problem})")
             continue
         out[i] = apply_drift(maps[i], d)

@@ -273,8 +273,8 @@ def _bar(items, progress, desc):
 def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
                model="pretrained", seed: int = 0, *, split: str = "test",
                params=None, progress: bool = True, render: str = "slam",
-               drift: str = "parametric", drift_method: str = "additive",
-               drift_scale: float = 1.0) -> Fig514:
+               drift="parametric", drift_method: str | None = None,
+               drift_scale: float | None = None) -> Fig514:
     """Fig. 5.14 for ``n`` held-out plans (module doc).
 
     Parameters
@@ -340,6 +340,9 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
         warns.append(f"the re-run of {len(bad)} pair(s) ({', '.join(bad[:4])}) did not give "
                      "the dataset's map; the figure shows the re-run (whose trajectory the "
                      "parametric model follows)")
-    how = "none" if drift == "none" else f"{drift} {drift_method} x{drift_scale:g}"
+    from .drift import drift_params
+
+    dp = drift_params(drift, drift_method, drift_scale)
+    how = "none" if dp is None else f"parametric ({dp.describe()})"
     return Fig514([m[0] for m in made], [int(m[1]) for m in made], plans, maps, rows, info,
                   net.source, warns, how)

@@ -27,7 +27,8 @@ error. Each hypothesis ``k`` is warped along a displacement field the parametric
 CAD->SLAM model (thesis 3.2) draws for the plan from its own generator
 (:func:`~map2map.learn.drift.drift_rng` ``(seed, k)``): a route touring the plan, the
 LIDAR and odometry error fields ``d_L + d_O`` (additive method by default,
-``drift_method``), scaled by ``drift_scale``. ``drift="none"``: the network's map as
+``drift_method``), as :class:`~map2map.learn.drift.DriftParams` says (``drift_scale``
+replaces its final factor). ``drift="none"``: the network's map as
 rendered (the output before drift existed, bit for bit).
 
 Examples
@@ -50,7 +51,7 @@ from __future__ import annotations
 
 import os
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -63,12 +64,12 @@ from . import slam_render
 from .autocorrect import _square
 from .data import reduce_input
 from .drift import (
-    DEFAULT_SCALE,
     DEFAULT_SQUARE_RESOLUTION,
+    DriftParams,
     apply_drift,
-    check_drift,
     drift_field,
     drift_maps,
+    drift_params,
     drift_rng,
 )
 from .networks import from_unit
@@ -208,8 +209,8 @@ class SynthesisResult:
 
 def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "pretrained",
                *, samples: int = 4, seed: int = 0, device: str = "cpu",
-               render: str = "slam", drift: str = "parametric",
-               drift_method: str = "additive", drift_scale: float = DEFAULT_SCALE
+               render: str = "slam", drift: str | DriftParams = "parametric",
+               drift_method: str | None = None, drift_scale: float | None = None
                ) -> SynthesisResult:
     """``samples`` SLAM-map hypotheses of ``plan`` (module doc), in its frame.
 
@@ -227,13 +228,14 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
         ``"slam"``: walls as a SLAM map draws them, the faces bordering free space with
         the training targets' thickness (:func:`~map2map.learn.slam_render.render_slam`);
         ``"plain"``: the previous output (snap, nearest-neighbour upsampling).
-    drift : {"parametric", "none"}
-        Warp each hypothesis along its own parametric drift field (module doc), or not.
-    drift_method : {"additive", "ekf"}
-        The parametric model's odometry-to-map conversion (thesis eqs. 3.81-3.90 or
+    drift : {"parametric", "none"} or DriftParams
+        Warp each hypothesis along its own parametric drift field (module doc; the
+        default :class:`~map2map.learn.drift.DriftParams`, or the given ones), or not.
+    drift_method : {"additive", "ekf"}, optional
+        Replaces the drift's odometry-to-map conversion (thesis eqs. 3.81-3.90 or
         3.54-3.80).
-    drift_scale : float
-        Factor on the drift field (1: the parametric model's magnitude).
+    drift_scale : float, optional
+        Replaces the drift's final factor on its field.
 
     Returns
     -------
@@ -243,7 +245,7 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
         raise InputError("--samples", f"must be >= 1, got {samples}")
     if render not in RENDERS:
         raise InputError("--render", f"must be one of {', '.join(RENDERS)}, got {render!r}")
-    check_drift(drift, drift_method)
+    dp = drift_params(drift, drift_method, drift_scale)
     net = load_ab_model(model, device)
     sq = _square(plan, net.data_size)
     if sq is None:
@@ -262,18 +264,14 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
         s = slam_render.render(grey[k], side, render, wall_px)
         data = np.full((H, W), UNKNOWN, np.uint8)
         data[rs:re, cs:ce] = s[rs - row0:re - row0, cs - col0:ce - col0]
-        if drift == "parametric":
+        if dp is not None:
             try:
-                d = drift_field(plan, drift_rng(seed, k), method=drift_method,
-                                scale=drift_scale)
+                d = drift_field(plan, drift_rng(seed, k), dp)
             except InputError as exc:
-                if exc.source == "--drift-scale":
-                    raise
                 warns.append(f"hypothesis {k + 1}: no drift ({exc.problem})")
             else:
                 data = apply_drift(data, d)
-                drifted[k] = {k2: round(float(v), 3)
-                              for k2, v in d.field.stats(d.observed).items()}
+                drifted[k] = {k2: round(float(v), 3) for k2, v in d.stats().items()}
         maps.append(plan.copy(data=data))
     # the square's known pixels are the plan's known pixels (the square holds them all)
     pw = pairwise_disagreement(np.stack([m.data for m in maps]), plan.data != UNKNOWN)
@@ -300,9 +298,9 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     for m in maps:
         m.meta["synthesize"] = {"model": net.source, "seed": seed, "samples": samples,
                                 "render": render, "wall_px": round(wall_px, 3),
-                                "drift": drift}
-        if drift == "parametric":
-            m.meta["synthesize"].update(drift_method=drift_method, drift_scale=drift_scale)
+                                "drift": "none" if dp is None else "parametric"}
+        if dp is not None:
+            m.meta["synthesize"]["drift_params"] = asdict(dp)
     for k, st in drifted.items():
         maps[k].meta["synthesize"]["drift_px"] = st
     return SynthesisResult(maps, div, pw, warns, net.source)
@@ -310,8 +308,8 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
 
 def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndarray, *,
                        seed: int = 0, device: str = "cpu", batch: int = 16,
-                       render: str = "slam", drift: str = "parametric",
-                       drift_method: str = "additive", drift_scale: float = DEFAULT_SCALE,
+                       render: str = "slam", drift: str | DriftParams = "parametric",
+                       drift_method: str | None = None, drift_scale: float | None = None,
                        resolution=None) -> np.ndarray:
     """Model_AB's SLAM map of each preprocessed dataset plan (``A.png``: already square,
     resized and thickened as the training inputs were), raised to the plans' size as
@@ -336,7 +334,7 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
     """
     if render not in RENDERS:
         raise ValueError(f"render must be one of {RENDERS}, got {render!r}")
-    check_drift(drift, drift_method)
+    dp = drift_params(drift, drift_method, drift_scale)
     net = load_ab_model(model, device)
     plans = np.asarray(plans, np.uint8)
     S = plans.shape[-1]
@@ -346,9 +344,9 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
         grey = net.sample_many(plans[i:i + batch], 1, seed)[:, 0]
         for j, gmap in enumerate(grey):
             out[i + j] = slam_render.render(gmap, S, render, wall_px)
-    if drift == "parametric":
+    if dp is not None:
         res = DEFAULT_SQUARE_RESOLUTION if resolution is None else resolution
-        out, warns = drift_maps(out, plans, res, seed, method=drift_method, scale=drift_scale)
+        out, warns = drift_maps(out, plans, res, seed, dp)
         for w in warns:
             warnings.warn(w, stacklevel=2)
     return out
