@@ -194,8 +194,9 @@ class Fig514:
         fig.suptitle(f"Fig. 5.14 reproduced: same plan, same trajectory (appendix-metric "
                      f"error px of the {self.plans.shape[-1]} px square; wall recall 2 px); "
                      f"Model_AB: {Path(self.model).name}"
-                     + (f", drift {self.drift}" if self.drift else ""), fontsize=9)
-        fig.tight_layout(rect=(0, 0, 1, 1 - 0.45 / (3.1 * max(n, 1))))
+                     + (f"\nModel_AB's drift: {self.drift}" if self.drift else ""), fontsize=9)
+        top = 0.75 if self.drift else 0.45
+        fig.tight_layout(rect=(0, 0, 1, 1 - top / (3.1 * max(n, 1))))
         if path is not None:
             from ..core._io import atomic_path
 
