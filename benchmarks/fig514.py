@@ -5,7 +5,8 @@ the work; this script writes ``fig514.png`` and ``fig514.csv`` into ``--out`` an
 the table.
 
     python3 benchmarks/fig514.py --data DS --n 6 --out DIR [--model pretrained|RUN] [--seed 0]
-        [--render slam|plain]
+        [--render slam|plain] [--drift parametric|none] [--drift-method additive|ekf]
+        [--drift-scale F]
 """
 
 from __future__ import annotations
@@ -30,15 +31,23 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--render", choices=("slam", "plain"), default="slam",
                     help="Model_AB's resolution raising (slam: SLAM-like walls, default)")
+    ap.add_argument("--drift", choices=("parametric", "none"), default="parametric",
+                    help="Model_AB's parametric drift (default) or none")
+    ap.add_argument("--drift-method", choices=("additive", "ekf"), default=None,
+                    help="the drift's odometry-to-map conversion (default additive)")
+    ap.add_argument("--drift-scale", type=float, default=None,
+                    help="factor on the drift field (default: the tuned drift's)")
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     f = run_fig514(args.data, args.n, args.model, args.seed, split=args.split,
-                   render=args.render)
+                   render=args.render, drift=args.drift, drift_method=args.drift_method,
+                   drift_scale=args.drift_scale)
     f.figure(out / "fig514.png")
     f.write_csv(out / "fig514.csv")
     (out / "fig514_summary.json").write_text(json.dumps(
-        {**f.summary, "plans": f.info, "warnings": f.warnings}, indent=1, sort_keys=True))
+        {**f.summary, "plans": f.info, "warnings": f.warnings, "drift": f.drift}, indent=1,
+        sort_keys=True))
     print(f.table())
     for w in f.warnings:
         print(f"warning: {w}")

@@ -12,6 +12,8 @@ statistic: W(generated, run 1) / W(run 2, run 1); target every ratio <= 1.5.
 
     python3 benchmarks/realism.py --data DS [--model pretrained RUN ...] [--plans N]
         [--cache refs.npz] [--csv out.csv] [--render slam plain] [--measures]
+        [--drift parametric none] [--drift-method additive] [--drift-scale 1 ...]
+        [--diversity K]
 
 ``--render`` measures each model with each resolution raising
 (:mod:`map2map.learn.slam_render`: ``slam``, SLAM-like walls, the default of ``map2map
@@ -20,6 +22,14 @@ synthesize``; ``plain``, the previous snap + nearest upsampling). ``--measures``
 after alignment, wall recall and precision at 2 px) for the simulated runs, the parametric
 model and every generator: mean (median) error, plans not aligned, mean recall, mean
 precision.
+
+``--drift`` measures each model with and without the parametric drift of
+:mod:`map2map.learn.drift` (default ``parametric``, as ``map2map synthesize``; each square
+at its own metric resolution, :func:`map2map.learn.realism.pair_square_resolution`),
+``--drift-scale`` with each factor on the drift field (for tuning: tune on ``--split
+val``, report on ``test``). ``--diversity K`` adds, per generator, the mean pairwise
+disagreement of ``K`` hypotheses (:func:`map2map.learn.synthesize.synthesize`, test-time
+dropout + the drift) over the plans.
 """
 
 from __future__ import annotations
@@ -29,6 +39,8 @@ import csv
 import sys
 import time
 from pathlib import Path
+
+import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
@@ -52,6 +64,16 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0, help="Model_AB's seed (dropout off)")
     ap.add_argument("--render", nargs="+", choices=("slam", "plain"), default=["slam"],
                     help="Model_AB's resolution raising(s) to measure (default slam)")
+    ap.add_argument("--drift", nargs="+", choices=("parametric", "none"),
+                    default=["parametric"],
+                    help="Model_AB's drift(s) to measure (default parametric)")
+    ap.add_argument("--drift-method", choices=("additive", "ekf"), default=None,
+                    help="the parametric drift's odometry-to-map conversion (default "
+                    "additive)")
+    ap.add_argument("--drift-scale", nargs="+", type=float, default=[None],
+                    help="factor(s) on the drift field (default: the tuned drift's)")
+    ap.add_argument("--diversity", type=int, default=0, metavar="K",
+                    help="also the mean pairwise disagreement of K hypotheses per plan")
     ap.add_argument("--measures", action="store_true",
                     help="also Fig. 5.14's measures (appendix error, wall recall/precision) "
                     "on every plan")
@@ -61,15 +83,33 @@ def main(argv=None) -> int:
     plans = refs.a
     st1, st2 = stats_of(refs.sim1, plans), stats_of(refs.sim2, plans)
     gens = {"parametric": refs.parametric}
+    div: dict = {}
     if args.model:
         from map2map.learn.synthesize import load_ab_model, synthesize_squares
 
+        variants = [(how, d, sc) for how in args.render for d in args.drift
+                    for sc in (args.drift_scale if d == "parametric" else [None])]
         for m in args.model:
             net = load_ab_model(m)
             base = "Model_AB" if m == "pretrained" else f"AB:{Path(m).name}"
-            for how in args.render:
-                name = base if len(args.render) == 1 else f"{base} [{how}]"
-                gens[name] = synthesize_squares(net, plans, seed=args.seed, render=how)
+            for how, d, sc in variants:
+                tags = [how] * (len(args.render) > 1)
+                if len(args.drift) > 1 or len(args.drift_scale) > 1:
+                    tags.append("no drift" if d == "none" else
+                                f"drift x{sc:g}" if len(args.drift_scale) > 1 else "drift")
+                name = f"{base} [{', '.join(tags)}]" if tags else base
+                t1 = time.perf_counter()
+                gens[name] = synthesize_squares(
+                    net, plans, seed=args.seed, render=how, drift=d,
+                    drift_method=args.drift_method, drift_scale=sc, resolution=refs.resolution)
+                if args.diversity > 1:
+                    div[name] = _diversity(net, plans, refs.resolution, args.diversity,
+                                           args.seed, how, d, args.drift_method, sc)
+                print(f"{name}: {time.perf_counter() - t1:.0f} s")
+            if "parametric" in args.drift:
+                from map2map.learn.drift import drift_params
+
+                print("drift: " + drift_params("parametric", args.drift_method).describe())
             print(f"{base}: {net.source} ({net.resolution} px, target walls "
                   f"{net.wall_px:.2f} px, note: {str(net.header.get('note', ''))[:90]})")
     print(f"{len(plans)} held-out '{args.split}' plans of {args.data} "
@@ -82,6 +122,11 @@ def main(argv=None) -> int:
         print()
         print(format_realism_table(rows, name))
         out_rows += [{"generator": name, **r.as_dict()} for r in rows]
+    if div:
+        print(f"\ndiversity: mean pairwise disagreement of {args.diversity} hypotheses "
+              f"(share of the plan's known pixels), mean (min, max) over {len(plans)} plans")
+        for name, v in div.items():
+            print(f"{name:<40} {np.mean(v):.2%} ({np.min(v):.2%}, {np.max(v):.2%})")
     if args.measures:
         _measures({"simulated run 1": refs.sim1, "simulated run 2": refs.sim2, **gens}, plans)
     if args.csv:
@@ -91,6 +136,24 @@ def main(argv=None) -> int:
             w.writerows(out_rows)
     print(f"\n{time.perf_counter() - t0:.0f} s")
     return 0
+
+
+def _diversity(net, plans, resolution, k, seed, render, drift, method, scale) -> list:
+    """Per plan: mean pairwise disagreement of ``k`` hypotheses of ``synthesize``."""
+    import warnings
+
+    from map2map.core.grid import OccupancyMap
+    from map2map.learn.synthesize import synthesize
+
+    out = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for a, r in zip(plans, resolution, strict=True):
+            res = synthesize(OccupancyMap(a, float(r)), net, samples=k, seed=seed,
+                             render=render, drift=drift, drift_method=method,
+                             drift_scale=scale)
+            out.append(res.diversity)
+    return out
 
 
 def _measures(gens: dict, plans) -> None:

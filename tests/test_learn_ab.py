@@ -297,7 +297,9 @@ def test_synthesize_keeps_the_plan_frame_and_gives_seeded_distinct_hypotheses(ti
         assert np.array_equal(a.data, b.data)             # same seed, same maps
     assert res.pairwise.shape == (3, 3) and np.all(np.diag(res.pairwise) == 0)
     assert res.diversity == pytest.approx(res.pairwise[~np.eye(3, dtype=bool)].mean())
-    assert res.diversity > 0                              # dropout on: distinct hypotheses
+    # dropout on: distinct hypotheses (the tiny network draws a few free pixels, which the
+    # drift's route coverage may hide: measured without drift)
+    assert synthesize(plan, tiny_run, samples=3, seed=5, drift="none").diversity > 0
     one = synthesize(plan, tiny_run, samples=1)
     assert one.diversity == 0.0 and len(one.maps) == 1
     assert any("16 px" in w for w in res.warnings)        # coarse model says so
@@ -324,14 +326,96 @@ def test_synthesize_render_slam_draws_faces_and_plain_is_the_previous_output(tin
     grey = net.sample_many(plans, 1, 0)[:, 0]
     S = plans.shape[-1]
     wall = net.wall_px * S / net.data_size
-    got = synthesize_squares(net, plans)
+    got = synthesize_squares(net, plans, drift="none")
     assert np.array_equal(got[1], render_slam(grey[1], S, wall).map)
-    assert np.array_equal(synthesize_squares(net, plans, render="plain")[1],
+    assert np.array_equal(synthesize_squares(net, plans, render="plain", drift="none")[1],
                           render_plain(grey[1], S))
     for a, b in zip(slam.maps, plain.maps, strict=True):     # same frame, other walls
         assert a.shape == b.shape and a.origin == b.origin
     with pytest.raises(InputError, match="render"):
         synthesize(plan, net, render="blur")
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+def test_synthesize_drift_none_is_the_previous_output_and_parametric_drifts(tiny_run):
+    from map2map.learn.autocorrect import _square
+    from map2map.learn.drift import apply_drift, drift_field, drift_rng
+    from map2map.learn.slam_render import render
+    from map2map.learn.synthesize import load_ab_model, pairwise_disagreement, synthesize
+
+    net = load_ab_model(tiny_run)
+    plan = _plan()
+    none = synthesize(plan, net, samples=3, seed=2, drift="none")
+    # the output before drift existed: rendered squares pasted into the plan's frame,
+    # diversity over the square's known pixels
+    square, row0, col0, side = _square(plan, net.data_size)
+    grey = net.sample(thicken_input(square, net), 3, 2)
+    squares = [render(g, side, "slam", net.wall_px * side / net.data_size) for g in grey]
+    for k, m in enumerate(none.maps):
+        old = np.full(plan.shape, UNKNOWN, np.uint8)
+        old[:, :] = squares[k][-row0:-row0 + plan.shape[0], -col0:-col0 + plan.shape[1]]
+        assert np.array_equal(m.data, old)
+        assert m.meta["synthesize"]["drift"] == "none"
+    pw = pairwise_disagreement(np.stack(squares), square != UNKNOWN)
+    assert none.diversity == pw[~np.eye(3, dtype=bool)].mean()
+    # the tiny network draws nothing: let it draw the plan, so that the drift shows
+    net.sample_many = _plan_drawer(net)
+    none = synthesize(plan, net, samples=3, seed=2, drift="none")
+    drift = synthesize(plan, net, samples=3, seed=2)              # default: parametric
+    again = synthesize(plan, net, samples=3, seed=2, drift="parametric")
+    for k, (a, b, c) in enumerate(zip(drift.maps, again.maps, none.maps, strict=True)):
+        assert np.array_equal(a.data, b.data)                     # same seed, same bytes
+        assert np.count_nonzero(c.data == OCCUPIED) > 20
+        assert not np.array_equal(a.data, c.data)                 # the drift moved it
+        want = apply_drift(c.data, drift_field(plan, drift_rng(2, k)))
+        assert np.array_equal(a.data, want)                       # hypothesis k: (seed, k)
+        assert a.meta["synthesize"]["drift_params"]["method"] == "additive"
+        assert a.meta["synthesize"]["drift_px"]["mean"] > 0
+    assert drift.diversity > none.diversity == 0.0                # the drift differs
+    ekf = synthesize(plan, net, samples=1, seed=2, drift_method="ekf")
+    assert ekf.maps[0].meta["synthesize"]["drift_params"]["method"] == "ekf"
+    from map2map.errors import InputError
+
+    with pytest.raises(InputError, match="--drift"):
+        synthesize(plan, net, drift="rigid")
+
+
+def _plan_drawer(net):
+    """A stand-in for ``net.sample_many``: the input plans reduced to the output size,
+    the same for every sample."""
+    from map2map.learn.data import reduce_input
+
+    def sample_many(inputs, samples=1, seed=0):
+        x = reduce_input(np.asarray(inputs, np.uint8), net.resolution, "area")
+        return np.repeat(x[:, None].astype(np.float32), samples, axis=1)
+
+    return sample_many
+
+
+def thicken_input(square, net):
+    from map2map.maps.preprocess import square_resize, thicken
+
+    k = int(net.header.get("dataset", {}).get("thicken", 0) or 0)
+    return thicken(square_resize(square, net.data_size), k)
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+def test_synthesize_squares_drifts_each_plan_at_its_resolution(tiny_run):
+    from map2map.learn.drift import DriftParams, drift_maps
+    from map2map.learn.synthesize import load_ab_model, synthesize_squares
+
+    net = load_ab_model(tiny_run)
+    net.sample_many = _plan_drawer(net)                 # draws the plan (tiny net: nothing)
+    plans = _pairs(n=3, size=32, seed=4).a
+    none = synthesize_squares(net, plans, drift="none")
+    got = synthesize_squares(net, plans, seed=1, resolution=[0.06, 0.07, 0.08])
+    assert np.array_equal(got, synthesize_squares(net, plans, seed=1,
+                                                  resolution=[0.06, 0.07, 0.08]))
+    assert all(not np.array_equal(g, n) for g, n in zip(got, none, strict=True))
+    want, _ = drift_maps(none, plans, [0.06, 0.07, 0.08], 1, DriftParams())
+    assert np.array_equal(got, want)                   # plan i: drift_rng(seed, i)
+    assert not np.array_equal(got, synthesize_squares(net, plans, seed=1, resolution=0.06,
+                                                      drift_scale=3.0))
 
 
 def test_cli_synthesize_writes_maps_summary_and_figure(tiny_run, tmp_path, capsys):
@@ -341,8 +425,9 @@ def test_cli_synthesize_writes_maps_summary_and_figure(tiny_run, tmp_path, capsy
 
     save_map(_plan(), tmp_path / "plan.yaml")
     out = tmp_path / "hyps"
+    # the tiny network draws next to nothing; without drift a hypothesis still reads back
     rc = main(["synthesize", str(tmp_path / "plan.yaml"), "--out", str(out), "--samples", "3",
-               "--model", str(tiny_run)])
+               "--model", str(tiny_run), "--drift", "none"])
     assert rc == 0
     m = load_map(out / "plan_hyp02.yaml")
     assert m.shape == (30, 44) and m.resolution == pytest.approx(0.07)
@@ -350,10 +435,17 @@ def test_cli_synthesize_writes_maps_summary_and_figure(tiny_run, tmp_path, capsy
     summary = json.loads((out / "plan_synthesize.json").read_text())
     assert summary["samples"] == 3 and 0 < summary["diversity_mean_pairwise_disagreement"] < 1
     assert (out / "plan_synthesize.png").stat().st_size > 1000
-    assert summary["render"] == "slam"
+    assert summary["render"] == "slam" and summary["drift"] == "none"
     assert main(["synthesize", str(tmp_path / "plan.yaml"), "--out", str(tmp_path / "p"),
                  "--samples", "2", "--format", "png", "--no-figure", "--model",
                  str(tiny_run), "--render", "plain"]) == 0
+    p = json.loads((tmp_path / "p" / "plan_synthesize.json").read_text())
+    assert p["drift"] == "parametric" and p["drift_params"]["method"] == "additive"
+    assert main(["synthesize", str(tmp_path / "plan.yaml"), "--out", str(tmp_path / "e"),
+                 "--samples", "1", "--no-figure", "--model", str(tiny_run),
+                 "--drift-method", "ekf", "--drift-scale", "0.5"]) == 0
+    e = json.loads((tmp_path / "e" / "plan_synthesize.json").read_text())
+    assert (e["drift_params"]["method"], e["drift_params"]["scale"]) == ("ekf", 0.5)
     assert sorted(p.name for p in (tmp_path / "p").iterdir()) == \
         ["plan_hyp00.png", "plan_hyp01.png", "plan_synthesize.json"]
     err = capsys.readouterr().err
@@ -361,13 +453,13 @@ def test_cli_synthesize_writes_maps_summary_and_figure(tiny_run, tmp_path, capsy
     from map2map.learn.autocorrect import pretrained_path
 
     bad = [["--samples", "0"], ["--model", str(pretrained_path())],
-           ["--model", str(tmp_path / "nope")]]
+           ["--model", str(tmp_path / "nope")], ["--drift-scale", "-1"]]
     for extra in bad:
         assert main(["synthesize", str(tmp_path / "plan.yaml"), "--out",
                      str(tmp_path / "bad"), *extra]) == 2
     assert main(["synthesize", str(tmp_path / "none.yaml"), "--out", str(tmp_path / "b")]) == 2
     err = capsys.readouterr().err
-    assert "Traceback" not in err and err.count("map2map: error:") == 4
+    assert "Traceback" not in err and err.count("map2map: error:") == 5
     assert not (tmp_path / "bad").exists()
 
 

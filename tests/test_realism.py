@@ -117,6 +117,14 @@ def test_simulated_references_are_cached(tiny_dataset, tmp_path, monkeypatch):
     monkeypatch.setattr(R, "rerun_pair", lambda *a, **k: pytest.fail("simulated again"))
     again = simulated_references(tiny_dataset, split=split, n=1, cache=cache, progress=False)
     assert np.array_equal(again.sim2, refs.sim2)
+    # each square's metres per pixel: the pair's crop window over 32 px (the drift's scale)
+    from map2map.datasets.pair import crop_box, window_resolution
+    from map2map.maps.formats import load_map
+
+    folder = pair_dir(tiny_dataset, int(refs.indices[0]))
+    a, b = load_map(folder / "A.yaml"), load_map(folder / "B.yaml")
+    assert refs.resolution.tolist() == [window_resolution(a, crop_box(a, b), 32)]
+    assert refs.resolution[0] >= a.resolution * max(a.shape) / 32 * 0.5
     rows = realism_table(refs.parametric, refs.sim1, refs.sim2, refs.a)
     assert len(rows) == len(STATS)
 
@@ -141,6 +149,8 @@ def test_fig514_from_a_dataset_and_from_plans(tiny_dataset, tmp_path):
     assert [r["method"] for r in f.rows] == list(METHODS)
     assert all(set(r) >= {"plan", "method", "error_px", "wall_recall"} for r in f.rows)
     assert f.info[f.plan_ids[0]]["reproduces_dataset_map"] is True
+    assert f.drift.startswith("parametric (additive x1")
+    assert f.info[f.plan_ids[0]]["square_resolution_m"] > 0
     assert set(f.summary) >= {"n", "model", *METHODS} and f.summary["n"] == 1
     for m in METHODS:
         assert f.maps[m].shape == (1, 32, 32)
@@ -152,5 +162,7 @@ def test_fig514_from_a_dataset_and_from_plans(tiny_dataset, tmp_path):
     d[2:-2, 2:-2] = 0
     d[4:-4, 4:-4] = 255
     p = BuildParams(source="simulate", duration=8.0, size=32, fov=360.0)
-    g = run_fig514([OccupancyMap(d, 0.05)], 1, _untrained(32), params=p, progress=False)
+    g = run_fig514([OccupancyMap(d, 0.05)], 1, _untrained(32), params=p, progress=False,
+                   drift="none")
+    assert g.drift == "none"
     assert g.plan_ids == ["plan 0"] and len(g.rows) == len(METHODS)

@@ -31,6 +31,17 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="slam (default): walls as a SLAM map draws them, the faces next to "
                    "free space with the training maps' wall thickness, wall interiors "
                    "unknown; plain: the network's output snapped and upsampled (nearest)")
+    p.add_argument("--drift", choices=("parametric", "none"), default="parametric",
+                   help="parametric (default): warp each hypothesis along its own drift "
+                   "field of the parametric CAD->SLAM model (thesis 3.2: a route through the "
+                   "plan, LIDAR + odometry errors), as a SLAM run bends walls and shifts "
+                   "rooms; none: the network's straight walls")
+    p.add_argument("--drift-method", choices=("additive", "ekf"), default="additive",
+                   help="the drift's odometry-to-map conversion (additive: thesis eqs. "
+                   "3.81-3.90, default; ekf: 3.54-3.80)")
+    p.add_argument("--drift-scale", type=float, default=None,
+                   help="factor on the drift field (default: the tuned drift's, see "
+                   "docs/learn_ab.md)")
     p.add_argument("--no-figure", action="store_true", help="do not write the figure")
     p.add_argument("--device", default="cpu", help="torch device (default cpu)")
     add_input_options(p)
@@ -63,11 +74,14 @@ def run(args: argparse.Namespace) -> int:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = synthesize(plan, args.model, samples=args.samples, seed=args.seed,
-                         device=args.device, render=args.render)
+                         device=args.device, render=args.render, drift=args.drift,
+                         drift_method=args.drift_method, drift_scale=args.drift_scale)
     ensure_output_dir(out)
     for path, m in zip(names, res.maps, strict=True):
         save_map(m, path)
     summary = {"plan": str(src), "seed": args.seed, "render": args.render,
+               "drift": args.drift,
+               "drift_params": res.maps[0].meta["synthesize"].get("drift_params"),
                "files": [p.name for p in names], **res.summary()}
     with atomic_path(out / f"{src.stem}_synthesize.json") as tmp:
         tmp.write_text(json.dumps(summary, indent=2))

@@ -80,6 +80,7 @@ __all__ = [
     "wall_error",
     "crop_box",
     "preprocess_pair",
+    "window_resolution",
     "rerun_seed",
     "MIN_PATH_M",
 ]
@@ -272,6 +273,28 @@ def preprocess_pair(a: OccupancyMap, b: OccupancyMap, size: int, thicken: int, b
     a_n = preprocess(a, size=size, thicken=thicken, crop=False)
     b_n = preprocess(b, size=size, thicken=0, crop=False)
     return a_n.data, b_n.data
+
+
+def window_resolution(a: OccupancyMap, box, size: int) -> float:
+    """Metres per pixel of the ``size`` px squares :func:`preprocess_pair` makes of map
+    ``a`` (and its partner) cut with ``box`` (``None``: the whole map): the window's side,
+    margins included, over ``size`` times ``a``'s resolution (thesis 4.1's square + resize
+    keeps the aspect ratio, :func:`map2map.maps.preprocess.square_resize`).
+
+    Examples
+    --------
+    >>> a = OccupancyMap(np.full((100, 300), 255, np.uint8), 0.05)
+    >>> window_resolution(a, (10, 60, 20, 220), 256) == 0.05 * (200 + 2 * CROP_MARGIN_PX) / 256
+    True
+    >>> window_resolution(a, None, 100)
+    0.15
+    """
+    if box is None:
+        side = max(a.shape)
+    else:
+        r0, r1, c0, c1 = box
+        side = max(r1 - r0, c1 - c0) + 2 * CROP_MARGIN_PX
+    return float(a.resolution) * side / int(size)
 
 
 def _reachable(plan: OccupancyMap, start) -> np.ndarray:

@@ -15,7 +15,9 @@ given in memory):
   (:func:`map2map.datasets.rerun.parametric_on_trajectory`; the model draws its own
   odometry and LIDAR errors);
 * **Model_AB** -- the generator's single output for the preprocessed plan (dropout off,
-  :func:`map2map.learn.synthesize.synthesize_squares`).
+  :func:`map2map.learn.synthesize.synthesize_squares`), warped along a parametric drift
+  field of the plan (``drift="parametric"``, the default, :mod:`map2map.learn.drift`: its
+  own route and errors, not the simulation's trajectory; ``"none"``: no drift).
 
 All three are cut and preprocessed as the dataset's ``B`` (thesis 4.1: the pair's crop
 window, square, ``S`` px) and measured the same way against the preprocessed plan: the
@@ -107,6 +109,8 @@ class Fig514:
     model : str
         The Model_AB weights used.
     warnings : list of str
+    drift : str
+        How Model_AB's maps drift (e.g. ``"parametric additive x1"``, ``"none"``).
     """
 
     plan_ids: list
@@ -117,6 +121,7 @@ class Fig514:
     info: dict
     model: str
     warnings: list = field(default_factory=list)
+    drift: str = ""
 
     @property
     def summary(self) -> dict:
@@ -188,8 +193,10 @@ class Fig514:
                     ax.set_ylim(box[1] + 3, box[0] - 3)
         fig.suptitle(f"Fig. 5.14 reproduced: same plan, same trajectory (appendix-metric "
                      f"error px of the {self.plans.shape[-1]} px square; wall recall 2 px); "
-                     f"Model_AB: {Path(self.model).name}", fontsize=9)
-        fig.tight_layout(rect=(0, 0, 1, 1 - 0.45 / (3.1 * max(n, 1))))
+                     f"Model_AB: {Path(self.model).name}"
+                     + (f"\nModel_AB's drift: {self.drift}" if self.drift else ""), fontsize=9)
+        top = 0.75 if self.drift else 0.45
+        fig.tight_layout(rect=(0, 0, 1, 1 - top / (3.1 * max(n, 1))))
         if path is not None:
             from ..core._io import atomic_path
 
@@ -214,7 +221,7 @@ class Fig514:
 
 def _from_dataset(ds, n, seed, split, progress):
     from ..datasets.build import pair_dir
-    from ..datasets.pair import read_pair_meta
+    from ..datasets.pair import read_pair_meta, window_resolution
     from ..datasets.rerun import parametric_on_run, rerun_pair
     from .realism import _read_png, split_indices
 
@@ -228,13 +235,14 @@ def _from_dataset(ds, n, seed, split, progress):
         info = {k: rr.meta.get(k) for k in ("coverage", "ate_rmse_m", "path_length_m",
                                              "stop_reason", "sim_seed")}
         info["reproduces_dataset_map"] = same
+        info["square_resolution_m"] = window_resolution(rr.plan, rr.box, rr.a_n.shape[-1])
         out.append((meta["plan_id"], i, rr.a_n, rr.b_n, parametric_on_run(rr, seed=seed),
                     info))
     return out
 
 
 def _from_plans(plans, seed, progress, params):
-    from ..datasets.pair import BuildParams, crop_box, preprocess_pair
+    from ..datasets.pair import BuildParams, crop_box, preprocess_pair, window_resolution
     from ..datasets.rerun import parametric_on_trajectory
     from ..sim.runner import simulate
 
@@ -250,6 +258,7 @@ def _from_plans(plans, seed, progress, params):
         rep = sim.report()
         info = {k2: rep.get(k2) for k2 in ("coverage", "ate_rmse_m", "path_length_m",
                                             "stop_reason")}
+        info["square_resolution_m"] = window_resolution(plan, box, p.size)
         out.append((f"plan {k}", -1, a_n, b_n, par, info))
     return out
 
@@ -264,7 +273,9 @@ def _bar(items, progress, desc):
 
 def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
                model="pretrained", seed: int = 0, *, split: str = "test",
-               params=None, progress: bool = True, render: str = "slam") -> Fig514:
+               params=None, progress: bool = True, render: str = "slam",
+               drift="parametric", drift_method: str | None = None,
+               drift_scale: float | None = None) -> Fig514:
     """Fig. 5.14 for ``n`` held-out plans (module doc).
 
     Parameters
@@ -286,6 +297,9 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
     render : {"slam", "plain"}
         How Model_AB's output is raised to the plans' size
         (:func:`~map2map.learn.synthesize.synthesize_squares`).
+    drift, drift_method, drift_scale
+        Model_AB's drift (:func:`~map2map.learn.synthesize.synthesize_squares`; each
+        square at its metric resolution, ``info[plan]["square_resolution_m"]``).
 
     Returns
     -------
@@ -307,7 +321,9 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
     plans = np.stack([m[2] for m in made])
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        gen = synthesize_squares(net, plans, seed=seed, render=render)
+        gen = synthesize_squares(net, plans, seed=seed, render=render, drift=drift,
+                                 drift_method=drift_method, drift_scale=drift_scale,
+                                 resolution=[m[5]["square_resolution_m"] for m in made])
     warns = []
     if "PROVISIONAL" in str(net.header.get("note", "")):
         warns.append("Model_AB weights are provisional (their note says so)")
@@ -325,5 +341,9 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
         warns.append(f"the re-run of {len(bad)} pair(s) ({', '.join(bad[:4])}) did not give "
                      "the dataset's map; the figure shows the re-run (whose trajectory the "
                      "parametric model follows)")
+    from .drift import drift_params
+
+    dp = drift_params(drift, drift_method, drift_scale)
+    how = "none" if dp is None else f"parametric ({dp.describe()})"
     return Fig514([m[0] for m in made], [int(m[1]) for m in made], plans, maps, rows, info,
-                  net.source, warns)
+                  net.source, warns, how)

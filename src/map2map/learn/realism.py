@@ -68,7 +68,7 @@ from ..core.grid import FREE, OCCUPIED, UNKNOWN
 
 __all__ = ["STATS", "STAT_INFO", "TARGET_RATIO", "map_stats", "stats_of", "RealismRow",
            "realism_table", "format_realism_table", "References", "simulated_references",
-           "split_indices"]
+           "split_indices", "pair_square_resolution"]
 
 STATS = ("wall_err", "wall_seen", "free_mapped", "unknown", "spurious", "thickness", "bend")
 #: What each statistic is (units).
@@ -276,6 +276,10 @@ class References:
         trajectory, cut and preprocessed as the pair's ``B``.
     meta : list of dict
         Per plan: run 2's coverage, ATE, path length, seed.
+    resolution : (N,) float
+        Metres per pixel of each square (:func:`~map2map.datasets.pair.window_resolution`
+        of the pair's crop window), for the metric drift model of
+        :func:`~map2map.learn.synthesize.synthesize_squares`.
     """
 
     indices: np.ndarray
@@ -285,6 +289,7 @@ class References:
     sim2: np.ndarray
     parametric: np.ndarray
     meta: list
+    resolution: np.ndarray | None = None
 
 
 def split_indices(ds: str | os.PathLike, split: str = "test") -> list[int]:
@@ -384,4 +389,18 @@ def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int |
     return References(np.array(idx, int), [have[i]["meta"]["plan_id"] for i in idx], a, sim1,
                       np.stack([have[i]["sim2"] for i in idx]),
                       np.stack([have[i]["parametric"] for i in idx]),
-                      [have[i]["meta"] for i in idx])
+                      [have[i]["meta"] for i in idx],
+                      np.array([pair_square_resolution(ds, i, a.shape[-1]) for i in idx]))
+
+
+def pair_square_resolution(ds: str | os.PathLike, index: int, size: int) -> float:
+    """Metres per pixel of pair ``index``'s ``size`` px squares (``A.png``, ``B.png``): its
+    crop window (the union of the plan's and run 1's content, as the build and
+    :func:`~map2map.datasets.rerun.rerun_pair` cut it) over ``size``."""
+    from ..datasets.build import pair_dir
+    from ..datasets.pair import crop_box, window_resolution
+    from ..maps.formats import load_map
+
+    folder = pair_dir(ds, index)
+    a, b = load_map(folder / "A.yaml"), load_map(folder / "B.yaml")
+    return window_resolution(a, crop_box(a, b), size)

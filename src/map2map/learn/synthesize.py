@@ -21,6 +21,16 @@ wall interiors unknown; ``render="plain"``: the previous output, snapped and ups
 nearest neighbour) and pasted into a map of the plan's shape, resolution and origin,
 unknown outside.
 
+Drift (``drift="parametric"``, the default; :mod:`map2map.learn.drift`): the network
+draws straight walls in the plan's frame, a SLAM map carries the run's accumulated pose
+error. Each hypothesis ``k`` is warped along a displacement field the parametric
+CAD->SLAM model (thesis 3.2) draws for the plan from its own generator
+(:func:`~map2map.learn.drift.drift_rng` ``(seed, k)``): a route touring the plan, the
+LIDAR and odometry error fields ``d_L + d_O`` (additive method by default,
+``drift_method``), as :class:`~map2map.learn.drift.DriftParams` says (``drift_scale``
+replaces its final factor). ``drift="none"``: the network's map as
+rendered (the output before drift existed, bit for bit).
+
 Examples
 --------
 An untrained generator (``"pretrained"`` or a run folder in practice):
@@ -41,7 +51,7 @@ from __future__ import annotations
 
 import os
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -53,6 +63,15 @@ from ..maps.preprocess import square_resize, thicken
 from . import slam_render
 from .autocorrect import _square
 from .data import reduce_input
+from .drift import (
+    DEFAULT_SQUARE_RESOLUTION,
+    DriftParams,
+    apply_drift,
+    drift_field,
+    drift_maps,
+    drift_params,
+    drift_rng,
+)
 from .networks import from_unit
 from .progressive import StochasticUNet
 from .slam_render import DEFAULT_WALL_PX, RENDERS, snap
@@ -190,7 +209,9 @@ class SynthesisResult:
 
 def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "pretrained",
                *, samples: int = 4, seed: int = 0, device: str = "cpu",
-               render: str = "slam") -> SynthesisResult:
+               render: str = "slam", drift: str | DriftParams = "parametric",
+               drift_method: str | None = None, drift_scale: float | None = None
+               ) -> SynthesisResult:
     """``samples`` SLAM-map hypotheses of ``plan`` (module doc), in its frame.
 
     Parameters
@@ -207,6 +228,14 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
         ``"slam"``: walls as a SLAM map draws them, the faces bordering free space with
         the training targets' thickness (:func:`~map2map.learn.slam_render.render_slam`);
         ``"plain"``: the previous output (snap, nearest-neighbour upsampling).
+    drift : {"parametric", "none"} or DriftParams
+        Warp each hypothesis along its own parametric drift field (module doc; the
+        default :class:`~map2map.learn.drift.DriftParams`, or the given ones), or not.
+    drift_method : {"additive", "ekf"}, optional
+        Replaces the drift's odometry-to-map conversion (thesis eqs. 3.81-3.90 or
+        3.54-3.80).
+    drift_scale : float, optional
+        Replaces the drift's final factor on its field.
 
     Returns
     -------
@@ -216,6 +245,7 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
         raise InputError("--samples", f"must be >= 1, got {samples}")
     if render not in RENDERS:
         raise InputError("--render", f"must be one of {', '.join(RENDERS)}, got {render!r}")
+    dp = drift_params(drift, drift_method, drift_scale)
     net = load_ab_model(model, device)
     sq = _square(plan, net.data_size)
     if sq is None:
@@ -228,17 +258,24 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     H, W = plan.shape
     rs, re = max(0, row0), min(H, row0 + side)
     cs, ce = max(0, col0), min(W, col0 + side)
-    maps, squares = [], []
+    maps, drifted = [], {}
+    warns = []
     for k in range(samples):
         s = slam_render.render(grey[k], side, render, wall_px)
-        squares.append(s)
         data = np.full((H, W), UNKNOWN, np.uint8)
         data[rs:re, cs:ce] = s[rs - row0:re - row0, cs - col0:ce - col0]
+        if dp is not None:
+            try:
+                d = drift_field(plan, drift_rng(seed, k), dp)
+            except InputError as exc:
+                warns.append(f"hypothesis {k + 1}: no drift ({exc.problem})")
+            else:
+                data = apply_drift(data, d)
+                drifted[k] = {k2: round(float(v), 3) for k2, v in d.stats().items()}
         maps.append(plan.copy(data=data))
-    known = square != UNKNOWN
-    pw = pairwise_disagreement(np.stack(squares), known)
+    # the square's known pixels are the plan's known pixels (the square holds them all)
+    pw = pairwise_disagreement(np.stack([m.data for m in maps]), plan.data != UNKNOWN)
     div = float(pw[~np.eye(samples, dtype=bool)].mean()) if samples > 1 else 0.0
-    warns = []
     if net.alpha < 1.0:
         warns.append(f"the model stopped during the fade-in of its {net.resolution} px stage "
                      f"(alpha {net.alpha:.2f}); it is run with that blend")
@@ -260,18 +297,33 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
         warnings.warn(w, stacklevel=2)
     for m in maps:
         m.meta["synthesize"] = {"model": net.source, "seed": seed, "samples": samples,
-                                "render": render, "wall_px": round(wall_px, 3)}
+                                "render": render, "wall_px": round(wall_px, 3),
+                                "drift": "none" if dp is None else "parametric"}
+        if dp is not None:
+            m.meta["synthesize"]["drift_params"] = asdict(dp)
+    for k, st in drifted.items():
+        maps[k].meta["synthesize"]["drift_px"] = st
     return SynthesisResult(maps, div, pw, warns, net.source)
 
 
 def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndarray, *,
                        seed: int = 0, device: str = "cpu", batch: int = 16,
-                       render: str = "slam") -> np.ndarray:
+                       render: str = "slam", drift: str | DriftParams = "parametric",
+                       drift_method: str | None = None, drift_scale: float | None = None,
+                       resolution=None) -> np.ndarray:
     """Model_AB's SLAM map of each preprocessed dataset plan (``A.png``: already square,
     resized and thickened as the training inputs were), raised to the plans' size as
     ``render`` says (:func:`synthesize`): (N, S, S) uint8, the thesis's single output
-    (dropout off). For evaluations on a dataset's own pixels
-    (:mod:`map2map.learn.realism`, :mod:`map2map.learn.fig514`).
+    (dropout off), warped along a parametric drift field of its plan as ``drift`` says
+    (:func:`synthesize`; plan ``i`` of the call draws from
+    :func:`~map2map.learn.drift.drift_rng` ``(seed, i)``). For evaluations on a dataset's
+    own pixels (:mod:`map2map.learn.realism`, :mod:`map2map.learn.fig514`).
+
+    ``resolution`` (metres per pixel of the squares: one float or one per plan) scales the
+    metric drift model; the dataset's squares differ (``map2map.datasets.pair.
+    window_resolution``); default
+    :data:`~map2map.learn.drift.DEFAULT_SQUARE_RESOLUTION`. A plan the drift model's
+    robot cannot drive keeps its undrifted map, with a warning.
 
     Examples
     --------
@@ -282,6 +334,7 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
     """
     if render not in RENDERS:
         raise ValueError(f"render must be one of {RENDERS}, got {render!r}")
+    dp = drift_params(drift, drift_method, drift_scale)
     net = load_ab_model(model, device)
     plans = np.asarray(plans, np.uint8)
     S = plans.shape[-1]
@@ -291,6 +344,11 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
         grey = net.sample_many(plans[i:i + batch], 1, seed)[:, 0]
         for j, gmap in enumerate(grey):
             out[i + j] = slam_render.render(gmap, S, render, wall_px)
+    if dp is not None:
+        res = DEFAULT_SQUARE_RESOLUTION if resolution is None else resolution
+        out, warns = drift_maps(out, plans, res, seed, dp)
+        for w in warns:
+            warnings.warn(w, stacklevel=2)
     return out
 
 

@@ -8,7 +8,8 @@ removed walls and room shrinkage, the parametric one better at doors. Here:
 :func:`map2map.learn.fig514.run_fig514` on generated plans never used in training: each
 plan simulated (TurtleBot3, 7 minutes, 180 degrees, ``rbpf``, as ``map2map dataset
 build``), the parametric model (additive) driven along the simulation's own trajectory,
-Model_AB's single output (pretrained weights), all three preprocessed alike (thesis 4.1)
+Model_AB's single output (pretrained weights) warped along a parametric drift field
+(:mod:`map2map.learn.drift`, ``run_fig514``'s default), all three preprocessed alike (thesis 4.1)
 and measured against the plan the same way: the appendix paper's metric (mean local
 error, px) and wall recall / precision at 2 px.
 

@@ -1,0 +1,81 @@
+"""Tune Model_AB's parametric drift (:mod:`map2map.learn.drift`) against simulated SLAM
+maps: the realism ratios (:mod:`map2map.learn.realism`) of the shipped Model_AB's maps
+warped along drift fields of each ``--variant`` (``DriftParams`` fields as JSON), on the
+plans of ``--split`` (tune on ``val``; report on ``test`` with ``benchmarks/realism.py``).
+The network runs once; each variant only redraws the drift.
+
+    python3 benchmarks/drift_tune.py --data DS --cache refs_val.npz [--split val]
+        [--plans N] [--model pretrained] --variant '{}' '{"scale": 2, "smooth_m": 0.3}' ...
+
+Prints, per variant, the seven ratios and the worst, then the generated maps' means.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import warnings
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+
+from map2map.learn.realism import (  # noqa: E402
+    STATS,
+    realism_table,
+    simulated_references,
+    stats_of,
+)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--data", required=True, help="a 'map2map dataset build' folder")
+    ap.add_argument("--split", default="val", help="plans to tune on (default val)")
+    ap.add_argument("--plans", type=int, help="the first N pairs of the split")
+    ap.add_argument("--cache", help=".npz keeping the second runs between calls")
+    ap.add_argument("--model", default="pretrained")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--variant", nargs="+", default=["{}"],
+                    help="DriftParams fields as JSON objects ({}: the defaults)")
+    args = ap.parse_args(argv)
+    from map2map.learn.drift import DriftParams, drift_maps
+    from map2map.learn.synthesize import load_ab_model, synthesize_squares
+
+    t0 = time.perf_counter()
+    refs = simulated_references(args.data, split=args.split, n=args.plans, cache=args.cache)
+    plans = refs.a
+    st1, st2 = stats_of(refs.sim1, plans), stats_of(refs.sim2, plans)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        base = synthesize_squares(load_ab_model(args.model), plans, seed=args.seed,
+                                  drift="none")
+    print(f"{len(plans)} '{args.split}' plans of {args.data}; ratio W(gen, sim 1) / "
+          "W(sim 2, sim 1), target <= 1.5")
+    head = f"{'variant':<44}" + "".join(f"{s[:10]:>11}" for s in STATS) + f"{'worst':>8}"
+    print(head)
+    ref = realism_table(st1, st1, st2, plans)
+    print(f"{'sim 1 / sim 2 means':<44}" + "".join(f"{r.sim1:>5.2f}/{r.sim2:<5.2f}"
+                                                   for r in ref))
+
+    def show(name, maps):
+        rows = realism_table(stats_of(maps, plans), st1, st2, plans)
+        print(f"{name[:44]:<44}" + "".join(f"{r.ratio:>11.2f}" for r in rows)
+              + f"{max(r.ratio for r in rows):>8.2f}")
+        print(f"{'  means':<44}" + "".join(f"{r.generated:>11.3f}" for r in rows), flush=True)
+
+    show("parametric model (run 2's trajectory)", refs.parametric)
+    show("Model_AB, no drift", base)
+    for v in args.variant:
+        dp = DriftParams(**json.loads(v))
+        out, warns = drift_maps(base, plans, refs.resolution, args.seed, dp)
+        show(v, out)
+        for w in warns:
+            print(f"  warning: {w}")
+    print(f"{time.perf_counter() - t0:.0f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
