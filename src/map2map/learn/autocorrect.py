@@ -58,7 +58,6 @@ import numpy as np
 import torch
 from numba import njit
 
-from ..core.errors import InputError
 from ..core.grid import OCCUPIED, UNKNOWN, OccupancyMap
 from ..maps.preprocess import square_resize
 from .data import reduce_input
@@ -122,7 +121,7 @@ def load_model(model: str | os.PathLike | BAModel | None = "pretrained",
     (its ``model.safetensors``) or a ``.safetensors`` file written by the trainer."""
     if isinstance(model, BAModel):
         return model
-    from .checkpoint import read_model_file
+    from .checkpoint import load_generator, read_model_file
 
     path, header, tensors = read_model_file(
         model, pretrained_path(), "map2map-model-ba", "Model_BA",
@@ -132,13 +131,7 @@ def load_model(model: str | os.PathLike | BAModel | None = "pretrained",
         wrong="not a Model_BA weights file (no map2map-model-ba header)",
     )  # fmt: skip
     g = UNetGenerator(**header["generator"])
-    try:
-        g.load_state_dict(tensors, strict=True)
-    except RuntimeError as exc:
-        raise InputError(path, f"weights do not fit the network ({str(exc).splitlines()[0]})"
-                         ) from None
-    dev = torch.device(device)
-    g.to(dev).eval()
+    dev = load_generator(g, tensors, path, device)
     return BAModel(g, int(header["generator"]["size"]), int(header.get("data_size", 256)),
                    float(header.get("target_wall_px", 2.0)), header, str(path), dev)
 

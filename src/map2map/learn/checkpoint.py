@@ -193,3 +193,19 @@ def export_generator(run: str | os.PathLike, dest: str | os.PathLike, read_heade
     with atomic_path(dest.with_suffix(".json")) as tmp:
         tmp.write_text(json.dumps(header, indent=2, sort_keys=True))
     return dest
+
+
+def load_generator(net: torch.nn.Module, tensors: dict[str, torch.Tensor], path,
+                   device: str | torch.device = "cpu") -> torch.device:
+    """Put ``tensors`` (from :func:`read_model_file`) into ``net`` (strictly: every
+    weight, no extra), move it to ``device`` in eval mode; the device. Weights that do not
+    fit the network are one :class:`InputError` naming ``path``."""
+    try:
+        net.load_state_dict(tensors, strict=True)
+    except RuntimeError as exc:
+        raise InputError(path, f"weights do not fit the network ({str(exc).splitlines()[0]})"
+                         ) from None
+    dev = torch.device(device)
+    net.to(dev).eval()
+    return dev
+

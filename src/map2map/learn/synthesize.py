@@ -143,7 +143,7 @@ def load_ab_model(model: str | os.PathLike | ABModel | None = "pretrained",
     ``model.safetensors``."""
     if isinstance(model, ABModel):
         return model
-    from .checkpoint import read_model_file
+    from .checkpoint import load_generator, read_model_file
 
     path, header, tensors = read_model_file(
         model, pretrained_ab_path(), FORMAT_AB, "Model_AB",
@@ -157,13 +157,7 @@ def load_ab_model(model: str | os.PathLike | ABModel | None = "pretrained",
         raise InputError(path, "the run has not finished an epoch yet (no resolution)")
     g = StochasticUNet(**{k: v for k, v in header["generator"].items() if k != "dropout"},
                        dropout=header["generator"].get("dropout", 0.5))
-    try:
-        g.load_state_dict(tensors, strict=True)
-    except RuntimeError as exc:
-        raise InputError(path, f"weights do not fit the network ({str(exc).splitlines()[0]})"
-                         ) from None
-    dev = torch.device(device)
-    g.to(dev).eval()
+    dev = load_generator(g, tensors, path, device)
     return ABModel(g, int(header["resolution"]), float(header.get("alpha", 1.0)),
                    int(header.get("data_size", 256)), header, str(path), dev)
 
