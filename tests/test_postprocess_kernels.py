@@ -107,3 +107,27 @@ def test_dominant_angle_matches_the_complex_formula(angle):
     assert a == pytest.approx(np.degrees(np.angle(z) / 4), abs=1e-6)
     assert coh == pytest.approx(abs(z) / mag.sum(), abs=1e-7)
     assert a == pytest.approx(-angle if angle <= 45 else 0, abs=1.5)
+
+
+def test_autocorrect_many_same_with_any_number_of_threads():
+    from map2map.core.grid import OccupancyMap
+    from map2map.learn.autocorrect import autocorrect_many
+
+    rng = np.random.default_rng(5)
+    maps = []
+    for k in range(5):
+        g = np.full((120 + 10 * k, 150), UNKNOWN, np.uint8)
+        r0, c0 = rng.integers(5, 20, 2)
+        g[r0:r0 + 90, c0:c0 + 110] = FREE
+        g[r0:r0 + 90, [c0, c0 + 109, c0 + 50 + k]] = OCCUPIED
+        g[[r0, r0 + 89], c0:c0 + 110] = OCCUPIED
+        maps.append(OccupancyMap(g, 0.05))
+    maps.append(OccupancyMap(np.full((40, 40), UNKNOWN, np.uint8), 0.05))  # nothing known
+    with pytest.warns(UserWarning):
+        one = autocorrect_many(maps, workers=1)
+    with pytest.warns(UserWarning):
+        three = autocorrect_many(maps, workers=3)
+    for a, b in zip(one, three, strict=True):
+        np.testing.assert_array_equal(a.map.data, b.map.data)
+        np.testing.assert_array_equal(a.segments, b.segments)
+        assert a.warnings == b.warnings

@@ -170,7 +170,7 @@ def _face(mask: np.ndarray, top: bool, offset: int, min_cover: float) -> int | N
     return offset + int(np.round(np.median(idx[has])))
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _median_round(v: np.ndarray, n: int) -> int:
     """``int(np.round(np.median(v[:n])))`` of integers (round half to even, as numpy)."""
     w = np.sort(v[:n])
@@ -179,7 +179,7 @@ def _median_round(v: np.ndarray, n: int) -> int:
     return int(np.round((w[n // 2 - 1] + w[n // 2]) / 2.0))
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, min_cover):
     """:func:`_face` of both sides for every segment k (rows ``a[k]..b[k]`` across it,
     ``lo[k]..hi[k]`` along it, clipped to the map): (first, last) face positions, -1
@@ -214,7 +214,7 @@ def _faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, min_cover):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _paint_walls(mask, free, horiz, r0, r1, lo, hi, stop_at_free):
     """Fill each wall's box (rows ``r0..r1`` across, ``lo..hi`` along; negative starts
     clip to 0) in ``mask``, in order; where ``stop_at_free``, only non-free pixels."""
