@@ -40,8 +40,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="the drift's odometry-to-map conversion (additive: thesis eqs. "
                    "3.81-3.90, default; ekf: 3.54-3.80)")
     p.add_argument("--drift-scale", type=float, default=None,
-                   help="factor on the drift field (default: the tuned drift's, see "
-                   "docs/learn_ab.md)")
+                   help="factor on the drift field (default 1: the parametric model's "
+                   "own error magnitudes; docs/learn_ab.md)")
     p.add_argument("--no-figure", action="store_true", help="do not write the figure")
     p.add_argument("--device", default="cpu", help="torch device (default cpu)")
     add_input_options(p)
