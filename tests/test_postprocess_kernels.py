@@ -5,7 +5,6 @@ import pytest
 
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN
 from map2map.learn.postprocess import (
-    _face,
     _faces_kernel,
     _paint_walls,
     _surface_masks,
@@ -14,6 +13,17 @@ from map2map.learn.postprocess import (
 
 pytest.importorskip("torch")
 from map2map.learn.autocorrect import dominant_angle  # noqa: E402
+
+
+def _face(mask, top, offset, min_cover):
+    """The plain-numpy reference (the code the kernel replaced): median position
+    (+ ``offset``) of the first (``top``) or last face pixel of each column of ``mask``,
+    or None when under ``min_cover`` of the columns have one."""
+    has = mask.any(0)
+    if has.sum() < min_cover * max(1, mask.shape[1]):
+        return None
+    idx = np.argmax(mask, 0) if top else mask.shape[0] - 1 - np.argmax(mask[::-1], 0)
+    return offset + int(np.round(np.median(idx[has])))
 
 
 def _noisy_map(rng, size=64):

@@ -158,18 +158,6 @@ def _surface_masks(data: np.ndarray) -> tuple[np.ndarray, ...]:
     return up, dn, lf, rt
 
 
-def _face(mask: np.ndarray, top: bool, offset: int, min_cover: float) -> int | None:
-    """Median position (+ ``offset``) of the first (``top``) or last face pixel of each
-    column of ``mask`` (rows across the wall), or None when under ``min_cover`` of the
-    columns have one. (The reference for :func:`_faces_kernel`, which does the same for
-    every segment at once.)"""
-    has = mask.any(0)
-    if has.sum() < min_cover * max(1, mask.shape[1]):
-        return None
-    idx = np.argmax(mask, 0) if top else mask.shape[0] - 1 - np.argmax(mask[::-1], 0)
-    return offset + int(np.round(np.median(idx[has])))
-
-
 @njit(cache=True, nogil=True)
 def _median_round(v: np.ndarray, n: int) -> int:
     """``int(np.round(np.median(v[:n])))`` of integers (round half to even, as numpy)."""
@@ -181,9 +169,11 @@ def _median_round(v: np.ndarray, n: int) -> int:
 
 @njit(cache=True, nogil=True)
 def _faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, min_cover):
-    """:func:`_face` of both sides for every segment k (rows ``a[k]..b[k]`` across it,
-    ``lo[k]..hi[k]`` along it, clipped to the map): (first, last) face positions, -1
-    where under ``min_cover`` of the positions along it see one."""
+    """Face positions of every segment k (rows ``a[k]..b[k]`` across it, ``lo[k]..hi[k]``
+    along it, clipped to the map): at each position along it the first (``up``/``lf``)
+    and the last (``dn``/``rt``) face pixel across it; per side, the median of those
+    positions, rounded half to even, or -1 where under ``min_cover`` of the positions
+    along the segment see one. Returns (K, 2) int64: (first, last)."""
     H, W = up.shape
     K = horiz.shape[0]
     out = np.full((K, 2), -1, np.int64)
@@ -217,7 +207,8 @@ def _faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, min_cover):
 @njit(cache=True, nogil=True)
 def _paint_walls(mask, free, horiz, r0, r1, lo, hi, stop_at_free):
     """Fill each wall's box (rows ``r0..r1`` across, ``lo..hi`` along; negative starts
-    clip to 0) in ``mask``, in order; where ``stop_at_free``, only non-free pixels."""
+    clip to 0) in ``mask``; where ``stop_at_free``, only its non-free pixels (a wall
+    extended behind a face stops at space the input saw free)."""
     H, W = mask.shape
     for k in range(horiz.shape[0]):
         a0, a1 = max(0, r0[k]), max(0, r1[k] + 1)
@@ -294,8 +285,7 @@ def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px:
     t = max(1, int(round(wall_px)))
     s = np.asarray(segs, float).reshape(-1, 4)
     horiz, vert = s[:, 1] == s[:, 3], s[:, 0] == s[:, 2]
-    s = s[horiz != vert]
-    horiz = s[:, 1] == s[:, 3]
+    s, horiz = s[horiz != vert], horiz[horiz != vert]  # axis-aligned segments only
     c = np.where(horiz, s[:, 1], s[:, 0])
     # np.round as Python's round on these floats: both round half to even
     lo = np.round(np.where(horiz, np.minimum(s[:, 0], s[:, 2]),
@@ -311,7 +301,7 @@ def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px:
              for h, (f0, f1), lo_, hi_, c_ in zip(horiz, f, lo, hi, c, strict=True)]
     if align > 0:
         _align_faces(found, align)
-    faces, extended, centres = [], [], []
+    boxes, centres = [], []
     for horiz_k, f0, f1, lo_k, hi_k, c_k in found:
         if f0 is not None and f1 is not None and f0 <= f1:
             r0, r1, ext = f0, f1, False
@@ -322,11 +312,11 @@ def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px:
         else:
             r0 = int(round(c_k - (t - 1) / 2))
             r1, ext = r0 + t - 1, True
-        (extended if ext else faces).append((horiz_k, r0, r1, lo_k, hi_k, ext))
+        boxes.append((horiz_k, r0, r1, lo_k, hi_k, ext))
         mid = (r0 + r1) / 2
         centres.append([lo_k, mid, hi_k, mid] if horiz_k else [mid, lo_k, mid, hi_k])
     mask = np.zeros((H, W), bool)
-    walls = np.array(faces + extended, np.int64).reshape(-1, 6)  # faces first, as drawn
+    walls = np.array(boxes, np.int64).reshape(-1, 6)  # painting is an OR: order is free
     _paint_walls(mask, free, walls[:, 0].astype(bool), walls[:, 1], walls[:, 2], walls[:, 3],
                  walls[:, 4], walls[:, 5].astype(bool))
     return mask, np.array(centres, float).reshape(-1, 4)
