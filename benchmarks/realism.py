@@ -71,7 +71,8 @@ def main(argv=None) -> int:
                     help="the parametric drift's odometry-to-map conversion (default "
                     "additive)")
     ap.add_argument("--drift-scale", nargs="+", type=float, default=[None],
-                    help="factor(s) on the drift field (default: the tuned drift's)")
+                    help="factor(s) on the drift field (default 1: the parametric model's "
+                    "own magnitudes)")
     ap.add_argument("--diversity", type=int, default=0, metavar="K",
                     help="also the mean pairwise disagreement of K hypotheses per plan")
     ap.add_argument("--measures", action="store_true",
