@@ -300,14 +300,15 @@ def test_dask_dead_workers_are_retried_then_recorded(plans, reference, tmp_path,
 
 
 class _FakeFuture:
-    def __init__(self, value):
-        self.value = value
+    def __init__(self, value, log=None, key=""):
+        self.value, self.log, self.key = value, log if log is not None else [], key
 
     def result(self):
+        self.log.append(("result", self.key))
         return self.value
 
     def release(self):
-        pass
+        self.log.append(("release", self.key))
 
     def cancel(self):
         pass
@@ -317,7 +318,7 @@ class _FakeClient:
     """Runs a task when submitted; records how many were in flight at once."""
 
     def __init__(self, threads: dict):
-        self.threads, self.live, self.most = threads, set(), 0
+        self.threads, self.live, self.most, self.log = threads, set(), 0, []
 
     def nthreads(self):
         return dict(self.threads)
@@ -326,7 +327,8 @@ class _FakeClient:
         return {w: {"malloc_trim": "65536", "profile": w == "w1"} for w in self.threads}
 
     def submit(self, fn, task, key, pure):
-        fut = _FakeFuture(fn(task))
+        self.log.append(("submit", key))
+        fut = _FakeFuture(fn(task), self.log, key)
         self.live.add(fut)
         self.most = max(self.most, len(self.live))
         return fut
@@ -374,6 +376,34 @@ def test_dask_submission_is_greedy_and_warns_on_threads():
     match = "MALLOC_TRIM_THRESHOLD_=65536.*profiler on .1 of 2"
     with pytest.warns(DaskWarning, match=match):
         _check_workers(_FakeClient({"w1": 1, "w2": 1}))
+
+
+def test_dask_results_are_fetched_before_the_next_pair_starts():
+    """A finished pair is fetched from its worker and released before the next pair is
+    submitted: a result left on the worker would be lost if the next pair killed it (and
+    the recomputed pair could then be blamed for that death; seen in CI)."""
+    pytest.importorskip("distributed")
+    from collections import deque
+    from types import SimpleNamespace
+
+    from map2map.datasets.dask_backend import _run
+
+    tasks = [SimpleNamespace(index=i) for i in range(3)]
+    client = _FakeClient({"w1": 1})
+    written = []
+
+    def on_result(t, r, w):
+        written.append(t.index)
+        client.log.append(("write", f"k-{t.index}"))
+
+    _run(client, deque(tasks), lambda t: t.index, on_result, None, "k", RuntimeError,
+         client.wait)  # fmt: skip
+    assert written == [0, 1, 2]
+    log = client.log
+    for i in range(2):  # pair i+1 starts after pair i is fetched and released ...
+        assert log.index(("release", f"k-{i}")) < log.index(("submit", f"k-{i + 1}"))
+        # ... and before pair i is written (writing overlaps the next computation)
+        assert log.index(("submit", f"k-{i + 1}")) < log.index(("write", f"k-{i}"))
 
 
 def _free_port() -> int:

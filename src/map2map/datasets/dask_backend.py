@@ -252,16 +252,24 @@ def _run(
                             return_when="FIRST_COMPLETED").done  # fmt: skip
             except TimeoutError:
                 continue  # every slot still busy: look at the cluster's size again
-            finished = [(fut, in_flight.pop(fut)) for fut in done]
-            top_up()  # the next pairs start before these are written
-            for fut, task in finished:
+            # Fetch the finished pairs and release them *before* the next pairs start: a
+            # result still held by a worker is lost if the next pair kills that worker,
+            # and Dask then recomputes it; while recomputed it counts as running on the
+            # next worker that dies, and can be declared a killer (KilledWorker) itself.
+            finished = []
+            for fut in done:
+                task = in_flight.pop(fut)
                 try:
-                    result = fut.result()
+                    finished.append((task, fut.result(), None))
                 except killed_worker as exc:
-                    on_crash(task, _killed_reason(exc))
-                else:
-                    on_result(task, result, "dask")
+                    finished.append((task, None, _killed_reason(exc)))
                 fut.release()
+            top_up()  # the next pairs start before these are written
+            for task, result, crash in finished:
+                if crash is None:
+                    on_result(task, result, "dask")
+                else:
+                    on_crash(task, crash)
     finally:
         for fut in in_flight:  # interrupted: do not leave pairs running on the cluster
             fut.cancel()
