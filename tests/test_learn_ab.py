@@ -418,6 +418,51 @@ def test_synthesize_squares_drifts_each_plan_at_its_resolution(tiny_run):
                                                       drift_scale=3.0))
 
 
+@pytest.mark.parametrize("cells", [2, 4])
+def test_synthesize_at_two_px_per_cell_draws_target_walls_without_the_coarse_warning(cells):
+    """A model trained to half the data square (a 128 px model of 256 px pairs: one output
+    cell is 2 px, the simulated walls' thickness) draws its walls ``target_wall_px`` thick
+    and is not called coarse; at 4 px a cell (the 64 px models) the warning stays."""
+    from map2map.core.grid import OccupancyMap
+    from map2map.learn.postprocess import wall_thickness_px
+    from map2map.learn.synthesize import ABModel, synthesize
+
+    S = 64
+    data = np.full((S, S), UNKNOWN, np.uint8)
+    data[4:60, 4:60] = OCCUPIED                   # building: outer walls 4 px thick, the
+    data[8:56, 8:28] = data[8:56, 36:56] = FREE   # inner one 8 px; the square is the plan
+    plan = OccupancyMap(data, resolution=0.05)
+    r = S // cells
+    net = ABModel(StochasticUNet(size=r, channels=8, min_size=r // 2), resolution=r,
+                  alpha=1.0, data_size=S, header={"target_wall_px": 2.0}, source="test")
+    net.sample_many = _plan_drawer(net)           # draws the plan at r px
+    with pytest.warns(UserWarning) if cells > 2 else _no_warning():
+        res = synthesize(plan, net, samples=1, drift="none")
+    coarse = [w for w in res.warnings if "one output cell is" in w]
+    assert len(coarse) == (cells > 2)
+    if cells > 2:
+        assert f"{cells:.1f} plan pixels" in coarse[0]
+    m = res.maps[0].data
+    assert wall_thickness_px(m[None]) == pytest.approx(2.0, abs=0.35)
+    if cells == 2:                                # faces 2 px, the wall's inside unseen
+        assert np.all(m[20:44, 28:30] == OCCUPIED) and np.all(m[20:44, 34:36] == OCCUPIED)
+        assert np.all(m[20:44, 30:34] == UNKNOWN)
+        assert np.all(m[20:44, 4:6] == UNKNOWN) and np.all(m[20:44, 6:8] == OCCUPIED)
+
+
+def _no_warning():
+    import warnings
+    from contextlib import contextmanager
+
+    @contextmanager
+    def ctx():
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            yield
+
+    return ctx()
+
+
 def test_cli_synthesize_writes_maps_summary_and_figure(tiny_run, tmp_path, capsys):
     import json
 
