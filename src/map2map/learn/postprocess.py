@@ -489,13 +489,12 @@ def drop_free_specks(data: np.ndarray, min_area: float) -> np.ndarray:
     >>> int((out == 255).sum()), int(out[8, 4]), int(out[2, 2])
     (90, 127, 255)
     """
-    free = np.asarray(data) == FREE
-    lab, n = ndimage.label(free)
-    if n < 2 and not (n == 1 and free.sum() < min_area):
+    free = (np.asarray(data) == FREE).astype(np.uint8)
+    n, lab = cv2.connectedComponents(free, connectivity=4)
+    small = np.bincount(lab.ravel(), minlength=n) < min_area
+    small[0] = False  # label 0: the pixels that are not free
+    if not small.any():
         return np.asarray(data)
-    area = np.bincount(lab.ravel())
-    small = area < min_area
-    small[0] = False
     out = np.array(data, copy=True)
     out[small[lab]] = UNKNOWN
     return out
