@@ -46,7 +46,15 @@ needs 8x (or more) upsampling, and plain upsampling gives grey, blurred walls.
    are clutter: furniture, people); those a straight wall replaces take the value of
    their nearest non-wall pixel. Free and unknown space come from the input, except
    free space the network calls unknown more than two model cells from any wall (laser
-   streaks through windows and open doors), which becomes unknown.
+   streaks through windows and open doors), which becomes unknown. Two more rules,
+   measured on Table 5.3 (docs/learn.md, "Why 43 % of the maps were not improved"):
+   free islands of the input smaller than ``ANCHOR_SPECK`` (30 dataset pixels squared)
+   become unknown first (:func:`drop_free_specks`: rays that slipped through or past
+   a wall, mostly beyond the outer walls; kept, they gave the anchored walls faces
+   the plan does not have), and the faces are straight lines at the map's own wall
+   angle, not along the pixel grid (``tilt``, :func:`anchored_walls`: a SLAM map is
+   turned against its plan by its heading error, and a face made exactly horizontal on
+   a wall turned by 2 degrees leaves it up to 1.7 px off across 100 px).
 5. **Redrawing**: the segments are drawn with the thickness of the training targets'
    walls (``wall_px``, measured on the dataset at training time and scaled to the frame),
    occupied blobs of step 2 that no segment explains (columns, furniture) are kept when at
@@ -82,7 +90,8 @@ from scipy import ndimage
 from ..core.grid import FREE, OCCUPIED, UNKNOWN
 from ..maps.segments import straight_segments
 
-__all__ = ["postprocess", "wall_thickness_px", "straight_segments", "anchored_walls"]
+__all__ = ["postprocess", "wall_thickness_px", "straight_segments", "anchored_walls",
+           "map_tilt", "drop_free_specks"]
 
 #: Grey level below which an upsampled output pixel is wall (step 2).
 WALL_BELOW = 96
@@ -168,32 +177,83 @@ def _median_round(v: np.ndarray, n: int) -> int:
 
 
 @njit(cache=True, nogil=True)
-def _faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, min_cover):
+def _line_fit(x, y, n, trim):
+    """Least-squares slope of ``y`` over ``x`` (first ``n`` entries), refitted once
+    without the points farther than ``trim`` from the first line; (slope, points used)."""
+    sx = sy = sxx = sxy = 0.0
+    for i in range(n):
+        sx += x[i]
+        sy += y[i]
+        sxx += x[i] * x[i]
+        sxy += x[i] * y[i]
+    var = sxx - sx * sx / n
+    if var <= 0.0:
+        return 0.0, 0
+    q = (sxy - sx * sy / n) / var
+    p = (sy - q * sx) / n
+    sx = sy = sxx = sxy = 0.0
+    m = 0
+    for i in range(n):
+        if abs(y[i] - p - q * x[i]) <= trim:
+            sx += x[i]
+            sy += y[i]
+            sxx += x[i] * x[i]
+            sxy += x[i] * y[i]
+            m += 1
+    if m < 2:
+        return q, n
+    var = sxx - sx * sx / m
+    if var <= 0.0:
+        return q, n
+    return (sxy - sx * sy / m) / var, m
+
+
+@njit(cache=True, nogil=True)
+def _faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, min_cover, slope):
     """Face positions of every segment k (rows ``a[k]..b[k]`` across it, ``lo[k]..hi[k]``
-    along it, clipped to the map): at each position along it the first (``up``/``lf``)
-    and the last (``dn``/``rt``) face pixel across it; per side, the median of those
-    positions, rounded half to even, or -1 where under ``min_cover`` of the positions
-    along the segment see one. Returns (K, 2) int64: (first, last)."""
+    along it, clipped to the map), along the tilted line of ``slope[k]`` (pixels across
+    per pixel along, about the segment's middle ``m``: at position ``j`` the rows are
+    shifted by ``round(slope (j - m))``): at each position along it the first
+    (``up``/``lf``) and the last (``dn``/``rt``) face pixel across it; per side, the
+    median of those positions (minus the shift), rounded half to even, or -1 where under
+    ``min_cover`` of the positions along the segment see one.
+
+    Returns (K, 2) int64: (first, last), and (K, 2) float64: the least-squares slope of
+    the face pixels about that tilted line (both sides together, each side with at least
+    ``max(3, min_cover)`` of the positions; trimmed once at 1.5 px) and the number of
+    pixels it rests on (0: none)."""
     H, W = up.shape
     K = horiz.shape[0]
     out = np.full((K, 2), -1, np.int64)
-    buf0 = np.empty(max(H, W), np.int64)
-    buf1 = np.empty(max(H, W), np.int64)
+    fit = np.zeros((K, 2), np.float64)
+    n_max = max(H, W)
+    buf0 = np.empty(n_max, np.int64)
+    buf1 = np.empty(n_max, np.int64)
+    pos0 = np.empty(n_max, np.float64)
+    pos1 = np.empty(n_max, np.float64)
+    val = np.empty(n_max, np.float64)
     for k in range(K):
+        lim = H if horiz[k] else W
         s0 = max(0, lo[k])
         s1 = min(W if horiz[k] else H, hi[k] + 1)
         length = max(0, s1 - s0)
+        mid = (lo[k] + hi[k]) / 2.0
         n0 = 0
         n1 = 0
         for j in range(s0, s1):
-            for i in range(a[k], b[k] + 1):  # first face pixel across the wall
+            sh = int(np.round(slope[k] * (j - mid)))
+            i0 = max(0, a[k] + sh)
+            i1 = min(lim - 1, b[k] + sh)
+            for i in range(i0, i1 + 1):  # first face pixel across the wall
                 if (up[i, j] if horiz[k] else lf[j, i]):
-                    buf0[n0] = i - a[k]
+                    buf0[n0] = i - a[k] - sh
+                    pos0[n0] = j - mid
                     n0 += 1
                     break
-            for i in range(b[k], a[k] - 1, -1):  # last face pixel
+            for i in range(i1, i0 - 1, -1):  # last face pixel
                 if (dn[i, j] if horiz[k] else rt[j, i]):
-                    buf1[n1] = i - a[k]
+                    buf1[n1] = i - a[k] - sh
+                    pos1[n1] = j - mid
                     n1 += 1
                     break
         need = min_cover * max(1, length)
@@ -201,26 +261,45 @@ def _faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, min_cover):
             out[k, 0] = a[k] + _median_round(buf0, n0)
         if n1 > 0 and n1 >= need:
             out[k, 1] = a[k] + _median_round(buf1, n1)
-    return out
+        num = den = 0.0
+        if n0 >= 3 and n0 >= need:
+            for i in range(n0):
+                val[i] = buf0[i]
+            q0, m0 = _line_fit(pos0, val, n0, 1.5)
+            num += q0 * m0
+            den += m0
+        if n1 >= 3 and n1 >= need:
+            for i in range(n1):
+                val[i] = buf1[i]
+            q1, m1 = _line_fit(pos1, val, n1, 1.5)
+            num += q1 * m1
+            den += m1
+        if den > 0:
+            fit[k, 0] = num / den
+            fit[k, 1] = den
+    return out, fit
 
 
 @njit(cache=True, nogil=True)
-def _paint_walls(mask, free, horiz, r0, r1, lo, hi, stop_at_free):
+def _paint_walls(mask, free, horiz, r0, r1, lo, hi, stop_at_free, slope):
     """Fill each wall's box (rows ``r0..r1`` across, ``lo..hi`` along; negative starts
-    clip to 0) in ``mask``; where ``stop_at_free``, only its non-free pixels (a wall
-    extended behind a face stops at space the input saw free)."""
+    clip to 0) in ``mask``, its rows shifted at position ``j`` along it by
+    ``round(slope (j - m))`` (``m`` its middle; slope 0: an axis-aligned box); where
+    ``stop_at_free``, only its non-free pixels (a wall extended behind a face stops at
+    space the input saw free)."""
     H, W = mask.shape
     for k in range(horiz.shape[0]):
-        a0, a1 = max(0, r0[k]), max(0, r1[k] + 1)
-        b0, b1 = max(0, lo[k]), max(0, hi[k] + 1)
-        if horiz[k]:
-            rs, re, cs, ce = a0, min(H, a1), b0, min(W, b1)
-        else:
-            rs, re, cs, ce = b0, min(H, b1), a0, min(W, a1)
-        for i in range(rs, re):
-            for j in range(cs, ce):
-                if not (stop_at_free[k] and free[i, j]):
-                    mask[i, j] = True
+        mid = (lo[k] + hi[k]) / 2.0
+        n_along = W if horiz[k] else H
+        n_across = H if horiz[k] else W
+        for j in range(max(0, lo[k]), min(n_along, max(0, hi[k] + 1))):
+            sh = int(np.round(slope[k] * (j - mid)))
+            for i in range(max(0, r0[k] + sh), min(n_across, max(0, r1[k] + sh + 1))):
+                if horiz[k]:
+                    if not (stop_at_free[k] and free[i, j]):
+                        mask[i, j] = True
+                elif not (stop_at_free[k] and free[j, i]):
+                    mask[j, i] = True
 
 
 def _align_faces(found: list, tol: float) -> None:
@@ -247,8 +326,8 @@ def _align_faces(found: list, tol: float) -> None:
 
 
 def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px: float,
-                   min_cover: float = 0.3, align: float = 0.0, grow: int = 0
-                   ) -> tuple[np.ndarray, np.ndarray]:
+                   min_cover: float = 0.3, align: float = 0.0, grow: int = 0,
+                   tilt: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Walls of axis-aligned segments placed on the guide's observed surfaces (step 4b).
 
     For each segment, the guide's (input map's) wall surfaces facing free space within
@@ -258,6 +337,22 @@ def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px:
     observed one). A wall seen from both sides spans its two faces; a wall seen from one
     side gets ``wall_px`` of thickness behind its face, stopping at space the input saw
     free; a wall with no observed face keeps the segment's position and ``wall_px``.
+
+    With ``tilt`` (default), the faces are straight lines at the **map's own wall
+    angle** rather than along the pixel grid: a SLAM map is turned against its plan by
+    its heading error (the metric's rigid alignment turns 22 of the 38 val maps of the
+    gen6300 build by 1 to 7.6 degrees; :func:`~map2map.learn.autocorrect.autocorrect`
+    deskews anchored maps only beyond 6), and a face made exactly horizontal on a wall
+    turned by 2 degrees leaves it, across a 100 px wall, up to 1.7 px off at its ends.
+    The angle is one for the map (the building's walls are parallel or perpendicular,
+    so one rotation turns them all): each segment's observed faces get a least-squares slope
+    (trimmed once at 1.5 px), and the length-weighted median over the segments (a
+    vertical wall's slope counted with its sign turned) is the map's, limited to
+    :data:`ANCHOR_TILT_MAX_DEG`; the faces are then found again along lines of that
+    slope and drawn along them, rasterised (the shift across a wall at position ``j``
+    is ``round(slope (j - m))``, ``m`` its middle). A map whose walls run along the grid
+    gets slope 0: the walls of ``tilt=False``.
+
     With ``align > 0``, faces of one orientation and side within ``align`` pixels of each
     other (pieces of one wall line cut by doors, bent apart by drift) are put on one
     line, their length-weighted median. ``grow`` moves every observed face that many
@@ -276,8 +371,17 @@ def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px:
     >>> g = np.full((20, 30), 255, np.uint8)
     >>> g[9:11, 2:28] = 0; g[11, 2:28:3] = 0            # a noisy wall: faces rows 9, 10
     >>> m, c = anchored_walls(g, np.array([[2.0, 11.0, 27.0, 11.0]]), band=3, wall_px=2)
-    >>> sorted(set(np.nonzero(m)[0].tolist())), c[0].tolist()
+    >>> sorted(set(np.nonzero(m)[0].tolist())), np.round(c[0], 1).tolist()
     ([9, 10], [2.0, 9.5, 27.0, 9.5])
+    >>> t = np.full((40, 80), 255, np.uint8)             # a wall turned by 2 degrees
+    >>> for x in range(5, 75): t[18 + int(round((x - 40) * np.tan(np.radians(2)))), x] = 0
+    >>> seg = np.array([[5.0, 18.0, 74.0, 18.0]])
+    >>> m, c = anchored_walls(t, seg, band=3, wall_px=1)
+    >>> int((m & (t != 0)).sum()), np.round(c[0], 1).tolist()   # 1 of 70 pixels off
+    (1, [5.0, 16.8, 74.0, 19.2])
+    >>> m, c = anchored_walls(t, seg, band=3, wall_px=1, tilt=False)
+    >>> int((m & (t != 0)).sum())                      # along the grid: 41 off
+    41
     """
     H, W = guide.shape
     free = guide == FREE
@@ -295,14 +399,21 @@ def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px:
     lim = np.where(horiz, H, W)
     a = np.maximum(0, np.floor(c - band)).astype(np.int64)
     b = np.minimum(lim - 1, np.ceil(c + band)).astype(np.int64)
-    f = _faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, float(min_cover))
+    slope = np.zeros(len(s))
+    f, fit = _faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, float(min_cover), slope)
+    if tilt:
+        g = map_tilt(np.where(horiz, fit[:, 0], -fit[:, 0]), hi - lo + 1, fit[:, 1] > 0)
+        if g != 0.0:
+            slope = np.where(horiz, g, -g)
+            f, _ = _faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, float(min_cover),
+                                 slope)
     found = [[bool(h), None if f0 < 0 else int(f0) - grow, None if f1 < 0 else int(f1) + grow,
               int(lo_), int(hi_), float(c_)]
              for h, (f0, f1), lo_, hi_, c_ in zip(horiz, f, lo, hi, c, strict=True)]
     if align > 0:
         _align_faces(found, align)
     boxes, centres = [], []
-    for horiz_k, f0, f1, lo_k, hi_k, c_k in found:
+    for (horiz_k, f0, f1, lo_k, hi_k, c_k), q in zip(found, slope, strict=True):
         if f0 is not None and f1 is not None and f0 <= f1:
             r0, r1, ext = f0, f1, False
         elif f0 is not None:
@@ -314,12 +425,38 @@ def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px:
             r1, ext = r0 + t - 1, True
         boxes.append((horiz_k, r0, r1, lo_k, hi_k, ext))
         mid = (r0 + r1) / 2
-        centres.append([lo_k, mid, hi_k, mid] if horiz_k else [mid, lo_k, mid, hi_k])
+        d = q * (hi_k - lo_k) / 2  # the centre line's tilt, half each side of the middle
+        centres.append([lo_k, mid - d, hi_k, mid + d] if horiz_k
+                       else [mid - d, lo_k, mid + d, hi_k])
     mask = np.zeros((H, W), bool)
     walls = np.array(boxes, np.int64).reshape(-1, 6)  # painting is an OR: order is free
     _paint_walls(mask, free, walls[:, 0].astype(bool), walls[:, 1], walls[:, 2], walls[:, 3],
-                 walls[:, 4], walls[:, 5].astype(bool))
+                 walls[:, 4], walls[:, 5].astype(bool), slope)
     return mask, np.array(centres, float).reshape(-1, 4)
+
+
+def map_tilt(slopes: np.ndarray, lengths: np.ndarray, ok: np.ndarray | None = None) -> float:
+    """The map's common wall slope (pixels across per pixel along, horizontal walls'
+    sign): the length-weighted median of the segments' fitted slopes (``ok`` those
+    with a fit), limited to :data:`ANCHOR_TILT_MAX_DEG`; 0 without any.
+
+    Examples
+    --------
+    >>> float(map_tilt(np.array([0.03, 0.035, 0.5, 0.0]), np.array([50, 80, 5, 10]),
+    ...                np.array([True, True, True, False])))
+    0.035
+    """
+    q = np.asarray(slopes, float)
+    w = np.asarray(lengths, float)
+    if ok is not None:
+        q, w = q[ok], w[ok]
+    if not len(q) or w.sum() <= 0:
+        return 0.0
+    o = np.argsort(q, kind="stable")
+    cum = np.cumsum(w[o])
+    med = float(q[o][np.searchsorted(cum, cum[-1] / 2)])
+    m = float(np.tan(np.radians(ANCHOR_TILT_MAX_DEG)))
+    return float(np.clip(med, -m, m))
 
 
 #: Anchoring scales in pixels of the dataset's 256 px maps (multiplied by ``data_px``).
@@ -328,6 +465,39 @@ ANCHOR_CELL, ANCHOR_BAND, ANCHOR_NEW = 4.0, 3.0, 4.0
 ANCHOR_ALIGN = 0.0
 #: Pixels (dataset) each observed face moves out into its free space.
 ANCHOR_GROW = 0.0
+#: Largest map wall angle (degrees) the anchored faces follow (:func:`anchored_walls`).
+ANCHOR_TILT_MAX_DEG = 6.0
+#: Free components of the input smaller than this (dataset pixels squared) are unknown.
+ANCHOR_SPECK = 30.0
+
+
+def drop_free_specks(data: np.ndarray, min_area: float) -> np.ndarray:
+    """``data`` with its free components (4-connected) smaller than ``min_area`` pixels
+    made unknown.
+
+    A SLAM map's free space is one region the robot's laser swept; small free islands
+    apart from it are rays that slipped through a wall or past its end (most lie
+    beyond the outer walls). Kept, each gives the wall beside it a face towards space
+    the plan does not have (free on the far side of an outer wall) and the anchored
+    walls of step 4b a second, spurious face. Measured on Table 5.3 (docs/learn.md).
+
+    Examples
+    --------
+    >>> d = np.full((12, 20), 127, np.uint8); d[1:6, 1:19] = 255; d[6, 1:19] = 0
+    >>> d[8, 4] = d[8, 12] = 255                      # two free specks beyond the wall
+    >>> out = drop_free_specks(d, 4)
+    >>> int((out == 255).sum()), int(out[8, 4]), int(out[2, 2])
+    (90, 127, 255)
+    """
+    free = (np.asarray(data) == FREE).astype(np.uint8)
+    n, lab = cv2.connectedComponents(free, connectivity=4)
+    small = np.bincount(lab.ravel(), minlength=n) < min_area
+    small[0] = False  # label 0: the pixels that are not free
+    if not small.any():
+        return np.asarray(data)
+    out = np.array(data, copy=True)
+    out[small[lab]] = UNKNOWN
+    return out
 
 
 def _anchored(output_segs: np.ndarray, guide: np.ndarray, wall_px: float, data_px: float,
@@ -335,6 +505,7 @@ def _anchored(output_segs: np.ndarray, guide: np.ndarray, wall_px: float, data_p
               cell: float = 8.0) -> tuple[np.ndarray, np.ndarray]:
     """Step 4 in ``anchor`` mode: the guide's own walls straightened at full resolution,
     plus the network's walls the guide does not show (module docstring)."""
+    guide = drop_free_specks(guide, ANCHOR_SPECK * data_px * data_px)
     occ = guide == OCCUPIED
     own = straight_segments(occ, ANCHOR_CELL * data_px)
     segs = own
