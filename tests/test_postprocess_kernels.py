@@ -265,3 +265,63 @@ def test_anchored_postprocess_leaves_no_free_specks():
     assert (out[100:, :] != FREE).all()
     assert (out[30:90, 30:90] == FREE).all()
     assert (out[98:100, 30:90] == OCCUPIED).all()
+
+
+def _merge_loop(segs, axis, tol, gap):
+    """The plain-Python merge that ``segments._merge`` vectorises (reference)."""
+    if len(segs) == 0:
+        return np.zeros((0, 4))
+    c = segs[:, 1] if axis == 0 else segs[:, 0]
+    lo = np.minimum(segs[:, 0], segs[:, 2]) if axis == 0 else np.minimum(segs[:, 1], segs[:, 3])
+    hi = np.maximum(segs[:, 0], segs[:, 2]) if axis == 0 else np.maximum(segs[:, 1], segs[:, 3])
+    order = np.argsort(c, kind="stable")
+    groups, cur = [], [order[0]]
+    for i in order[1:]:
+        if c[i] - c[cur[-1]] <= tol:
+            cur.append(i)
+        else:
+            groups.append(cur)
+            cur = [i]
+    groups.append(cur)
+    out = []
+
+    def seg(m, start, end):
+        w = np.maximum(hi[m] - lo[m], 1.0)
+        k = float(np.sum(c[m] * w) / np.sum(w))
+        return [start, k, end, k] if axis == 0 else [k, start, k, end]
+
+    for g in groups:
+        g = np.asarray(g)
+        g = g[np.argsort(lo[g], kind="stable")]
+        start, end, members = lo[g[0]], hi[g[0]], [g[0]]
+        for i in g[1:]:
+            if lo[i] <= end + gap:
+                end = max(end, hi[i])
+                members.append(i)
+                continue
+            out.append(seg(members, start, end))
+            start, end, members = lo[i], hi[i], [i]
+        out.append(seg(members, start, end))
+    return np.array(out, float)
+
+
+@pytest.mark.parametrize("axis", [0, 1])
+def test_segment_merge_matches_the_loop(axis):
+    """The vectorised merge of collinear segments gives the loop's segments (random sets
+    with shared lines, overlaps, gaps, negative coordinates and duplicates)."""
+    from map2map.maps.segments import _merge
+
+    rng = np.random.default_rng(7 + axis)
+    for _ in range(200):
+        n = int(rng.integers(1, 40))
+        fixed = rng.choice(np.arange(-5, 30, 0.5), n)  # shared lines (ties) and near ones
+        a, b = rng.uniform(-20, 120, (2, n)).round(1)
+        segs = (np.stack([a, fixed, b, fixed], 1) if axis == 0
+                else np.stack([fixed, a, fixed, b], 1))  # fmt: skip
+        if n > 3:
+            segs[1] = segs[0]  # an exact duplicate
+        tol, gap = float(rng.uniform(0.5, 3)), float(rng.uniform(0, 10))
+        got, ref = _merge(segs, axis, tol, gap), _merge_loop(segs, axis, tol, gap)
+        assert got.shape == ref.shape
+        np.testing.assert_allclose(got, ref, rtol=0, atol=1e-12)
+    assert _merge(np.zeros((0, 4)), axis, 1.0, 1.0).shape == (0, 4)

@@ -29,43 +29,37 @@ __all__ = ["AXIS_TOLERANCE_DEG", "straight_segments"]
 AXIS_TOLERANCE_DEG = 10.0
 
 
-def _merge(segs: np.ndarray, axis: int, tol: float, gap: float) -> list[np.ndarray]:
+def _merge(segs: np.ndarray, axis: int, tol: float, gap: float) -> np.ndarray:
     """Merge axis-aligned segments (axis 0: horizontal, y fixed) that are collinear within
-    ``tol`` and overlap or leave less than ``gap`` between them along their length."""
+    ``tol`` and overlap or leave less than ``gap`` between them along their length.
+
+    Segments sorted by their fixed coordinate form a line group while consecutive ones lie
+    within ``tol``; within a group, sorted by start, a run continues while a segment
+    starts within ``gap`` of the furthest end so far. Each run becomes one segment at the
+    length-weighted mean coordinate of its members (vectorised: no Python loop).
+    """
     if len(segs) == 0:
-        return []
+        return np.zeros((0, 4))
     c = segs[:, 1] if axis == 0 else segs[:, 0]
     lo = np.minimum(segs[:, 0], segs[:, 2]) if axis == 0 else np.minimum(segs[:, 1], segs[:, 3])
     hi = np.maximum(segs[:, 0], segs[:, 2]) if axis == 0 else np.maximum(segs[:, 1], segs[:, 3])
     order = np.argsort(c)
-    groups, cur = [], [order[0]]
-    for i in order[1:]:
-        if c[i] - c[cur[-1]] <= tol:
-            cur.append(i)
-        else:
-            groups.append(cur)
-            cur = [i]
-    groups.append(cur)
-    out = []
-    for g in groups:
-        g = np.asarray(g)
-        g = g[np.argsort(lo[g])]
-        start, end, members = lo[g[0]], hi[g[0]], [g[0]]
-        for i in g[1:]:
-            if lo[i] <= end + gap:
-                end = max(end, hi[i])
-                members.append(i)
-                continue
-            out.append(_axis_seg(axis, c[members], hi[members] - lo[members], start, end))
-            start, end, members = lo[i], hi[i], [i]
-        out.append(_axis_seg(axis, c[members], hi[members] - lo[members], start, end))
-    return out
-
-
-def _axis_seg(axis, coords, lengths, start, end) -> np.ndarray:
-    w = np.maximum(lengths, 1.0)
-    k = float(np.sum(coords * w) / np.sum(w))
-    return np.array([start, k, end, k] if axis == 0 else [k, start, k, end], float)
+    group = np.empty(len(c), np.int64)
+    group[order] = np.concatenate([[0], np.cumsum(np.diff(c[order]) > tol)])
+    o = np.lexsort((lo, group))  # by group, then by start (stable: ties keep c's order)
+    g, lo_o, hi_o, c_o = group[o], lo[o], hi[o], c[o]
+    # furthest end so far within the group: an offset per group restarts the running max
+    span = float(hi.max() - min(lo.min(), 0.0)) + gap + 1.0
+    reach = np.maximum.accumulate(hi_o + g * span) - g * span
+    new = np.ones(len(o), bool)
+    new[1:] = (g[1:] != g[:-1]) | (lo_o[1:] > reach[:-1] + gap)
+    first = np.flatnonzero(new)
+    w = np.maximum(hi_o - lo_o, 1.0)
+    k = np.add.reduceat(c_o * w, first) / np.add.reduceat(w, first)
+    start = lo_o[first]
+    stop = np.maximum.reduceat(hi_o, first)
+    out = np.stack([start, k, stop, k] if axis == 0 else [k, start, k, stop], axis=1)
+    return out.astype(float)
 
 
 def straight_segments(walls: np.ndarray, cell: float) -> np.ndarray:
@@ -99,7 +93,7 @@ def straight_segments(walls: np.ndarray, cell: float) -> np.ndarray:
     hs = _merge(h, 0, tol, cell)
     vs = _merge(v, 1, tol, cell)
     other = [row for row in s[~horiz & ~vert]]
-    hs, vs = _join(np.array(hs).reshape(-1, 4), np.array(vs).reshape(-1, 4), cell)
+    hs, vs = _join(hs, vs, cell)
     return np.concatenate([hs, vs, np.array(other).reshape(-1, 4)])
 
 
