@@ -231,7 +231,6 @@ def _faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, min_cover, slope):
     buf1 = np.empty(n_max, np.int64)
     pos0 = np.empty(n_max, np.float64)
     pos1 = np.empty(n_max, np.float64)
-    val = np.empty(n_max, np.float64)
     for k in range(K):
         lim = H if horiz[k] else W
         s0 = max(0, lo[k])
@@ -263,15 +262,11 @@ def _faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, min_cover, slope):
             out[k, 1] = a[k] + _median_round(buf1, n1)
         num = den = 0.0
         if n0 >= 3 and n0 >= need:
-            for i in range(n0):
-                val[i] = buf0[i]
-            q0, m0 = _line_fit(pos0, val, n0, 1.5)
+            q0, m0 = _line_fit(pos0, buf0, n0, 1.5)
             num += q0 * m0
             den += m0
         if n1 >= 3 and n1 >= need:
-            for i in range(n1):
-                val[i] = buf1[i]
-            q1, m1 = _line_fit(pos1, val, n1, 1.5)
+            q1, m1 = _line_fit(pos1, buf1, n1, 1.5)
             num += q1 * m1
             den += m1
         if den > 0:

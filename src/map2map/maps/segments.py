@@ -48,9 +48,11 @@ def _merge(segs: np.ndarray, axis: int, tol: float, gap: float) -> np.ndarray:
     group[order] = np.concatenate([[0], np.cumsum(np.diff(c[order]) > tol)])
     o = np.lexsort((lo, group))  # by group, then by start (stable: ties keep c's order)
     g, lo_o, hi_o, c_o = group[o], lo[o], hi[o], c[o]
-    # furthest end so far within the group: an offset per group restarts the running max
-    span = float(hi.max() - min(lo.min(), 0.0)) + gap + 1.0
-    reach = np.maximum.accumulate(hi_o + g * span) - g * span
+    # furthest end so far within the group: the running maximum of the ends' ranks, each
+    # group lifted above the ones before it (integers: exact, no rounding of the ends)
+    ends, rank = np.unique(hi_o, return_inverse=True)
+    lift = g * len(ends)
+    reach = ends[np.maximum.accumulate(rank + lift) - lift]
     new = np.ones(len(o), bool)
     new[1:] = (g[1:] != g[:-1]) | (lo_o[1:] > reach[:-1] + gap)
     first = np.flatnonzero(new)
