@@ -351,6 +351,6 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
     dp = drift_params(drift, drift_method, drift_scale)
     how = "none" if dp is None else f"parametric ({dp.describe()})"
     if coverage != "none" or (drift_route != "tour" and dp is not None):
-        how += f"; coverage {coverage}, drift route {drift_route}"
+        how += f"; own exploration: coverage {coverage}, drift route {drift_route}"
     return Fig514([m[0] for m in made], [int(m[1]) for m in made], plans, maps, rows, info,
                   net.source, warns, how)
