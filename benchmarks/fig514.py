@@ -6,7 +6,7 @@ the table.
 
     python3 benchmarks/fig514.py --data DS --n 6 --out DIR [--model pretrained|RUN] [--seed 0]
         [--render slam|plain] [--drift parametric|none] [--drift-method additive|ekf]
-        [--drift-scale F]
+        [--drift-scale F] [--coverage none|explore] [--drift-route tour|explore]
 """
 
 from __future__ import annotations
@@ -37,12 +37,18 @@ def main(argv=None) -> int:
                     help="the drift's odometry-to-map conversion (default additive)")
     ap.add_argument("--drift-scale", type=float, default=None,
                     help="factor on the drift field (default: the tuned drift's)")
+    ap.add_argument("--coverage", choices=("none", "explore"), default="none",
+                    help="Model_AB's coverage: the network's extent (none, default) or only "
+                    "what its own exploration saw (explore)")
+    ap.add_argument("--drift-route", choices=("tour", "explore"), default="tour",
+                    help="the drift's route: roadmap tour (default) or the exploration's path")
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     f = run_fig514(args.data, args.n, args.model, args.seed, split=args.split,
                    render=args.render, drift=args.drift, drift_method=args.drift_method,
-                   drift_scale=args.drift_scale)
+                   drift_scale=args.drift_scale, coverage=args.coverage,
+                   drift_route=args.drift_route)
     f.figure(out / "fig514.png")
     f.write_csv(out / "fig514.csv")
     (out / "fig514_summary.json").write_text(json.dumps(

@@ -13,7 +13,7 @@ statistic: W(generated, run 1) / W(run 2, run 1); target every ratio <= 1.5.
     python3 benchmarks/realism.py --data DS [--model pretrained RUN ...] [--plans N]
         [--cache refs.npz] [--csv out.csv] [--render slam plain] [--measures]
         [--drift parametric none] [--drift-method additive] [--drift-scale 1 ...]
-        [--diversity K]
+        [--diversity K] [--coverage none explore] [--drift-route tour explore]
 
 ``--render`` measures each model with each resolution raising
 (:mod:`map2map.learn.slam_render`: ``slam``, SLAM-like walls, the default of ``map2map
@@ -30,6 +30,11 @@ at its own metric resolution, :func:`map2map.learn.realism.pair_square_resolutio
 val``, report on ``test``). ``--diversity K`` adds, per generator, the mean pairwise
 disagreement of ``K`` hypotheses (:func:`map2map.learn.synthesize.synthesize`, test-time
 dropout + the drift) over the plans.
+
+``--coverage`` and ``--drift-route`` (:mod:`map2map.learn.coverage`) measure each model
+with the network's own extent (``none``) and/or only what its own ``oracle`` exploration
+of the square saw (``explore``), and the drift along the roadmap tour (``tour``) and/or
+the exploration's path (``explore``): every combination given is one generator.
 """
 
 from __future__ import annotations
@@ -75,6 +80,12 @@ def main(argv=None) -> int:
                     "own magnitudes)")
     ap.add_argument("--diversity", type=int, default=0, metavar="K",
                     help="also the mean pairwise disagreement of K hypotheses per plan")
+    ap.add_argument("--coverage", nargs="+", choices=("none", "explore"), default=["none"],
+                    help="Model_AB's coverage(s): none (the network's extent, default) or "
+                    "explore (unknown where its own exploration of the plan did not see)")
+    ap.add_argument("--drift-route", nargs="+", choices=("tour", "explore"), default=["tour"],
+                    help="the drift's route(s): tour (roadmap tour, default) or explore (the "
+                    "exploration's true path)")
     ap.add_argument("--measures", action="store_true",
                     help="also Fig. 5.14's measures (appendix error, wall recall/precision) "
                     "on every plan")
@@ -88,24 +99,31 @@ def main(argv=None) -> int:
     if args.model:
         from map2map.learn.synthesize import load_ab_model, synthesize_squares
 
-        variants = [(how, d, sc) for how in args.render for d in args.drift
-                    for sc in (args.drift_scale if d == "parametric" else [None])]
+        variants = [(how, d, sc, cov, rt) for how in args.render for d in args.drift
+                    for sc in (args.drift_scale if d == "parametric" else [None])
+                    for cov in args.coverage
+                    for rt in (args.drift_route if d == "parametric" else ["tour"])]
         for m in args.model:
             net = load_ab_model(m)
             base = "Model_AB" if m == "pretrained" else f"AB:{Path(m).name}"
-            for how, d, sc in variants:
+            for how, d, sc, cov, rt in variants:
                 tags = [how] * (len(args.render) > 1)
                 if len(args.drift) > 1 or len(args.drift_scale) > 1:
                     tags.append("no drift" if d == "none" else
                                 f"drift x{sc:g}" if len(args.drift_scale) > 1 else "drift")
+                if len(args.coverage) > 1 or cov != "none":
+                    tags.append(f"cover {cov}")
+                if len(args.drift_route) > 1 or rt != "tour":
+                    tags.append(f"route {rt}")
                 name = f"{base} [{', '.join(tags)}]" if tags else base
                 t1 = time.perf_counter()
                 gens[name] = synthesize_squares(
                     net, plans, seed=args.seed, render=how, drift=d,
-                    drift_method=args.drift_method, drift_scale=sc, resolution=refs.resolution)
+                    drift_method=args.drift_method, drift_scale=sc, resolution=refs.resolution,
+                    coverage=cov, drift_route=rt)
                 if args.diversity > 1:
                     div[name] = _diversity(net, plans, refs.resolution, args.diversity,
-                                           args.seed, how, d, args.drift_method, sc)
+                                           args.seed, how, d, args.drift_method, sc, cov, rt)
                 print(f"{name}: {time.perf_counter() - t1:.0f} s")
             if "parametric" in args.drift:
                 from map2map.learn.drift import drift_params
@@ -139,7 +157,8 @@ def main(argv=None) -> int:
     return 0
 
 
-def _diversity(net, plans, resolution, k, seed, render, drift, method, scale) -> list:
+def _diversity(net, plans, resolution, k, seed, render, drift, method, scale,
+               coverage="none", drift_route="tour") -> list:
     """Per plan: mean pairwise disagreement of ``k`` hypotheses of ``synthesize``."""
     import warnings
 
@@ -152,7 +171,7 @@ def _diversity(net, plans, resolution, k, seed, render, drift, method, scale) ->
         for a, r in zip(plans, resolution, strict=True):
             res = synthesize(OccupancyMap(a, float(r)), net, samples=k, seed=seed,
                              render=render, drift=drift, drift_method=method,
-                             drift_scale=scale)
+                             drift_scale=scale, coverage=coverage, drift_route=drift_route)
             out.append(res.diversity)
     return out
 

@@ -42,6 +42,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--drift-scale", type=float, default=None,
                    help="factor on the drift field (default 1: the parametric model's "
                    "own error magnitudes; docs/learn_ab.md)")
+    p.add_argument("--coverage", choices=("none", "explore"), default="none",
+                   help="none (default): every room the network draws; explore: the "
+                   "simulator's robot explores the plan for each hypothesis (oracle mapper, "
+                   "420 s, 180 degree LIDAR, seeded) and what it did not see becomes unknown, "
+                   "as a 7-minute run leaves rooms unseen")
+    p.add_argument("--drift-route", choices=("tour", "explore"), default="tour",
+                   help="the drift's path: tour (default), a roadmap tour of the plan; "
+                   "explore: the hypothesis's exploration (the same one as --coverage "
+                   "explore)")
     p.add_argument("--no-figure", action="store_true", help="do not write the figure")
     p.add_argument("--device", default="cpu", help="torch device (default cpu)")
     add_input_options(p)
@@ -75,12 +84,15 @@ def run(args: argparse.Namespace) -> int:
         warnings.simplefilter("ignore")
         res = synthesize(plan, args.model, samples=args.samples, seed=args.seed,
                          device=args.device, render=args.render, drift=args.drift,
-                         drift_method=args.drift_method, drift_scale=args.drift_scale)
+                         drift_method=args.drift_method, drift_scale=args.drift_scale,
+                         coverage=args.coverage, drift_route=args.drift_route)
     ensure_output_dir(out)
     for path, m in zip(names, res.maps, strict=True):
         save_map(m, path)
     summary = {"plan": str(src), "seed": args.seed, "render": args.render,
                "drift": args.drift,
+               **({"coverage": args.coverage, "drift_route": args.drift_route}
+                  if (args.coverage, args.drift_route) != ("none", "tour") else {}),
                "drift_params": res.maps[0].meta["synthesize"].get("drift_params"),
                "files": [p.name for p in names], **res.summary()}
     with atomic_path(out / f"{src.stem}_synthesize.json") as tmp:

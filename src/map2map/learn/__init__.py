@@ -22,6 +22,9 @@ PyTorch is imported only inside this package (``pip install 'map2map[learn]'``);
 * :mod:`~map2map.learn.train_ab` -- :func:`train_ab` (``map2map train ab``, Fig. 5.1);
 * :mod:`~map2map.learn.synthesize` -- K SLAM-map hypotheses of a plan (``map2map
   synthesize``) and their diversity;
+* :mod:`~map2map.learn.coverage` -- a hypothesis's own simulated exploration of the plan
+  (``oracle`` mapper): what it did not see turns unknown, its path drives the drift
+  (``synthesize --coverage explore --drift-route explore``, opt-in);
 * :mod:`~map2map.learn.realism` -- issue #15's realism statistics of generated SLAM maps
   against two simulated runs of the same plans (numpy only);
 * :mod:`~map2map.learn.fig514` -- Fig. 5.14: simulated | parametric (same trajectory) |

@@ -271,7 +271,8 @@ def _carry(f: DisplacementField, observed: np.ndarray) -> DisplacementField:
 
 def drift_field(plan: OccupancyMap, rng: np.random.Generator,
                 params: DriftParams | None = None,
-                model: ParametricParams | None = None) -> DriftField:
+                model: ParametricParams | None = None, *,
+                trajectory: Trajectory | None = None) -> DriftField:
     """A parametric drift field for ``plan`` (module doc, steps 1-4).
 
     Parameters
@@ -286,6 +287,10 @@ def drift_field(plan: OccupancyMap, rng: np.random.Generator,
     model : ParametricParams, optional
         The parametric model's parameters; default its defaults with a
         :data:`DEFAULT_FOV_DEG` LIDAR.
+    trajectory : Trajectory, optional
+        Drive the model along this path (plan frame; e.g. an exploration's true poses,
+        :func:`map2map.learn.coverage.explore_plan`) instead of step 1's roadmap tour;
+        ``params.duration`` still cuts it, and ``rng`` then draws no route.
 
     Returns
     -------
@@ -299,7 +304,10 @@ def drift_field(plan: OccupancyMap, rng: np.random.Generator,
     """
     dp = params or DriftParams()
     p = model or ParametricParams(fov_deg=DEFAULT_FOV_DEG)
-    traj, _ = make_trajectory(plan, p, rng, tour=dp.tour)
+    if trajectory is None:
+        traj, _ = make_trajectory(plan, p, rng, tour=dp.tour)
+    else:
+        traj = trajectory
     if dp.duration is not None and traj.t[-1] > dp.duration:
         n = max(2, int(np.searchsorted(traj.t, dp.duration, side="right")))
         traj = Trajectory(traj.t[:n], traj.x[:n], traj.y[:n], traj.theta[:n], traj.v[:n],
@@ -352,7 +360,8 @@ def apply_drift(m: np.ndarray, drift: DriftField) -> np.ndarray:
 
 
 def drift_maps(maps, plans, resolutions, seed: int = 0, params: DriftParams | None = None,
-               model: ParametricParams | None = None) -> tuple[np.ndarray, list[str]]:
+               model: ParametricParams | None = None, trajectories=None
+               ) -> tuple[np.ndarray, list[str]]:
     """Map ``i`` of ``maps`` warped along a drift field of plan ``i`` drawn from
     :func:`drift_rng` ``(seed, i)``.
 
@@ -365,6 +374,9 @@ def drift_maps(maps, plans, resolutions, seed: int = 0, params: DriftParams | No
     seed : int
     params, model
         As :func:`drift_field`.
+    trajectories : sequence of Trajectory or None, optional
+        Per map, the path of its drift (:func:`drift_field` ``trajectory``; ``None``:
+        the roadmap tour).
 
     Returns
     -------
@@ -381,7 +393,7 @@ def drift_maps(maps, plans, resolutions, seed: int = 0, params: DriftParams | No
     for i in range(len(maps)):
         try:
             d = drift_field(OccupancyMap(plans[i], float(res[i])), drift_rng(seed, i), params,
-                            model)
+                            model, trajectory=None if trajectories is None else trajectories[i])
         except InputError as exc:
             warns.append(f"map {i}: no drift ({exc.problem})")
             continue

@@ -275,7 +275,8 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
                model="pretrained", seed: int = 0, *, split: str = "test",
                params=None, progress: bool = True, render: str = "slam",
                drift="parametric", drift_method: str | None = None,
-               drift_scale: float | None = None) -> Fig514:
+               drift_scale: float | None = None, coverage: str = "none",
+               drift_route: str = "tour") -> Fig514:
     """Fig. 5.14 for ``n`` held-out plans (module doc).
 
     Parameters
@@ -300,6 +301,9 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
     drift, drift_method, drift_scale
         Model_AB's drift (:func:`~map2map.learn.synthesize.synthesize_squares`; each
         square at its metric resolution, ``info[plan]["square_resolution_m"]``).
+    coverage, drift_route
+        Model_AB's coverage from its own exploration and the drift's route
+        (:func:`~map2map.learn.synthesize.synthesize_squares`, :mod:`map2map.learn.coverage`).
 
     Returns
     -------
@@ -323,7 +327,8 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
         warnings.simplefilter("always")
         gen = synthesize_squares(net, plans, seed=seed, render=render, drift=drift,
                                  drift_method=drift_method, drift_scale=drift_scale,
-                                 resolution=[m[5]["square_resolution_m"] for m in made])
+                                 resolution=[m[5]["square_resolution_m"] for m in made],
+                                 coverage=coverage, drift_route=drift_route)
     warns = []
     if "PROVISIONAL" in str(net.header.get("note", "")):
         warns.append("Model_AB weights are provisional (their note says so)")
@@ -345,5 +350,7 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
 
     dp = drift_params(drift, drift_method, drift_scale)
     how = "none" if dp is None else f"parametric ({dp.describe()})"
+    if coverage != "none" or (drift_route != "tour" and dp is not None):
+        how += f"; own exploration: coverage {coverage}, drift route {drift_route}"
     return Fig514([m[0] for m in made], [int(m[1]) for m in made], plans, maps, rows, info,
                   net.source, warns, how)

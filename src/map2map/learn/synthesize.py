@@ -31,6 +31,15 @@ LIDAR and odometry error fields ``d_L + d_O`` (additive method by default,
 replaces its final factor). ``drift="none"``: the network's map as
 rendered (the output before drift existed, bit for bit).
 
+Coverage (:mod:`map2map.learn.coverage`, beyond the thesis): the network maps every room;
+a 7-minute exploration does not. ``coverage="explore"`` lets the simulator's robot explore
+the plan (``oracle`` mapper, seeded per hypothesis by
+:func:`~map2map.learn.coverage.explore_rng` ``(seed, k)``) and turns unknown every pixel
+of hypothesis ``k`` the exploration did not see (beyond a band of the rendered wall
+thickness); ``drift_route="explore"`` drives the drift along that exploration's true
+path instead of the roadmap tour. One exploration serves both; ``coverage="none"`` with
+``drift_route="tour"`` (the defaults) is the output without them, bit for bit.
+
 Examples
 --------
 An untrained generator (``"pretrained"`` or a run folder in practice):
@@ -62,6 +71,7 @@ from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from ..maps.preprocess import square_resize, thicken
 from . import slam_render
 from .autocorrect import _square
+from .coverage import ExploreParams, coverage_options, explore_plan, explore_rng, hide_unseen
 from .data import reduce_input
 from .drift import (
     DEFAULT_SQUARE_RESOLUTION,
@@ -204,8 +214,9 @@ class SynthesisResult:
 def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "pretrained",
                *, samples: int = 4, seed: int = 0, device: str = "cpu",
                render: str = "slam", drift: str | DriftParams = "parametric",
-               drift_method: str | None = None, drift_scale: float | None = None
-               ) -> SynthesisResult:
+               drift_method: str | None = None, drift_scale: float | None = None,
+               coverage: str = "none", drift_route: str = "tour",
+               explore: ExploreParams | None = None) -> SynthesisResult:
     """``samples`` SLAM-map hypotheses of ``plan`` (module doc), in its frame.
 
     Parameters
@@ -230,6 +241,15 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
         3.54-3.80).
     drift_scale : float, optional
         Replaces the drift's final factor on its field.
+    coverage : {"none", "explore"}
+        ``"explore"``: unknown wherever hypothesis ``k``'s own exploration of the plan
+        did not see (module doc, :func:`~map2map.learn.coverage.hide_unseen`).
+    drift_route : {"tour", "explore"}
+        The drift's path: the roadmap tour, or hypothesis ``k``'s exploration (no effect
+        with ``drift="none"``).
+    explore : ExploreParams, optional
+        The exploration's settings (default :class:`~map2map.learn.coverage.ExploreParams`:
+        420 s, 180 degree LIDAR, ``oracle``, band = rendered wall thickness).
 
     Returns
     -------
@@ -240,6 +260,9 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     if render not in RENDERS:
         raise InputError("--render", f"must be one of {', '.join(RENDERS)}, got {render!r}")
     dp = drift_params(drift, drift_method, drift_scale)
+    hide, along = coverage_options(coverage, drift_route)
+    along = along and dp is not None
+    ep = explore or ExploreParams()
     net = load_ab_model(model, device)
     sq = _square(plan, net.data_size)
     if sq is None:
@@ -252,15 +275,26 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     H, W = plan.shape
     rs, re = max(0, row0), min(H, row0 + side)
     cs, ce = max(0, col0), min(W, col0 + side)
-    maps, drifted = [], {}
+    maps, drifted, explored = [], {}, {}
     warns = []
     for k in range(samples):
         s = slam_render.render(grey[k], side, render, wall_px)
         data = np.full((H, W), UNKNOWN, np.uint8)
         data[rs:re, cs:ce] = s[rs - row0:re - row0, cs - col0:ce - col0]
+        ex = None
+        if hide or along:
+            try:
+                ex = explore_plan(plan, explore_rng(seed, k), ep)
+            except InputError as exc:
+                warns.append(f"hypothesis {k + 1}: no exploration ({exc.problem})")
+            else:
+                explored[k] = ex.stats()
+                if hide:
+                    data = hide_unseen(data, ex.seen, ep.margin(wall_px))
         if dp is not None:
             try:
-                d = drift_field(plan, drift_rng(seed, k), dp)
+                d = drift_field(plan, drift_rng(seed, k), dp,
+                                trajectory=ex.trajectory if along and ex is not None else None)
             except InputError as exc:
                 warns.append(f"hypothesis {k + 1}: no drift ({exc.problem})")
             else:
@@ -297,6 +331,12 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
             m.meta["synthesize"]["drift_params"] = asdict(dp)
     for k, st in drifted.items():
         maps[k].meta["synthesize"]["drift_px"] = st
+    if hide or along:                   # the default's meta stays as it was, key for key
+        for k, m in enumerate(maps):
+            m.meta["synthesize"].update(coverage=coverage, drift_route=drift_route,
+                                        explore=asdict(ep))
+            if k in explored:
+                m.meta["synthesize"]["exploration"] = explored[k]
     return SynthesisResult(maps, div, pw, warns, net.source)
 
 
@@ -304,7 +344,8 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
                        seed: int = 0, device: str = "cpu", batch: int = 16,
                        render: str = "slam", drift: str | DriftParams = "parametric",
                        drift_method: str | None = None, drift_scale: float | None = None,
-                       resolution=None) -> np.ndarray:
+                       resolution=None, coverage: str = "none", drift_route: str = "tour",
+                       explore: ExploreParams | None = None) -> np.ndarray:
     """Model_AB's SLAM map of each preprocessed dataset plan (``A.png``: already square,
     resized and thickened as the training inputs were), raised to the plans' size as
     ``render`` says (:func:`synthesize`): (N, S, S) uint8, the thesis's single output
@@ -319,6 +360,10 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
     :data:`~map2map.learn.drift.DEFAULT_SQUARE_RESOLUTION`. A plan the drift model's
     robot cannot drive keeps its undrifted map, with a warning.
 
+    ``coverage``, ``drift_route`` and ``explore`` as :func:`synthesize`: plan ``i``'s
+    square is explored at its metric resolution, seeded by
+    :func:`~map2map.learn.coverage.explore_rng` ``(seed, i)``.
+
     Examples
     --------
     >>> net = ABModel(StochasticUNet(size=16, channels=8), resolution=16, alpha=1.0,
@@ -329,6 +374,9 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
     if render not in RENDERS:
         raise ValueError(f"render must be one of {RENDERS}, got {render!r}")
     dp = drift_params(drift, drift_method, drift_scale)
+    hide, along = coverage_options(coverage, drift_route)
+    along = along and dp is not None
+    ep = explore or ExploreParams()
     net = load_ab_model(model, device)
     plans = np.asarray(plans, np.uint8)
     S = plans.shape[-1]
@@ -338,9 +386,23 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
         grey = net.sample_many(plans[i:i + batch], 1, seed)[:, 0]
         for j, gmap in enumerate(grey):
             out[i + j] = slam_render.render(gmap, S, render, wall_px)
+    res = DEFAULT_SQUARE_RESOLUTION if resolution is None else resolution
+    trajs = None
+    if hide or along:
+        rs = np.broadcast_to(np.asarray(res, float), (len(plans),))
+        trajs = [None] * len(plans)
+        for i in range(len(plans)):
+            try:
+                ex = explore_plan(OccupancyMap(plans[i], float(rs[i])), explore_rng(seed, i), ep)
+            except InputError as exc:
+                warnings.warn(f"map {i}: no exploration ({exc.problem})", stacklevel=2)
+                continue
+            if hide:
+                out[i] = hide_unseen(out[i], ex.seen, ep.margin(wall_px))
+            if along:
+                trajs[i] = ex.trajectory
     if dp is not None:
-        res = DEFAULT_SQUARE_RESOLUTION if resolution is None else resolution
-        out, warns = drift_maps(out, plans, res, seed, dp)
+        out, warns = drift_maps(out, plans, res, seed, dp, trajectories=trajs)
         for w in warns:
             warnings.warn(w, stacklevel=2)
     return out
