@@ -320,9 +320,114 @@ def _align_faces(found: list, tol: float) -> None:
                 group = [f] if f is not None else []
 
 
+def collinear_faces(horiz: np.ndarray, side: np.ndarray, face: np.ndarray,
+                    lo: np.ndarray, hi: np.ndarray, slope: np.ndarray, tol: float,
+                    gap: float | None = None) -> np.ndarray:
+    """Observed wall faces that lie on one line, put on it: the length-weighted **mean**
+    line of each group (step 4b, ``ANCHOR_COLLINEAR``).
+
+    A CAD plan draws the pieces of one wall line (a corridor wall cut by doors, the
+    walls of a row of rooms) exactly collinear; a SLAM map's drift displaces the pieces
+    by different amounts, each by a pixel or two. Faces of one orientation and side
+    (``horiz``, ``side`` 0: top/left, 1: bottom/right) are compared by where their
+    line crosses the map's axis (``face - slope * m``, ``m`` the face's middle
+    ``(lo + hi) / 2``: the faces are tilted by the map's common ``slope``); sorted by
+    it, consecutive faces within ``tol`` pixels form a group, cut where the pieces,
+    sorted along the line, leave a gap of more than ``gap`` pixels (``None``: no cut).
+    Every face of a group of two or more moves to the group's line, weighted by its
+    length ``hi - lo + 1`` (long pieces dominate), rounded to whole pixels. The mean,
+    not the median: the per-face drift errors are scattered about the plan's line, and
+    measured on the gen6300 val split (docs/learn.md, "Moving drifted walls") the mean
+    line is closer to the plan's than the median one.
+
+    Parameters
+    ----------
+    horiz, side : ndarray (K,) bool, int
+        The faces' orientation and side.
+    face : ndarray (K,) int
+        Row (horizontal) or column (vertical) of each face pixel at the face's middle.
+    lo, hi : ndarray (K,) int
+        The face's extent along it.
+    slope : ndarray (K,) float
+        Pixels across per pixel along (:func:`map_tilt`, the vertical faces' sign turned).
+    tol, gap : float
+        Grouping distances, pixels.
+
+    Returns
+    -------
+    ndarray (K,) int
+        The faces, moved.
+
+    Examples
+    --------
+    >>> h = np.array([True, True, True]); side = np.zeros(3, int)
+    >>> face = np.array([20, 22, 40]); lo = np.array([0, 60, 0]); hi = np.array([49, 69, 49])
+    >>> collinear_faces(h, side, face, lo, hi, np.zeros(3), tol=3).tolist()
+    [20, 20, 40]
+    """
+    face = np.asarray(face, np.int64)
+    out = face.copy()
+    length = (np.asarray(hi) - np.asarray(lo) + 1).astype(float)
+    mid = (np.asarray(lo) + np.asarray(hi)) / 2.0
+    icpt = face - np.asarray(slope, float) * mid
+    for h in (True, False):
+        for sd in (0, 1):
+            idx = np.flatnonzero((np.asarray(horiz) == h) & (np.asarray(side) == sd))
+            if len(idx) < 2:
+                continue
+            idx = idx[np.argsort(icpt[idx], kind="stable")]
+            for g in np.split(idx, np.flatnonzero(np.diff(icpt[idx]) > tol) + 1):
+                if gap is not None and len(g) > 1:
+                    g = g[np.argsort(lo[g], kind="stable")]
+                    reach = np.maximum.accumulate(hi[g])
+                    runs = np.split(g, np.flatnonzero(lo[g][1:] > reach[:-1] + gap) + 1)
+                else:
+                    runs = [g]
+                for r in runs:
+                    if len(r) < 2:
+                        continue
+                    line = np.average(icpt[r], weights=length[r])
+                    out[r] = np.round(line + slope[r] * mid[r]).astype(np.int64)
+    return out
+
+
+def thicken_two_sided(first: np.ndarray, last: np.ndarray, width: int) -> tuple[np.ndarray,
+                                                                              np.ndarray]:
+    """Walls seen from both sides that are thinner than ``width`` pixels, grown to it by
+    moving both faces out by the same whole number of pixels (step 4b,
+    ``ANCHOR_MIN_THICK``).
+
+    A wall seen from two rooms has both faces in the map, but an occupancy grid traces
+    it thinner than it is: measured on the gen6300 val split (docs/learn.md, "Moving
+    drifted walls"), the plan's faces of such walls lie 0.63 px (median) further out
+    than the map's on each side -- the plan's walls are 4-6 px thick where the map's
+    are 3-4. A wall ``d = width - (last - first + 1)`` pixels too thin gets
+    ``d // 2`` pixels on each side (an odd pixel is left out: moving one face only would
+    move the wall's centre).
+
+    Parameters
+    ----------
+    first, last : ndarray (K,) int
+        The two face pixels' positions across each wall (``first <= last``).
+    width : int
+        The thickness to grow to, pixels (the plan's walls; 0: off).
+
+    Examples
+    --------
+    >>> f, l = thicken_two_sided(np.array([10, 10, 10]), np.array([11, 12, 16]), 5)
+    >>> f.tolist(), l.tolist()          # 2 px -> 4 (3 missing, 1 each side), 3 -> 5, 7 stays
+    ([9, 9, 10], [12, 13, 16])
+    """
+    first, last = np.asarray(first, np.int64), np.asarray(last, np.int64)
+    grow = np.maximum(0, int(width) - (last - first + 1)) // 2
+    return first - grow, last + grow
+
+
 def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px: float,
                    min_cover: float = 0.3, align: float = 0.0, grow: int = 0,
-                   tilt: bool = True) -> tuple[np.ndarray, np.ndarray]:
+                   tilt: bool = True, collinear: float = 0.0,
+                   collinear_gap: float | None = None,
+                   min_thick: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Walls of axis-aligned segments placed on the guide's observed surfaces (step 4b).
 
     For each segment, the guide's (input map's) wall surfaces facing free space within
@@ -402,6 +507,13 @@ def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px:
             slope = np.where(horiz, g, -g)
             f, _ = _faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, float(min_cover),
                                  slope)
+    if collinear > 0:
+        f = f.copy()
+        for k in (0, 1):
+            seen = f[:, k] >= 0
+            f[seen, k] = collinear_faces(horiz[seen], np.full(seen.sum(), k), f[seen, k],
+                                         lo[seen], hi[seen], slope[seen], collinear,
+                                         collinear_gap)
     found = [[bool(h), None if f0 < 0 else int(f0) - grow, None if f1 < 0 else int(f1) + grow,
               int(lo_), int(hi_), float(c_)]
              for h, (f0, f1), lo_, hi_, c_ in zip(horiz, f, lo, hi, c, strict=True)]
@@ -411,6 +523,9 @@ def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px:
     for (horiz_k, f0, f1, lo_k, hi_k, c_k), q in zip(found, slope, strict=True):
         if f0 is not None and f1 is not None and f0 <= f1:
             r0, r1, ext = f0, f1, False
+            if min_thick > 0:
+                (r0,), (r1,) = thicken_two_sided([f0], [f1], min_thick)
+                r0, r1 = int(r0), int(r1)
         elif f0 is not None:
             r0, r1, ext = f0, f0 + t - 1, True
         elif f1 is not None:
@@ -458,6 +573,14 @@ def map_tilt(slopes: np.ndarray, lengths: np.ndarray, ok: np.ndarray | None = No
 ANCHOR_CELL, ANCHOR_BAND, ANCHOR_NEW = 4.0, 3.0, 4.0
 #: Faces closer than this (dataset pixels) are put on one line (0: off).
 ANCHOR_ALIGN = 0.0
+#: Observed faces whose lines lie within this (dataset pixels) of each other are put on
+#: their length-weighted mean line (:func:`collinear_faces`; 0: off).
+ANCHOR_COLLINEAR = 0.0
+#: ... unless pieces along the line are farther apart than this (dataset px; 0: no cut).
+ANCHOR_COLLINEAR_GAP = 0.0
+#: Walls seen from both sides are grown to this thickness (dataset px, rounded;
+#: :func:`thicken_two_sided`; 0: off).
+ANCHOR_MIN_THICK = 0.0
 #: Pixels (dataset) each observed face moves out into its free space.
 ANCHOR_GROW = 0.0
 #: Largest map wall angle (degrees) the anchored faces follow (:func:`anchored_walls`).
@@ -518,7 +641,10 @@ def _anchored(output_segs: np.ndarray, guide: np.ndarray, wall_px: float, data_p
             segs = np.concatenate([own, new])
     mask, centres = anchored_walls(guide, segs, band=ANCHOR_BAND * data_px, wall_px=wall_px,
                                    align=ANCHOR_ALIGN * data_px,
-                                   grow=int(round(ANCHOR_GROW * data_px)))
+                                   grow=int(round(ANCHOR_GROW * data_px)),
+                                   collinear=ANCHOR_COLLINEAR * data_px,
+                                   collinear_gap=ANCHOR_COLLINEAR_GAP * data_px or None,
+                                   min_thick=int(round(ANCHOR_MIN_THICK * data_px)))
     other = own[(own[:, 0] != own[:, 2]) & (own[:, 1] != own[:, 3])] if len(own) else own
     # the input's walls: replaced by their nearest non-wall value where a straight wall
     # explains them, kept where none does (corners, short pieces, what Hough missed).
