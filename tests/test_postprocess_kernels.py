@@ -340,9 +340,32 @@ def test_collinear_faces_snap_pieces_of_one_line():
     hi = np.array([79, 69, 79, 79, 79])
     out = collinear_faces(h, side, face, lo, hi, np.zeros(5), tol=2.5)
     assert out.tolist() == [30, 30, 36, 31, 32]     # (30*80 + 32*10) / 90 = 30.2
-    lo2, hi2 = np.array([0, 200, 0, 0, 0]), np.array([79, 209, 79, 79, 79])
-    assert collinear_faces(h, side, face, lo2, hi2, np.zeros(5), tol=2.5,
-                           gap=50).tolist() == face.tolist()
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_collinear_faces_matches_the_loop(seed):
+    """The vectorised grouping gives the plain loop's faces on random face sets."""
+    from map2map.learn.postprocess import collinear_faces
+
+    rng = np.random.default_rng(seed)
+    n = 60
+    h, side = rng.random(n) < 0.5, rng.integers(0, 2, n)
+    face, lo = rng.integers(0, 200, n), rng.integers(0, 150, n)
+    hi = lo + rng.integers(3, 80, n)
+    q = np.where(h, 0.03, -0.03)
+    got = collinear_faces(h, side, face, lo, hi, q, tol=3)
+    mid = (lo + hi) / 2
+    icpt = face - q * mid
+    ref = face.copy()
+    for hh in (True, False):
+        for sd in (0, 1):
+            idx = np.flatnonzero((h == hh) & (side == sd))
+            idx = idx[np.argsort(icpt[idx], kind="stable")]
+            for g in np.split(idx, np.flatnonzero(np.diff(icpt[idx]) > 3) + 1):
+                if len(g) > 1:
+                    line = np.average(icpt[g], weights=hi[g] - lo[g] + 1)
+                    ref[g] = np.round(line + q[g] * mid[g])
+    np.testing.assert_array_equal(got, ref)
 
 
 def test_collinear_faces_follow_the_map_angle():
@@ -379,3 +402,24 @@ def test_anchored_walls_collinear_moves_a_displaced_piece():
     assert np.nonzero(m0[:, 100])[0].tolist() == [22, 23, 24]
     assert np.nonzero(m1[:, 100])[0].tolist() == [20, 21, 22]
     assert (m1[:, 40] == m0[:, 40]).all()      # the long piece dominates: it stays
+
+
+def test_anchored_walls_thicken_two_sided():
+    """A wall seen from both rooms, traced 2 px thin: with ``min_thick`` it is grown to
+    the plan's thickness, one pixel out on each side (its centre stays); a wall seen from
+    one side only keeps its face and ``wall_px``."""
+    g = np.full((40, 60), UNKNOWN, np.uint8)
+    g[5:35, 2:58] = FREE
+    g[19:21, 2:58] = OCCUPIED                  # two-sided, rows 19-20
+    segs = np.array([[2.0, 19.5, 57.0, 19.5]])
+    m0, _ = anchored_walls(g, segs, band=3, wall_px=4)
+    m1, _ = anchored_walls(g, segs, band=3, wall_px=4, min_thick=5)
+    assert np.nonzero(m0[:, 30])[0].tolist() == [19, 20]
+    assert np.nonzero(m1[:, 30])[0].tolist() == [18, 19, 20, 21]   # 3 missing: 1 a side
+    h = np.full((40, 60), UNKNOWN, np.uint8)
+    h[5:20, 2:58] = FREE
+    h[20, 2:58] = OCCUPIED                     # seen from above only
+    one = np.array([[2.0, 20.0, 57.0, 20.0]])
+    a, _ = anchored_walls(h, one, band=3, wall_px=4)
+    b, _ = anchored_walls(h, one, band=3, wall_px=4, min_thick=5)
+    assert (a == b).all() and np.nonzero(b[:, 30])[0].tolist() == [20, 21, 22, 23]
