@@ -404,7 +404,7 @@ def thicken_two_sided(first: np.ndarray, last: np.ndarray, width: int) -> tuple[
     it thinner than it is: measured on the gen6300 val split (docs/learn.md, "Moving
     drifted walls"), the plan's faces of such walls lie 0.63 px (median) further out
     than the map's on each side -- the plan's walls are 4-6 px thick where the map's
-    are 3-4. A wall ``d = width - (last - first + 1)`` pixels too thin gets
+    are 2-4. A wall ``d = width - (last - first + 1)`` pixels too thin gets
     ``d // 2`` pixels on each side (an odd pixel is left out: moving one face only would
     move the wall's centre).
 
