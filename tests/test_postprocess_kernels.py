@@ -325,3 +325,101 @@ def test_segment_merge_matches_the_loop(axis):
         assert got.shape == ref.shape
         np.testing.assert_allclose(got, ref, rtol=0, atol=1e-12)
     assert _merge(np.zeros((0, 4)), axis, 1.0, 1.0).shape == (0, 4)
+
+
+def test_collinear_faces_snap_pieces_of_one_line():
+    """Pieces of one wall line displaced by drift go to their length-weighted mean line
+    (the long piece dominates); a face farther than ``tol`` and a face of the other side
+    stay; with ``gap`` a piece far along the line is its own group."""
+    from map2map.learn.postprocess import collinear_faces
+
+    h = np.array([True, True, True, True, False])
+    side = np.array([0, 0, 0, 1, 0])
+    face = np.array([30, 32, 36, 31, 32])
+    lo = np.array([0, 60, 0, 0, 0])
+    hi = np.array([79, 69, 79, 79, 79])
+    out = collinear_faces(h, side, face, lo, hi, np.zeros(5), tol=2.5)
+    assert out.tolist() == [30, 30, 36, 31, 32]     # (30*80 + 32*10) / 90 = 30.2
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_collinear_faces_matches_the_loop(seed):
+    """The vectorised grouping gives the plain loop's faces on random face sets."""
+    from map2map.learn.postprocess import collinear_faces
+
+    rng = np.random.default_rng(seed)
+    n = 60
+    h, side = rng.random(n) < 0.5, rng.integers(0, 2, n)
+    face, lo = rng.integers(0, 200, n), rng.integers(0, 150, n)
+    hi = lo + rng.integers(3, 80, n)
+    q = np.where(h, 0.03, -0.03)
+    got = collinear_faces(h, side, face, lo, hi, q, tol=3)
+    mid = (lo + hi) / 2
+    icpt = face - q * mid
+    ref = face.copy()
+    for hh in (True, False):
+        for sd in (0, 1):
+            idx = np.flatnonzero((h == hh) & (side == sd))
+            idx = idx[np.argsort(icpt[idx], kind="stable")]
+            for g in np.split(idx, np.flatnonzero(np.diff(icpt[idx]) > 3) + 1):
+                if len(g) > 1:
+                    line = np.average(icpt[g], weights=hi[g] - lo[g] + 1)
+                    ref[g] = np.round(line + q[g] * mid[g])
+    np.testing.assert_array_equal(got, ref)
+
+
+def test_collinear_faces_follow_the_map_angle():
+    """On a map turned by its heading error the faces of one line differ by the slope
+    times their distance along it: they are compared where their line crosses the axis,
+    so collinear tilted pieces stay where they are and a displaced one joins them."""
+    from map2map.learn.postprocess import collinear_faces
+
+    q = 0.05
+    lo, hi = np.array([0, 100, 200]), np.array([59, 159, 259])
+    mid = (lo + hi) / 2
+    face = np.round(40 + q * mid).astype(int)            # one tilted line: 41, 46, 51
+    h, side = np.ones(3, bool), np.zeros(3, int)
+    assert collinear_faces(h, side, face, lo, hi, np.full(3, q), tol=2).tolist() \
+        == face.tolist()
+    moved = face + np.array([0, 2, 0])                   # the middle piece drifted 2 px
+    assert collinear_faces(h, side, moved, lo, hi, np.full(3, q), tol=2.5).tolist() \
+        == [42, 47, 52]          # the mean line, 39.525 + 2/3 px, plus q m: all rounded
+    # along the grid (slope 0) the same faces are 5 px apart: no group
+    assert collinear_faces(h, side, face, lo, hi, np.zeros(3), tol=2).tolist() \
+        == face.tolist()
+
+
+def test_anchored_walls_collinear_moves_a_displaced_piece():
+    """A corridor wall cut by a door, its short piece drawn 2 px off by drift: with
+    ``collinear`` both pieces' faces are on one line; without, each keeps its own."""
+    g = np.full((40, 120), UNKNOWN, np.uint8)
+    g[5:30, 2:118] = FREE
+    g[20:23, 2:80] = OCCUPIED                  # long piece, faces rows 20 and 22
+    g[22:25, 90:110] = OCCUPIED                # short piece 2 px lower
+    segs = np.array([[2.0, 21.0, 79.0, 21.0], [90.0, 23.0, 109.0, 23.0]])
+    m0, _ = anchored_walls(g, segs, band=3, wall_px=2)
+    m1, _ = anchored_walls(g, segs, band=3, wall_px=2, collinear=3)
+    assert np.nonzero(m0[:, 100])[0].tolist() == [22, 23, 24]
+    assert np.nonzero(m1[:, 100])[0].tolist() == [20, 21, 22]
+    assert (m1[:, 40] == m0[:, 40]).all()      # the long piece dominates: it stays
+
+
+def test_anchored_walls_thicken_two_sided():
+    """A wall seen from both rooms, traced 2 px thin: with ``min_thick`` it is grown to
+    the plan's thickness, one pixel out on each side (its centre stays); a wall seen from
+    one side only keeps its face and ``wall_px``."""
+    g = np.full((40, 60), UNKNOWN, np.uint8)
+    g[5:35, 2:58] = FREE
+    g[19:21, 2:58] = OCCUPIED                  # two-sided, rows 19-20
+    segs = np.array([[2.0, 19.5, 57.0, 19.5]])
+    m0, _ = anchored_walls(g, segs, band=3, wall_px=4)
+    m1, _ = anchored_walls(g, segs, band=3, wall_px=4, min_thick=5)
+    assert np.nonzero(m0[:, 30])[0].tolist() == [19, 20]
+    assert np.nonzero(m1[:, 30])[0].tolist() == [18, 19, 20, 21]   # 3 missing: 1 a side
+    h = np.full((40, 60), UNKNOWN, np.uint8)
+    h[5:20, 2:58] = FREE
+    h[20, 2:58] = OCCUPIED                     # seen from above only
+    one = np.array([[2.0, 20.0, 57.0, 20.0]])
+    a, _ = anchored_walls(h, one, band=3, wall_px=4)
+    b, _ = anchored_walls(h, one, band=3, wall_px=4, min_thick=5)
+    assert (a == b).all() and np.nonzero(b[:, 30])[0].tolist() == [20, 21, 22, 23]

@@ -17,8 +17,9 @@
 3. the generator's output is post-processed back to the square *at the input's own
    resolution* (:func:`map2map.learn.postprocess.postprocess`: upsampling, snapping to the
    three values, straight walls; by default (``anchor=True``) the input's own walls,
-   straightened at full resolution on the median of their observed faces and given the
-   training targets' thickness, plus the network's walls the input does not show;
+   straightened at full resolution on the median of their observed faces, pieces of
+   one wall line put on one line, and given the plan's thickness, plus the network's
+   walls the input does not show;
    ``anchor=False`` draws the network's walls, moved by at most half a model cell onto
    the input's);
 4. the square is cut back into the input's grid: the result has the input's shape,

@@ -54,7 +54,14 @@ needs 8x (or more) upsampling, and plain upsampling gives grey, blurred walls.
    the plan does not have), and the faces are straight lines at the map's own wall
    angle, not along the pixel grid (``tilt``, :func:`anchored_walls`: a SLAM map is
    turned against its plan by its heading error, and a face made exactly horizontal on
-   a wall turned by 2 degrees leaves it up to 1.7 px off across 100 px).
+   a wall turned by 2 degrees leaves it up to 1.7 px off across 100 px). Two more, for
+   the walls that SLAM drift displaced (docs/learn.md, "Moving drifted walls"): faces
+   of one orientation and side whose lines lie within ``ANCHOR_COLLINEAR`` (3 dataset
+   pixels) of each other go to their length-weighted mean line
+   (:func:`collinear_faces`: the pieces of one wall line, which the plan draws
+   collinear), and a wall seen from both sides thinner than ``ANCHOR_MIN_THICK`` (5
+   dataset pixels) is grown to it, both faces out by the same amount
+   (:func:`thicken_two_sided`: an occupancy grid traces walls thinner than the plan's).
 5. **Redrawing**: the segments are drawn with the thickness of the training targets'
    walls (``wall_px``, measured on the dataset at training time and scaled to the frame),
    occupied blobs of step 2 that no segment explains (columns, furniture) are kept when at
@@ -91,7 +98,7 @@ from ..core.grid import FREE, OCCUPIED, UNKNOWN
 from ..maps.segments import straight_segments
 
 __all__ = ["postprocess", "wall_thickness_px", "straight_segments", "anchored_walls",
-           "map_tilt", "drop_free_specks"]
+           "map_tilt", "drop_free_specks", "collinear_faces", "thicken_two_sided"]
 
 #: Grey level below which an upsampled output pixel is wall (step 2).
 WALL_BELOW = 96
@@ -320,9 +327,109 @@ def _align_faces(found: list, tol: float) -> None:
                 group = [f] if f is not None else []
 
 
+def collinear_faces(horiz: np.ndarray, side: np.ndarray, face: np.ndarray,
+                    lo: np.ndarray, hi: np.ndarray, slope: np.ndarray,
+                    tol: float) -> np.ndarray:
+    """Observed wall faces that lie on one line, put on it: the length-weighted **mean**
+    line of each group (step 4b, ``ANCHOR_COLLINEAR``).
+
+    A CAD plan draws the pieces of one wall line (a corridor wall cut by doors, the
+    walls of a row of rooms) exactly collinear; a SLAM map's drift displaces the pieces
+    by different amounts, each by a pixel or two. Faces of one orientation and side
+    (``horiz``, ``side`` 0: top/left, 1: bottom/right) are compared by where their
+    line crosses the map's axis (``face - slope * m``, ``m`` the face's middle
+    ``(lo + hi) / 2``: the faces are tilted by the map's common ``slope``); sorted by
+    it, consecutive faces within ``tol`` pixels form a group, wherever they lie along
+    the line. Every face of a group moves to the group's line, weighted by its length
+    ``hi - lo + 1`` (long pieces dominate), rounded to whole pixels. The mean, not the
+    median: the pieces' drift scatters them about the plan's line; measured on the
+    gen6300 val split (docs/learn.md, "Moving drifted walls"), the mean line is closer
+    to the plan's (median: no closer than the pieces themselves).
+
+    Parameters
+    ----------
+    horiz, side : ndarray (K,) bool, int
+        The faces' orientation and side.
+    face : ndarray (K,) int
+        Row (horizontal) or column (vertical) of each face pixel at the face's middle.
+    lo, hi : ndarray (K,) int
+        The face's extent along it.
+    slope : ndarray (K,) float
+        Pixels across per pixel along (:func:`map_tilt`, the vertical faces' sign turned).
+    tol : float
+        Grouping distance, pixels.
+
+    Returns
+    -------
+    ndarray (K,) int
+        The faces, moved (a face alone in its group stays).
+
+    Examples
+    --------
+    >>> h = np.array([True, True, True]); side = np.zeros(3, int)
+    >>> face = np.array([20, 22, 40]); lo = np.array([0, 60, 0]); hi = np.array([49, 69, 49])
+    >>> collinear_faces(h, side, face, lo, hi, np.zeros(3), tol=3).tolist()
+    [20, 20, 40]
+    """
+    face = np.asarray(face, np.int64)
+    if len(face) < 2:
+        return face.copy()
+    lo, hi = np.asarray(lo), np.asarray(hi)
+    slope = np.asarray(slope, float)
+    length = (hi - lo + 1).astype(float)
+    mid = (lo + hi) / 2.0
+    icpt = face - slope * mid
+    kind = 2 * np.asarray(horiz, np.int64) + np.asarray(side, np.int64)
+    o = np.lexsort((icpt, kind))
+    k, x = kind[o], icpt[o]
+    new = np.ones(len(o), bool)
+    new[1:] = (k[1:] != k[:-1]) | (np.diff(x) > tol)
+    group = np.cumsum(new) - 1
+    line = np.bincount(group, x * length[o]) / np.bincount(group, length[o])
+    out = np.round(line[group] + slope[o] * mid[o]).astype(np.int64)
+    alone = np.bincount(group)[group] == 1
+    out[alone] = face[o][alone]
+    res = np.empty_like(face)
+    res[o] = out
+    return res
+
+
+def thicken_two_sided(first: np.ndarray, last: np.ndarray, width: int) -> tuple[np.ndarray,
+                                                                              np.ndarray]:
+    """Walls seen from both sides that are thinner than ``width`` pixels, grown to it by
+    moving both faces out by the same whole number of pixels (step 4b,
+    ``ANCHOR_MIN_THICK``).
+
+    A wall seen from two rooms has both faces in the map, but an occupancy grid traces
+    it thinner than it is: measured on the gen6300 val split (docs/learn.md, "Moving
+    drifted walls"), the plan's faces of such walls lie 0.63 px (median) further out
+    than the map's on each side -- the plan's walls are 4-6 px thick where the map's
+    are 2-4. A wall ``d = width - (last - first + 1)`` pixels too thin gets
+    ``d // 2`` pixels on each side (an odd pixel is left out: moving one face only would
+    move the wall's centre).
+
+    Parameters
+    ----------
+    first, last : ndarray (K,) int
+        The two face pixels' positions across each wall (``first <= last``).
+    width : int
+        The thickness to grow to, pixels (the plan's walls; 0: off).
+
+    Examples
+    --------
+    >>> f, l = thicken_two_sided(np.array([10, 10, 10]), np.array([11, 12, 16]), 5)
+    >>> f.tolist(), l.tolist()          # 2 px -> 4 (3 missing, 1 each side), 3 -> 5, 7 stays
+    ([9, 9, 10], [12, 13, 16])
+    """
+    first, last = np.asarray(first, np.int64), np.asarray(last, np.int64)
+    grow = np.maximum(0, int(width) - (last - first + 1)) // 2
+    return first - grow, last + grow
+
+
 def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px: float,
                    min_cover: float = 0.3, align: float = 0.0, grow: int = 0,
-                   tilt: bool = True) -> tuple[np.ndarray, np.ndarray]:
+                   tilt: bool = True, collinear: float = 0.0,
+                   min_thick: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Walls of axis-aligned segments placed on the guide's observed surfaces (step 4b).
 
     For each segment, the guide's (input map's) wall surfaces facing free space within
@@ -352,7 +459,14 @@ def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px:
     other (pieces of one wall line cut by doors, bent apart by drift) are put on one
     line, their length-weighted median. ``grow`` moves every observed face that many
     pixels out into the free space it faces (a plan drawn with thicker walls than the
-    laser sees).
+    laser sees). Both were measured worse (docs/learn.md) and are off by default.
+
+    With ``collinear > 0``, observed faces whose lines lie within ``collinear`` pixels of
+    each other go to their length-weighted mean line (:func:`collinear_faces`); with
+    ``min_thick > 0``, walls seen from both sides thinner than ``min_thick`` pixels are
+    grown to it (:func:`thicken_two_sided`). Their defaults (0) are the walls before
+    2026-11-25's "Moving drifted walls"; :func:`postprocess` passes
+    ``ANCHOR_COLLINEAR`` and ``ANCHOR_MIN_THICK``.
 
     Returns
     -------
@@ -402,6 +516,16 @@ def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px:
             slope = np.where(horiz, g, -g)
             f, _ = _faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, float(min_cover),
                                  slope)
+    if collinear > 0:
+        f = f.copy()
+        for k in (0, 1):
+            seen = f[:, k] >= 0
+            f[seen, k] = collinear_faces(horiz[seen], np.full(seen.sum(), k), f[seen, k],
+                                         lo[seen], hi[seen], slope[seen], collinear)
+    if min_thick > 0:
+        both = (f[:, 0] >= 0) & (f[:, 1] >= 0) & (f[:, 0] <= f[:, 1])
+        f = f.copy()
+        f[both, 0], f[both, 1] = thicken_two_sided(f[both, 0], f[both, 1], min_thick)
     found = [[bool(h), None if f0 < 0 else int(f0) - grow, None if f1 < 0 else int(f1) + grow,
               int(lo_), int(hi_), float(c_)]
              for h, (f0, f1), lo_, hi_, c_ in zip(horiz, f, lo, hi, c, strict=True)]
@@ -458,6 +582,12 @@ def map_tilt(slopes: np.ndarray, lengths: np.ndarray, ok: np.ndarray | None = No
 ANCHOR_CELL, ANCHOR_BAND, ANCHOR_NEW = 4.0, 3.0, 4.0
 #: Faces closer than this (dataset pixels) are put on one line (0: off).
 ANCHOR_ALIGN = 0.0
+#: Observed faces whose lines lie within this (dataset pixels) of each other are put on
+#: their length-weighted mean line (:func:`collinear_faces`; 0: off).
+ANCHOR_COLLINEAR = 3.0
+#: Walls seen from both sides are grown to this thickness (dataset px, rounded;
+#: :func:`thicken_two_sided`; 0: off).
+ANCHOR_MIN_THICK = 5.0
 #: Pixels (dataset) each observed face moves out into its free space.
 ANCHOR_GROW = 0.0
 #: Largest map wall angle (degrees) the anchored faces follow (:func:`anchored_walls`).
@@ -518,7 +648,9 @@ def _anchored(output_segs: np.ndarray, guide: np.ndarray, wall_px: float, data_p
             segs = np.concatenate([own, new])
     mask, centres = anchored_walls(guide, segs, band=ANCHOR_BAND * data_px, wall_px=wall_px,
                                    align=ANCHOR_ALIGN * data_px,
-                                   grow=int(round(ANCHOR_GROW * data_px)))
+                                   grow=int(round(ANCHOR_GROW * data_px)),
+                                   collinear=ANCHOR_COLLINEAR * data_px,
+                                   min_thick=int(round(ANCHOR_MIN_THICK * data_px)))
     other = own[(own[:, 0] != own[:, 2]) & (own[:, 1] != own[:, 3])] if len(own) else own
     # the input's walls: replaced by their nearest non-wall value where a straight wall
     # explains them, kept where none does (corners, short pieces, what Hough missed).
