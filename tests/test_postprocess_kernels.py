@@ -423,3 +423,25 @@ def test_anchored_walls_thicken_two_sided():
     a, _ = anchored_walls(h, one, band=3, wall_px=4)
     b, _ = anchored_walls(h, one, band=3, wall_px=4, min_thick=5)
     assert (a == b).all() and np.nonzero(b[:, 30])[0].tolist() == [20, 21, 22, 23]
+
+
+def test_anchored_output_has_no_unknown_pocket_where_the_input_is_free(monkeypatch):
+    """The network's unknown inside a room the input shows free (far from walls, so the
+    streak rule makes it unknown) goes back to free: a plan has no such pocket."""
+    from map2map.core.grid import FREE, OCCUPIED, UNKNOWN
+    from map2map.learn import postprocess as pp
+
+    guide = np.full((64, 64), UNKNOWN, np.uint8)
+    guide[8:57, 8:57] = OCCUPIED
+    guide[10:55, 10:55] = FREE
+    low = np.full((16, 16), 127.0, np.float32)
+    low[2:14, 2:14] = 0.0
+    low[3:13, 3:13] = 255.0
+    low[7:9, 7:9] = 127.0                      # the network's unknown pocket mid-room
+    out, _ = pp.postprocess(low, (64, 64), guide, wall_px=2.0, data_px=1.0)
+    monkeypatch.setattr(pp, "ANCHOR_FILL_POCKETS", False)
+    old, _ = pp.postprocess(low, (64, 64), guide, wall_px=2.0, data_px=1.0)
+    assert (old[28:36, 28:36] == UNKNOWN).any()  # what the streak rule alone leaves
+    assert (out[10:55, 10:55] == FREE).all()
+    assert ((out != old) <= ((old == UNKNOWN) & (out == FREE))).all()  # only pockets move
+    assert (out[:6] == UNKNOWN).all()            # outside the building stays unknown

@@ -588,6 +588,9 @@ ANCHOR_COLLINEAR = 3.0
 #: Walls seen from both sides are grown to this thickness (dataset px, rounded;
 #: :func:`thicken_two_sided`; 0: off).
 ANCHOR_MIN_THICK = 5.0
+#: Unknown pockets of the anchored output that free space or walls enclose go back to free
+#: where the input shows free (:func:`_anchored`; False: off).
+ANCHOR_FILL_POCKETS = True
 #: Pixels (dataset) each observed face moves out into its free space.
 ANCHOR_GROW = 0.0
 #: Largest map wall angle (degrees) the anchored faces follow (:func:`anchored_walls`).
@@ -674,6 +677,11 @@ def _anchored(output_segs: np.ndarray, guide: np.ndarray, wall_px: float, data_p
         data[(data == FREE) & (net_space == UNKNOWN) & (far > 2 * cell)] = UNKNOWN
     data[keep] = OCCUPIED
     data[mask] = OCCUPIED
+    if ANCHOR_FILL_POCKETS:
+        # ... but not a pocket the input shows free and free space or walls enclose (the
+        # network's unknown inside a room, e.g. where it imagined a wall): a plan has none
+        pocket = ndimage.binary_fill_holes(data != UNKNOWN) & (data == UNKNOWN)
+        data[pocket & (guide == FREE)] = FREE
     return data, np.concatenate([centres, other.reshape(-1, 4)])
 
 
