@@ -45,24 +45,8 @@ def _faces(guide: np.ndarray, data_px: float):
     """The anchored step's faces before any move: (horiz, (K, 2) faces, lo, hi, slope)."""
     guide = pp.drop_free_specks(guide, pp.ANCHOR_SPECK * data_px ** 2)
     s = straight_segments(guide == OCCUPIED, pp.ANCHOR_CELL * data_px)
-    up, dn, lf, rt = pp._surface_masks(guide)
-    horiz, vert = s[:, 1] == s[:, 3], s[:, 0] == s[:, 2]
-    s, horiz = s[horiz != vert], horiz[horiz != vert]
-    c = np.where(horiz, s[:, 1], s[:, 0])
-    lo = np.round(np.where(horiz, np.minimum(s[:, 0], s[:, 2]),
-                           np.minimum(s[:, 1], s[:, 3]))).astype(np.int64)
-    hi = np.round(np.where(horiz, np.maximum(s[:, 0], s[:, 2]),
-                           np.maximum(s[:, 1], s[:, 3]))).astype(np.int64)
-    lim = np.where(horiz, *guide.shape)
-    band = pp.ANCHOR_BAND * data_px
-    a = np.maximum(0, np.floor(c - band)).astype(np.int64)
-    b = np.minimum(lim - 1, np.ceil(c + band)).astype(np.int64)
-    slope = np.zeros(len(s))
-    f, fit = pp._faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, 0.3, slope)
-    g = pp.map_tilt(np.where(horiz, fit[:, 0], -fit[:, 0]), hi - lo + 1, fit[:, 1] > 0)
-    if g != 0.0:
-        slope = np.where(horiz, g, -g)
-        f, _ = pp._faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, 0.3, slope)
+    horiz, f, lo, hi, _, slope = pp._observed_faces(guide, s, pp.ANCHOR_BAND * data_px, 0.3,
+                                                    True)
     return horiz, f, lo, hi, slope
 
 

@@ -426,6 +426,36 @@ def thicken_two_sided(first: np.ndarray, last: np.ndarray, width: int) -> tuple[
     return first - grow, last + grow
 
 
+def _observed_faces(guide: np.ndarray, segs: np.ndarray, band: float, min_cover: float,
+                    tilt: bool) -> tuple[np.ndarray, ...]:
+    """The guide's observed faces of each axis-aligned segment, before any rule moves
+    them (:func:`anchored_walls`' first step): ``(horiz, faces (K, 2), lo, hi, centre,
+    slope)``; a face is -1 where none was found."""
+    H, W = guide.shape
+    up, dn, lf, rt = _surface_masks(guide)
+    s = np.asarray(segs, float).reshape(-1, 4)
+    horiz, vert = s[:, 1] == s[:, 3], s[:, 0] == s[:, 2]
+    s, horiz = s[horiz != vert], horiz[horiz != vert]  # axis-aligned segments only
+    c = np.where(horiz, s[:, 1], s[:, 0])
+    # np.round as Python's round on these floats: both round half to even
+    lo = np.round(np.where(horiz, np.minimum(s[:, 0], s[:, 2]),
+                           np.minimum(s[:, 1], s[:, 3]))).astype(np.int64)
+    hi = np.round(np.where(horiz, np.maximum(s[:, 0], s[:, 2]),
+                           np.maximum(s[:, 1], s[:, 3]))).astype(np.int64)
+    lim = np.where(horiz, H, W)
+    a = np.maximum(0, np.floor(c - band)).astype(np.int64)
+    b = np.minimum(lim - 1, np.ceil(c + band)).astype(np.int64)
+    slope = np.zeros(len(s))
+    f, fit = _faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, float(min_cover), slope)
+    if tilt:
+        g = map_tilt(np.where(horiz, fit[:, 0], -fit[:, 0]), hi - lo + 1, fit[:, 1] > 0)
+        if g != 0.0:
+            slope = np.where(horiz, g, -g)
+            f, _ = _faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, float(min_cover),
+                                 slope)
+    return horiz, f, lo, hi, c, slope
+
+
 def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px: float,
                    min_cover: float = 0.3, align: float = 0.0, grow: int = 0,
                    tilt: bool = True, collinear: float = 0.0,
@@ -494,28 +524,8 @@ def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px:
     """
     H, W = guide.shape
     free = guide == FREE
-    up, dn, lf, rt = _surface_masks(guide)
     t = max(1, int(round(wall_px)))
-    s = np.asarray(segs, float).reshape(-1, 4)
-    horiz, vert = s[:, 1] == s[:, 3], s[:, 0] == s[:, 2]
-    s, horiz = s[horiz != vert], horiz[horiz != vert]  # axis-aligned segments only
-    c = np.where(horiz, s[:, 1], s[:, 0])
-    # np.round as Python's round on these floats: both round half to even
-    lo = np.round(np.where(horiz, np.minimum(s[:, 0], s[:, 2]),
-                           np.minimum(s[:, 1], s[:, 3]))).astype(np.int64)
-    hi = np.round(np.where(horiz, np.maximum(s[:, 0], s[:, 2]),
-                           np.maximum(s[:, 1], s[:, 3]))).astype(np.int64)
-    lim = np.where(horiz, H, W)
-    a = np.maximum(0, np.floor(c - band)).astype(np.int64)
-    b = np.minimum(lim - 1, np.ceil(c + band)).astype(np.int64)
-    slope = np.zeros(len(s))
-    f, fit = _faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, float(min_cover), slope)
-    if tilt:
-        g = map_tilt(np.where(horiz, fit[:, 0], -fit[:, 0]), hi - lo + 1, fit[:, 1] > 0)
-        if g != 0.0:
-            slope = np.where(horiz, g, -g)
-            f, _ = _faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, float(min_cover),
-                                 slope)
+    horiz, f, lo, hi, c, slope = _observed_faces(guide, segs, band, min_cover, tilt)
     if collinear > 0:
         f = f.copy()
         for k in (0, 1):
