@@ -113,11 +113,17 @@ def test_drawn_pieces_cut_at_gaps():
 
     occ = np.zeros((10, 40), bool)
     occ[4, 2:10] = occ[4, 20:28] = True
-    occ[8, 35] = True                       # a lone pixel: a piece shorter than a pixel
+    occ[8, 35] = True                       # a lone pixel: 1.5 px of line within 1 px
     segs = np.array([[2.0, 4.0, 38.0, 4.0], [3.0, 0.0, 3.0, 9.0], [35.0, 8.0, 39.0, 8.0]])
     got = drawn_pieces(segs, occ)
-    # one pixel of tolerance: pixel i spans [i - 0.5, i + 0.5), 10.25 is in pixel 10
-    want = [[2.0, 4.0, 10.25, 4.0], [18.5, 4.0, 28.5, 4.0],  # 28.5 - 1e-15: pixel 28
-            [3.0, 2.5, 3.0, 5.5], [35.0, 8.0, 36.25, 8.0]]
-    np.testing.assert_allclose(got, want, atol=1e-9)
+    # one pixel of tolerance (pixel i spans [i - 0.5, i + 0.5)): up to the pixel borders
+    want = [[2.0, 4.0, 10.5, 4.0], [18.5, 4.0, 28.5, 4.0],
+            [3.0, 2.5, 3.0, 5.5], [35.0, 8.0, 36.5, 8.0]]
+    np.testing.assert_allclose(got, want, atol=1e-3)
+    # a slanted segment that clips pixel corners: exact, not sampled
+    diag = np.zeros((40, 40), bool)
+    diag[np.arange(5, 30), np.arange(5, 30)] = True
+    cut = drawn_pieces(np.array([[0.0, 3.0, 39.0, 33.0]]), diag)
+    assert len(cut) == 1 and _off_walls(cut, diag) == []
     assert _off_walls(got, occ) == []
+    assert drawn_pieces(segs, np.zeros_like(occ)).shape == (0, 4)
