@@ -67,7 +67,7 @@ from ..core.grid import OCCUPIED, UNKNOWN, OccupancyMap
 from ..maps.preprocess import square_resize
 from .data import reduce_input
 from .networks import UNetGenerator, from_unit
-from .postprocess import postprocess
+from .postprocess import drawn_pieces, postprocess
 
 __all__ = ["BAModel", "load_model", "autocorrect", "autocorrect_many", "Correction",
            "pretrained_path", "save_segments_dxf", "export_model", "dominant_angle"]
@@ -308,8 +308,11 @@ def _finish(m: OccupancyMap, sq, output: np.ndarray | None, net: BAModel, straig
     rs, re = max(0, row0), min(H, row0 + side)
     cs, ce = max(0, col0), min(W, col0 + side)
     data[rs:re, cs:ce] = data_sq[rs - row0:re - row0, cs - col0:ce - col0]
-    # segments: square pixel indices -> continuous input pixel coordinates
-    seg_px = segs + np.array([col0, row0, col0, row0]) + 0.5
+    # segments: square pixel indices -> input pixel indices, kept where they lie on the
+    # walls drawn there (rotated back and cut to the input's grid, a wall may lose its
+    # pixels beyond the grid, or a thin one a pixel), -> continuous input coordinates
+    seg_px = segs + np.array([col0, row0, col0, row0])
+    seg_px = drawn_pieces(seg_px, data == OCCUPIED) + 0.5
     warns = []
     if scale > MAX_SHRINK:
         warns.append(f"the map is {scale:.1f}x larger than the maps the model learnt on "

@@ -73,7 +73,11 @@ needs 8x (or more) upsampling, and plain upsampling gives grey, blurred walls.
 
 The result is a three-valued map plus its wall segments (pixel coordinates of the
 working frame, ``x`` = column, ``y`` = row), which ``map2map autocorrect --dxf`` writes as
-vector lines.
+vector lines. With anchored walls the segments are exactly the walls drawn (issue #14):
+each wall's centre line where that wall painted pixels on it, within a pixel
+(:func:`_drawn_runs`; a wall that stops at free space is cut there, one drawn nowhere
+has none), plus the straight pieces of the input's wall pixels kept as they are
+(:func:`drawn_pieces`).
 
 Examples
 --------
@@ -98,7 +102,8 @@ from ..core.grid import FREE, OCCUPIED, UNKNOWN
 from ..maps.segments import straight_segments
 
 __all__ = ["postprocess", "wall_thickness_px", "straight_segments", "anchored_walls",
-           "map_tilt", "drop_free_specks", "collinear_faces", "thicken_two_sided"]
+           "map_tilt", "drop_free_specks", "collinear_faces", "thicken_two_sided",
+           "drawn_pieces"]
 
 #: Grey level below which an upsampled output pixel is wall (step 2).
 WALL_BELOW = 96
@@ -304,6 +309,72 @@ def _paint_walls(mask, free, horiz, r0, r1, lo, hi, stop_at_free, slope):
                     mask[j, i] = True
 
 
+@njit(cache=True, nogil=True)
+def _drawn_runs(free, horiz, r0, r1, lo, hi, stop_at_free, slope):
+    """Where along each wall of :func:`_paint_walls` it was drawn, as straight centre
+    lines: ``(runs, centre)``, ``runs`` (R, 3) int64 rows ``(k, j0, j1)`` and
+    ``centre`` (K,) float64.
+
+    Wall ``k``'s centre line crosses position ``j`` at ``centre[k] + slope (j - m)``
+    (``m`` its middle along it); ``centre[k]`` is the median, over the positions where
+    it painted anything, of the middle of the pixels it painted there (its box's middle
+    ``(r0 + r1) / 2`` where it painted the whole box; a wall that stops at space the
+    input saw free (``stop_at_free``) may paint only part of its box). The runs are the
+    maximal stretches ``j0..j1`` (``j1 > j0``: a run of one position, a segment of
+    length 0, is left out) at which one of the pixels it painted lies within one pixel
+    across of the pixel holding its centre line, ``floor(c + 0.5)`` (pixel ``i`` spans
+    ``[i - 0.5, i + 0.5)``). A wall drawn nowhere (a network wall across a room the
+    robot saw empty) has none."""
+    H, W = free.shape
+    K = horiz.shape[0]
+    rows = np.empty((K + 1 + (max(H, W) + 1) // 2 * K, 3), np.int64)
+    centre = np.empty(K, np.float64)
+    mids = np.empty(max(H, W) + 1, np.float64)
+    n = 0
+    for k in range(K):
+        mid = (lo[k] + hi[k]) / 2.0
+        n_along = W if horiz[k] else H
+        n_across = H if horiz[k] else W
+        j_start = max(0, lo[k])
+        j_end = min(n_along, max(0, hi[k] + 1))
+        m = 0
+        for j in range(j_start, j_end):
+            sh = int(np.round(slope[k] * (j - mid)))
+            first = -1
+            last = -1
+            for i in range(max(0, r0[k] + sh), min(n_across, max(0, r1[k] + sh + 1))):
+                if not stop_at_free[k] or not (free[i, j] if horiz[k] else free[j, i]):
+                    if first < 0:
+                        first = i
+                    last = i
+            if first >= 0:
+                mids[m] = (first + last) / 2.0 - sh
+                m += 1
+        centre[k] = np.median(mids[:m]) if m else (r0[k] + r1[k]) / 2.0
+        start = -1
+        for j in range(j_start, j_end + 1):
+            hit = False
+            if j < j_end:
+                sh = int(np.round(slope[k] * (j - mid)))
+                cc = int(np.floor(centre[k] + slope[k] * (j - mid) + 0.5))
+                i0 = max(max(0, r0[k] + sh), cc - 1)
+                i1 = min(min(n_across - 1, r1[k] + sh), cc + 1)
+                for i in range(i0, i1 + 1):
+                    if not stop_at_free[k] or not (free[i, j] if horiz[k] else free[j, i]):
+                        hit = True
+                        break
+            if hit and start < 0:
+                start = j
+            elif not hit and start >= 0:
+                if j - 1 > start:
+                    rows[n, 0] = k
+                    rows[n, 1] = start
+                    rows[n, 2] = j - 1
+                    n += 1
+                start = -1
+    return rows[:n].copy(), centre
+
+
 def _align_faces(found: list, tol: float) -> None:
     """Put faces of one orientation and side that lie within ``tol`` of each other on one
     line (in place): their length-weighted median, rounded."""
@@ -502,8 +573,10 @@ def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px:
     -------
     mask : ndarray (H, W) bool
         The walls.
-    centre : ndarray (K, 4)
-        Their centre lines (x0, y0, x1, y1) in pixels.
+    centre : ndarray (R, 4)
+        Their centre lines (x0, y0, x1, y1) in pixels where they were drawn
+        (:func:`_drawn_runs`): a wall cut by free space gives several, one drawn
+        nowhere none.
 
     Examples
     --------
@@ -541,8 +614,8 @@ def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px:
              for h, (f0, f1), lo_, hi_, c_ in zip(horiz, f, lo, hi, c, strict=True)]
     if align > 0:
         _align_faces(found, align)
-    boxes, centres = [], []
-    for (horiz_k, f0, f1, lo_k, hi_k, c_k), q in zip(found, slope, strict=True):
+    boxes = []
+    for horiz_k, f0, f1, lo_k, hi_k, c_k in found:
         if f0 is not None and f1 is not None and f0 <= f1:
             r0, r1, ext = f0, f1, False
         elif f0 is not None:
@@ -553,15 +626,23 @@ def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px:
             r0 = int(round(c_k - (t - 1) / 2))
             r1, ext = r0 + t - 1, True
         boxes.append((horiz_k, r0, r1, lo_k, hi_k, ext))
-        mid = (r0 + r1) / 2
-        d = q * (hi_k - lo_k) / 2  # the centre line's tilt, half each side of the middle
-        centres.append([lo_k, mid - d, hi_k, mid + d] if horiz_k
-                       else [mid - d, lo_k, mid + d, hi_k])
-    mask = np.zeros((H, W), bool)
-    walls = np.array(boxes, np.int64).reshape(-1, 6)  # painting is an OR: order is free
-    _paint_walls(mask, free, walls[:, 0].astype(bool), walls[:, 1], walls[:, 2], walls[:, 3],
-                 walls[:, 4], walls[:, 5].astype(bool), slope)
-    return mask, np.array(centres, float).reshape(-1, 4)
+    walls = np.array(boxes, np.int64).reshape(-1, 6)
+    mask = np.zeros((H, W), bool)  # painting is an OR: order is free
+    args = (walls[:, 0].astype(bool), walls[:, 1], walls[:, 2], walls[:, 3], walls[:, 4],
+            walls[:, 5].astype(bool), np.asarray(slope, float))
+    _paint_walls(mask, free, *args)
+    # the centre lines where each wall was drawn: a wall that stops at free space is cut
+    # there, one that was drawn nowhere (a network wall across a room seen empty) has none
+    runs, across = _drawn_runs(free, *args)
+    k, j0, j1 = runs[:, 0], runs[:, 1].astype(float), runs[:, 2].astype(float)
+    across = across[k]
+    mid = (walls[k, 3] + walls[k, 4]) / 2.0
+    q = np.asarray(slope, float)[k]
+    c0, c1 = across + q * (j0 - mid), across + q * (j1 - mid)
+    h = walls[k, 0].astype(bool)
+    centres = np.where(h[:, None], np.stack([j0, c0, j1, c1], 1),
+                       np.stack([c0, j0, c1, j1], 1))
+    return mask, centres.reshape(-1, 4)
 
 
 def map_tilt(slopes: np.ndarray, lengths: np.ndarray, ok: np.ndarray | None = None) -> float:
@@ -638,6 +719,56 @@ def drop_free_specks(data: np.ndarray, min_area: float) -> np.ndarray:
     return out
 
 
+def drawn_pieces(segs: np.ndarray, occ: np.ndarray) -> np.ndarray:
+    """The pieces of segments (x0, y0, x1, y1; pixel ``i`` spans ``[i - 0.5, i + 0.5)``)
+    that lie on ``occ``: every point of a piece falls in a pixel of ``occ`` or next to one
+    (8-neighbourhood, the one-pixel tolerance of :func:`_drawn_runs`); pieces shorter
+    than a pixel are left out.
+
+    Exact, not sampled: each segment is cut where it crosses a pixel border, and each
+    stretch between two crossings lies in one pixel (a piece's ends are moved inwards
+    by ``1e-6`` of the segment, so that none lies on a border).
+
+    Examples
+    --------
+    >>> occ = np.zeros((10, 30), bool); occ[4, 2:10] = occ[4, 20:28] = True
+    >>> np.round(drawn_pieces(np.array([[2.0, 4.0, 27.0, 4.0]]), occ), 3).tolist()
+    [[2.0, 4.0, 10.5, 4.0], [18.5, 4.0, 27.0, 4.0]]
+    """
+    s = np.asarray(segs, float).reshape(-1, 4)
+    occ = np.asarray(occ, bool)
+    if not len(s) or not occ.any():
+        return np.zeros((0, 4))
+    H, W = occ.shape
+    near = cv2.dilate(occ.astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
+    out = []
+    eps = 1e-6
+    for x0, y0, x1, y1 in s:
+        ts = [np.array([0.0, 1.0])]
+        for a, b in ((x0, x1), (y0, y1)):  # borders at k + 0.5 crossed between a and b
+            if b != a:
+                k = np.arange(np.ceil(min(a, b) - 0.5), np.floor(max(a, b) - 0.5) + 1)
+                ts.append((k + 0.5 - a) / (b - a))
+        t = np.unique(np.clip(np.concatenate(ts), 0.0, 1.0))
+        if len(t) < 2:
+            continue
+        m = (t[:-1] + t[1:]) / 2                     # one point inside each stretch
+        r = np.floor(y0 + m * (y1 - y0) + 0.5).astype(np.int64)
+        c = np.floor(x0 + m * (x1 - x0) + 0.5).astype(np.int64)
+        inside = (r >= 0) & (r < H) & (c >= 0) & (c < W)
+        on = np.zeros(len(m), bool)
+        on[inside] = near[r[inside], c[inside]]
+        edges = np.diff(np.concatenate([[0], on.astype(np.int8), [0]]))
+        for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1),
+                        strict=True):
+            ta, tb = t[a] + eps, t[b] - eps
+            p = [x0 + ta * (x1 - x0), y0 + ta * (y1 - y0),
+                 x0 + tb * (x1 - x0), y0 + tb * (y1 - y0)]
+            if np.hypot(p[2] - p[0], p[3] - p[1]) >= 1.0:
+                out.append(p)
+    return np.array(out, float).reshape(-1, 4)
+
+
 def _anchored(output_segs: np.ndarray, guide: np.ndarray, wall_px: float, data_px: float,
               net_walls: np.ndarray | None = None, net_space: np.ndarray | None = None,
               cell: float = 8.0) -> tuple[np.ndarray, np.ndarray]:
@@ -664,7 +795,6 @@ def _anchored(output_segs: np.ndarray, guide: np.ndarray, wall_px: float, data_p
                                    grow=int(round(ANCHOR_GROW * data_px)),
                                    collinear=ANCHOR_COLLINEAR * data_px,
                                    min_thick=int(round(ANCHOR_MIN_THICK * data_px)))
-    other = own[(own[:, 0] != own[:, 2]) & (own[:, 1] != own[:, 3])] if len(own) else own
     # the input's walls: replaced by their nearest non-wall value where a straight wall
     # explains them, kept where none does (corners, short pieces, what Hough missed).
     # (Free within 2 px, else unknown, was measured worse: 48 vs 56 of 104 improved --
@@ -692,7 +822,12 @@ def _anchored(output_segs: np.ndarray, guide: np.ndarray, wall_px: float, data_p
         # network's unknown inside a room, e.g. where it imagined a wall): a plan has none
         pocket = ndimage.binary_fill_holes(data != UNKNOWN) & (data == UNKNOWN)
         data[pocket & (guide == FREE)] = FREE
-    return data, np.concatenate([centres, other.reshape(-1, 4)])
+    # the input's wall pixels kept as they are (no straight wall replaced them) are walls
+    # of the output too: their straight pieces, where drawn, go with the straight walls
+    kept = keep & ~mask
+    pieces = straight_segments(kept, ANCHOR_CELL * data_px) if kept.any() \
+        else np.zeros((0, 4))
+    return data, np.concatenate([centres, drawn_pieces(pieces, data == OCCUPIED)])
 
 
 def postprocess(output: np.ndarray, shape: tuple[int, int], guide: np.ndarray | None = None,
