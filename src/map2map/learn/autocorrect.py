@@ -325,13 +325,15 @@ def _finish(m: OccupancyMap, sq, output: np.ndarray | None, net: BAModel, straig
                      "the input: the model may have invented structure; check the figure")
     if "PROVISIONAL" in str(net.header.get("note", "")):
         measured = ("walls anchored on the input lowered the appendix-metric error on "
-                    "120 of 127 held-out simulated maps" if anchor else
+                    "120 of 127 held-out simulated maps, but on only 10 of 17 real "
+                    "Halmstad maps against their floor plans (no significant change; "
+                    "walls drawn several times too thick)" if anchor else
                     "the network's own walls (no anchoring) lowered the appendix-metric "
-                    "error on only 10 of 81 held-out simulated maps")
+                    "error on only 10 of 81 held-out simulated maps and 2 of 18 real "
+                    "Halmstad maps")
         warns.append("provisional Model_BA weights (small CPU training run): walls the "
                      f"input does not show are placed only to within a few pixels; "
-                     f"{measured}, real maps were not measured against a plan "
-                     "(docs/learn.md)")
+                     f"{measured} (docs/learn.md)")
     out = m.copy(data=data)
     out.meta["autocorrect"] = {"model": net.source, "warnings": warns,
                                "support": support, "segments_px": seg_px.tolist(),
