@@ -31,7 +31,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="slam (default): walls as a SLAM map draws them, the faces next to "
                    "free space with the training maps' wall thickness, wall interiors "
                    "unknown; plain: the network's output snapped and upsampled (nearest)")
-    p.add_argument("--drift", choices=("parametric", "none"), default="parametric",
+    p.add_argument("--drift", choices=("parametric", "rooms", "none"), default="parametric",
                    help="parametric (default): warp each hypothesis along its own drift "
                    "field of the parametric CAD->SLAM model (thesis 3.2: a route through the "
                    "plan, LIDAR + odometry errors), as a SLAM run bends walls and shifts "

@@ -84,6 +84,7 @@ from .drift import (
 )
 from .networks import from_unit
 from .progressive import StochasticUNet
+from .room_drift import RoomDriftParams
 from .slam_render import DEFAULT_WALL_PX, RENDERS, snap
 
 __all__ = ["ABModel", "SynthesisResult", "load_ab_model", "pretrained_ab_path",
@@ -326,7 +327,7 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     for m in maps:
         m.meta["synthesize"] = {"model": net.source, "seed": seed, "samples": samples,
                                 "render": render, "wall_px": round(wall_px, 3),
-                                "drift": "none" if dp is None else "parametric"}
+                                "drift": _drift_name(dp)}
         if dp is not None:
             m.meta["synthesize"]["drift_params"] = asdict(dp)
     for k, st in drifted.items():
@@ -338,6 +339,12 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
             if k in explored:
                 m.meta["synthesize"]["exploration"] = explored[k]
     return SynthesisResult(maps, div, pw, warns, net.source)
+
+
+def _drift_name(dp) -> str:
+    """``meta["synthesize"]["drift"]`` of drift settings ``dp``."""
+    return "none" if dp is None else "rooms" if isinstance(dp, RoomDriftParams) else \
+        "parametric"
 
 
 def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndarray, *,
