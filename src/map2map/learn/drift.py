@@ -322,7 +322,8 @@ def drift_field(plan: OccupancyMap, rng: np.random.Generator,
     if isinstance(params, RoomDriftParams):
         extra = None
         if params.parametric:
-            extra = drift_field(plan, rng, DriftParams(method=params.method), model,
+            extra = drift_field(plan, rng, DriftParams(method=params.method,
+                                                       smooth_m=params.smooth_m), model,
                                 trajectory=trajectory).field
         rd = room_drift_field(plan.data, rng, params)
         rd.extra = extra

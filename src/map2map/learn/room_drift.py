@@ -100,6 +100,9 @@ class RoomDriftParams:
         from the same generator; :func:`map2map.learn.drift.drift_field`).
     method : {"additive", "ekf"}
         That parametric field's odometry-to-map conversion.
+    smooth_m : float
+        That parametric field's Gaussian smoothing [m] (``DriftParams.smooth_m``; 0:
+        none, the default drift's rough field).
     """
 
     rot_deg: float = 1.0
@@ -110,9 +113,10 @@ class RoomDriftParams:
     scale: float = 1.0
     parametric: bool = False
     method: str = "additive"
+    smooth_m: float = 0.0
 
     def __post_init__(self):
-        bad = [n for n in ("rot_deg", "lin", "spread", "scale", "h_px")
+        bad = [n for n in ("rot_deg", "lin", "spread", "scale", "h_px", "smooth_m")
                if not (math.isfinite(getattr(self, n)) and getattr(self, n) >= 0)]
         if not (math.isfinite(self.blend_px) and self.blend_px > 0):
             bad.append("blend_px")
@@ -132,8 +136,8 @@ class RoomDriftParams:
         """
         return (f"rooms: {self.rot_deg:g} deg + {self.lin:g} dl per step, spread "
                 f"{self.spread:g}, blend {self.blend_px:g} px, h {self.h_px:g} px, "
-                f"x{self.scale:g}" + (f" + parametric {self.method}" if self.parametric
-                                      else ""))
+                f"x{self.scale:g}" + (f" + parametric {self.method} smoothed "
+                                      f"{self.smooth_m:g} m" if self.parametric else ""))
 
 
 @dataclass
