@@ -119,8 +119,8 @@ def test_walls_stay_connected(seed):
 def test_drift_params_rooms_and_parametric_sum():
     assert drift_params("rooms") == RoomDriftParams()
     assert drift_params("rooms", "additive", 0.5) == RoomDriftParams(scale=0.5)
-    both = RoomDriftParams(parametric=True)
-    assert drift_params(both, "ekf").method == "ekf"
+    assert drift_params(RoomDriftParams(), "ekf").method == "ekf"
+    assert drift_params(RoomDriftParams(parametric=False), "ekf").method == "additive"
     with pytest.raises(InputError, match="--drift-method"):
         drift_params("rooms", "rigid")
     with pytest.raises(InputError):
@@ -130,11 +130,30 @@ def test_drift_params_rooms_and_parametric_sum():
     # parametric=True adds the default parametric field, drawn first from the same stream
     data = _three_rooms()
     plan = OccupancyMap(data, resolution=0.1)
-    rp = RoomDriftParams(h_px=2.0)
+    rp = RoomDriftParams(h_px=2.0, parametric=False)
     alone = drift_field(plan, drift_rng(0, 0), rp)
-    summed = drift_field(plan, drift_rng(0, 0), RoomDriftParams(h_px=2.0, parametric=True))
+    summed = drift_field(plan, drift_rng(0, 0), RoomDriftParams(h_px=2.0, parametric=True,
+                                                                smooth_m=0.0))
     assert alone.extra is None and summed.extra is not None
     par = drift_field(plan, drift_rng(0, 0), DriftParams())
     assert np.array_equal(summed.extra.dx, par.field.dx)
+    smooth = drift_field(plan, drift_rng(0, 0), RoomDriftParams(h_px=2.0))   # the default
+    par = drift_field(plan, drift_rng(0, 0), DriftParams(smooth_m=0.2))
+    assert np.array_equal(smooth.extra.dx, par.field.dx)
     out = apply_drift(data, summed)
     assert out.shape == data.shape and not np.array_equal(out, apply_drift(data, alone))
+
+
+@pytest.mark.parametrize("seed", [0, 2])
+def test_default_rooms_drift_keeps_walls_whole_where_the_parametric_tears_them(seed):
+    """The default room-wise drift (rooms + the parametric field smoothed 0.2 m) on a
+    generated plan: wall components stay within 3 of the plan's; the default parametric
+    drift alone breaks the same walls into more than 50 pieces."""
+    p = generate_floorplan(seed, size=(14, 10))
+    plan = OccupancyMap(np.pad(p.data, 40, constant_values=UNKNOWN), p.resolution)
+    before = _wall_parts(plan.data)
+    rooms = drift_field(plan, drift_rng(seed, 0), RoomDriftParams())
+    assert rooms.extra is not None and rooms.stats()["mean"] > 1.0
+    assert _wall_parts(apply_drift(plan.data, rooms)) <= before + 3
+    torn = apply_drift(plan.data, drift_field(plan, drift_rng(seed, 0), DriftParams()))
+    assert _wall_parts(torn) > before + 50

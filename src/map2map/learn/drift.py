@@ -206,7 +206,7 @@ def drift_params(drift: str | DriftParams | RoomDriftParams, method: str | None 
     ...     drift_params("wobble")
     ... except InputError as exc:
     ...     print(exc)
-    --drift: must be one of parametric, none, got 'wobble'
+    --drift: must be one of parametric, rooms, none, got 'wobble'
     """
     if isinstance(drift, RoomDriftParams) or drift == "rooms":
         if method is not None and method not in DRIFT_METHODS:

@@ -105,15 +105,15 @@ class RoomDriftParams:
         none, the default drift's rough field).
     """
 
-    rot_deg: float = 1.0
+    rot_deg: float = 1.5
     lin: float = 0.02
-    spread: float = 0.7
+    spread: float = 0.8
     blend_px: float = 4.0
     h_px: float = 4.0
     scale: float = 1.0
-    parametric: bool = False
+    parametric: bool = True
     method: str = "additive"
-    smooth_m: float = 0.0
+    smooth_m: float = 0.2
 
     def __post_init__(self):
         bad = [n for n in ("rot_deg", "lin", "spread", "scale", "h_px", "smooth_m")
@@ -131,8 +131,8 @@ class RoomDriftParams:
 
         Examples
         --------
-        >>> RoomDriftParams().describe()
-        'rooms: 1 deg + 0.02 dl per step, spread 0.7, blend 4 px, h 4 px, x1'
+        >>> RoomDriftParams().describe()[:58]
+        'rooms: 1.5 deg + 0.02 dl per step, spread 0.8, blend 4 px,'
         """
         return (f"rooms: {self.rot_deg:g} deg + {self.lin:g} dl per step, spread "
                 f"{self.spread:g}, blend {self.blend_px:g} px, h {self.h_px:g} px, "
