@@ -140,6 +140,8 @@ def test_drift_params_rooms_and_parametric_sum():
     smooth = drift_field(plan, drift_rng(0, 0), RoomDriftParams(h_px=2.0))   # the default
     par = drift_field(plan, drift_rng(0, 0), DriftParams(smooth_m=0.2))
     assert np.array_equal(smooth.extra.dx, par.field.dx)
+    zero = drift_field(plan, drift_rng(0, 0), RoomDriftParams(h_px=2.0, scale=0.0))
+    assert np.array_equal(apply_drift(data, zero), data)          # scale 0: both parts off
     out = apply_drift(data, summed)
     assert out.shape == data.shape and not np.array_equal(out, apply_drift(data, alone))
 

@@ -26,6 +26,12 @@ For one plan and one random generator (:func:`drift_field`, settings
 4. optionally smoothed (``smooth_m``), resized (``magnitude_px``, ``resolution_ref``)
    and scaled by ``scale`` (1: the parametric model's own magnitude).
 
+``drift="rooms"`` (:class:`~map2map.learn.room_drift.RoomDriftParams`) draws instead one
+rigid transform per room of the plan, chained along a walk through the doors and blended
+across the walls (:mod:`map2map.learn.room_drift`), plus by default this module's field
+smoothed 0.2 m: the simulated maps' wall error without torn walls (opt-in; docs/learn_ab.md,
+"Room-wise drift").
+
 :func:`apply_drift` then moves the generated map's content at ``p`` to ``p + d(p)`` with
 :func:`map2map.parametric.field.warp_map` (field inversion, nearest sampling, every wall
 pixel splatted so walls stay closed). By default (``coverage="map"``) the generated map
@@ -310,8 +316,8 @@ def drift_field(plan: OccupancyMap, rng: np.random.Generator,
     -------
     DriftField, or RoomDrift for a :class:`~map2map.learn.room_drift.RoomDriftParams`
     (:func:`~map2map.learn.room_drift.room_drift_field` of the plan's pixels; with
-    ``parametric=True`` the default parametric field is drawn first from the same
-    ``rng`` and added)
+    ``parametric=True`` the default parametric field, smoothed ``smooth_m`` and scaled
+    ``scale``, is drawn first from the same ``rng`` and added)
 
     Raises
     ------
@@ -323,7 +329,8 @@ def drift_field(plan: OccupancyMap, rng: np.random.Generator,
         extra = None
         if params.parametric:
             extra = drift_field(plan, rng, DriftParams(method=params.method,
-                                                       smooth_m=params.smooth_m), model,
+                                                       smooth_m=params.smooth_m,
+                                                       scale=params.scale), model,
                                 trajectory=trajectory).field
         rd = room_drift_field(plan.data, rng, params)
         rd.extra = extra

@@ -94,7 +94,8 @@ class RoomDriftParams:
     h_px : float
         Depth [px of a 256 px square] of the distance-transform maxima that seed rooms.
     scale : float
-        Final factor on the drawn rotations and shifts (0: no drift).
+        Final factor on the drawn rotations and shifts, and on the added parametric field
+        (0: no drift).
     parametric : bool
         Also add the default parametric field of :mod:`map2map.learn.drift` (drawn first,
         from the same generator; :func:`map2map.learn.drift.drift_field`).

@@ -28,8 +28,11 @@ CAD->SLAM model (thesis 3.2) draws for the plan from its own generator
 (:func:`~map2map.learn.drift.drift_rng` ``(seed, k)``): a route touring the plan, the
 LIDAR and odometry error fields ``d_L + d_O`` (additive method by default,
 ``drift_method``), as :class:`~map2map.learn.drift.DriftParams` says (``drift_scale``
-replaces its final factor). ``drift="none"``: the network's map as
-rendered (the output before drift existed, bit for bit).
+replaces its final factor). ``drift="rooms"`` (or a
+:class:`~map2map.learn.room_drift.RoomDriftParams`): one rigid transform per room of the
+plan, chained along a walk through its doors and blended across walls, plus the
+parametric field smoothed (:mod:`map2map.learn.room_drift`; opt-in). ``drift="none"``: the
+network's map as rendered (the output before drift existed, bit for bit).
 
 Coverage (:mod:`map2map.learn.coverage`, beyond the thesis): the network maps every room;
 a 7-minute exploration does not. ``coverage="explore"`` lets the simulator's robot explore
@@ -234,9 +237,10 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
         ``"slam"``: walls as a SLAM map draws them, the faces bordering free space with
         the training targets' thickness (:func:`~map2map.learn.slam_render.render_slam`);
         ``"plain"``: the previous output (snap, nearest-neighbour upsampling).
-    drift : {"parametric", "none"} or DriftParams
+    drift : {"parametric", "rooms", "none"}, DriftParams or RoomDriftParams
         Warp each hypothesis along its own parametric drift field (module doc; the
-        default :class:`~map2map.learn.drift.DriftParams`, or the given ones), or not.
+        default :class:`~map2map.learn.drift.DriftParams`, or the given ones), along its
+        own room-wise drift (``"rooms"``, :mod:`map2map.learn.room_drift`), or not.
     drift_method : {"additive", "ekf"}, optional
         Replaces the drift's odometry-to-map conversion (thesis eqs. 3.81-3.90 or
         3.54-3.80).
