@@ -7,6 +7,9 @@ The network runs once; each variant only redraws the drift.
     python3 benchmarks/drift_tune.py --data DS --cache refs_val.npz [--split val]
         [--plans N] [--model pretrained] --variant '{}' '{"scale": 2, "smooth_m": 0.3}' ...
 
+A variant with ``"rooms": true`` is a room-wise drift (:mod:`map2map.learn.room_drift`;
+its other fields are ``RoomDriftParams``'), e.g. ``'{"rooms": true, "rot_deg": 1.5}'``.
+
 Prints, per variant, the seven ratios and the worst, then the generated maps' means.
 """
 
@@ -18,6 +21,8 @@ import sys
 import time
 import warnings
 from pathlib import Path
+
+import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
@@ -41,6 +46,7 @@ def main(argv=None) -> int:
                     help="DriftParams fields as JSON objects ({}: the defaults)")
     args = ap.parse_args(argv)
     from map2map.learn.drift import DriftParams, drift_maps
+    from map2map.learn.room_drift import RoomDriftParams
     from map2map.learn.synthesize import load_ab_model, synthesize_squares
 
     t0 = time.perf_counter()
@@ -59,16 +65,26 @@ def main(argv=None) -> int:
     print(f"{'sim 1 / sim 2 means':<44}" + "".join(f"{r.sim1:>5.2f}/{r.sim2:<5.2f}"
                                                    for r in ref))
 
+    def quantiles(v):
+        v = v[np.isfinite(v)]
+        return " ".join(f"{x:.2f}" for x in np.percentile(v, (10, 50, 90, 99)))
+
+    print(f"{'  wall_err q10/50/90/99: sim 1':<44} {quantiles(st1['wall_err'])}; sim 2 "
+          f"{quantiles(st2['wall_err'])}")
+
     def show(name, maps):
-        rows = realism_table(stats_of(maps, plans), st1, st2, plans)
+        st = stats_of(maps, plans)
+        rows = realism_table(st, st1, st2, plans)
         print(f"{name[:44]:<44}" + "".join(f"{r.ratio:>11.2f}" for r in rows)
               + f"{max(r.ratio for r in rows):>8.2f}")
-        print(f"{'  means':<44}" + "".join(f"{r.generated:>11.3f}" for r in rows), flush=True)
+        print(f"{'  means':<44}" + "".join(f"{r.generated:>11.3f}" for r in rows))
+        print(f"{'  wall_err q10/50/90/99':<44} {quantiles(st['wall_err'])}", flush=True)
 
     show("parametric model (run 2's trajectory)", refs.parametric)
     show("Model_AB, no drift", base)
     for v in args.variant:
-        dp = DriftParams(**json.loads(v))
+        kw = json.loads(v)
+        dp = RoomDriftParams(**kw) if kw.pop("rooms", False) else DriftParams(**kw)
         out, warns = drift_maps(base, plans, refs.resolution, args.seed, dp)
         show(v, out)
         for w in warns:

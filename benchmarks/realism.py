@@ -25,7 +25,8 @@ precision.
 
 ``--drift`` measures each model with and without the parametric drift of
 :mod:`map2map.learn.drift` (default ``parametric``, as ``map2map synthesize``; each square
-at its own metric resolution, :func:`map2map.learn.realism.pair_square_resolution`),
+at its own metric resolution, :func:`map2map.learn.realism.pair_square_resolution`) and
+with the room-wise rigid drift of :mod:`map2map.learn.room_drift` (``rooms``),
 ``--drift-scale`` with each factor on the drift field (for tuning: tune on ``--split
 val``, report on ``test``). ``--diversity K`` adds, per generator, the mean pairwise
 disagreement of ``K`` hypotheses (:func:`map2map.learn.synthesize.synthesize`, test-time
@@ -69,9 +70,10 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0, help="Model_AB's seed (dropout off)")
     ap.add_argument("--render", nargs="+", choices=("slam", "plain"), default=["slam"],
                     help="Model_AB's resolution raising(s) to measure (default slam)")
-    ap.add_argument("--drift", nargs="+", choices=("parametric", "none"),
+    ap.add_argument("--drift", nargs="+", choices=("parametric", "rooms", "none"),
                     default=["parametric"],
-                    help="Model_AB's drift(s) to measure (default parametric)")
+                    help="Model_AB's drift(s) to measure (default parametric; rooms: the "
+                    "room-wise rigid drift of map2map.learn.room_drift)")
     ap.add_argument("--drift-method", choices=("additive", "ekf"), default=None,
                     help="the parametric drift's odometry-to-map conversion (default "
                     "additive)")
@@ -100,7 +102,7 @@ def main(argv=None) -> int:
         from map2map.learn.synthesize import load_ab_model, synthesize_squares
 
         variants = [(how, d, sc, cov, rt) for how in args.render for d in args.drift
-                    for sc in (args.drift_scale if d == "parametric" else [None])
+                    for sc in (args.drift_scale if d != "none" else [None])
                     for cov in args.coverage
                     for rt in (args.drift_route if d == "parametric" else ["tour"])]
         for m in args.model:
@@ -109,8 +111,9 @@ def main(argv=None) -> int:
             for how, d, sc, cov, rt in variants:
                 tags = [how] * (len(args.render) > 1)
                 if len(args.drift) > 1 or len(args.drift_scale) > 1:
+                    kind = "rooms drift" if d == "rooms" else "drift"
                     tags.append("no drift" if d == "none" else
-                                f"drift x{sc:g}" if len(args.drift_scale) > 1 else "drift")
+                                f"{kind} x{sc:g}" if len(args.drift_scale) > 1 else kind)
                 if len(args.coverage) > 1 or cov != "none":
                     tags.append(f"cover {cov}")
                 if len(args.drift_route) > 1 or rt != "tour":
@@ -125,10 +128,11 @@ def main(argv=None) -> int:
                     div[name] = _diversity(net, plans, refs.resolution, args.diversity,
                                            args.seed, how, d, args.drift_method, sc, cov, rt)
                 print(f"{name}: {time.perf_counter() - t1:.0f} s")
-            if "parametric" in args.drift:
-                from map2map.learn.drift import drift_params
+            for d in ("parametric", "rooms"):
+                if d in args.drift:
+                    from map2map.learn.drift import drift_params
 
-                print("drift: " + drift_params("parametric", args.drift_method).describe())
+                    print("drift: " + drift_params(d, args.drift_method).describe())
             print(f"{base}: {net.source} ({net.resolution} px, target walls "
                   f"{net.wall_px:.2f} px, note: {str(net.header.get('note', ''))[:90]})")
     print(f"{len(plans)} held-out '{args.split}' plans of {args.data} "

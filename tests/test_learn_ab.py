@@ -380,6 +380,29 @@ def test_synthesize_drift_none_is_the_previous_output_and_parametric_drifts(tiny
         synthesize(plan, net, drift="rigid")
 
 
+@pytest.mark.filterwarnings("ignore::UserWarning")
+def test_synthesize_rooms_drift_is_seeded_and_leaves_the_other_choices_alone(tiny_run):
+    from map2map.learn.drift import apply_drift, drift_field, drift_rng
+    from map2map.learn.room_drift import RoomDriftParams
+    from map2map.learn.synthesize import load_ab_model, synthesize, synthesize_squares
+
+    net = load_ab_model(tiny_run)
+    net.sample_many = _plan_drawer(net)
+    plan = _plan()
+    none = synthesize(plan, net, samples=2, seed=2, drift="none")
+    rooms = synthesize(plan, net, samples=2, seed=2, drift="rooms")
+    again = synthesize(plan, net, samples=2, seed=2, drift=RoomDriftParams())
+    for k, (a, b, c) in enumerate(zip(rooms.maps, again.maps, none.maps, strict=True)):
+        assert a.data.tobytes() == b.data.tobytes()              # same seed, same bytes
+        want = apply_drift(c.data, drift_field(plan, drift_rng(2, k), RoomDriftParams()))
+        assert np.array_equal(a.data, want)                       # hypothesis k: (seed, k)
+        assert a.meta["synthesize"]["drift"] == "rooms"
+        assert a.meta["synthesize"]["drift_params"]["rot_deg"] == RoomDriftParams().rot_deg
+    plans = _pairs(n=2, size=32, seed=4).a
+    sq = synthesize_squares(net, plans, seed=1, drift="rooms")
+    assert np.array_equal(sq, synthesize_squares(net, plans, seed=1, drift="rooms"))
+
+
 def _plan_drawer(net):
     """A stand-in for ``net.sample_many``: the input plans reduced to the output size,
     the same for every sample."""
@@ -491,6 +514,11 @@ def test_cli_synthesize_writes_maps_summary_and_figure(tiny_run, tmp_path, capsy
                  "--drift-method", "ekf", "--drift-scale", "0.5"]) == 0
     e = json.loads((tmp_path / "e" / "plan_synthesize.json").read_text())
     assert (e["drift_params"]["method"], e["drift_params"]["scale"]) == ("ekf", 0.5)
+    assert main(["synthesize", str(tmp_path / "plan.yaml"), "--out", str(tmp_path / "r"),
+                 "--samples", "1", "--no-figure", "--model", str(tiny_run),
+                 "--drift", "rooms", "--drift-scale", "0.5"]) == 0
+    r = json.loads((tmp_path / "r" / "plan_synthesize.json").read_text())
+    assert r["drift"] == "rooms" and r["drift_params"]["scale"] == 0.5
     assert sorted(p.name for p in (tmp_path / "p").iterdir()) == \
         ["plan_hyp00.png", "plan_hyp01.png", "plan_synthesize.json"]
     err = capsys.readouterr().err

@@ -31,11 +31,14 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="slam (default): walls as a SLAM map draws them, the faces next to "
                    "free space with the training maps' wall thickness, wall interiors "
                    "unknown; plain: the network's output snapped and upsampled (nearest)")
-    p.add_argument("--drift", choices=("parametric", "none"), default="parametric",
+    p.add_argument("--drift", choices=("parametric", "rooms", "none"), default="parametric",
                    help="parametric (default): warp each hypothesis along its own drift "
                    "field of the parametric CAD->SLAM model (thesis 3.2: a route through the "
                    "plan, LIDAR + odometry errors), as a SLAM run bends walls and shifts "
-                   "rooms; none: the network's straight walls")
+                   "rooms; rooms: one rigid transform per room chained along a walk through "
+                   "the doors, blended across walls (the simulated maps' wall error, walls "
+                   "kept whole), plus the parametric field smoothed; none: the network's "
+                   "straight walls")
     p.add_argument("--drift-method", choices=("additive", "ekf"), default="additive",
                    help="the drift's odometry-to-map conversion (additive: thesis eqs. "
                    "3.81-3.90, default; ekf: 3.54-3.80)")

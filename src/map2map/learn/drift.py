@@ -26,6 +26,12 @@ For one plan and one random generator (:func:`drift_field`, settings
 4. optionally smoothed (``smooth_m``), resized (``magnitude_px``, ``resolution_ref``)
    and scaled by ``scale`` (1: the parametric model's own magnitude).
 
+``drift="rooms"`` (:class:`~map2map.learn.room_drift.RoomDriftParams`) draws instead one
+rigid transform per room of the plan, chained along a walk through the doors and blended
+across the walls (:mod:`map2map.learn.room_drift`), plus by default this module's field
+smoothed 0.2 m: the simulated maps' wall error without torn walls (opt-in; docs/learn_ab.md,
+"Room-wise drift").
+
 :func:`apply_drift` then moves the generated map's content at ``p`` to ``p + d(p)`` with
 :func:`map2map.parametric.field.warp_map` (field inversion, nearest sampling, every wall
 pixel splatted so walls stay closed). By default (``coverage="map"``) the generated map
@@ -68,13 +74,15 @@ from ..parametric.field import DisplacementField, warp_map
 from ..parametric.params import ParametricParams
 from ..parametric.pipeline import METHODS, deform, make_trajectory
 from ..trajectory.timing import Trajectory
+from .room_drift import RoomDrift, RoomDriftParams, apply_room_drift, room_drift_field
 
 __all__ = ["DRIFTS", "DRIFT_METHODS", "COVERAGES", "DEFAULT_FOV_DEG", "TUNED_ON_VAL",
            "DEFAULT_SQUARE_RESOLUTION", "DriftParams", "DriftField", "drift_params",
            "drift_rng", "drift_field", "apply_drift", "drift_maps"]
 
-#: ``drift`` choices of :func:`map2map.learn.synthesize.synthesize`.
-DRIFTS = ("parametric", "none")
+#: ``drift`` choices of :func:`map2map.learn.synthesize.synthesize` (``"rooms"``: the
+#: room-wise rigid drift of :mod:`map2map.learn.room_drift`).
+DRIFTS = ("parametric", "rooms", "none")
 #: The parametric model's odometry-to-map conversions (``drift_method``).
 DRIFT_METHODS = METHODS
 #: What a drifted map shows (:func:`apply_drift`).
@@ -184,10 +192,13 @@ TUNED_ON_VAL = DriftParams(scale=1.75, duration=420.0, smooth_m=0.2, coverage="r
                            margin_px=2)
 
 
-def drift_params(drift: str | DriftParams, method: str | None = None,
-                 scale: float | None = None) -> DriftParams | None:
-    """``drift`` (``"parametric"``: the default :class:`DriftParams`, ``"none"``: None, or
-    a :class:`DriftParams`) with ``method`` and ``scale`` replaced where given.
+def drift_params(drift: str | DriftParams | RoomDriftParams, method: str | None = None,
+                 scale: float | None = None) -> DriftParams | RoomDriftParams | None:
+    """``drift`` (``"parametric"``: the default :class:`DriftParams`, ``"rooms"``: the
+    default :class:`~map2map.learn.room_drift.RoomDriftParams`, ``"none"``: None, or
+    either dataclass) with ``method`` and ``scale`` replaced where given (the room-wise
+    drift has no odometry conversion: ``method`` is checked and otherwise ignored there;
+    with ``RoomDriftParams(parametric=True)`` it goes to the added parametric field).
 
     Examples
     --------
@@ -195,12 +206,21 @@ def drift_params(drift: str | DriftParams, method: str | None = None,
     'ekf'
     >>> drift_params("none") is None
     True
+    >>> drift_params("rooms", "additive", 2.0).scale
+    2.0
     >>> try:
     ...     drift_params("wobble")
     ... except InputError as exc:
     ...     print(exc)
-    --drift: must be one of parametric, none, got 'wobble'
+    --drift: must be one of parametric, rooms, none, got 'wobble'
     """
+    if isinstance(drift, RoomDriftParams) or drift == "rooms":
+        if method is not None and method not in DRIFT_METHODS:
+            DriftParams(method=method)                   # the error names the choice
+        p = drift if isinstance(drift, RoomDriftParams) else RoomDriftParams()
+        if method is not None and p.parametric:
+            p = replace(p, method=method)
+        return p if scale is None else replace(p, scale=float(scale))
     if isinstance(drift, DriftParams):
         p = drift
     elif drift == "parametric":
@@ -294,7 +314,10 @@ def drift_field(plan: OccupancyMap, rng: np.random.Generator,
 
     Returns
     -------
-    DriftField
+    DriftField, or RoomDrift for a :class:`~map2map.learn.room_drift.RoomDriftParams`
+    (:func:`~map2map.learn.room_drift.room_drift_field` of the plan's pixels; with
+    ``parametric=True`` the default parametric field, smoothed ``smooth_m`` and scaled
+    ``scale``, is drawn first from the same ``rng`` and added)
 
     Raises
     ------
@@ -302,6 +325,16 @@ def drift_field(plan: OccupancyMap, rng: np.random.Generator,
         A plan the robot cannot drive (no free space wider than the robot, nodes not
         connected).
     """
+    if isinstance(params, RoomDriftParams):
+        extra = None
+        if params.parametric:
+            extra = drift_field(plan, rng, DriftParams(method=params.method,
+                                                       smooth_m=params.smooth_m,
+                                                       scale=params.scale), model,
+                                trajectory=trajectory).field
+        rd = room_drift_field(plan.data, rng, params)
+        rd.extra = extra
+        return rd
     dp = params or DriftParams()
     p = model or ParametricParams(fov_deg=DEFAULT_FOV_DEG)
     if trajectory is None:
@@ -330,7 +363,7 @@ def drift_field(plan: OccupancyMap, rng: np.random.Generator,
     return DriftField(f, res.observed, traj, dp, res.drawn)
 
 
-def apply_drift(m: np.ndarray, drift: DriftField) -> np.ndarray:
+def apply_drift(m: np.ndarray, drift: DriftField | RoomDrift) -> np.ndarray:
     """Map ``m`` (plan frame, same shape as the drift's plan) warped along the drift:
     content at ``p`` moves to ``p + d(p)`` (:func:`map2map.parametric.field.warp_map`);
     ``m``'s own unknown cells stay unknown, and with ``coverage="route"`` so do the cells
@@ -340,12 +373,16 @@ def apply_drift(m: np.ndarray, drift: DriftField) -> np.ndarray:
     ----------
     m : (H, W) uint8
         Ternary map (occupied 0, unknown 127, free 255).
-    drift : DriftField
+    drift : DriftField or RoomDrift
+        (a RoomDrift: :func:`~map2map.learn.room_drift.apply_room_drift`, plus its
+        ``extra`` parametric field)
 
     Returns
     -------
     (H, W) uint8
     """
+    if isinstance(drift, RoomDrift):
+        return apply_room_drift(m, drift, drift.extra)
     m = np.asarray(m, np.uint8)
     if m.shape != drift.field.shape:
         raise ValueError(f"map {m.shape} and drift field {drift.field.shape} differ in shape")

@@ -28,8 +28,11 @@ CAD->SLAM model (thesis 3.2) draws for the plan from its own generator
 (:func:`~map2map.learn.drift.drift_rng` ``(seed, k)``): a route touring the plan, the
 LIDAR and odometry error fields ``d_L + d_O`` (additive method by default,
 ``drift_method``), as :class:`~map2map.learn.drift.DriftParams` says (``drift_scale``
-replaces its final factor). ``drift="none"``: the network's map as
-rendered (the output before drift existed, bit for bit).
+replaces its final factor). ``drift="rooms"`` (or a
+:class:`~map2map.learn.room_drift.RoomDriftParams`): one rigid transform per room of the
+plan, chained along a walk through its doors and blended across walls, plus the
+parametric field smoothed (:mod:`map2map.learn.room_drift`; opt-in). ``drift="none"``: the
+network's map as rendered (the output before drift existed, bit for bit).
 
 Coverage (:mod:`map2map.learn.coverage`, beyond the thesis): the network maps every room;
 a 7-minute exploration does not. ``coverage="explore"`` lets the simulator's robot explore
@@ -84,6 +87,7 @@ from .drift import (
 )
 from .networks import from_unit
 from .progressive import StochasticUNet
+from .room_drift import RoomDriftParams
 from .slam_render import DEFAULT_WALL_PX, RENDERS, snap
 
 __all__ = ["ABModel", "SynthesisResult", "load_ab_model", "pretrained_ab_path",
@@ -233,9 +237,10 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
         ``"slam"``: walls as a SLAM map draws them, the faces bordering free space with
         the training targets' thickness (:func:`~map2map.learn.slam_render.render_slam`);
         ``"plain"``: the previous output (snap, nearest-neighbour upsampling).
-    drift : {"parametric", "none"} or DriftParams
+    drift : {"parametric", "rooms", "none"}, DriftParams or RoomDriftParams
         Warp each hypothesis along its own parametric drift field (module doc; the
-        default :class:`~map2map.learn.drift.DriftParams`, or the given ones), or not.
+        default :class:`~map2map.learn.drift.DriftParams`, or the given ones), along its
+        own room-wise drift (``"rooms"``, :mod:`map2map.learn.room_drift`), or not.
     drift_method : {"additive", "ekf"}, optional
         Replaces the drift's odometry-to-map conversion (thesis eqs. 3.81-3.90 or
         3.54-3.80).
@@ -326,7 +331,7 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     for m in maps:
         m.meta["synthesize"] = {"model": net.source, "seed": seed, "samples": samples,
                                 "render": render, "wall_px": round(wall_px, 3),
-                                "drift": "none" if dp is None else "parametric"}
+                                "drift": _drift_name(dp)}
         if dp is not None:
             m.meta["synthesize"]["drift_params"] = asdict(dp)
     for k, st in drifted.items():
@@ -338,6 +343,12 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
             if k in explored:
                 m.meta["synthesize"]["exploration"] = explored[k]
     return SynthesisResult(maps, div, pw, warns, net.source)
+
+
+def _drift_name(dp) -> str:
+    """``meta["synthesize"]["drift"]`` of drift settings ``dp``."""
+    return "none" if dp is None else "rooms" if isinstance(dp, RoomDriftParams) else \
+        "parametric"
 
 
 def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndarray, *,

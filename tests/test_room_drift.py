@@ -1,0 +1,161 @@
+"""Room-wise rigid drift (map2map.learn.room_drift): rooms from the plan, seeded draws,
+nearly rigid inside rooms, walls not torn, wired into drift_params / drift_field /
+apply_drift. No torch needed."""
+
+import numpy as np
+import pytest
+from scipy import ndimage
+
+from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from map2map.errors import InputError
+from map2map.learn.drift import DriftParams, apply_drift, drift_field, drift_params, drift_rng
+from map2map.learn.room_drift import (
+    RoomDriftParams,
+    apply_room_drift,
+    room_adjacency,
+    room_drift_field,
+    segment_rooms,
+)
+from map2map.maps.floorplan import generate_floorplan
+
+
+def _three_rooms() -> np.ndarray:
+    """Three rooms in a row joined by doors, 40 x 100 px."""
+    p = np.full((44, 104), UNKNOWN, np.uint8)
+    p[2:42, 2:102] = FREE
+    p[2, 2:102] = p[41, 2:102] = OCCUPIED
+    p[2:42, 2] = p[2:42, 101] = OCCUPIED
+    for c in (35, 68):
+        p[2:42, c] = OCCUPIED
+        p[18:26, c] = FREE
+    return p
+
+
+def _wall_parts(m: np.ndarray) -> int:
+    return ndimage.label(m == OCCUPIED, structure=np.ones((3, 3)))[1]
+
+
+def test_segment_rooms_and_doors():
+    p = _three_rooms()
+    lab = segment_rooms(p, h_px=2.0)
+    assert lab.max() == 3 and (lab > 0).all()              # walls and outside filled
+    r = [int(lab[20, c]) for c in (15, 50, 85)]
+    assert len(set(r)) == 3
+    doors = room_adjacency(lab, p == FREE)
+    a, b, c = r
+    assert set(doors) == {tuple(sorted((a, b))), tuple(sorted((b, c)))}   # a-c not adjacent
+    x, y = doors[tuple(sorted((a, b)))]
+    assert abs(x - 35) < 2 and abs(y - 21.5) < 2          # at the door
+    assert segment_rooms(np.full((5, 5), UNKNOWN, np.uint8)).max() == 0
+
+
+def test_seeded_same_bytes_and_other_seed_differs():
+    plan = generate_floorplan(1, size=(12, 9))
+    rp = RoomDriftParams()
+    a = room_drift_field(plan.data, np.random.default_rng(5), rp)
+    b = room_drift_field(plan.data, np.random.default_rng(5), rp)
+    c = room_drift_field(plan.data, np.random.default_rng(6), rp)
+    assert np.array_equal(a.field.dx, b.field.dx) and np.array_equal(a.field.dy, b.field.dy)
+    assert not np.array_equal(a.field.dx, c.field.dx)
+    out_a, out_b = apply_room_drift(plan.data, a), apply_room_drift(plan.data, b)
+    assert out_a.tobytes() == out_b.tobytes()
+    assert not np.array_equal(out_a, apply_room_drift(plan.data, c))
+    # through the drift module's entry points, per hypothesis stream
+    d1 = drift_field(plan, drift_rng(2, 0), rp)
+    d2 = drift_field(plan, drift_rng(2, 0), rp)
+    assert apply_drift(plan.data, d1).tobytes() == apply_drift(plan.data, d2).tobytes()
+
+
+def test_field_is_rigid_inside_rooms_and_scales():
+    p = _three_rooms()
+    rp = RoomDriftParams(rot_deg=0.5, lin=0.01, spread=0.0, blend_px=2.0, h_px=2.0)
+    rd = room_drift_field(p, np.random.default_rng(0), rp)
+    assert rd.amplitude == pytest.approx(1.0)
+    start = rd.order[0]
+    inner = ndimage.binary_erosion(rd.rooms == start, iterations=8)
+    assert inner.any()
+    assert np.abs(rd.field.dx[inner]).max() < 1e-3 and np.abs(rd.field.dy[inner]).max() < 1e-3
+    for r in rd.order[1:]:                        # other rooms: one rigid transform each
+        inner = ndimage.binary_erosion(rd.rooms == r, iterations=8)
+        A = rd.transforms[r - 1]
+        yy, xx = np.nonzero(inner)
+        dx = A[0, 0] * xx + A[0, 1] * yy + A[0, 2] - xx
+        assert np.allclose(rd.field.dx[inner], dx, atol=1e-3)
+        assert np.linalg.det(A[:, :2]) == pytest.approx(1.0)   # a rotation: no stretch
+    # scale 0: no drift, the map itself; the field grows with the scale
+    zero = room_drift_field(p, np.random.default_rng(0), RoomDriftParams(scale=0.0, h_px=2.0))
+    assert np.abs(zero.field.magnitude).max() < 1e-4
+    assert np.array_equal(apply_room_drift(p, zero), p)
+    one = room_drift_field(p, np.random.default_rng(0), RoomDriftParams(h_px=2.0, spread=0.0))
+    two = room_drift_field(p, np.random.default_rng(0), RoomDriftParams(h_px=2.0, spread=0.0,
+                                                                       scale=2.0))
+    assert two.stats()["mean"] > 1.5 * one.stats()["mean"] > 0
+    # the spread makes a heavy tail across maps: some draws far above the median
+    plan = generate_floorplan(0, size=(12, 9)).data
+    means = [room_drift_field(plan, np.random.default_rng(s), RoomDriftParams(spread=0.7))
+             .stats()["mean"] for s in range(12)]
+    assert max(means) > 2.5 * np.median(means)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_walls_stay_connected(seed):
+    """A generated plan's walls under the room-wise drift: at most a few more wall
+    components (the parametric field scaled to the same size breaks them into >100)."""
+    plan = np.pad(generate_floorplan(seed, size=(14, 10)).data, 60,
+                  constant_values=UNKNOWN)                   # room to move: nothing leaves
+    before = _wall_parts(plan)
+    rd = room_drift_field(plan, np.random.default_rng(seed),
+                          RoomDriftParams(rot_deg=2.0, lin=0.03))
+    assert rd.stats()["mean"] > 2.0                          # it does move the rooms
+    out = apply_room_drift(plan, rd)
+    assert _wall_parts(out) <= before + 4
+    assert set(np.unique(out).tolist()) <= {OCCUPIED, UNKNOWN, FREE}
+    # no fold: the field's slope stays below 1 px/px, and wall pixels are kept (splatted)
+    slope = max(np.abs(g).max() for g in np.gradient(rd.field.dx) + np.gradient(rd.field.dy))
+    assert slope < 0.5
+    assert np.count_nonzero(out == OCCUPIED) >= 0.95 * np.count_nonzero(plan == OCCUPIED)
+
+
+def test_drift_params_rooms_and_parametric_sum():
+    assert drift_params("rooms") == RoomDriftParams()
+    assert drift_params("rooms", "additive", 0.5) == RoomDriftParams(scale=0.5)
+    assert drift_params(RoomDriftParams(), "ekf").method == "ekf"
+    assert drift_params(RoomDriftParams(parametric=False), "ekf").method == "additive"
+    with pytest.raises(InputError, match="--drift-method"):
+        drift_params("rooms", "rigid")
+    with pytest.raises(InputError):
+        RoomDriftParams(blend_px=0.0)
+    with pytest.raises(InputError, match="--drift"):
+        drift_params("wobble")
+    # parametric=True adds the default parametric field, drawn first from the same stream
+    data = _three_rooms()
+    plan = OccupancyMap(data, resolution=0.1)
+    rp = RoomDriftParams(h_px=2.0, parametric=False)
+    alone = drift_field(plan, drift_rng(0, 0), rp)
+    summed = drift_field(plan, drift_rng(0, 0), RoomDriftParams(h_px=2.0, parametric=True,
+                                                                smooth_m=0.0))
+    assert alone.extra is None and summed.extra is not None
+    par = drift_field(plan, drift_rng(0, 0), DriftParams())
+    assert np.array_equal(summed.extra.dx, par.field.dx)
+    smooth = drift_field(plan, drift_rng(0, 0), RoomDriftParams(h_px=2.0))   # the default
+    par = drift_field(plan, drift_rng(0, 0), DriftParams(smooth_m=0.2))
+    assert np.array_equal(smooth.extra.dx, par.field.dx)
+    zero = drift_field(plan, drift_rng(0, 0), RoomDriftParams(h_px=2.0, scale=0.0))
+    assert np.array_equal(apply_drift(data, zero), data)          # scale 0: both parts off
+    out = apply_drift(data, summed)
+    assert out.shape == data.shape and not np.array_equal(out, apply_drift(data, alone))
+
+
+@pytest.mark.parametrize("seed", [0, 2])
+def test_default_rooms_drift_keeps_walls_whole_where_the_parametric_tears_them(seed):
+    """The default room-wise drift (rooms + the parametric field smoothed 0.2 m) on a
+    generated plan: wall components stay within 3 of the plan's; the default parametric
+    drift alone breaks the same walls into more than 50 pieces."""
+    p = generate_floorplan(seed, size=(14, 10))
+    plan = OccupancyMap(np.pad(p.data, 40, constant_values=UNKNOWN), p.resolution)
+    before = _wall_parts(plan.data)
+    rooms = drift_field(plan, drift_rng(seed, 0), RoomDriftParams())
+    assert rooms.extra is not None and rooms.stats()["mean"] > 1.0
+    assert _wall_parts(apply_drift(plan.data, rooms)) <= before + 3
+    torn = apply_drift(plan.data, drift_field(plan, drift_rng(seed, 0), DriftParams()))
+    assert _wall_parts(torn) > before + 50
