@@ -127,3 +127,33 @@ def test_drawn_pieces_cut_at_gaps():
     assert len(cut) == 1 and _off_walls(cut, diag) == []
     assert _off_walls(got, occ) == []
     assert drawn_pieces(segs, np.zeros_like(occ)).shape == (0, 4)
+
+
+def test_network_band_behind_an_input_wall_does_not_double_it():
+    """The demo's doubled outer walls: the input sees the outer walls from inside only;
+    the network draws them as bands two cells thick lying beyond them (the plans' outer
+    walls are thick). The band's centre line is farther than ``ANCHOR_NEW`` from the
+    input's wall, so it was drawn as a second wall with a gap between the two; its band
+    reaches the input's wall: it is that wall's body, drawn with it as one wall."""
+    n = 128
+    g = np.full((n, n), UNKNOWN, np.uint8)
+    g[32:96, 32:96] = FREE
+    g[30:32, 30:98] = g[96:98, 30:98] = OCCUPIED
+    g[30:98, 30:32] = g[30:98, 96:98] = OCCUPIED
+    low = np.full((32, 32), UNKNOWN, np.float32)  # cells of 4 px
+    low[8:24, 8:24] = FREE
+    low[5:7, 5:27] = low[25:27, 5:27] = OCCUPIED
+    low[5:27, 5:7] = low[5:27, 25:27] = OCCUPIED
+    out, segs = postprocess(low, (n, n), g, wall_px=4)
+    wall = list(range(22, 32)) + list(range(96, 106))   # one run across each wall, no gap
+    assert np.flatnonzero(out[:, 64] == OCCUPIED).tolist() == wall
+    assert np.flatnonzero(out[64] == OCCUPIED).tolist() == wall
+    # and one centre line across each wall in the DXF
+    h = segs[(segs[:, 1] == segs[:, 3]) & (np.minimum(segs[:, 0], segs[:, 2]) <= 64)
+             & (np.maximum(segs[:, 0], segs[:, 2]) >= 64)]
+    v = segs[(segs[:, 0] == segs[:, 2]) & (np.minimum(segs[:, 1], segs[:, 3]) <= 64)
+             & (np.maximum(segs[:, 1], segs[:, 3]) >= 64)]
+    assert len(h) == 2 and len(v) == 2
+    assert _off_walls(segs, out == OCCUPIED) == []
+
+

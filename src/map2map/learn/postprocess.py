@@ -41,7 +41,12 @@ needs 8x (or more) upsampling, and plain upsampling gives grey, blurred walls.
    wall recall rises), never into space the input saw free. The network decides what
    the input does not show: its straight walls lying farther than ``ANCHOR_NEW`` (4
    dataset pixels) from any input wall over 70 % of their length are added (walls the
-   robot never saw). Input wall pixels that no straight wall explains (corners, short
+   robot never saw); one whose band (the network draws walls several model cells thick)
+   comes within ``ANCHOR_NEW`` of an input wall seen from one side is that wall's body
+   behind its face (the plans' thick outer walls) and is drawn with it as one wall,
+   from the face to the band's far side (:func:`_join_backing`; drawn apart, the two
+   were the demo's doubled outer walls, issue #14). Input wall pixels that no straight
+   wall explains (corners, short
    pieces) are kept where the network has a wall within a model cell (elsewhere they
    are clutter: furniture, people); those a straight wall replaces take the value of
    their nearest non-wall pixel. Free and unknown space come from the input, except
@@ -497,6 +502,64 @@ def thicken_two_sided(first: np.ndarray, last: np.ndarray, width: int) -> tuple[
     return first - grow, last + grow
 
 
+def _axis_aligned(segs: np.ndarray) -> np.ndarray:
+    """Which segments (x0, y0, x1, y1) are horizontal or vertical (those step 4b uses)."""
+    s = np.asarray(segs, float).reshape(-1, 4)
+    return (s[:, 1] == s[:, 3]) != (s[:, 0] == s[:, 2])
+
+
+def _join_backing(walls: np.ndarray, faces: np.ndarray, backing: np.ndarray,
+                  reach: float) -> list[tuple[int, int]]:
+    """Walls of the network that back an input wall seen from one side, joined to it
+    (in place): each ``backing`` wall's box is stretched across to the nearest observed
+    face in front of it (same orientation, within ``reach`` of the backing wall's box
+    middle, the two side by side along at least half of the shorter), so that face and band
+    are drawn as one wall, not as two with a gap between them.
+
+    ``walls`` (K, 6): horiz, r0, r1, lo, hi, stop_at_free; ``faces`` (K, 2) the observed
+    faces (-1: none) of the same walls. Returns the pairs (backing wall, face wall)
+    joined."""
+    pairs = []
+    one = (faces[:, 0] >= 0) != (faces[:, 1] >= 0)          # seen from one side only
+    face = np.where(faces[:, 0] >= 0, faces[:, 0], faces[:, 1])
+    behind = np.where(faces[:, 0] >= 0, 1, -1)             # where its body lies
+    for k in np.flatnonzero(backing & ~(faces >= 0).any(axis=1)):
+        h, r0, r1, lo, hi = walls[k, :5]
+        c = (r0 + r1) / 2.0
+        dist = behind * (c - face)                          # backing wall behind the face
+        overlap = np.minimum(walls[:, 4], hi) - np.maximum(walls[:, 3], lo)
+        ok = one & ~backing & (walls[:, 0] == h) & (dist > 0) & (dist <= reach) \
+            & (overlap >= 0.5 * np.minimum(hi - lo, walls[:, 4] - walls[:, 3]))
+        if ok.any():
+            j = np.flatnonzero(ok)[np.argmin(dist[ok])]
+            if behind[j] > 0:
+                walls[k, 1] = min(r0, face[j])
+            else:
+                walls[k, 2] = max(r1, face[j])
+            pairs.append((int(k), int(j)))
+    return pairs
+
+
+def _cut_runs(runs: np.ndarray, pairs: list[tuple[int, int]], walls: np.ndarray) -> np.ndarray:
+    """Runs (k, j0, j1) of :func:`_drawn_runs` without the stretches of a face wall that a
+    backing wall joined to it covers along (its centre line there is the joined wall's:
+    one wall, one line)."""
+    runs = [tuple(r) for r in runs]
+    for k, j in pairs:
+        lo, hi = walls[k, 3], walls[k, 4]
+        out = []
+        for r in runs:
+            if r[0] != j or r[2] < lo or r[1] > hi:
+                out.append(r)
+                continue
+            if r[1] < lo - 1:
+                out.append((j, r[1], lo - 1))
+            if r[2] > hi + 1:
+                out.append((j, hi + 1, r[2]))
+        runs = out
+    return np.array(runs, np.int64).reshape(-1, 3)
+
+
 def _observed_faces(guide: np.ndarray, segs: np.ndarray, band: float, min_cover: float,
                     tilt: bool) -> tuple[np.ndarray, ...]:
     """The guide's observed faces of each axis-aligned segment, before any rule moves
@@ -530,7 +593,8 @@ def _observed_faces(guide: np.ndarray, segs: np.ndarray, band: float, min_cover:
 def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px: float,
                    min_cover: float = 0.3, align: float = 0.0, grow: int = 0,
                    tilt: bool = True, collinear: float = 0.0,
-                   min_thick: int = 0) -> tuple[np.ndarray, np.ndarray]:
+                   min_thick: int = 0, backing: np.ndarray | None = None,
+                   reach: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """Walls of axis-aligned segments placed on the guide's observed surfaces (step 4b).
 
     For each segment, the guide's (input map's) wall surfaces facing free space within
@@ -568,6 +632,11 @@ def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px:
     grown to it (:func:`thicken_two_sided`). Their defaults (0) are the walls before
     2026-11-25's "Moving drifted walls"; :func:`postprocess` passes
     ``ANCHOR_COLLINEAR`` and ``ANCHOR_MIN_THICK``.
+
+    ``backing`` (bool per segment) marks the network's walls that back an input wall:
+    each is drawn from the nearest face seen from one side in front of it (within
+    ``reach`` pixels of its middle) to its own far side, as one wall with it
+    (:func:`_join_backing`), and that face's wall has no centre line of its own there.
 
     Returns
     -------
@@ -627,6 +696,8 @@ def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px:
             r1, ext = r0 + t - 1, True
         boxes.append((horiz_k, r0, r1, lo_k, hi_k, ext))
     walls = np.array(boxes, np.int64).reshape(-1, 6)
+    joined = _join_backing(walls, f, np.asarray(backing, bool)[_axis_aligned(segs)], reach) \
+        if backing is not None and len(walls) else []
     mask = np.zeros((H, W), bool)  # painting is an OR: order is free
     args = (walls[:, 0].astype(bool), walls[:, 1], walls[:, 2], walls[:, 3], walls[:, 4],
             walls[:, 5].astype(bool), np.asarray(slope, float))
@@ -634,6 +705,8 @@ def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px:
     # the centre lines where each wall was drawn: a wall that stops at free space is cut
     # there, one that was drawn nowhere (a network wall across a room seen empty) has none
     runs, across = _drawn_runs(free, *args)
+    if joined:
+        runs = _cut_runs(runs, joined, walls)
     k, j0, j1 = runs[:, 0], runs[:, 1].astype(float), runs[:, 2].astype(float)
     across = across[k]
     mid = (walls[k, 3] + walls[k, 4]) / 2.0
@@ -778,6 +851,7 @@ def _anchored(output_segs: np.ndarray, guide: np.ndarray, wall_px: float, data_p
     occ = guide == OCCUPIED
     own = straight_segments(occ, ANCHOR_CELL * data_px)
     segs = own
+    backing = None
     if len(output_segs):
         d = cv2.distanceTransform((~occ).astype(np.uint8), cv2.DIST_L2, 5) if occ.any() \
             else np.full(occ.shape, np.inf)
@@ -787,14 +861,28 @@ def _anchored(output_segs: np.ndarray, guide: np.ndarray, wall_px: float, data_p
                      0, occ.shape[0] - 1)
         xs = np.clip(np.round(o[:, 0, None] + t * (o[:, 2, None] - o[:, 0, None])).astype(int),
                      0, occ.shape[1] - 1)
-        new = o[np.mean(d[ys, xs] > ANCHOR_NEW * data_px, axis=1) > 0.7]
+        far = np.mean(d[ys, xs] > ANCHOR_NEW * data_px, axis=1) > 0.7
+        apart = far
+        if net_walls is not None and net_walls.any():
+            # the network draws a wall as a band several model cells thick: measured
+            # from the band's edge, not from its centre line (half its thickness away),
+            # a network wall over an input wall is that wall, not a second one beside it
+            # (drawn apart, the two are the doubled walls of issue #14); where the input
+            # saw the wall from one side only, the band shows how far its body reaches
+            # behind the face (the plans' outer walls are thicker than the rest)
+            half = cv2.distanceTransform(net_walls.astype(np.uint8), cv2.DIST_L2, 5)
+            apart = np.mean(d[ys, xs] - half[ys, xs] > ANCHOR_NEW * data_px, axis=1) > 0.7
+        new = o[far]
         if len(new):
             segs = np.concatenate([own, new])
+            backing = np.concatenate([np.zeros(len(own), bool), ~apart[far]])
     mask, centres = anchored_walls(guide, segs, band=ANCHOR_BAND * data_px, wall_px=wall_px,
                                    align=ANCHOR_ALIGN * data_px,
                                    grow=int(round(ANCHOR_GROW * data_px)),
                                    collinear=ANCHOR_COLLINEAR * data_px,
-                                   min_thick=int(round(ANCHOR_MIN_THICK * data_px)))
+                                   min_thick=int(round(ANCHOR_MIN_THICK * data_px)),
+                                   backing=backing, reach=max(1, int(round(wall_px)))
+                                   + (ANCHOR_BAND + ANCHOR_NEW) * data_px)
     # the input's walls: replaced by their nearest non-wall value where a straight wall
     # explains them, kept where none does (corners, short pieces, what Hough missed).
     # (Free within 2 px, else unknown, was measured worse: 48 vs 56 of 104 improved --
