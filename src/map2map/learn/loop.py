@@ -168,6 +168,16 @@ def gan_step(g_run, dd_run, dr_run, opt_g, opt_d, x: torch.Tensor, y: torch.Tens
     return {"loss_G": loss_g, "loss_D": loss_d, **g_terms, **d_terms}
 
 
+def _host_sums(dev_sums: dict, n: float) -> dict:
+    """An epoch's running loss sums, kept on the device, as host floats (one
+    synchronisation); ``_n`` counts the pairs summed."""
+    keys = sorted(dev_sums)
+    vals = torch.stack([dev_sums[k] for k in keys]).tolist() if keys else []
+    out = dict(zip(keys, vals, strict=True))
+    out["_n"] = n
+    return out
+
+
 def write_log_csv(history: list[dict], path: Path) -> None:
     """``log.csv``: one row per epoch, the losses first, the other columns sorted."""
     if not history:
@@ -495,7 +505,7 @@ class GANRun:
             done = sum(self.batches_in(e) for e in range(epoch)) + self.start_batch
             bar = tqdm(total=total, initial=min(total, done), desc=self.desc, unit="batch",
                        dynamic_ncols=True)
-        images, t_start = 0, time.perf_counter()
+        images, t_start, t_shown = 0, time.perf_counter(), -1.0
         interrupted = False
         # Ctrl-C stops at the end of the batch in progress, so the checkpoint is consistent
         # (a second Ctrl-C stops at once, without a checkpoint)
@@ -517,8 +527,12 @@ class GANRun:
                 B, nb = plan.batch, plan.batches
                 per_rank = max(1, B // dist.world)
                 rng_state = gen.get_state()
-                perm = torch.randperm(self.n, generator=gen)
-                shifts = torch.randint(1, max(2, B), (nb,), generator=gen)
+                perm = torch.randperm(self.n, generator=gen).to(self.dev)
+                shifts = torch.randint(1, max(2, B), (nb,), generator=gen).tolist()
+                # a resumed epoch's sums continue on the device (same additions, same order)
+                dev_sums = {k: torch.tensor(v, dtype=torch.float64, device=self.dev)
+                            for k, v in sums.items() if k != "_n"}
+                n_sum = sums.get("_n", 0.0)
                 f = lr_factor(epoch, cfg)
                 for o in (self.opt_g, self.opt_d):
                     for grp in o.param_groups:
@@ -530,23 +544,30 @@ class GANRun:
                     if dist.world > 1:
                         idx = idx[dist.rank * per_rank:(dist.rank + 1) * per_rank]
                     x, y = plan.data.batch(idx)
-                    vals = self.step(epoch, b, idx, x, y, int(shifts[b]))
+                    vals = self.step(epoch, b, idx, x, y, shifts[b])
                     k = len(idx)
+                    # summed on the device in float64 (as float(v) * k on the host would,
+                    # bit for bit): no host-device synchronisation per batch
                     for key, v in vals.items():
-                        sums[key] = sums.get(key, 0.0) + float(v.detach()) * k
-                    sums["_n"] = sums.get("_n", 0.0) + k
+                        term = v.detach().double() * k
+                        dev_sums[key] = dev_sums[key] + term if key in dev_sums else term
+                    n_sum += k
                     images += k * dist.world
                     b += 1
                     if bar is not None:
                         el = time.perf_counter() - t_start
-                        bar.set_postfix_str(f"epoch {epoch + 1}/{cfg.epochs} "
-                                            f"{self.postfix(epoch, b - 1)}"
-                                            f"{images / max(el, 1e-9):.0f} img/s "
-                                            f"G {float(vals['loss_G'].detach()):.3f} "
-                                            f"D {float(vals['loss_D'].detach()):.3f}")
+                        if el - t_shown >= 0.5 or b == nb:  # losses read twice a second
+                            t_shown = el
+                            bar.set_postfix_str(f"epoch {epoch + 1}/{cfg.epochs} "
+                                                f"{self.postfix(epoch, b - 1)}"
+                                                f"{images / max(el, 1e-9):.0f} img/s "
+                                                f"G {float(vals['loss_G'].detach()):.3f} "
+                                                f"D {float(vals['loss_D'].detach()):.3f}")
                         bar.update(1)
                     if stop["flag"]:
+                        sums = _host_sums(dev_sums, n_sum)
                         raise KeyboardInterrupt
+                sums = _host_sums(dev_sums, n_sum)
                 row = {"epoch": epoch + 1, "lr": cfg.lr * f, **plan.log}
                 row.update(dist.mean({k: v / sums["_n"] for k, v in sums.items() if k != "_n"}))
                 row["img_per_s"] = images / max(time.perf_counter() - t_start, 1e-9)
