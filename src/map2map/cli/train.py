@@ -46,6 +46,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="no false-target augmentation for D_d")
     b.add_argument("--no-amp", action="store_true", help="fp32 on CUDA (no bf16 autocast)")
     b.add_argument("--compile", action="store_true", help="torch.compile the generator")
+    b.add_argument("--save-every", type=int, default=1, metavar="N",
+                   help="checkpoint, sample grid and logs every N epochs (default 1; also "
+                   "after the last and on Ctrl-C)")
     b.add_argument("--quiet", action="store_true", help="no progress bar")
     b.set_defaults(func=run)
     register_ab(tsub)
@@ -94,6 +97,9 @@ def register_ab(tsub) -> None:
                    help="no false-target augmentation for D_d")
     b.add_argument("--no-amp", action="store_true", help="fp32 on CUDA (no bf16 autocast)")
     b.add_argument("--compile", action="store_true", help="torch.compile the generator")
+    b.add_argument("--save-every", type=int, default=1, metavar="N",
+                   help="checkpoint, sample grid and logs every N epochs (default 1; also "
+                   "after the last and on Ctrl-C)")
     b.add_argument("--quiet", action="store_true", help="no progress bar")
     b.set_defaults(func=run_ab)
 
@@ -106,7 +112,7 @@ def run_ab(args: argparse.Namespace) -> int:
         from ..learn.train_ab import train_ab
     except ImportError as exc:
         raise InputError("train", f"needs PyTorch: pip install 'map2map[learn]' ({exc})") from None
-    for name in ("epochs", "batch", "fade_batches"):
+    for name in ("epochs", "batch", "fade_batches", "save_every"):
         v = getattr(args, name)
         if v is not None and v < (0 if name == "fade_batches" else 1):
             raise InputError(f"--{name.replace('_', '-')}", f"must be positive, got {v}")
@@ -118,7 +124,8 @@ def run_ab(args: argparse.Namespace) -> int:
             seed=args.seed, lambda_l1=args.lambda_l1, g_channels=args.g_channels,
             g_max_channels=args.g_max_channels, d_channels=args.d_channels,
             d_layers=args.d_layers, false_targets=not args.no_false_targets,
-            amp=not args.no_amp, compile=args.compile, growth=args.growth)
+            amp=not args.no_amp, compile=args.compile, growth=args.growth,
+            save_every=args.save_every)
     except ValueError as exc:
         raise InputError("--schedule", str(exc)) from None
     res = train_ab(args.data, args.out, cfg, resume=args.resume,
@@ -143,7 +150,7 @@ def run(args: argparse.Namespace) -> int:
         from ..learn.train import train_ba
     except ImportError as exc:
         raise InputError("train", f"needs PyTorch: pip install 'map2map[learn]' ({exc})") from None
-    for name in ("epochs", "batch"):
+    for name in ("epochs", "batch", "save_every"):
         v = getattr(args, name)
         if v is not None and v < 1:
             raise InputError(f"--{name}", f"must be >= 1, got {v}")
@@ -155,6 +162,7 @@ def run(args: argparse.Namespace) -> int:
         g_max_channels=args.g_max_channels, d_channels=args.d_channels, d_layers=args.d_layers,
         input_reduce=args.input_reduce,
         false_targets=not args.no_false_targets, amp=not args.no_amp, compile=args.compile,
+        save_every=args.save_every,
     )
     res = train_ba(args.data, args.out, cfg, resume=args.resume,
                    epochs=args.epochs if args.resume else None, progress=not args.quiet)

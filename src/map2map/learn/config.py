@@ -77,6 +77,10 @@ class TrainConfig:
         ``torch.compile`` the generator (not the spectral-normalised discriminators).
     samples : int
         Validation pairs shown in each epoch's sample grid.
+    save_every : int
+        Checkpoint, sample grid and logs every this many epochs (and after the last, and
+        on Ctrl-C). 1 (default): every epoch; a GPU run whose epochs take a fraction of a
+        second would otherwise spend more time writing checkpoints than training.
     input_reduce : {"area", "classes"}
         How the input (SLAM map) is brought to ``size``: ``"area"`` averages grey values
         (a one-pixel wall becomes a faint line), ``"classes"`` reduces per class as the
@@ -106,6 +110,7 @@ class TrainConfig:
     amp: bool = True
     compile: bool = False
     samples: int = 6
+    save_every: int = 1
     input_reduce: str = "area"
 
     @property

@@ -576,9 +576,11 @@ class GANRun:
                 epoch += 1
                 start_batch, sums = 0, {}
                 rng_state = gen.get_state()
+                if epoch % max(1, cfg.save_every) and epoch < cfg.epochs:
+                    continue  # --save-every: not a saving epoch
                 self.checkpoint(epoch, 0, rng_state, {})
                 if dist.main:
-                    every = max(1, cfg.epochs // 50)
+                    every = max(1, cfg.epochs // 50, cfg.save_every)
                     self._write_logs(self.figures and (epoch % every == 0
                                                        or epoch == cfg.epochs))
                     if self.figures:
