@@ -82,15 +82,24 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--growth", choices=("full", "decoder"), default="full")
     ap.add_argument("--threads", type=int, help="torch CPU threads (default: torch's)")
+    ap.add_argument("--batch", type=int, help="one batch size for every stage (default: "
+                    "Table 5.1's)")
+    ap.add_argument("--only", type=int, help="time this stage resolution alone")
+    ap.add_argument("--g-channels", type=int, help="generator width (default ABConfig's)")
+    ap.add_argument("--g-max-channels", type=int, help="generator cap (default ABConfig's)")
     args = ap.parse_args(argv)
     if args.threads:
         torch.set_num_threads(args.threads)
     dev = torch.device(args.device)
-    cfg = ABConfig(device=args.device, growth=args.growth)
+    widths = {k: v for k, v in (("g_channels", args.g_channels),
+                                ("g_max_channels", args.g_max_channels)) if v}
+    cfg = ABConfig(device=args.device, growth=args.growth, batch=args.batch, **widths)
     if args.quick:
         cfg = ABConfig(device=args.device, g_channels=8, g_max_channels=32, d_channels=8,
                        growth=args.growth)
     stages = cfg.schedule[:2] if args.quick else cfg.schedule
+    if args.only:
+        stages = [st for st in cfg.schedule if st[0] == args.only]
     steps = 2 if args.quick else args.steps
     print(f"device {dev}, {torch.get_num_threads()} threads, growth {cfg.growth}; "
           f"G {cfg.g_channels}-"

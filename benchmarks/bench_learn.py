@@ -13,6 +13,14 @@
 
 ``--data`` takes the simulated SLAM maps (``B``) of a ``map2map dataset build`` folder
 instead of generated boxes (the maps ``autocorrect`` is for).
+
+``--steps-at SIZE:BATCH,...`` measures instead the training step alone (the full eq. 3.2
+step of :func:`map2map.learn.loop.gan_step`, default widths, bf16 + channels_last on
+CUDA) on random ternary maps resident on the device, for each resolution and batch,
+over ``--seconds`` after warm-up; ``--compile`` also times a ``torch.compile``d generator.
+Issue #14's target: Model_32 >= 10,000 img/s on one H100.
+
+    python3 benchmarks/bench_learn.py --steps-at 32:32,32:256,64:16 --device cuda
 """
 
 from __future__ import annotations
@@ -60,11 +68,23 @@ def main(argv=None) -> int:
     ap.add_argument("--data", help="a 'map2map dataset build' folder: its SLAM maps")
     ap.add_argument("--inference-only", action="store_true", help="skip the training rates")
     ap.add_argument("--repeat", type=int, default=1, help="timed inference rounds")
+    ap.add_argument("--steps-at", help="SIZE:BATCH,... : time training steps only")
+    ap.add_argument("--seconds", type=float, default=3.0, help="timed seconds per --steps-at")
+    ap.add_argument("--compile", action="store_true", help="--steps-at: also compiled G")
     args = ap.parse_args(argv)
     if args.threads:
         torch.set_num_threads(args.threads)
     print(f"device {args.device}, {torch.get_num_threads()} threads (CPU figures are from "
           "whatever else the machine runs)")
+    if args.steps_at:
+        for item in args.steps_at.split(","):
+            size, batch = (int(v) for v in item.split(":"))
+            for comp in (False, True) if args.compile else (False,):
+                ips, n = _step_rate(size, batch, args.device, args.seconds, comp)
+                print(f"training step, Model_{size} default widths, batch {batch}"
+                      f"{', compiled G' if comp else ''}: {ips:.0f} img/s ({n} steps)",
+                      flush=True)
+        return 0
     if not args.inference_only:
         _training(args)
     _inference(args)
@@ -94,6 +114,51 @@ def _training(args) -> None:
             res = train_ba(pairs, Path(d) / "run", cfg, progress=False, figures=False)
         print(f"training {name}, batch {cfg.batch_size}: "
               f"{res.history[-1]['img_per_s']:.0f} img/s")
+
+
+def _step_rate(size: int, batch: int, device: str, seconds: float, compiled: bool
+               ) -> tuple[float, int]:
+    """Images/s of the eq. 3.2 training step at ``size`` and ``batch`` (module doc)."""
+    from map2map.learn.loop import gan_step
+    from map2map.learn.train import build_networks
+
+    cfg = TrainConfig(size=size, batch=batch, device=device)
+    dev = torch.device(device)
+    amp = dev.type == "cuda" and cfg.amp
+    g, dd, dr = build_networks(cfg)
+    for n in (g, dd, dr):
+        n.to(dev)
+        if amp:
+            n.to(memory_format=torch.channels_last)
+    opt_g = torch.optim.Adam(g.parameters(), lr=cfg.lr, betas=(cfg.beta1, cfg.beta2))
+    opt_d = torch.optim.Adam(list(dd.parameters()) + list(dr.parameters()), lr=cfg.lr,
+                             betas=(cfg.beta1, cfg.beta2))
+    gen = torch.Generator().manual_seed(0)
+    x, y = ((torch.randint(0, 3, (batch, 1, size, size), generator=gen).float() - 1).to(dev)
+            for _ in range(2))
+    if amp:
+        x, y = (t.contiguous(memory_format=torch.channels_last) for t in (x, y))
+    autocast = torch.autocast("cuda", dtype=torch.bfloat16, enabled=amp) if amp \
+        else torch.autocast("cpu", enabled=False)
+    g_run = torch.compile(g) if compiled else g
+
+    def sync():
+        if dev.type == "cuda":
+            torch.cuda.synchronize()
+
+    for _ in range(3 if not compiled else 5):
+        gan_step(g_run, dd, dr, opt_g, opt_d, x, y, None, cfg, 1, autocast, (dd, dr))
+    sync()
+    n, t0 = 0, time.perf_counter()
+    while True:
+        for _ in range(5):
+            gan_step(g_run, dd, dr, opt_g, opt_d, x, y, None, cfg, 1 + n % max(1, batch - 1),
+                     autocast, (dd, dr))
+        n += 5
+        sync()
+        el = time.perf_counter() - t0
+        if el >= seconds:
+            return n * batch / el, n
 
 
 def _timed(fn) -> tuple[float, float]:
