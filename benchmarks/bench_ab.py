@@ -84,6 +84,7 @@ def main(argv=None) -> int:
     ap.add_argument("--threads", type=int, help="torch CPU threads (default: torch's)")
     ap.add_argument("--batch", type=int, help="one batch size for every stage (default: "
                     "Table 5.1's)")
+    ap.add_argument("--batch-rate", type=float, default=1.0, help="Table 5.1 multiplier (1)")
     ap.add_argument("--only", type=int, help="time this stage resolution alone")
     ap.add_argument("--g-channels", type=int, help="generator width (default ABConfig's)")
     ap.add_argument("--g-max-channels", type=int, help="generator cap (default ABConfig's)")
@@ -91,9 +92,11 @@ def main(argv=None) -> int:
     if args.threads:
         torch.set_num_threads(args.threads)
     dev = torch.device(args.device)
+    torch.backends.cudnn.benchmark = dev.type == "cuda"  # as the trainer does
     widths = {k: v for k, v in (("g_channels", args.g_channels),
                                 ("g_max_channels", args.g_max_channels)) if v}
-    cfg = ABConfig(device=args.device, growth=args.growth, batch=args.batch, **widths)
+    cfg = ABConfig(device=args.device, growth=args.growth, batch=args.batch,
+                   batch_rate=args.batch_rate, **widths)
     if args.quick:
         cfg = ABConfig(device=args.device, g_channels=8, g_max_channels=32, d_channels=8,
                        growth=args.growth)

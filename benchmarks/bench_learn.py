@@ -124,6 +124,7 @@ def _step_rate(size: int, batch: int, device: str, seconds: float, compiled: boo
 
     cfg = TrainConfig(size=size, batch=batch, device=device)
     dev = torch.device(device)
+    torch.backends.cudnn.benchmark = dev.type == "cuda"  # as the trainer does
     amp = dev.type == "cuda" and cfg.amp
     g, dd, dr = build_networks(cfg)
     for n in (g, dd, dr):

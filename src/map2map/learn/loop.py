@@ -367,6 +367,8 @@ class GANRun:
         self.dev = self.dist.device
         self.cuda = self.dev.type == "cuda"
         self.amp = self.cuda and self.cfg.amp
+        if self.cuda:  # fixed shapes per stage: let cuDNN pick the fastest convolutions
+            torch.backends.cudnn.benchmark = True
         self.g, self.dd, self.dr = nets
         self.n = len(start.train)
         cfg = self.cfg

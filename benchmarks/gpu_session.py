@@ -1,0 +1,174 @@
+"""The one GPU call of a session: the throughput figures of issues #14/#15 and the
+thesis-scale training runs, fitted into a fixed device-time budget.
+
+A lent GPU comes with minutes, not hours, so everything runs in one prepared call and
+each part is capped by a wall-clock budget:
+
+1. the eq. 3.2 training-step rate of Model_BA (``bench_learn.py --steps-at``) at Table
+   5.1's batch and larger ones, and of Model_prog per stage (``bench_ab.py``) at Table
+   5.1's batches and at ``--ab-batch-rate``;
+2. ``map2map train ba`` on ``--data`` (64 px, default widths, batch ``--ba-batch``) for as
+   many epochs (at most the thesis's 534) as the measured rate fits into ``--ba-seconds``;
+3. ``map2map train ab`` (growth full, G 16-128 channels: <= 10 MB in fp16) with Table
+   5.2's four stages, each given a share of ``--ab-seconds`` and as many epochs as its
+   measured rate fits;
+4. inference maps/s at 256 px on the GPU (``bench_learn.py --inference-only``);
+5. the run folders (without the optimiser checkpoints) packed as ``ba.tar`` / ``ab.tar``.
+
+Every training run is stopped by SIGINT at its budget plus a margin (the trainer then
+writes its checkpoint), so a slower machine gives fewer epochs, never a lost call.
+
+    python3 benchmarks/gpu_session.py --data packed.npz --out OUTDIR [--device cuda]
+        [--ba-seconds 150] [--ab-seconds 200] [--quick]
+
+``--quick``: tiny budgets and networks, for checking the script on a CPU.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import subprocess
+import sys
+import tarfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+THESIS_BA_EPOCHS = 534  # the epoch the thesis chose for Model_BA
+AB_SHARES = {32: 0.1, 64: 0.15, 128: 0.25, 256: 0.5}  # of --ab-seconds per stage
+
+
+def _run(cmd: list[str], limit: float, log, signal: str = "TERM") -> tuple[int, str]:
+    """Run ``cmd`` under ``timeout`` (``signal`` at ``limit`` s), echo and return output."""
+    full = ["timeout", "-s", signal, "-k", "30", str(int(limit))] + cmd
+    print("$ " + " ".join(cmd), file=log, flush=True)
+    t0 = time.perf_counter()
+    p = subprocess.run(full, capture_output=True, text=True, cwd=ROOT)
+    out = p.stdout + p.stderr
+    print(out[-6000:], file=log, flush=True)
+    print(f"[rc {p.returncode}, {time.perf_counter() - t0:.0f} s]", file=log, flush=True)
+    return p.returncode, out
+
+
+def _rates(text: str, pattern: str) -> dict:
+    return {tuple(int(g) for g in m.groups()[:-1]): float(m.groups()[-1])
+            for m in re.finditer(pattern, text, re.M)}
+
+
+def _train_pairs(data: Path) -> int:
+    meta = json.loads(str(np.load(data)["meta"]))
+    return int(meta["splits"]["train"])
+
+
+def _pack(run: Path, dest: Path) -> None:
+    """The run folder without its optimiser checkpoint, with the last 4 sample grids."""
+    if not run.is_dir():
+        return
+    grids = sorted((run / "samples").glob("*.png"))[-4:]
+    with tarfile.open(dest, "w") as tar:
+        for f in sorted(run.iterdir()):
+            if f.is_file() and f.name != "last.safetensors":
+                tar.add(f, arcname=f"{run.name}/{f.name}")
+        for f in grids:
+            tar.add(f, arcname=f"{run.name}/samples/{f.name}")
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--data", required=True, type=Path, help="packed.npz")
+    ap.add_argument("--out", required=True, type=Path)
+    ap.add_argument("--device", default="cuda")
+    ap.add_argument("--ba-seconds", type=float, default=150.0)
+    ap.add_argument("--ab-seconds", type=float, default=200.0)
+    ap.add_argument("--ba-batch", type=int, default=64)
+    ap.add_argument("--ab-batch-rate", type=float, default=4.0)
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--skip", default="", help="comma list of parts to skip: "
+                    "bench,ba,ab,infer")
+    args = ap.parse_args(argv)
+    args.out.mkdir(parents=True, exist_ok=True)
+    skip = set(filter(None, args.skip.split(",")))
+    py = sys.executable
+    log = open(args.out / "log.txt", "a")
+    t_all = time.perf_counter()
+    n_train = _train_pairs(args.data)
+    print(f"train pairs {n_train}; device {args.device}", file=log, flush=True)
+    _run([py, "-c", "import torch; print(torch.__version__, torch.cuda.is_available() and "
+          "torch.cuda.get_device_name())"], 60, log)
+    res = {"n_train": n_train}
+
+    # 1. training-step rates
+    ba_rates, ab_rates = {}, {}
+    if "bench" not in skip:
+        at = "32:32,32:256,32:1024,64:16,64:64,64:256" if not args.quick else "32:8,64:8"
+        _, txt = _run([py, "benchmarks/bench_learn.py", "--device", args.device, "--steps-at",
+                       at, "--seconds", "2" if not args.quick else "0.5"], 150, log)
+        ba_rates = _rates(txt, r"Model_(\d+) default widths, batch (\d+): (\d+) img/s")
+        q = ["--quick"] if args.quick else []
+        _, txt = _run([py, "benchmarks/bench_ab.py", "--device", args.device, "--steps", "8",
+                       *q], 120, log)
+        for rate in (args.ab_batch_rate,):
+            _, t2 = _run([py, "benchmarks/bench_ab.py", "--device", args.device, "--steps", "8",
+                          "--batch-rate", str(rate), "--g-channels", "16",
+                          "--g-max-channels", "128", *q], 120, log)
+            ab_rates = _rates(t2, r"^\s*(\d+)\s+(\d+)\s+\d+\s+([\d.]+)")
+        ab_rates = {k[0]: v for k, v in ab_rates.items()}
+        if not args.quick:
+            _run([py, "benchmarks/bench_ab.py", "--device", args.device, "--steps", "8",
+                  "--only", "256", "--batch", "64"], 90, log)
+    res["ba_rates"] = {f"{k[0]}:{k[1]}": v for k, v in ba_rates.items()}
+    res["ab_rates"] = ab_rates
+    print(json.dumps(res), file=log, flush=True)
+
+    # 2. Model_BA at 64 px
+    if "ba" not in skip:
+        rate = ba_rates.get((64, args.ba_batch)) or ba_rates.get((64, 64)) or 2000.0
+        epochs = int(max(2, min(THESIS_BA_EPOCHS, 0.8 * args.ba_seconds * rate / n_train)))
+        every = max(1, epochs // 20)
+        cmd = [py, "-m", "map2map", "train", "ba", "--data", str(args.data), "--out",
+               str(args.out / "ba_run"), "--epochs", str(epochs), "--batch", str(args.ba_batch),
+               "--device", args.device, "--seed", "0", "--save-every", str(every), "--quiet"]
+        if args.quick:
+            cmd += ["--g-channels", "8", "--g-max-channels", "16", "--d-channels", "8"]
+        res["ba_cmd"] = " ".join(cmd[1:])
+        rc, _ = _run(cmd, args.ba_seconds * 1.25 + 30, log, signal="INT")
+        res["ba_rc"] = rc
+        _pack(args.out / "ba_run", args.out / "ba.tar")
+
+    # 3. Model_AB, Table 5.2's stages fitted into the budget
+    if "ab" not in skip:
+        sched = []
+        for r, share in AB_SHARES.items():
+            rate = ab_rates.get(r) or {32: 4000, 64: 2000, 128: 800, 256: 200}[r]
+            sched.append(f"{r}:{max(1, int(0.75 * share * args.ab_seconds * rate / n_train))}")
+        if args.quick:
+            sched = sched[:2]
+        total = sum(int(s.split(":")[1]) for s in sched)
+        cmd = [py, "-m", "map2map", "train", "ab", "--data", str(args.data), "--out",
+               str(args.out / "ab_run"), "--schedule", ",".join(sched), "--batch-rate",
+               str(args.ab_batch_rate), "--g-channels", "16", "--g-max-channels", "128",
+               "--device", args.device, "--seed", "0", "--save-every",
+               str(max(1, total // 20)), "--quiet"]
+        if args.quick:
+            cmd += ["--d-channels", "8", "--g-max-channels", "32"]
+        res["ab_cmd"] = " ".join(cmd[1:])
+        rc, _ = _run(cmd, args.ab_seconds * 1.25 + 30, log, signal="INT")
+        res["ab_rc"] = rc
+        _pack(args.out / "ab_run", args.out / "ab.tar")
+
+    # 4. inference at 256 px
+    if "infer" not in skip:
+        _run([py, "benchmarks/bench_learn.py", "--device", args.device, "--inference-only",
+              "--maps", "64" if args.quick else "512", "--repeat", "2"], 120, log)
+    res["seconds"] = time.perf_counter() - t_all
+    (args.out / "result.json").write_text(json.dumps(res, indent=1))
+    print(json.dumps(res), file=log, flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
