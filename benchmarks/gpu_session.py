@@ -19,7 +19,7 @@ Every training run is stopped by SIGINT at its budget plus a margin (the trainer
 writes its checkpoint), so a slower machine gives fewer epochs, never a lost call.
 
     python3 benchmarks/gpu_session.py --data packed.npz --out OUTDIR [--device cuda]
-        [--ba-seconds 150] [--ab-seconds 200] [--quick]
+        [--ba-seconds 150] [--ab-seconds 200] [--deadline 560] [--quick]
 
 ``--quick``: tiny budgets and networks, for checking the script on a CPU.
 """
@@ -86,6 +86,8 @@ def main(argv=None) -> int:
     ap.add_argument("--ab-seconds", type=float, default=200.0)
     ap.add_argument("--ba-batch", type=int, default=64)
     ap.add_argument("--ab-batch-rate", type=float, default=4.0)
+    ap.add_argument("--deadline", type=float, default=560.0,
+                    help="seconds for the whole script: the training budgets shrink to fit")
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--skip", default="", help="comma list of parts to skip: "
                     "bench,ba,ab,infer")
@@ -106,28 +108,30 @@ def main(argv=None) -> int:
     if "bench" not in skip:
         at = "32:32,32:256,32:1024,64:16,64:64,64:256" if not args.quick else "32:8,64:8"
         _, txt = _run([py, "benchmarks/bench_learn.py", "--device", args.device, "--steps-at",
-                       at, "--seconds", "2" if not args.quick else "0.5"], 150, log)
+                       at, "--seconds", "2" if not args.quick else "0.5"], 100, log)
         ba_rates = _rates(txt, r"Model_(\d+) default widths, batch (\d+): (\d+) img/s")
         q = ["--quick"] if args.quick else []
-        _, txt = _run([py, "benchmarks/bench_ab.py", "--device", args.device, "--steps", "8",
-                       *q], 120, log)
+        _, txt = _run([py, "benchmarks/bench_ab.py", "--device", args.device, "--steps", "6",
+                       *q], 90, log)
         for rate in (args.ab_batch_rate,):
-            _, t2 = _run([py, "benchmarks/bench_ab.py", "--device", args.device, "--steps", "8",
+            _, t2 = _run([py, "benchmarks/bench_ab.py", "--device", args.device, "--steps", "6",
                           "--batch-rate", str(rate), "--g-channels", "16",
-                          "--g-max-channels", "128", *q], 120, log)
+                          "--g-max-channels", "128", *q], 90, log)
             ab_rates = _rates(t2, r"^\s*(\d+)\s+(\d+)\s+\d+\s+([\d.]+)")
         ab_rates = {k[0]: v for k, v in ab_rates.items()}
-        if not args.quick:
-            _run([py, "benchmarks/bench_ab.py", "--device", args.device, "--steps", "8",
-                  "--only", "256", "--batch", "64"], 90, log)
     res["ba_rates"] = {f"{k[0]}:{k[1]}": v for k, v in ba_rates.items()}
     res["ab_rates"] = ab_rates
     print(json.dumps(res), file=log, flush=True)
 
+    def left(reserve: float) -> float:
+        return args.deadline - (time.perf_counter() - t_all) - reserve
+
     # 2. Model_BA at 64 px
     if "ba" not in skip:
+        budget = max(10.0, min(args.ba_seconds, left(min(args.ab_seconds, 120) + 90)))
+        res["ba_budget_s"] = budget
         rate = ba_rates.get((64, args.ba_batch)) or ba_rates.get((64, 64)) or 2000.0
-        epochs = int(max(2, min(THESIS_BA_EPOCHS, 0.8 * args.ba_seconds * rate / n_train)))
+        epochs = int(max(2, min(THESIS_BA_EPOCHS, 0.8 * budget * rate / n_train)))
         every = max(1, epochs // 20)
         cmd = [py, "-m", "map2map", "train", "ba", "--data", str(args.data), "--out",
                str(args.out / "ba_run"), "--epochs", str(epochs), "--batch", str(args.ba_batch),
@@ -135,16 +139,18 @@ def main(argv=None) -> int:
         if args.quick:
             cmd += ["--g-channels", "8", "--g-max-channels", "16", "--d-channels", "8"]
         res["ba_cmd"] = " ".join(cmd[1:])
-        rc, _ = _run(cmd, args.ba_seconds * 1.25 + 30, log, signal="INT")
+        rc, _ = _run(cmd, budget * 1.15 + 25, log, signal="INT")
         res["ba_rc"] = rc
         _pack(args.out / "ba_run", args.out / "ba.tar")
 
     # 3. Model_AB, Table 5.2's stages fitted into the budget
     if "ab" not in skip:
+        budget = max(10.0, min(args.ab_seconds, left(75)))
+        res["ab_budget_s"] = budget
         sched = []
         for r, share in AB_SHARES.items():
             rate = ab_rates.get(r) or {32: 4000, 64: 2000, 128: 800, 256: 200}[r]
-            sched.append(f"{r}:{max(1, int(0.75 * share * args.ab_seconds * rate / n_train))}")
+            sched.append(f"{r}:{max(1, int(0.75 * share * budget * rate / n_train))}")
         if args.quick:
             sched = sched[:2]
         total = sum(int(s.split(":")[1]) for s in sched)
@@ -156,14 +162,14 @@ def main(argv=None) -> int:
         if args.quick:
             cmd += ["--d-channels", "8", "--g-max-channels", "32"]
         res["ab_cmd"] = " ".join(cmd[1:])
-        rc, _ = _run(cmd, args.ab_seconds * 1.25 + 30, log, signal="INT")
+        rc, _ = _run(cmd, budget * 1.15 + 25, log, signal="INT")
         res["ab_rc"] = rc
         _pack(args.out / "ab_run", args.out / "ab.tar")
 
     # 4. inference at 256 px
     if "infer" not in skip:
         _run([py, "benchmarks/bench_learn.py", "--device", args.device, "--inference-only",
-              "--maps", "64" if args.quick else "512", "--repeat", "2"], 120, log)
+              "--maps", "64" if args.quick else "512", "--repeat", "2"], 60, log)
     res["seconds"] = time.perf_counter() - t_all
     (args.out / "result.json").write_text(json.dumps(res, indent=1))
     print(json.dumps(res), file=log, flush=True)
