@@ -39,6 +39,11 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 THESIS_BA_EPOCHS = 534  # the epoch the thesis chose for Model_BA
+# `map2map train` alone: the full CLI also registers the map commands, which import
+# shapely/ezdxf, absent on the GPU machine
+CLI_TRAIN = ("import argparse, sys; from map2map.cli import train as t; "
+             "p = argparse.ArgumentParser(); t.register(p.add_subparsers()); "
+             "a = p.parse_args(sys.argv[1:]); sys.exit(a.func(a))")
 AB_SHARES = {32: 0.1, 64: 0.15, 128: 0.25, 256: 0.5}  # of --ab-seconds per stage
 
 
@@ -130,10 +135,12 @@ def main(argv=None) -> int:
     if "ba" not in skip:
         budget = max(10.0, min(args.ba_seconds, left(min(args.ab_seconds, 120) + 90)))
         res["ba_budget_s"] = budget
-        rate = ba_rates.get((64, args.ba_batch)) or ba_rates.get((64, 64)) or 2000.0
+        # without --skip bench the measured rate; else H200 figures measured 2026-11-26
+        rate = ba_rates.get((64, args.ba_batch)) or {16: 233.0, 64: 1017.0, 256: 3129.0}.get(
+            args.ba_batch, 1000.0)
         epochs = int(max(2, min(THESIS_BA_EPOCHS, 0.8 * budget * rate / n_train)))
         every = max(1, epochs // 20)
-        cmd = [py, "-m", "map2map", "train", "ba", "--data", str(args.data), "--out",
+        cmd = [py, "-c", CLI_TRAIN, "train", "ba", "--data", str(args.data), "--out",
                str(args.out / "ba_run"), "--epochs", str(epochs), "--batch", str(args.ba_batch),
                "--device", args.device, "--seed", "0", "--save-every", str(every), "--quiet"]
         if args.quick:
@@ -149,12 +156,12 @@ def main(argv=None) -> int:
         res["ab_budget_s"] = budget
         sched = []
         for r, share in AB_SHARES.items():
-            rate = ab_rates.get(r) or {32: 4000, 64: 2000, 128: 800, 256: 200}[r]
+            rate = ab_rates.get(r) or {32: 3195, 64: 1131, 128: 557, 256: 158}[r]
             sched.append(f"{r}:{max(1, int(0.75 * share * budget * rate / n_train))}")
         if args.quick:
             sched = sched[:2]
         total = sum(int(s.split(":")[1]) for s in sched)
-        cmd = [py, "-m", "map2map", "train", "ab", "--data", str(args.data), "--out",
+        cmd = [py, "-c", CLI_TRAIN, "train", "ab", "--data", str(args.data), "--out",
                str(args.out / "ab_run"), "--schedule", ",".join(sched), "--batch-rate",
                str(args.ab_batch_rate), "--g-channels", "16", "--g-max-channels", "128",
                "--device", args.device, "--seed", "0", "--save-every",

@@ -462,14 +462,25 @@ def test_generator_fade_in_blends_resolutions():
     assert torch.allclose(g(x, alpha=torch.tensor(1.0)), g(x))
 
 
-def test_autocorrect_warns_about_provisional_weights():
-    """The shipped weights say PROVISIONAL in their note: every correction says so."""
+def test_autocorrect_warns_with_what_the_weights_measured():
+    """The shipped weights warn on every correction that they were trained on simulated
+    maps (and what real maps measured); weights whose note says PROVISIONAL say so; a
+    user's own run warns about neither."""
     net = load_model("pretrained")
-    assert "PROVISIONAL" in net.header["note"]
     m = OccupancyMap(_pairs().b[0], 0.05)
-    with pytest.warns(UserWarning, match="provisional"):
+    with pytest.warns(UserWarning, match="simulated SLAM maps only"):
         (res,) = autocorrect_many([m], net)
-    assert any("provisional" in w for w in res.warnings)
+    assert any("Halmstad" in w for w in res.warnings)
+    import dataclasses
+
+    prov = dataclasses.replace(net, header={**net.header, "note": "PROVISIONAL: test"},
+                               source="elsewhere.safetensors")
+    with pytest.warns(UserWarning, match="provisional"):
+        (res,) = autocorrect_many([m], prov)
+    own = dataclasses.replace(net, header={**net.header, "note": ""},
+                              source="elsewhere.safetensors")
+    (res,) = autocorrect_many([m], own)
+    assert not any("trained on simulated" in w or "provisional" in w for w in res.warnings)
 
 
 def test_exporters_write_fp16_with_header_and_refuse_the_other_model(tmp_path):

@@ -344,7 +344,7 @@ def _known_errors(plan: OccupancyMap, seed: int) -> tuple[OccupancyMap, np.ndarr
 def stage_autocorrect(ctx: DemoContext) -> None:
     """Auto-correct the simulated rbpf SLAM map into a CAD-like plan with Model_BA.
 
-    Uses the shipped (provisional) weights; writes ``autocorrect/cad.yaml`` (+ ``.pgm``),
+    Uses the shipped weights; writes ``autocorrect/cad.yaml`` (+ ``.pgm``),
     ``autocorrect/walls.dxf`` (the walls as line segments) and
     ``autocorrect/before_after.png``. Skipped, saying so, when PyTorch is not installed
     (``pip install -e '.[learn]'``) or no SLAM map was made.
@@ -378,12 +378,12 @@ def stage_autocorrect(ctx: DemoContext) -> None:
         res.map,
         out / "before_after.png",
         res.map.meta["autocorrect"]["segments_px"],
-        title="Model_BA (provisional weights): rbpf SLAM map -> CAD-like plan",
+        title="Model_BA (shipped weights): rbpf SLAM map -> CAD-like plan",
     )
     ctx.wrote("auto-correct before/after figure", out / "before_after.png")
     ctx.say(
-        f"autocorrect: rbpf SLAM map -> CAD-like plan with Model_BA (provisional CPU-trained "
-        f"weights): {len(res.segments)} wall segments"
+        f"autocorrect: rbpf SLAM map -> CAD-like plan with Model_BA (shipped weights, "
+        f"trained on simulated maps): {len(res.segments)} wall segments"
     )
     for w in res.warnings:
         ctx.say(f"autocorrect: warning: {w}")
