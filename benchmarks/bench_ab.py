@@ -28,6 +28,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
 import torch  # noqa: E402
 
+from map2map.learn.loop import place_networks, step_autocast  # noqa: E402
 from map2map.learn.progressive import ABConfig, build_ab_networks  # noqa: E402
 from map2map.learn.train_ab import gan_step  # noqa: E402
 
@@ -36,13 +37,7 @@ def stage_speed(cfg: ABConfig, r: int, dev: torch.device, steps: int, warm: int 
     """Images/s of ``steps`` training steps at stage ``r`` (fading in)."""
     g, dd, dr = build_ab_networks(cfg)
     amp = dev.type == "cuda" and cfg.amp
-    for n in (g, dd, dr):
-        n.to(dev)
-        if amp:
-            n.to(memory_format=torch.channels_last)
-    opt_g = torch.optim.Adam(g.parameters(), lr=cfg.lr, betas=(cfg.beta1, cfg.beta2))
-    opt_d = torch.optim.Adam(list(dd.parameters()) + list(dr.parameters()), lr=cfg.lr,
-                             betas=(cfg.beta1, cfg.beta2))
+    opt_g, opt_d = place_networks((g, dd, dr), dev, amp, cfg)
     B = cfg.stage_batch(r)
     gen = torch.Generator().manual_seed(0)
     x = (torch.randint(0, 3, (B, 1, r, r), generator=gen).float() - 1).to(dev)
@@ -57,8 +52,7 @@ def stage_speed(cfg: ABConfig, r: int, dev: torch.device, steps: int, warm: int 
         if gi is not None:
             gi = gi.contiguous(memory_format=torch.channels_last)
     alpha = torch.tensor(0.5, device=dev) if r > cfg.min_size else None
-    autocast = torch.autocast("cuda", dtype=torch.bfloat16, enabled=amp) if dev.type == "cuda" \
-        else torch.autocast("cpu", enabled=False)
+    autocast = step_autocast(dev, amp)
 
     def run(n):
         for _ in range(n):

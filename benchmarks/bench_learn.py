@@ -119,7 +119,7 @@ def _training(args) -> None:
 def _step_rate(size: int, batch: int, device: str, seconds: float, compiled: bool
                ) -> tuple[float, int]:
     """Images/s of the eq. 3.2 training step at ``size`` and ``batch`` (module doc)."""
-    from map2map.learn.loop import gan_step
+    from map2map.learn.loop import gan_step, place_networks, step_autocast
     from map2map.learn.train import build_networks
 
     cfg = TrainConfig(size=size, batch=batch, device=device)
@@ -127,20 +127,13 @@ def _step_rate(size: int, batch: int, device: str, seconds: float, compiled: boo
     torch.backends.cudnn.benchmark = dev.type == "cuda"  # as the trainer does
     amp = dev.type == "cuda" and cfg.amp
     g, dd, dr = build_networks(cfg)
-    for n in (g, dd, dr):
-        n.to(dev)
-        if amp:
-            n.to(memory_format=torch.channels_last)
-    opt_g = torch.optim.Adam(g.parameters(), lr=cfg.lr, betas=(cfg.beta1, cfg.beta2))
-    opt_d = torch.optim.Adam(list(dd.parameters()) + list(dr.parameters()), lr=cfg.lr,
-                             betas=(cfg.beta1, cfg.beta2))
+    opt_g, opt_d = place_networks((g, dd, dr), dev, amp, cfg)
     gen = torch.Generator().manual_seed(0)
     x, y = ((torch.randint(0, 3, (batch, 1, size, size), generator=gen).float() - 1).to(dev)
             for _ in range(2))
     if amp:
         x, y = (t.contiguous(memory_format=torch.channels_last) for t in (x, y))
-    autocast = torch.autocast("cuda", dtype=torch.bfloat16, enabled=amp) if amp \
-        else torch.autocast("cpu", enabled=False)
+    autocast = step_autocast(dev, amp)
     g_run = torch.compile(g) if compiled else g
 
     def sync():

@@ -116,14 +116,13 @@ def main(argv=None) -> int:
                        at, "--seconds", "2" if not args.quick else "0.5"], 100, log)
         ba_rates = _rates(txt, r"Model_(\d+) default widths, batch (\d+): (\d+) img/s")
         q = ["--quick"] if args.quick else []
-        _, txt = _run([py, "benchmarks/bench_ab.py", "--device", args.device, "--steps", "6",
-                       *q], 90, log)
-        for rate in (args.ab_batch_rate,):
-            _, t2 = _run([py, "benchmarks/bench_ab.py", "--device", args.device, "--steps", "6",
-                          "--batch-rate", str(rate), "--g-channels", "16",
-                          "--g-max-channels", "128", *q], 90, log)
-            ab_rates = _rates(t2, r"^\s*(\d+)\s+(\d+)\s+\d+\s+([\d.]+)")
-        ab_rates = {k[0]: v for k, v in ab_rates.items()}
+        _run([py, "benchmarks/bench_ab.py", "--device", args.device, "--steps", "6",
+              *q], 90, log)
+        _, t2 = _run([py, "benchmarks/bench_ab.py", "--device", args.device, "--steps", "6",
+                      "--batch-rate", str(args.ab_batch_rate), "--g-channels", "16",
+                      "--g-max-channels", "128", *q], 90, log)
+        ab_rates = {k[0]: v for k, v in
+                    _rates(t2, r"^\s*(\d+)\s+(\d+)\s+\d+\s+([\d.]+)").items()}
     res["ba_rates"] = {f"{k[0]}:{k[1]}": v for k, v in ba_rates.items()}
     res["ab_rates"] = ab_rates
     print(json.dumps(res), file=log, flush=True)

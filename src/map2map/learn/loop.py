@@ -64,7 +64,7 @@ from .networks import count_parameters, from_unit
 
 __all__ = ["MODEL_FILE", "CHECKPOINT_FILE", "TrainResult", "resolve_device", "false_targets",
            "gan_step", "write_log_csv", "batches_per_epoch", "Dist", "RunStart", "open_run",
-           "EpochPlan", "GANRun"]
+           "EpochPlan", "GANRun", "place_networks", "step_autocast"]
 
 MODEL_FILE = "model.safetensors"
 CHECKPOINT_FILE = "last.safetensors"
@@ -166,6 +166,28 @@ def gan_step(g_run, dd_run, dr_run, opt_g, opt_d, x: torch.Tensor, y: torch.Tens
     opt_g.step()
     _set_grad(freeze, True)
     return {"loss_G": loss_g, "loss_D": loss_d, **g_terms, **d_terms}
+
+
+def place_networks(nets, dev: torch.device, amp: bool, cfg: TrainConfig
+                   ) -> tuple[torch.optim.Adam, torch.optim.Adam]:
+    """Move ``(G, D_d, D_r)`` to ``dev`` (channels_last under ``amp``) and return Adam for
+    ``G`` and Adam for both discriminators (thesis 4.2: lr, betas of ``cfg``)."""
+    g, dd, dr = nets
+    for net in nets:
+        net.to(dev)
+        if amp:
+            net.to(memory_format=torch.channels_last)
+    opt_g = torch.optim.Adam(g.parameters(), lr=cfg.lr, betas=(cfg.beta1, cfg.beta2))
+    opt_d = torch.optim.Adam(list(dd.parameters()) + list(dr.parameters()), lr=cfg.lr,
+                             betas=(cfg.beta1, cfg.beta2))
+    return opt_g, opt_d
+
+
+def step_autocast(dev: torch.device, amp: bool):
+    """The autocast context of a training step: bf16 on CUDA under ``amp``, else off."""
+    if dev.type == "cuda":
+        return torch.autocast("cuda", dtype=torch.bfloat16, enabled=amp)
+    return torch.autocast("cpu", enabled=False)
 
 
 def _host_sums(dev_sums: dict, n: float) -> dict:
@@ -372,21 +394,13 @@ class GANRun:
         self.g, self.dd, self.dr = nets
         self.n = len(start.train)
         cfg = self.cfg
-        for net in nets:
-            net.to(self.dev)
-            if self.amp:
-                net.to(memory_format=torch.channels_last)
-        self.opt_g = torch.optim.Adam(self.g.parameters(), lr=cfg.lr,
-                                      betas=(cfg.beta1, cfg.beta2))
-        self.opt_d = torch.optim.Adam(list(self.dd.parameters()) + list(self.dr.parameters()),
-                                      lr=cfg.lr, betas=(cfg.beta1, cfg.beta2))
+        self.opt_g, self.opt_d = place_networks(nets, self.dev, self.amp, cfg)
         self.gen = torch.Generator().manual_seed(cfg.seed)
         self.history: list[dict] = []
         self.epoch, self.start_batch, self.sums = 0, 0, {}
         if start.resume:
             self._load(start.tensors, start.state)
-        self.autocast = (torch.autocast("cuda", dtype=torch.bfloat16, enabled=self.amp)
-                         if self.cuda else torch.autocast("cpu", enabled=False))
+        self.autocast = step_autocast(self.dev, self.amp)
 
     # ----------------------------------------------------------------- what differs
     def epoch_plan(self, epoch: int) -> EpochPlan:
