@@ -334,6 +334,24 @@ def test_ddp_two_processes_gloo(tmp_path):
     assert load_model(tmp_path / "run").size == 16
 
 
+def test_train_runs_without_shapely(tmp_path):
+    """The GPU machines have torch but no shapely: ``map2map train`` must not need it
+    (building the parser once imported the DXF reader for its unit names)."""
+    data = tmp_path / "ds.npz"
+    save_packed(data, _pairs(6))
+    code = ("import sys; sys.modules['shapely'] = None\n"
+            "from map2map.cli.main import main\n"
+            f"rc = main(['train', 'ba', '--data', {str(data)!r},"
+            f" '--out', {str(tmp_path / 'run')!r}, '--epochs', '1', '--size', '16',"
+            " '--batch', '4', '--g-channels', '8',"
+            " '--d-channels', '8', '--d-layers', '2', '--device', 'cpu', '--quiet'])\n"
+            "sys.exit(rc or ('shapely' in sys.modules and sys.modules['shapely'] is not None))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=240)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert (tmp_path / "run" / "model.safetensors").is_file()
+
+
 def test_import_map2map_does_not_import_torch():
     code = "import sys, map2map; map2map.__version__; print('torch' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,

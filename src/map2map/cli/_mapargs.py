@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..maps.dxf import UNITS
+from ..maps.formats import UNITS
 from ..maps.ros import MODES
 
 

@@ -66,6 +66,7 @@ from shapely.geometry import LineString, Point, Polygon
 from ..core.errors import InputError
 from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from ..core.limits import check_map_size
+from .formats import UNITS
 from .rasterize import fill_exact, thin_parts, trace
 
 __all__ = [
@@ -77,8 +78,6 @@ __all__ = [
     "dxf_layers",
 ]
 
-#: Unit names accepted by ``units`` and their size in metres.
-UNITS = {"mm": 0.001, "cm": 0.01, "m": 1.0, "in": 0.0254, "ft": 0.3048}
 DEFAULT_RESOLUTION = 0.05
 DEFAULT_WALL_THICKNESS = 0.1
 #: Largest raster (pixels) load_dxf builds before asking for other units/resolution.
