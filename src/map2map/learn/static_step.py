@@ -155,9 +155,13 @@ class StaticStep:
         self.graph = bool(graph) and dev.type == "cuda"
         self.mode = "graph" if self.graph else "eager"
         self.captures = 0
+        self.stream = None
         if self.graph:
             for o in opts:
                 make_capturable(o, dev)
+            # warm-up and capture on one side stream: library handles (cuBLAS/cuDNN
+            # workspaces) are made per stream, outside the capture
+            self.stream = torch.cuda.Stream(dev)
 
     # -------------------------------------------------------------------- buffers
     def _entry(self, x, y, alpha, g_input) -> _Entry:
@@ -219,7 +223,7 @@ class StaticStep:
             return self._eager(e)
 
     def _side_stream(self, e: _Entry) -> dict:
-        s = torch.cuda.Stream(self.dev)
+        s = self.stream
         s.wait_stream(torch.cuda.current_stream(self.dev))
         with torch.cuda.stream(s):
             out = self._eager(e)
@@ -227,9 +231,11 @@ class StaticStep:
         return out
 
     def _capture(self, e: _Entry) -> dict:
+        for o in (self.opt_g, self.opt_d):  # the backward allocates them in the graph's pool
+            o.zero_grad(set_to_none=True)
         torch.cuda.synchronize(self.dev)
         g = torch.cuda.CUDAGraph()
-        with torch.cuda.graph(g):
+        with torch.cuda.graph(g, stream=self.stream):
             out = self._eager(e)
         e.graph, e.out = g, {k: v.detach() for k, v in out.items()}
         self.captures += 1
