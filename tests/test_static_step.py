@@ -156,7 +156,10 @@ def test_capture_failure_falls_back_to_eager_steps(monkeypatch):
     batches = _batches(3, 4, 16)
     s0, l0, _ = _run(build_networks, cfg, batches, False, [None] * 3)
 
-    def broken(self, e):
+    def broken(self, e):  # fails half-way, the discriminators frozen, as a capture may
+        for net in self.freeze:
+            for p in net.parameters():
+                p.requires_grad_(False)
         raise RuntimeError("operation not permitted when stream is capturing")
 
     monkeypatch.setattr(StaticStep, "_side_stream", broken)

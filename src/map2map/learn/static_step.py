@@ -251,6 +251,9 @@ class StaticStep:
             e.graph, e.out = None, {}
         for o in (self.opt_g, self.opt_d):
             o.zero_grad(set_to_none=True)
+        for net in self.freeze:  # a capture stopped between the D and G steps
+            for p in net.parameters():
+                p.requires_grad_(True)
 
 
 @dataclass
