@@ -21,8 +21,10 @@ over ``--seconds`` after warm-up; ``--compile`` also times a ``torch.compile``d 
 ``--graph`` also times the same step as one CUDA graph replay
 (:class:`map2map.learn.static_step.StaticStep`: 3 eager warm-up steps, capture, replays;
 it falls back to eager steps if capture fails and the line says which ran); on CPU it
-runs eagerly. ``--count-ops`` counts instead the top-level operator calls of one step
-(``torch.profiler``; today's ``gan_step`` and the static step). Issue #14's target:
+runs eagerly; ``--check-graph`` first runs 8 steps both ways from the same weights and
+prints how far losses and weights differ and whether a learning rate set to 0 in place
+stops the graphed weights. ``--count-ops`` counts instead the top-level operator calls of
+one step (``torch.profiler``; today's ``gan_step`` and the static step). Issue #14's target:
 Model_32 >= 10,000 img/s on one H100.
 
     python3 benchmarks/bench_learn.py --steps-at 32:32,32:256,64:16 --device cuda --graph
@@ -81,6 +83,8 @@ def main(argv=None) -> int:
                     "CUDA graph replay (StaticStep; on CPU it runs eagerly)")
     ap.add_argument("--count-ops", action="store_true", help="--steps-at: count the "
                     "top-level operator calls of one step (torch.profiler) instead of timing")
+    ap.add_argument("--check-graph", action="store_true", help="--steps-at: compare 8 "
+                    "graphed steps with 8 eager ones (losses, weights, lr set to 0) first")
     args = ap.parse_args(argv)
     if args.threads:
         torch.set_num_threads(args.threads)
@@ -92,6 +96,8 @@ def main(argv=None) -> int:
             if args.count_ops:
                 _count(size, batch, args.device)
                 continue
+            if args.check_graph:
+                _check_graph(size, batch, args.device)
             kinds = [(False, False)] + [(True, False)] * args.compile + [(False, True)] * args.graph
             for comp, graph in kinds:
                 ips, n, mode = _step_rate(size, batch, args.device, args.seconds, comp, graph)
@@ -209,6 +215,47 @@ def _count(size: int, batch: int, device: str) -> None:
               f"{c.top} top-level ({c.total} with nested)", flush=True)
         print("  most called: " + ", ".join(f"{k.removeprefix('aten::')} {v}"
                                             for k, v in c.most_common(12)), flush=True)
+
+
+def _check_graph(size: int, batch: int, device: str, steps: int = 8) -> None:
+    """``--check-graph``: the same ``steps`` steps (distinct random batches, same initial
+    weights) as eager static steps and as CUDA graph replays; prints the largest loss and
+    weight differences, and whether a learning rate set to 0 (in place) for the last two
+    steps stops the weights of the graphed run (the per-epoch decay reaches the graph)."""
+    from map2map.learn.loop import set_lr
+    from map2map.learn.static_step import StaticStep, graph_autocast
+
+    gen = torch.Generator().manual_seed(1)
+    data = [tuple(torch.randint(0, 3, (batch, 1, size, size), generator=gen).float() - 1
+                  for _ in range(2)) for _ in range(steps)]
+    runs = {}
+    for graph in (False, True):
+        cfg, dev, amp, nets, opts, _, _, _ = _step_setup(size, batch, device)
+        step = StaticStep(nets, opts, cfg, graph_autocast(dev, amp), nets[1:], graph=graph)
+        losses, frozen = [], None
+        for i, (x, y) in enumerate(data):
+            if i == steps - 2:
+                for o in opts:
+                    set_lr(o, 0.0)
+                frozen = [p.detach().clone() for p in nets[0].parameters()]
+            if amp:
+                x, y = (t.contiguous(memory_format=torch.channels_last) for t in (x, y))
+            out = step(x.to(dev), y.to(dev), 1 + 3 * i)
+            losses.append([float(out["loss_G"].detach()), float(out["loss_D"].detach())])
+        params = [p.detach().float() for n in nets for p in n.parameters()]
+        still = all(torch.equal(a, b) for a, b in zip(frozen, nets[0].parameters(),
+                                                      strict=True))
+        runs[graph] = (losses, params, still, step.mode)
+    (l0, p0, s0, _), (l1, p1, s1, mode) = runs[False], runs[True]
+    dl = max(abs(a - b) / max(abs(a), 1e-6) for r0, r1 in zip(l0, l1, strict=True)
+             for a, b in zip(r0, r1, strict=True))
+    dw = max(float((a - b).abs().max() / a.abs().max().clamp_min(1e-12))
+             for a, b in zip(p0, p1, strict=True))
+    print(f"graph check, Model_{size} default widths, batch {batch}, {steps} steps: "
+          f"mode {mode}; max relative loss difference {dl:.2e}, max relative weight "
+          f"difference {dw:.2e}; lr 0 stops the weights: eager {s0}, graph {s1}; "
+          f"losses G/D eager {l0[-1][0]:.4f}/{l0[-1][1]:.4f} graph "
+          f"{l1[-1][0]:.4f}/{l1[-1][1]:.4f}", flush=True)
 
 
 def _timed(fn) -> tuple[float, float]:

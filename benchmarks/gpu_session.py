@@ -5,9 +5,11 @@ A lent GPU comes with minutes, not hours, so everything runs in one prepared cal
 each part is capped by a wall-clock budget:
 
 0. ``graph``: the eq. 3.2 step eager against the same step as one CUDA graph replay
-   (``bench_learn.py --steps-at ... --graph``; :class:`map2map.learn.static_step.
-   StaticStep`) for Model_32 at batch 32 / 256 / 1024 and Model_64 at 16 / 256; which step
-   ran is recorded (a failed capture falls back to eager and says so);
+   (``bench_learn.py --steps-at ... --graph --check-graph``;
+   :class:`map2map.learn.static_step.StaticStep`) for Model_32 at batch 32 / 256 / 1024
+   and Model_64 at 16 / 256: first 8 steps both ways from the same weights (loss and
+   weight differences, a zero learning rate reaching the graph), then the rates; which
+   step ran is recorded (a failed capture falls back to eager and says so);
 1. the eq. 3.2 training-step rate of Model_BA (``bench_learn.py --steps-at``) at Table
    5.1's batch and larger ones, and of Model_prog per stage (``bench_ab.py``) at Table
    5.1's batches and at ``--ab-batch-rate``;
@@ -145,7 +147,9 @@ def main(argv=None) -> int:
     if "graph" not in skip:
         at = "32:32,32:256,32:1024,64:16,64:256" if not args.quick else "32:8,64:8"
         _, txt = _run([py, "benchmarks/bench_learn.py", "--device", args.device, "--steps-at",
-                       at, "--graph", "--seconds", "2" if not args.quick else "0.5"], 200, log)
+                       at, "--graph", "--check-graph", "--seconds",
+                       "2" if not args.quick else "0.5"], 240, log)
+        res["graph_checks"] = re.findall(r"^graph check, (.*)$", txt, re.M)
         for m in re.finditer(r"Model_(\d+) default widths, batch (\d+)(, CUDA graph \(([^)]*)\))?"
                              r": (\d+) img/s", txt):
             key = f"{m.group(1)}:{m.group(2)}"
