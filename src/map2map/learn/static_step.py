@@ -30,7 +30,8 @@ What capture needs, and how it is met (PyTorch's "CUDA Graphs" notes):
 * Adam with ``capturable=True`` (its ``step`` counters on the device) and the learning
   rate as a 0-d device tensor, so the per-epoch linear decay (thesis 4.2) is a ``fill_``
   the graph sees (:func:`make_capturable`, :func:`~map2map.learn.loop.set_lr`); torch's
-  own LR schedulers also ``fill_`` a tensor lr (2.4+), but the trainer sets it itself;
+  own LR schedulers also ``fill_`` a tensor lr (since 2.4, pytorch#123753), but the
+  trainer sets it itself;
 * gradients: set to None before each backward *inside* the capture, so the backward
   allocates them once in the graph's private pool and rewrites them at every replay --
   the docs' whole-network recipe. (Zeroing them in place with ``set_to_none=False``
