@@ -130,6 +130,9 @@ def main(argv=None) -> int:
                     "graph,bench,ba,ab,infer")
     ap.add_argument("--ba-graph", choices=("auto", "yes", "no"), default="auto",
                     help="train ba with --cuda-graph: auto = when part 0 captured one")
+    ap.add_argument("--ab-graph", choices=("auto", "yes", "no"), default="no",
+                    help="train ab with --cuda-graph (default no: its epochs are fitted "
+                    "from eager rates)")
     args = ap.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
     skip = set(filter(None, args.skip.split(",")))
@@ -231,9 +234,12 @@ def main(argv=None) -> int:
                str(max(1, total // 20)), "--quiet"]
         if args.quick:
             cmd += ["--d-channels", "8", "--g-max-channels", "32"]
+        if args.ab_graph == "yes" or (args.ab_graph == "auto" and graph_ok):
+            cmd += ["--cuda-graph"]
         res["ab_cmd"] = " ".join(cmd[1:])
         rc, _ = _run(cmd, budget * 1.15 + 25, log, signal="INT")
         res["ab_rc"] = rc
+        res.update(_last_epoch(args.out / "ab_run" / "log.csv", "ab"))
         _pack(args.out / "ab_run", args.out / "ab.tar")
 
     # 4. inference at 256 px
