@@ -209,3 +209,114 @@ def test_cuda_graph_replay_matches_eager_steps():
     for k in s0:
         torch.testing.assert_close(s0[k].float(), s1[k].float(), rtol=1e-3, atol=1e-5,
                                    msg=k)
+
+
+# ----------------------------------------------- the graph path's control flow, emulated
+class _FakeStream:
+    def wait_stream(self, other):
+        pass
+
+
+class _FakeGraph:
+    """A 'CUDA graph' on the CPU: the capture runs the step and then undoes it (a real
+    capture records kernels without running them); replay runs the recorded step again
+    and writes its values into the captured output tensors (a real replay rewrites the
+    same memory)."""
+
+    def __init__(self):
+        self.fn = None
+
+    def replay(self):
+        self.fn()
+
+
+class _Emulation:
+    """Patches torch.cuda's stream and graph calls and StaticStep so the warm-up / capture /
+    replay logic runs on the CPU with the semantics above."""
+
+    def __init__(self, monkeypatch):
+        import contextlib
+
+        import map2map.learn.static_step as SS
+
+        self.captures, self.replays = 0, 0
+        real_eager = SS.StaticStep._eager
+        emu = self
+
+        def eager(step, e):
+            emu.last = (step, e)
+            return real_eager(step, e)
+
+        @contextlib.contextmanager
+        def graph(g, stream=None):
+            emu.last = None
+            saved = [t.detach().clone() for t in emu.tensors()], torch.get_rng_state()
+            yield
+            step, e = emu.last
+            for t, v in zip(emu.tensors(), saved[0], strict=True):  # undo: not executed
+                t.data.copy_(v)
+            torch.set_rng_state(saved[1])
+            emu.captures += 1
+
+            def run():
+                emu.replays += 1
+                out = real_eager(step, e)
+                for k, v in out.items():
+                    e.out[k].copy_(v.detach())
+
+            g.fn = run
+
+        def init(step, *a, **k):
+            real_init(step, *a, **k)
+            step.graph, step.mode, step.stream = True, "graph", _FakeStream()
+            emu.step = step
+
+        real_init = SS.StaticStep.__init__
+        monkeypatch.setattr(SS.StaticStep, "_eager", eager)
+        monkeypatch.setattr(SS.StaticStep, "__init__", init)
+        monkeypatch.setattr(torch.cuda, "graph", graph)
+        monkeypatch.setattr(torch.cuda, "CUDAGraph", _FakeGraph)
+        monkeypatch.setattr(torch.cuda, "current_stream", lambda dev=None: _FakeStream())
+        monkeypatch.setattr(torch.cuda, "stream", lambda s: contextlib.nullcontext())
+        monkeypatch.setattr(torch.cuda, "synchronize", lambda dev=None: None)
+
+    def tensors(self):
+        """Everything a step changes: weights, buffers, Adam's state."""
+        s = self.step
+        out = []
+        for net in (s.g_run, s.dd_run, s.dr_run):
+            out += list(net.parameters()) + list(net.buffers())
+        for o in (s.opt_g, s.opt_d):
+            for st in o.state.values():
+                out += [v for v in st.values() if torch.is_tensor(v)]
+        return out
+
+
+@pytest.mark.parametrize("trainer", ["ba", "ab"])
+def test_graph_path_control_flow_emulated_on_cpu_trains_as_eager(monkeypatch, tmp_path, trainer):
+    """Warm-up on the side stream, one capture per shape (full and short batch; Model_AB:
+    per stage and fade or not), replays after: with a CPU stand-in for the graph, the run
+    equals the eager one bit for bit and every step after the warm-up is a replay."""
+    pairs = _pairs(9)  # 7 train pairs in batches of 3: 2 full + 1 short an epoch
+    if trainer == "ba":
+        run_fn, cfg = train_ba, TrainConfig(
+            size=16, epochs=4, batch=3, g_channels=8, g_max_channels=16, d_channels=8,
+            d_layers=2, samples=1, device="cpu")
+    else:
+        run_fn, cfg = train_ab, ABConfig(
+            schedule=((8, 1), (16, 5)), batch=3, g_channels=8, g_max_channels=16,
+            d_channels=8, d_layers=1, d_scales=2, fade_batches=6, samples=1, device="cpu")
+    run_fn(pairs, tmp_path / "eager", cfg, progress=False, figures=False)
+    emu = _Emulation(monkeypatch)
+    cfg.cuda_graph = True
+    run_fn(pairs, tmp_path / "graph", cfg, progress=False, figures=False)
+    (t0, h0, _), (t1, h1, st1) = (_run_tensors(tmp_path / r) for r in ("eager", "graph"))
+    _same(t0, t1)
+    assert h0 == h1
+    assert {r["step"] for r in st1["history"]} == {"graph"}
+    if trainer == "ba":  # full batch: 8 calls = 3 warm-up + capture + 4; short: 3 + capture
+        assert (emu.captures, emu.replays) == (2, 6)
+    else:  # 8 px: 3 batches, all warm-up; 16 px: 15 batches, 6 fading then 9 without
+        # fade: full (4 calls) 3 + capture, short (2) warm-up; after: full (6) 3 + capture
+        # + 2, short (3) 3 warm-up
+        assert (emu.captures, emu.replays) == (2, 4)
