@@ -619,7 +619,6 @@ class GANRun:
                             for k, v in sums.items() if k != "_n"}
                 zero = torch.zeros((), dtype=torch.float64, device=self.dev)
                 keys, acc = None, None  # the logged values' names, their sums in one vector
-
                 n_sum = sums.get("_n", 0.0)
                 f = lr_factor(epoch, cfg)
                 for o in (self.opt_g, self.opt_d):
