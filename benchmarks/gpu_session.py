@@ -33,7 +33,7 @@ writes its checkpoint), so a slower machine gives fewer epochs, never a lost cal
 The session-12 call (CUDA graphs measured, then Model_BA at up to 534 epochs):
 
     python3 benchmarks/gpu_session.py --data packed.npz --out $OUT/s12
-        --skip bench,ab,infer --ba-batch 256 --ba-seconds 330 --deadline 540
+        --skip bench,ab,infer --ba-batch 256 --ba-seconds 300 --deadline 480
 
 ``--quick``: tiny budgets and networks, for checking the script on a CPU.
 """
