@@ -18,9 +18,17 @@ instead of generated boxes (the maps ``autocorrect`` is for).
 step of :func:`map2map.learn.loop.gan_step`, default widths, bf16 + channels_last on
 CUDA) on random ternary maps resident on the device, for each resolution and batch,
 over ``--seconds`` after warm-up; ``--compile`` also times a ``torch.compile``d generator.
-Issue #14's target: Model_32 >= 10,000 img/s on one H100.
+``--graph`` also times the same step as one CUDA graph replay
+(:class:`map2map.learn.static_step.StaticStep`: 3 eager warm-up steps, capture, replays;
+it falls back to eager steps if capture fails and the line says which ran); on CPU it
+runs eagerly; ``--check-graph`` first runs 8 steps both ways from the same weights and
+prints how far losses and weights differ and whether a learning rate set to 0 in place
+stops the graphed weights. ``--count-ops`` counts instead the top-level operator calls of
+one step (``torch.profiler``; today's ``gan_step`` and the static step). Issue #14's target:
+Model_32 >= 10,000 img/s on one H100.
 
-    python3 benchmarks/bench_learn.py --steps-at 32:32,32:256,64:16 --device cuda
+    python3 benchmarks/bench_learn.py --steps-at 32:32,32:256,64:16 --device cuda --graph
+    python3 benchmarks/bench_learn.py --steps-at 32:32 --device cpu --count-ops
 """
 
 from __future__ import annotations
@@ -71,6 +79,12 @@ def main(argv=None) -> int:
     ap.add_argument("--steps-at", help="SIZE:BATCH,... : time training steps only")
     ap.add_argument("--seconds", type=float, default=3.0, help="timed seconds per --steps-at")
     ap.add_argument("--compile", action="store_true", help="--steps-at: also compiled G")
+    ap.add_argument("--graph", action="store_true", help="--steps-at: also the step as one "
+                    "CUDA graph replay (StaticStep; on CPU it runs eagerly)")
+    ap.add_argument("--count-ops", action="store_true", help="--steps-at: count the "
+                    "top-level operator calls of one step (torch.profiler) instead of timing")
+    ap.add_argument("--check-graph", action="store_true", help="--steps-at: compare 8 "
+                    "graphed steps with 8 eager ones (losses, weights, lr set to 0) first")
     args = ap.parse_args(argv)
     if args.threads:
         torch.set_num_threads(args.threads)
@@ -79,10 +93,17 @@ def main(argv=None) -> int:
     if args.steps_at:
         for item in args.steps_at.split(","):
             size, batch = (int(v) for v in item.split(":"))
-            for comp in (False, True) if args.compile else (False,):
-                ips, n = _step_rate(size, batch, args.device, args.seconds, comp)
-                print(f"training step, Model_{size} default widths, batch {batch}"
-                      f"{', compiled G' if comp else ''}: {ips:.0f} img/s ({n} steps)",
+            if args.count_ops:
+                _count(size, batch, args.device)
+                continue
+            if args.check_graph:
+                _check_graph(size, batch, args.device)
+            kinds = [(False, False)] + [(True, False)] * args.compile + [(False, True)] * args.graph
+            for comp, graph in kinds:
+                ips, n, mode = _step_rate(size, batch, args.device, args.seconds, comp, graph)
+                label = ", compiled G" if comp else f", CUDA graph ({mode})" if graph else ""
+                print(f"training step, Model_{size} default widths, batch {batch}{label}: "
+                      f"{ips:.0f} img/s ({n} steps, {1e3 * batch / ips:.2f} ms a step)",
                       flush=True)
         return 0
     if not args.inference_only:
@@ -116,10 +137,10 @@ def _training(args) -> None:
               f"{res.history[-1]['img_per_s']:.0f} img/s")
 
 
-def _step_rate(size: int, batch: int, device: str, seconds: float, compiled: bool
-               ) -> tuple[float, int]:
-    """Images/s of the eq. 3.2 training step at ``size`` and ``batch`` (module doc)."""
-    from map2map.learn.loop import gan_step, place_networks, step_autocast
+def _step_setup(size: int, batch: int, device: str, compiled: bool = False):
+    """Networks, optimisers, autocast and a random ternary batch resident on ``device``
+    (module doc), as the trainer sets them up."""
+    from map2map.learn.loop import place_networks, step_autocast
     from map2map.learn.train import build_networks
 
     cfg = TrainConfig(size=size, batch=batch, device=device)
@@ -127,32 +148,114 @@ def _step_rate(size: int, batch: int, device: str, seconds: float, compiled: boo
     torch.backends.cudnn.benchmark = dev.type == "cuda"  # as the trainer does
     amp = dev.type == "cuda" and cfg.amp
     g, dd, dr = build_networks(cfg)
-    opt_g, opt_d = place_networks((g, dd, dr), dev, amp, cfg)
+    opts = place_networks((g, dd, dr), dev, amp, cfg)
     gen = torch.Generator().manual_seed(0)
     x, y = ((torch.randint(0, 3, (batch, 1, size, size), generator=gen).float() - 1).to(dev)
             for _ in range(2))
     if amp:
         x, y = (t.contiguous(memory_format=torch.channels_last) for t in (x, y))
-    autocast = step_autocast(dev, amp)
     g_run = torch.compile(g) if compiled else g
+    return cfg, dev, amp, (g_run, dd, dr), opts, x, y, step_autocast(dev, amp)
+
+
+def _step_fn(size: int, batch: int, device: str, compiled: bool, graph: bool):
+    """``(step(i), mode)``: one eq. 3.2 training step; ``graph``: the
+    :class:`~map2map.learn.static_step.StaticStep` with ``graph=True`` (eager on CPU)."""
+    from map2map.learn.loop import gan_step
+    from map2map.learn.static_step import StaticStep, graph_autocast
+
+    cfg, dev, amp, nets, opts, x, y, autocast = _step_setup(size, batch, device, compiled)
+    freeze = nets[1:]
+    if not graph:
+        return (lambda i: gan_step(*nets, *opts, x, y, None, cfg, 1 + i % max(1, batch - 1),
+                                   autocast, freeze)), None
+    step = StaticStep(nets, opts, cfg, graph_autocast(dev, amp), freeze, graph=True)
+    return (lambda i: step(x, y, 1 + i % max(1, batch - 1))), step
+
+
+def _step_rate(size: int, batch: int, device: str, seconds: float, compiled: bool,
+               graph: bool = False) -> tuple[float, int, str]:
+    """Images/s of the eq. 3.2 training step at ``size`` and ``batch`` (module doc), the
+    steps timed, and which step ran (``graph``: the static step's mode)."""
+    dev = torch.device(device)
+    fn, static = _step_fn(size, batch, device, compiled, graph)
 
     def sync():
         if dev.type == "cuda":
             torch.cuda.synchronize()
 
-    for _ in range(3 if not compiled else 5):
-        gan_step(g_run, dd, dr, opt_g, opt_d, x, y, None, cfg, 1, autocast, (dd, dr))
+    for i in range(3 if not (compiled or graph) else 6):  # graph: 3 warm-up, capture, 2 replays
+        fn(i)
     sync()
     n, t0 = 0, time.perf_counter()
     while True:
         for _ in range(5):
-            gan_step(g_run, dd, dr, opt_g, opt_d, x, y, None, cfg, 1 + n % max(1, batch - 1),
-                     autocast, (dd, dr))
-        n += 5
+            fn(n)
+            n += 1
         sync()
         el = time.perf_counter() - t0
         if el >= seconds:
-            return n * batch / el, n
+            return n * batch / el, n, (static.mode if static is not None else "eager")
+
+
+def _count(size: int, batch: int, device: str) -> None:
+    """Top-level operator calls of one step (``--count-ops``): today's ``gan_step`` and the
+    static step run eagerly (what a capture records), by name."""
+    from map2map.learn.static_step import StaticStep, count_ops
+
+    plain, _ = _step_fn(size, batch, device, False, False)
+    cfg, dev, amp, nets, opts, x, y, autocast = _step_setup(size, batch, device)
+    static = StaticStep(nets, opts, cfg, autocast, nets[1:], graph=False)
+    for what, fn in (("gan_step", plain),
+                     ("static step (eager)", lambda i: static(x, y, 1 + i % max(1, batch - 1)))):
+        for i in range(2):
+            fn(i)
+        c = count_ops(fn, 2)
+        print(f"operator calls per step, Model_{size} default widths, batch {batch}, {what}: "
+              f"{c.top} top-level ({c.total} with nested)", flush=True)
+        print("  most called: " + ", ".join(f"{k.removeprefix('aten::')} {v}"
+                                            for k, v in c.most_common(12)), flush=True)
+
+
+def _check_graph(size: int, batch: int, device: str, steps: int = 8) -> None:
+    """``--check-graph``: the same ``steps`` steps (distinct random batches, same initial
+    weights) as eager static steps and as CUDA graph replays; prints the largest loss and
+    weight differences, and whether a learning rate set to 0 (in place) for the last two
+    steps stops the weights of the graphed run (the per-epoch decay reaches the graph)."""
+    from map2map.learn.loop import set_lr
+    from map2map.learn.static_step import StaticStep, graph_autocast
+
+    gen = torch.Generator().manual_seed(1)
+    data = [tuple(torch.randint(0, 3, (batch, 1, size, size), generator=gen).float() - 1
+                  for _ in range(2)) for _ in range(steps)]
+    runs = {}
+    for graph in (False, True):
+        cfg, dev, amp, nets, opts, _, _, _ = _step_setup(size, batch, device)
+        step = StaticStep(nets, opts, cfg, graph_autocast(dev, amp), nets[1:], graph=graph)
+        losses, frozen = [], None
+        for i, (x, y) in enumerate(data):
+            if i == steps - 2:
+                for o in opts:
+                    set_lr(o, 0.0)
+                frozen = [p.detach().clone() for p in nets[0].parameters()]
+            if amp:
+                x, y = (t.contiguous(memory_format=torch.channels_last) for t in (x, y))
+            out = step(x.to(dev), y.to(dev), 1 + 3 * i)
+            losses.append([float(out["loss_G"].detach()), float(out["loss_D"].detach())])
+        params = [p.detach().float() for n in nets for p in n.parameters()]
+        still = all(torch.equal(a, b) for a, b in zip(frozen, nets[0].parameters(),
+                                                      strict=True))
+        runs[graph] = (losses, params, still, step.mode)
+    (l0, p0, s0, _), (l1, p1, s1, mode) = runs[False], runs[True]
+    dl = max(abs(a - b) / max(abs(a), 1e-6) for r0, r1 in zip(l0, l1, strict=True)
+             for a, b in zip(r0, r1, strict=True))
+    dw = max(float((a - b).abs().max() / a.abs().max().clamp_min(1e-12))
+             for a, b in zip(p0, p1, strict=True))
+    print(f"graph check, Model_{size} default widths, batch {batch}, {steps} steps: "
+          f"mode {mode}; max relative loss difference {dl:.2e}, max relative weight "
+          f"difference {dw:.2e}; lr 0 stops the weights: eager {s0}, graph {s1}; "
+          f"losses G/D eager {l0[-1][0]:.4f}/{l0[-1][1]:.4f} graph "
+          f"{l1[-1][0]:.4f}/{l1[-1][1]:.4f}", flush=True)
 
 
 def _timed(fn) -> tuple[float, float]:

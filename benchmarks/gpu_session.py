@@ -4,11 +4,19 @@ thesis-scale training runs, fitted into a fixed device-time budget.
 A lent GPU comes with minutes, not hours, so everything runs in one prepared call and
 each part is capped by a wall-clock budget:
 
+0. ``graph``: the eq. 3.2 step eager against the same step as one CUDA graph replay
+   (``bench_learn.py --steps-at ... --graph --check-graph``;
+   :class:`map2map.learn.static_step.StaticStep`) for Model_32 at batch 32 / 256 / 1024
+   and Model_64 at 16 / 256: first 8 steps both ways from the same weights (loss and
+   weight differences, a zero learning rate reaching the graph), then the rates; which
+   step ran is recorded (a failed capture falls back to eager and says so);
 1. the eq. 3.2 training-step rate of Model_BA (``bench_learn.py --steps-at``) at Table
    5.1's batch and larger ones, and of Model_prog per stage (``bench_ab.py``) at Table
    5.1's batches and at ``--ab-batch-rate``;
 2. ``map2map train ba`` on ``--data`` (64 px, default widths, batch ``--ba-batch``) for as
    many epochs (at most the thesis's 534) as the measured rate fits into ``--ba-seconds``;
+   with ``--cuda-graph`` when part 0 captured a graph (or ``--ba-graph yes``), the step
+   mode of its last epoch recorded;
 3. ``map2map train ab`` (growth full, G 16-128 channels: <= 10 MB in fp16) with Table
    5.2's four stages, each given a share of ``--ab-seconds`` and as many epochs as its
    measured rate fits;
@@ -20,6 +28,12 @@ writes its checkpoint), so a slower machine gives fewer epochs, never a lost cal
 
     python3 benchmarks/gpu_session.py --data packed.npz --out OUTDIR [--device cuda]
         [--ba-seconds 150] [--ab-seconds 200] [--deadline 560] [--quick]
+        [--skip graph,bench,ba,ab,infer] [--ba-graph auto|yes|no]
+
+The session-12 call (CUDA graphs measured, then Model_BA at up to 534 epochs):
+
+    python3 benchmarks/gpu_session.py --data packed.npz --out $OUT/s12
+        --skip bench,ab,infer --ba-batch 256 --ba-seconds 300 --deadline 480
 
 ``--quick``: tiny budgets and networks, for checking the script on a CPU.
 """
@@ -41,7 +55,9 @@ ROOT = Path(__file__).resolve().parents[1]
 THESIS_BA_EPOCHS = 534  # the epoch the thesis chose for Model_BA
 # `map2map train` alone: the full CLI also registers the map commands, which import
 # shapely/ezdxf, absent on the GPU machine
-CLI_TRAIN = ("import argparse, sys; from map2map.cli import train as t; "
+# (this checkout's src/ first: the code under test, whatever else is installed)
+CLI_TRAIN = (f"import argparse, sys; sys.path.insert(0, {str(ROOT / 'src')!r}); "
+             "from map2map.cli import train as t; "
              "p = argparse.ArgumentParser(); t.register(p.add_subparsers()); "
              "a = p.parse_args(sys.argv[1:]); sys.exit(a.func(a))")
 AB_SHARES = {32: 0.1, 64: 0.15, 128: 0.25, 256: 0.5}  # of --ab-seconds per stage
@@ -67,6 +83,22 @@ def _rates(text: str, pattern: str) -> dict:
 def _train_pairs(data: Path) -> int:
     meta = json.loads(str(np.load(data)["meta"]))
     return int(meta["splits"]["train"])
+
+
+def _last_epoch(log_csv: Path, prefix: str) -> dict:
+    """Epochs done, img/s and step mode (graph/eager/fallback) of a run's last logged
+    epoch."""
+    import csv
+
+    if not log_csv.is_file():
+        return {}
+    rows = list(csv.DictReader(log_csv.open()))
+    if not rows:
+        return {}
+    last = rows[-1]
+    return {f"{prefix}_epochs_done": int(last["epoch"]),
+            f"{prefix}_img_per_s": float(last.get("img_per_s") or "nan"),
+            f"{prefix}_step_mode": last.get("step", "eager (no --cuda-graph)")}
 
 
 def _pack(run: Path, dest: Path) -> None:
@@ -95,7 +127,12 @@ def main(argv=None) -> int:
                     help="seconds for the whole script: the training budgets shrink to fit")
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--skip", default="", help="comma list of parts to skip: "
-                    "bench,ba,ab,infer")
+                    "graph,bench,ba,ab,infer")
+    ap.add_argument("--ba-graph", choices=("auto", "yes", "no"), default="auto",
+                    help="train ba with --cuda-graph: auto = when part 0 captured one")
+    ap.add_argument("--ab-graph", choices=("auto", "yes", "no"), default="no",
+                    help="train ab with --cuda-graph (default no: its epochs are fitted "
+                    "from eager rates)")
     args = ap.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
     skip = set(filter(None, args.skip.split(",")))
@@ -107,6 +144,27 @@ def main(argv=None) -> int:
     _run([py, "-c", "import torch; print(torch.__version__, torch.cuda.is_available() and "
           "torch.cuda.get_device_name())"], 60, log)
     res = {"n_train": n_train}
+
+    # 0. eager against CUDA-graph steps
+    graph_rates, graph_ok = {}, False
+    if "graph" not in skip:
+        at = "32:32,32:256,32:1024,64:16,64:256" if not args.quick else "32:8,64:8"
+        _, txt = _run([py, "benchmarks/bench_learn.py", "--device", args.device, "--steps-at",
+                       at, "--graph", "--check-graph", "--seconds",
+                       "2" if not args.quick else "0.5"], 240, log)
+        res["graph_checks"] = re.findall(r"^graph check, (.*)$", txt, re.M)
+        for m in re.finditer(r"Model_(\d+) default widths, batch (\d+)(, CUDA graph \(([^)]*)\))?"
+                             r": (\d+) img/s", txt):
+            key = f"{m.group(1)}:{m.group(2)}"
+            slot = graph_rates.setdefault(key, {})
+            if m.group(3):
+                slot["graph"], slot["mode"] = float(m.group(5)), m.group(4)
+                graph_ok = graph_ok or m.group(4) == "graph"
+            else:
+                slot["eager"] = float(m.group(5))
+    res["graph_rates"] = graph_rates
+    res["graph_captured"] = graph_ok
+    print(json.dumps(res), file=log, flush=True)
 
     # 1. training-step rates
     ba_rates, ab_rates = {}, {}
@@ -132,11 +190,17 @@ def main(argv=None) -> int:
 
     # 2. Model_BA at 64 px
     if "ba" not in skip:
-        budget = max(10.0, min(args.ba_seconds, left(min(args.ab_seconds, 120) + 90)))
+        reserve = (min(args.ab_seconds, 120) + 90 if "ab" not in skip else 0) + \
+            (60 if "infer" not in skip else 10)
+        budget = max(10.0, min(args.ba_seconds, left(reserve)))
         res["ba_budget_s"] = budget
-        # without --skip bench the measured rate; else H200 figures measured 2026-11-26
-        rate = ba_rates.get((64, args.ba_batch)) or {16: 233.0, 64: 1017.0, 256: 3129.0}.get(
-            args.ba_batch, 1000.0)
+        use_graph = args.ba_graph == "yes" or (args.ba_graph == "auto" and graph_ok)
+        res["ba_cuda_graph"] = use_graph
+        # the measured rate (graphed when the run is); else H200 figures of 2026-11-26
+        measured = graph_rates.get(f"64:{args.ba_batch}", {})
+        rate = (measured.get("graph") if use_graph else measured.get("eager")) or \
+            ba_rates.get((64, args.ba_batch)) or \
+            {16: 233.0, 64: 1017.0, 256: 3129.0}.get(args.ba_batch, 1000.0)
         epochs = int(max(2, min(THESIS_BA_EPOCHS, 0.8 * budget * rate / n_train)))
         every = max(1, epochs // 20)
         cmd = [py, "-c", CLI_TRAIN, "train", "ba", "--data", str(args.data), "--out",
@@ -144,9 +208,12 @@ def main(argv=None) -> int:
                "--device", args.device, "--seed", "0", "--save-every", str(every), "--quiet"]
         if args.quick:
             cmd += ["--g-channels", "8", "--g-max-channels", "16", "--d-channels", "8"]
+        if use_graph:
+            cmd += ["--cuda-graph"]
         res["ba_cmd"] = " ".join(cmd[1:])
         rc, _ = _run(cmd, budget * 1.15 + 25, log, signal="INT")
         res["ba_rc"] = rc
+        res.update(_last_epoch(args.out / "ba_run" / "log.csv", "ba"))
         _pack(args.out / "ba_run", args.out / "ba.tar")
 
     # 3. Model_AB, Table 5.2's stages fitted into the budget
@@ -167,9 +234,12 @@ def main(argv=None) -> int:
                str(max(1, total // 20)), "--quiet"]
         if args.quick:
             cmd += ["--d-channels", "8", "--g-max-channels", "32"]
+        if args.ab_graph == "yes" or (args.ab_graph == "auto" and graph_ok):
+            cmd += ["--cuda-graph"]
         res["ab_cmd"] = " ".join(cmd[1:])
         rc, _ = _run(cmd, budget * 1.15 + 25, log, signal="INT")
         res["ab_rc"] = rc
+        res.update(_last_epoch(args.out / "ab_run" / "log.csv", "ab"))
         _pack(args.out / "ab_run", args.out / "ab.tar")
 
     # 4. inference at 256 px

@@ -46,6 +46,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="no false-target augmentation for D_d")
     b.add_argument("--no-amp", action="store_true", help="fp32 on CUDA (no bf16 autocast)")
     b.add_argument("--compile", action="store_true", help="torch.compile the generator")
+    b.add_argument("--cuda-graph", action="store_true",
+                   help="run each training step as one CUDA graph replay (single process; "
+                   "falls back to eager steps if capture fails; on CPU: eager, same result)")
     b.add_argument("--save-every", type=int, default=1, metavar="N",
                    help="checkpoint, sample grid and logs every N epochs (default 1; also "
                    "after the last and on Ctrl-C)")
@@ -97,6 +100,9 @@ def register_ab(tsub) -> None:
                    help="no false-target augmentation for D_d")
     b.add_argument("--no-amp", action="store_true", help="fp32 on CUDA (no bf16 autocast)")
     b.add_argument("--compile", action="store_true", help="torch.compile the generator")
+    b.add_argument("--cuda-graph", action="store_true",
+                   help="run each training step as one CUDA graph replay (single process; "
+                   "falls back to eager steps if capture fails; on CPU: eager, same result)")
     b.add_argument("--save-every", type=int, default=1, metavar="N",
                    help="checkpoint, sample grid and logs every N epochs (default 1; also "
                    "after the last and on Ctrl-C)")
@@ -124,7 +130,8 @@ def run_ab(args: argparse.Namespace) -> int:
             seed=args.seed, lambda_l1=args.lambda_l1, g_channels=args.g_channels,
             g_max_channels=args.g_max_channels, d_channels=args.d_channels,
             d_layers=args.d_layers, false_targets=not args.no_false_targets,
-            amp=not args.no_amp, compile=args.compile, growth=args.growth,
+            amp=not args.no_amp, compile=args.compile, cuda_graph=args.cuda_graph,
+            growth=args.growth,
             save_every=args.save_every)
     except ValueError as exc:
         raise InputError("--schedule", str(exc)) from None
@@ -135,8 +142,9 @@ def run_ab(args: argparse.Namespace) -> int:
     if int(os.environ.get("RANK", "0")) != 0:
         return 0
     last = res.history[-1] if res.history else {}
+    steps = f" ({last['step']} steps)" if "step" in last else ""
     print(f"trained {res.epochs_done} epochs (now {last.get('resolution', '?')} px, alpha "
-          f"{last.get('alpha', float('nan')):.2f}) at {res.images_per_s:.0f} img/s; "
+          f"{last.get('alpha', float('nan')):.2f}) at {res.images_per_s:.0f} img/s{steps}; "
           f"loss G {last.get('loss_G', float('nan')):.4f} D {last.get('loss_D', float('nan')):.4f}"
           f"; run in {res.run}", file=sys.stderr)
     return 0
@@ -162,7 +170,7 @@ def run(args: argparse.Namespace) -> int:
         g_max_channels=args.g_max_channels, d_channels=args.d_channels, d_layers=args.d_layers,
         input_reduce=args.input_reduce,
         false_targets=not args.no_false_targets, amp=not args.no_amp, compile=args.compile,
-        save_every=args.save_every,
+        cuda_graph=args.cuda_graph, save_every=args.save_every,
     )
     res = train_ba(args.data, args.out, cfg, resume=args.resume,
                    epochs=args.epochs if args.resume else None, progress=not args.quiet)
@@ -171,7 +179,8 @@ def run(args: argparse.Namespace) -> int:
     if int(os.environ.get("RANK", "0")) != 0:  # torchrun: one report, from rank 0
         return 0
     last = res.history[-1] if res.history else {}
-    print(f"trained {res.epochs_done} epochs at {res.images_per_s:.0f} img/s; "
+    steps = f" ({last['step']} steps)" if "step" in last else ""
+    print(f"trained {res.epochs_done} epochs at {res.images_per_s:.0f} img/s{steps}; "
           f"loss G {last.get('loss_G', float('nan')):.4f} D {last.get('loss_D', float('nan')):.4f}"
           f"; run in {res.run}", file=sys.stderr)
     return 0

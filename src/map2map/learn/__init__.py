@@ -12,6 +12,8 @@ PyTorch is imported only inside this package (``pip install 'map2map[learn]'``);
 * :mod:`~map2map.learn.checkpoint` -- safetensors checkpoints (no pickle);
 * :mod:`~map2map.learn.loop` -- the training loop both models share (the eq. 3.2 step,
   DDP, checkpoints and exact resume, logs, figures, progress);
+* :mod:`~map2map.learn.static_step` -- the same step on static buffers, replayed as one
+  CUDA graph (``--cuda-graph``), and :func:`count_ops` (operator calls per step);
 * :mod:`~map2map.learn.train` -- :func:`train_ba` (``map2map train ba``);
 * :mod:`~map2map.learn.postprocess` -- post-processing of Model_32/64 (upsample, snap, straighten);
 * :mod:`~map2map.learn.autocorrect` -- :func:`autocorrect` (``map2map autocorrect``);

@@ -102,14 +102,27 @@ def load_module(module: torch.nn.Module, tensors: dict[str, torch.Tensor], prefi
 
 
 def optimizer_tensors(opt: torch.optim.Optimizer, prefix: str) -> tuple[dict, list]:
-    """(tensors of the optimiser's per-parameter state, its param groups as JSON data)."""
+    """(tensors of the optimiser's per-parameter state, its param groups as JSON data).
+
+    The groups are stored in the plain (eager) form whatever ran: a tensor learning rate
+    (CUDA-graph training, :func:`~map2map.learn.static_step.make_capturable`) as a float,
+    ``capturable``/``foreach``/``fused`` at Adam's defaults -- they say how a step is
+    computed, not what the optimiser holds, and a resumed run sets its own.
+    """
     sd = opt.state_dict()
     tensors = {}
     for idx, st in sd["state"].items():
         for k, v in st.items():
             t = v if torch.is_tensor(v) else torch.tensor(v)
             tensors[f"{prefix}.{idx}.{k}"] = t
-    return tensors, sd["param_groups"]
+    groups = []
+    for g in sd["param_groups"]:
+        g = {k: (float(v) if torch.is_tensor(v) else v) for k, v in g.items()}
+        for k, plain in (("capturable", False), ("foreach", None), ("fused", None)):
+            if k in g:
+                g[k] = plain
+        groups.append(g)
+    return tensors, groups
 
 
 def load_optimizer(opt: torch.optim.Optimizer, tensors: dict[str, torch.Tensor], prefix: str,

@@ -75,6 +75,13 @@ class TrainConfig:
         bf16 autocast + channels_last on CUDA (ignored on CPU).
     compile : bool
         ``torch.compile`` the generator (not the spectral-normalised discriminators).
+    cuda_graph : bool
+        Run each training step as one CUDA graph replay
+        (:class:`~map2map.learn.static_step.StaticStep`): one graph per (resolution,
+        batch size), captured after 3 eager warm-up steps; a capture failure falls back
+        to eager steps with a warning. Single process only (under DDP, or with
+        ``compile``, the steps run eagerly); on CPU the same static step runs eagerly
+        (bit-identical to the default). Off by default until measured on a GPU.
     samples : int
         Validation pairs shown in each epoch's sample grid.
     save_every : int
@@ -109,6 +116,7 @@ class TrainConfig:
     device: str = "auto"
     amp: bool = True
     compile: bool = False
+    cuda_graph: bool = False
     samples: int = 6
     save_every: int = 1
     input_reduce: str = "area"

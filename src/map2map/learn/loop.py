@@ -64,7 +64,8 @@ from .networks import count_parameters, from_unit
 
 __all__ = ["MODEL_FILE", "CHECKPOINT_FILE", "TrainResult", "resolve_device", "false_targets",
            "gan_step", "write_log_csv", "batches_per_epoch", "Dist", "RunStart", "open_run",
-           "EpochPlan", "GANRun", "place_networks", "step_autocast"]
+           "EpochPlan", "GANRun", "place_networks", "step_autocast", "set_lr",
+           "adam_options"]
 
 MODEL_FILE = "model.safetensors"
 CHECKPOINT_FILE = "last.safetensors"
@@ -111,8 +112,8 @@ def false_targets(y: torch.Tensor, shift: int) -> torch.Tensor:
 
 def _split(scales: list[list[torch.Tensor]], n: int) -> list[list[list[torch.Tensor]]]:
     """Cut every feature map of a batched discriminator output into ``n`` equal parts."""
-    parts = [[[f.chunk(n)[i] for f in feats] for feats in scales] for i in range(n)]
-    return parts
+    chunks = [[f.chunk(n) for f in feats] for feats in scales]  # one chunk call a map
+    return [[[c[i] for c in feats] for feats in chunks] for i in range(n)]
 
 
 def _set_grad(nets, flag: bool) -> None:
@@ -123,7 +124,8 @@ def _set_grad(nets, flag: bool) -> None:
 
 def gan_step(g_run, dd_run, dr_run, opt_g, opt_d, x: torch.Tensor, y: torch.Tensor,
              alpha: torch.Tensor | None, cfg, shift: int, autocast, freeze=(),
-             g_input: torch.Tensor | None = None) -> dict:
+             g_input: torch.Tensor | None = None, false_index: torch.Tensor | None = None
+             ) -> dict:
     """One step of eq. 3.2: the discriminators (max side, false targets rolled by
     ``shift``), then the generator (min side, eqs. 3.3 + 3.4 non-saturating + 3.5 + 3.6
     + lambda 3.7).
@@ -135,8 +137,12 @@ def gan_step(g_run, dd_run, dr_run, opt_g, opt_d, x: torch.Tensor, y: torch.Tens
     network when it is not None. ``x`` is the input at the step's resolution (what
     ``D_d`` sees); the generator reads ``g_input`` when given (decoder growth: the
     full-size input), else ``x``. ``freeze``: the discriminators, whose gradients are
-    switched off during the generator's backward pass (single process). Returns the
-    logged values as tensors.
+    switched off during the generator's backward pass (single process).
+    ``false_index`` (an int64 tensor of the batch's length, the rolled ``arange``): the
+    false targets as ``y.index_select(0, false_index)`` instead of ``torch.roll`` by
+    ``shift`` -- the same values, but no Python int in the step, which a CUDA graph needs
+    (:class:`~map2map.learn.static_step.StaticStep`). Returns the logged values as
+    tensors.
     """
     a = () if alpha is None else (alpha,)
     k = len(x)
@@ -146,7 +152,9 @@ def gan_step(g_run, dd_run, dr_run, opt_g, opt_d, x: torch.Tensor, y: torch.Tens
         real_pair = torch.cat([x, y], 1)
         groups = [real_pair, torch.cat([x, fake.detach()], 1)]
         if use_false:
-            groups.append(torch.cat([x, false_targets(y, shift % k or 1)], 1))
+            y_false = (false_targets(y, shift % k or 1) if false_index is None
+                       else y.index_select(0, false_index))
+            groups.append(torch.cat([x, y_false], 1))
         dd_out = _split(dd_run(torch.cat(groups), *a), len(groups))
         dr_out = _split(dr_run(torch.cat([y, fake.detach()]), *a), 2)
     loss_d, d_terms = discriminator_loss_3_2(
@@ -177,10 +185,23 @@ def place_networks(nets, dev: torch.device, amp: bool, cfg: TrainConfig
         net.to(dev)
         if amp:
             net.to(memory_format=torch.channels_last)
-    opt_g = torch.optim.Adam(g.parameters(), lr=cfg.lr, betas=(cfg.beta1, cfg.beta2))
+    kw = adam_options(dev)
+    opt_g = torch.optim.Adam(g.parameters(), lr=cfg.lr, betas=(cfg.beta1, cfg.beta2), **kw)
     opt_d = torch.optim.Adam(list(dd.parameters()) + list(dr.parameters()), lr=cfg.lr,
-                             betas=(cfg.beta1, cfg.beta2))
+                             betas=(cfg.beta1, cfg.beta2), **kw)
     return opt_g, opt_d
+
+
+def adam_options(dev: torch.device) -> dict:
+    """How Adam computes its step on ``dev`` (not what it holds: checkpoints store the
+    plain form and a resumed run sets these again). Empty: torch's default (single-tensor
+    loops on CPU, ``foreach`` on CUDA)."""
+    return {}
+
+
+def _set_adam_options(opt: torch.optim.Optimizer, dev: torch.device) -> None:
+    for grp in opt.param_groups:
+        grp.update(adam_options(dev))
 
 
 def step_autocast(dev: torch.device, amp: bool):
@@ -188,6 +209,30 @@ def step_autocast(dev: torch.device, amp: bool):
     if dev.type == "cuda":
         return torch.autocast("cuda", dtype=torch.bfloat16, enabled=amp)
     return torch.autocast("cpu", enabled=False)
+
+
+def set_lr(opt: torch.optim.Optimizer, lr: float) -> None:
+    """Every group's learning rate to ``lr``: in place (``fill_``) when it is a tensor (a
+    captured CUDA graph reads that tensor), else by assignment.
+
+    Examples
+    --------
+    >>> p = torch.nn.Parameter(torch.zeros(1))
+    >>> o = torch.optim.Adam([p], lr=torch.tensor(1e-3), fused=True)
+    >>> t = o.param_groups[0]["lr"]; set_lr(o, 5e-4)
+    >>> o.param_groups[0]["lr"] is t, round(float(t), 6)
+    (True, 0.0005)
+    """
+    for grp in opt.param_groups:
+        if torch.is_tensor(grp["lr"]):
+            grp["lr"].fill_(lr)
+        else:
+            grp["lr"] = lr
+
+
+def _sums_dict(dev_sums: dict, keys: list | None, acc: torch.Tensor | None) -> dict:
+    """The running sums by name: the resumed ones, or the step's vector once it ran."""
+    return dev_sums if keys is None else dict(zip(keys, acc.unbind(), strict=True))
 
 
 def _host_sums(dev_sums: dict, n: float) -> dict:
@@ -398,6 +443,7 @@ class GANRun:
         self.gen = torch.Generator().manual_seed(cfg.seed)
         self.history: list[dict] = []
         self.epoch, self.start_batch, self.sums = 0, 0, {}
+        self.static = None  # the StaticStep under cfg.cuda_graph, made by run()
         if start.resume:
             self._load(start.tensors, start.state)
         self.autocast = step_autocast(self.dev, self.amp)
@@ -414,7 +460,8 @@ class GANRun:
     def step(self, epoch: int, b: int, idx: torch.Tensor, x: torch.Tensor,
              y: torch.Tensor, shift: int) -> dict:
         """Train on batch ``b`` of ``epoch`` (pairs ``idx``, tensors ``x``, ``y``);
-        returns the logged values as tensors (:func:`gan_step`'s)."""
+        returns the logged values as tensors (:func:`gan_step`'s, or :attr:`static`'s
+        -- the :class:`~map2map.learn.static_step.StaticStep` -- when it is not None)."""
         raise NotImplementedError
 
     def generate(self, plan: EpochPlan, idx: torch.Tensor, x: torch.Tensor) -> torch.Tensor:
@@ -431,6 +478,25 @@ class GANRun:
         """Text of the progress bar after the epoch counter for batch ``b`` (done)."""
         return ""
 
+    def _static_step(self):
+        """The static step under ``cfg.cuda_graph`` (None otherwise, or when it cannot
+        apply: DDP or a compiled generator, with a warning)."""
+        cfg = self.cfg
+        if not getattr(cfg, "cuda_graph", False):
+            return None
+        if self.dist.world > 1 or cfg.compile:
+            import warnings
+
+            warnings.warn("--cuda-graph is single-process and not combined with --compile: "
+                          "training eagerly", RuntimeWarning, stacklevel=2)
+            return None
+        from .static_step import StaticStep, graph_autocast
+
+        if self.cuda:
+            self.autocast = graph_autocast(self.dev, self.amp)
+        return StaticStep((self.g_run, self.dd_run, self.dr_run), (self.opt_g, self.opt_d),
+                          cfg, self.autocast, self.freeze, graph=self.cuda)
+
     # ----------------------------------------------------------------- what is shared
     def _load(self, tensors: dict, state: dict) -> None:
         ck_path = self.out / CHECKPOINT_FILE
@@ -438,6 +504,8 @@ class GANRun:
             load_module(net, tensors, name, ck_path)
         load_optimizer(self.opt_g, tensors, "opt_G", state["opt_G"])
         load_optimizer(self.opt_d, tensors, "opt_D", state["opt_D"])
+        for o in (self.opt_g, self.opt_d):
+            _set_adam_options(o, self.dev)
         self.gen.set_state(tensors["rng.shuffle"])
         if self.torch_rng:
             torch.set_rng_state(tensors["rng.torch"])
@@ -512,6 +580,7 @@ class GANRun:
         self.g_run, self.dd_run, self.dr_run = dist.wrap(g_run), dist.wrap(self.dd), \
             dist.wrap(self.dr)
         self.freeze = (self.dd, self.dr) if dist.world == 1 else ()
+        self.static = self._static_step()
         epoch, sums, history, gen = self.epoch, self.sums, self.history, self.gen
         bar = None
         if self.progress and dist.main:
@@ -548,11 +617,12 @@ class GANRun:
                 # a resumed epoch's sums continue on the device (same additions, same order)
                 dev_sums = {k: torch.tensor(v, dtype=torch.float64, device=self.dev)
                             for k, v in sums.items() if k != "_n"}
+                zero = torch.zeros((), dtype=torch.float64, device=self.dev)
+                keys, acc = None, None  # the logged values' names, their sums in one vector
                 n_sum = sums.get("_n", 0.0)
                 f = lr_factor(epoch, cfg)
                 for o in (self.opt_g, self.opt_d):
-                    for grp in o.param_groups:
-                        grp["lr"] = cfg.lr * f
+                    set_lr(o, cfg.lr * f)  # in place when a captured graph reads it
                 t_epoch = time.perf_counter()
                 b = start_batch
                 while b < nb:
@@ -563,10 +633,12 @@ class GANRun:
                     vals = self.step(epoch, b, idx, x, y, shifts[b])
                     k = len(idx)
                     # summed on the device in float64 (as float(v) * k on the host would,
-                    # bit for bit): no host-device synchronisation per batch
-                    for key, v in vals.items():
-                        term = v.detach().double() * k
-                        dev_sums[key] = dev_sums[key] + term if key in dev_sums else term
+                    # bit for bit): no host-device synchronisation per batch, and all the
+                    # values in one vector (4 operator calls a step, not 4 per value)
+                    if keys is None:  # (0 + term: the same bits as term)
+                        keys = sorted(vals)
+                        acc = torch.stack([dev_sums.get(key, zero) for key in keys])
+                    acc = acc + torch.stack([vals[key].detach() for key in keys]).double() * k
                     n_sum += k
                     images += k * dist.world
                     b += 1
@@ -581,12 +653,14 @@ class GANRun:
                                                 f"D {float(vals['loss_D'].detach()):.3f}")
                         bar.update(1)
                     if stop["flag"]:
-                        sums = _host_sums(dev_sums, n_sum)
+                        sums = _host_sums(_sums_dict(dev_sums, keys, acc), n_sum)
                         raise KeyboardInterrupt
-                sums = _host_sums(dev_sums, n_sum)
+                sums = _host_sums(_sums_dict(dev_sums, keys, acc), n_sum)
                 row = {"epoch": epoch + 1, "lr": cfg.lr * f, **plan.log}
                 row.update(dist.mean({k: v / sums["_n"] for k, v in sums.items() if k != "_n"}))
                 row["img_per_s"] = images / max(time.perf_counter() - t_start, 1e-9)
+                if self.static is not None:  # which step ran: graph, eager, or a fallback
+                    row["step"] = self.static.mode
                 row["epoch_s"] = time.perf_counter() - t_epoch
                 history.append(row)
                 epoch += 1

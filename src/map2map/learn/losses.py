@@ -58,21 +58,23 @@ Scales = list[list[torch.Tensor]]
 def _log_likelihood(scales: Scales, real: bool) -> torch.Tensor:
     """``-mean log D`` (real) or ``-mean log(1 - D)`` (fake) of the patch logits, summed
     over the scales."""
-    total = torch.zeros((), device=scales[0][-1].device)
+    total = None  # the first term itself, not 0 + it: the same value, two calls fewer
     for feats in scales:
         logits = feats[-1].float()
         target = torch.ones_like(logits) if real else torch.zeros_like(logits)
-        total = total + F.binary_cross_entropy_with_logits(logits, target)
+        term = F.binary_cross_entropy_with_logits(logits, target)
+        total = term if total is None else total + term
     return total
 
 
 def _feature_l1(real: Scales, fake: Scales) -> torch.Tensor:
     """Sum over scales and intermediate layers of the mean |D^(i)(real) - D^(i)(fake)|."""
-    total = torch.zeros((), device=fake[0][-1].device)
+    total = None
     for fr, ff in zip(real, fake, strict=True):
         for a, b in zip(fr[:-1], ff[:-1], strict=True):
-            total = total + (a.detach().float() - b.float()).abs().mean()
-    return total
+            term = (a.detach().float() - b.float()).abs().mean()
+            total = term if total is None else total + term
+    return total if total is not None else torch.zeros((), device=fake[0][-1].device)
 
 
 def gan_domain_3_3(real_pair: Scales | None, fake_pair: Scales, false_pair: Scales | None = None,

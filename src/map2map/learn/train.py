@@ -110,6 +110,8 @@ class _BARun(GANRun):
         return self.plan.batches
 
     def step(self, epoch, b, idx, x, y, shift) -> dict:
+        if self.static is not None:  # cfg.cuda_graph
+            return self.static(x, y, shift)
         return gan_step(self.g_run, self.dd_run, self.dr_run, self.opt_g, self.opt_d, x, y,
                         None, self.cfg, shift, self.autocast, self.freeze)
 

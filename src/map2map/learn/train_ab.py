@@ -233,9 +233,11 @@ class _ABRun(GANRun):
 
     def step(self, epoch, b, idx, x, y, shift) -> dict:
         alpha = self._alpha(self.alpha_at(epoch, b)[0])
+        gi = self._g_input("train", idx)
+        if self.static is not None:  # cfg.cuda_graph
+            return self.static(x, y, shift, alpha, gi)
         return gan_step(self.g_run, self.dd_run, self.dr_run, self.opt_g, self.opt_d, x, y,
-                        alpha, self.cfg, shift, self.autocast, self.freeze,
-                        self._g_input("train", idx))
+                        alpha, self.cfg, shift, self.autocast, self.freeze, gi)
 
     def postfix(self, epoch: int, b: int) -> str:
         return f"{stage_of(epoch, self.cfg.schedule)[1]}px a={self.alpha_at(epoch, b)[0]:.2f} "
