@@ -114,10 +114,12 @@ class _Closer(_Identity):
             known = r != UNKNOWN
             cols = np.flatnonzero(known.any(axis=0))
             rows = np.flatnonzero(known.any(axis=1))
-            o[rows.min() + 2:rows.max() - 1, cols.max() + 1] = OCCUPIED   # the frontier
+            if cols.max() + 1 < self.size:                                 # the frontier
+                o[rows.min() + 2:rows.max() - 1, cols.max() + 1] = OCCUPIED
             inner = rows[2:-2]
             strip = inner[(r[inner, cols.min() + 3:cols.min() + 20] == UNKNOWN).all(axis=1)]
-            o[strip.min():strip.max() + 1, cols.min() + 2:cols.max() - 8] = OCCUPIED
+            if len(strip):
+                o[strip.min():strip.max() + 1, cols.min() + 2:cols.max() - 8] = OCCUPIED
         return out
 
 
@@ -231,3 +233,29 @@ def test_cli_passes_the_new_options(tmp_path, capsys):
     assert outs["9"] > outs["2"]
     assert main(["autocorrect", str(tmp_path / "small.yaml"), "--out",
                  str(tmp_path / "x.yaml"), "--thickness", "thick"]) != 0
+
+
+def test_tiled_maps_leave_frontiers_open_unless_told():
+    """``open_frontiers=None``: on for a map corrected in tiles, the module default for
+    one corrected whole; an explicit value holds for both."""
+    from map2map.learn.autocorrect import OPEN_FRONTIERS, _open
+
+    assert _open(None, True) is True and _open(None, False) is OPEN_FRONTIERS
+    assert _open(False, True) is False and _open(True, False) is True
+
+
+def test_tiled_map_frontier_is_left_open_by_default():
+    """A large partial map corrected in tiles: the stand-in closes each tile's open edge;
+    by default (tiles) the frontier of the whole map stays open, with
+    ``open_frontiers=False`` it is closed."""
+    d = np.full((1000, 1400), UNKNOWN, np.uint8)
+    d[100:900, 50:900] = FREE
+    d[100:103, 50:900] = OCCUPIED
+    d[897:900, 50:900] = OCCUPIED
+    d[100:900, 50:53] = OCCUPIED
+    m = OccupancyMap(d, 0.05)
+    outs = {f: autocorrect_many([m], _Closer(), workers=1, large="tile",
+                                open_frontiers=f)[0].map.data for f in (None, False)}
+    edge = slice(895, 930)                       # the last known columns and beyond
+    assert (outs[False][200:800, edge] == OCCUPIED).any(axis=1).mean() > 0.5
+    assert (outs[None][200:800, edge] == OCCUPIED).any(axis=1).mean() < 0.05

@@ -37,7 +37,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "library's, learn.autocorrect.THICKNESS)")
     p.add_argument("--open-frontiers", action=argparse.BooleanOptionalAction, default=None,
                    help="leave out the network's walls at the edge of the known area or "
-                        "beyond it (partial maps; default: learn.autocorrect.OPEN_FRONTIERS)")
+                        "beyond it (partial maps; default: learn.autocorrect.OPEN_FRONTIERS, "
+                        "on for a map corrected in tiles)")
     p.add_argument("--large", choices=("resize", "tile", "refuse"), default=None,
                    help="maps more than 2.5x the training maps' size: resized whole, "
                         "corrected in overlapping tiles at the training scale, or returned "
