@@ -261,6 +261,8 @@ def drawn_wall_px(net: BAModel, m: OccupancyMap, shrink: float, thickness: str |
     if thickness == "input":
         from .postprocess import wall_thickness_px
 
+        if shrink <= 1.0:  # the bound: no need to measure the input's walls (2 ms a map)
+            return t * shrink
         t_in = wall_thickness_px(square[None]) if square is not None else SLAM_WALL_PX
         return t * min(shrink, max(1.0, t_in / SLAM_WALL_PX))
     if isinstance(thickness, str):
