@@ -5,6 +5,7 @@ the sign test are documented there).
     python3 benchmarks/table53.py                        # 100 generated held-out pairs
     python3 benchmarks/table53.py --quick                # 12 pairs
     python3 benchmarks/table53.py --data DS --model RUN  # a dataset's test split, a run
+    python3 benchmarks/table53.py --data DS --ac open_frontiers=true   # an autocorrect option
     python3 benchmarks/table53.py --data DS1 --data DS2 --split test val \\
         --cleaner DS1/cleaner.skops                      # several builds, merged by plan
 

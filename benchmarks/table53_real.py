@@ -5,7 +5,7 @@ Usage::
 
     OMP_NUM_THREADS=1 python3 benchmarks/table53_real.py --out OUT [--data ../shared/data]
         [--maps E5_01,HIH_01] [--model pretrained] [--no-anchor] [--seed 0]
-        [--figures docs/]
+        [--figures docs/] [--ac thickness=input --ac large=tile ...]
 
 For each of the 18 sensor maps (E5: 14 office maps, HIH: 4 apartment maps) and its
 layout: the appendix metric of the map and of its auto-corrected version against the
