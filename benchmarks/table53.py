@@ -5,6 +5,7 @@ the sign test are documented there).
     python3 benchmarks/table53.py                        # 100 generated held-out pairs
     python3 benchmarks/table53.py --quick                # 12 pairs
     python3 benchmarks/table53.py --data DS --model RUN  # a dataset's test split, a run
+    python3 benchmarks/table53.py --data DS --ac open_frontiers=true   # an autocorrect option
     python3 benchmarks/table53.py --data DS1 --data DS2 --split test val \\
         --cleaner DS1/cleaner.skops                      # several builds, merged by plan
 
@@ -33,6 +34,23 @@ from map2map.learn.table53 import (  # noqa: E402
 )
 
 
+def ac_options(items: list[str]) -> dict:
+    """``KEY=VALUE`` strings -> keyword arguments of ``autocorrect_many`` (true/false,
+    numbers, else strings)."""
+    out = {}
+    for item in items:
+        k, _, v = item.partition("=")
+        low = v.strip().lower()
+        if low in ("true", "false"):
+            out[k.strip()] = low == "true"
+            continue
+        try:
+            out[k.strip()] = float(v)
+        except ValueError:
+            out[k.strip()] = v.strip()
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--data", action="append", help="dataset folder or .npz (repeatable)")
@@ -48,6 +66,9 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default="table53_out")
     ap.add_argument("--no-anchor", action="store_true", help="walls placed by the network, "
                     "not anchored on the input (autocorrect --no-anchor)")
+    ap.add_argument("--ac", action="append", default=[], metavar="KEY=VALUE",
+                    help="an option of autocorrect (repeatable), e.g. thickness=resolution, "
+                         "open_frontiers=true")
     args = ap.parse_args(argv)
     n = 12 if args.quick else args.n
     out = Path(args.out)
@@ -68,7 +89,8 @@ def main(argv=None) -> int:
         pairs = PackedPairs(pairs.a[:n], pairs.b[:n], pairs.plan_id[:n], pairs.split[:n],
                             pairs.meta)
     save_packed(out / "heldout.npz", pairs)
-    table = run_table53(pairs, args.model, seed=args.seed, anchor=not args.no_anchor)
+    table = run_table53(pairs, args.model, seed=args.seed, anchor=not args.no_anchor,
+                        autocorrect_kw=ac_options(args.ac))
     print(table.format())
     table.to_csv(out / "table53.csv")
     table.figure(out / "fig512.png")

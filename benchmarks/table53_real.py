@@ -5,7 +5,7 @@ Usage::
 
     OMP_NUM_THREADS=1 python3 benchmarks/table53_real.py --out OUT [--data ../shared/data]
         [--maps E5_01,HIH_01] [--model pretrained] [--no-anchor] [--seed 0]
-        [--figures docs/]
+        [--figures docs/] [--ac thickness=input --ac large=tile ...]
 
 For each of the 18 sensor maps (E5: 14 office maps, HIH: 4 apartment maps) and its
 layout: the appendix metric of the map and of its auto-corrected version against the
@@ -36,6 +36,23 @@ SHARED = Path(os.environ.get("MAP2MAP_SHARED_DATA",
                              Path(__file__).resolve().parents[2] / "shared" / "data"))
 
 
+def ac_options(items: list[str]) -> dict:
+    """``KEY=VALUE`` strings -> keyword arguments of ``autocorrect_many`` (true/false,
+    numbers, else strings)."""
+    out = {}
+    for item in items:
+        k, _, v = item.partition("=")
+        low = v.strip().lower()
+        if low in ("true", "false"):
+            out[k.strip()] = low == "true"
+            continue
+        try:
+            out[k.strip()] = float(v)
+        except ValueError:
+            out[k.strip()] = v.strip()
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", default="table53_real_out")
@@ -48,13 +65,17 @@ def main(argv=None) -> int:
     ap.add_argument("--overlay-maps", default="",
                     help="maps of the overlay figure (default: HIH_01, the best and the "
                          "worst counted E5 map)")
+    ap.add_argument("--ac", action="append", default=[], metavar="KEY=VALUE",
+                    help="an option of autocorrect (repeatable), e.g. thickness=resolution, "
+                         "open_frontiers=true")
     args = ap.parse_args(argv)
     root = Path(args.data) / "halmstad"
     if not root.is_dir():
         print(f"no Halmstad data at {root}; nothing to do")
         return 0
     names = [n for n in args.maps.split(",") if n] or None
-    t = run_table53_real(root, names, args.model, seed=args.seed, anchor=not args.no_anchor)
+    t = run_table53_real(root, names, args.model, seed=args.seed, anchor=not args.no_anchor,
+                         autocorrect_kw=ac_options(args.ac))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     text = t.format()

@@ -29,6 +29,20 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-anchor", action="store_true",
                    help="place the walls where the network's low-resolution output says, "
                         "not on the input's observed wall faces (the default anchors them)")
+    p.add_argument("--thickness", default=None, metavar="RULE",
+                   help="thickness of the walls drawn behind a face seen from one side: "
+                        "'shrink' (the training plans' walls scaled with the map's size), "
+                        "'resolution' (their metres at the map's resolution), 'input' (from "
+                        "the input's own walls) or a number of pixels (default: the "
+                        "library's, learn.autocorrect.THICKNESS)")
+    p.add_argument("--open-frontiers", action=argparse.BooleanOptionalAction, default=None,
+                   help="leave out the network's walls at the edge of the known area or "
+                        "beyond it (partial maps; default: learn.autocorrect.OPEN_FRONTIERS, "
+                        "on for a map corrected in tiles)")
+    p.add_argument("--large", choices=("resize", "tile", "refuse"), default=None,
+                   help="maps more than 2.5x the training maps' size: resized whole, "
+                        "corrected in overlapping tiles at the training scale, or returned "
+                        "uncorrected (default: learn.autocorrect.LARGE)")
     p.add_argument("--device", default="cpu", help="torch device (default cpu)")
     add_input_options(p)
     p.set_defaults(func=run)
@@ -70,8 +84,17 @@ def run(args: argparse.Namespace) -> int:
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
+        thickness = args.thickness
+        if thickness is not None and thickness not in ("shrink", "resolution", "input"):
+            try:
+                thickness = float(thickness)
+            except ValueError:
+                raise InputError("--thickness", "'shrink', 'resolution', 'input' or a "
+                                 f"number of pixels, not {thickness!r}") from None
         results = autocorrect_many(maps, model, straighten=not args.no_straighten,
-                                   anchor=not args.no_anchor, device=args.device)
+                                   anchor=not args.no_anchor, device=args.device,
+                                   thickness=thickness, open_frontiers=args.open_frontiers,
+                                   large=args.large)
     for i, (f, r) in enumerate(zip(files, results, strict=True)):
         save_map(r.map, outs[i])
         if dxfs:

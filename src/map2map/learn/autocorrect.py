@@ -26,13 +26,27 @@
    resolution and origin, so every corrected wall lies in the same world frame. Cells
    outside the square (all unknown in the input) stay unknown.
 
-The whole map goes through the network in one piece (resizing, not tiling): the model
-learnt whole buildings at the dataset's scale. A result the model is unsure of carries a
+A map up to :data:`LARGE_SHRINK` (2.5) times the dataset's size goes through the network
+in one piece (resizing): the model learnt whole buildings at the dataset's scale. A larger
+one (``large``, default ``"tile"`` since 2026-11-26) is cut into half-overlapping tiles of
+at most :data:`TILE_SHRINK` times that size, each brought to the dataset's size and run
+through the network, and the centre of each tile's output is kept
+(:func:`tile_grid`, :func:`stitch_tiles`); the post-processing then runs once on the
+whole map, at the tiles' scale, leaving out the network's walls that have no seen space
+on one side (``open_frontiers``: a tile shows the network a piece of a building, which
+it closes). ``large="resize"`` is the behaviour before, ``"refuse"`` returns such a map
+uncorrected with a warning. The walls seen from one side are drawn as thick as the
+training plans' walls scaled by the input's own walls (``thickness="input"``, default
+since 2026-11-26: at most the shrink, see :func:`drawn_wall_px`), not by the shrink
+alone, which made the walls of a real office map 15-24 px thick against the plan's 3.
+Measured on the 18 real Halmstad maps and the gen1500 val split in docs/learn.md,
+"Real maps beyond the training scale". A result the model is unsure of carries a
 warning in ``meta["autocorrect"]["warnings"]`` (and on the command line): content
-more than 4x the dataset's size (a building much larger than those the model learnt:
-walls below a model cell are lost and the layout may be invented), or output walls that
-the input's walls do not support (fewer than half of the output wall pixels within half
-a wall plus 2 dataset pixels of an input wall means the network invented structure).
+more than 4x the dataset's size corrected whole (a building much larger than those the
+model learnt: walls below a model cell are lost and the layout may be invented), or
+output walls that the input's walls do not support (fewer than half of the output wall
+pixels within half a wall plus 2 dataset pixels of an input wall means the network
+invented structure).
 
 Examples
 --------
@@ -70,7 +84,8 @@ from .networks import UNetGenerator, from_unit
 from .postprocess import drawn_pieces, postprocess
 
 __all__ = ["BAModel", "load_model", "autocorrect", "autocorrect_many", "Correction",
-           "pretrained_path", "save_segments_dxf", "export_model", "dominant_angle"]
+           "pretrained_path", "save_segments_dxf", "export_model", "dominant_angle",
+           "drawn_wall_px", "tile_grid", "stitch_tiles"]
 
 PRETRAINED = "model_ba.safetensors"
 MARGIN_PX = 4  # dataset crop margin at the dataset's size (learn.synthetic, dataset build)
@@ -85,11 +100,34 @@ MAX_SHRINK = 4.0  # content squares more than 4x the dataset's size get a warnin
 #: maps"), said with every correction they make
 REAL_MAPS_ANCHORED = ("walls anchored on the input lowered the appendix-metric error on 191 "
                       "of 200 held-out simulated maps; on 18 real Halmstad maps against "
-                      "their floor plans it lowered it on 10; on 6 large office maps "
-                      "(beyond the training maps' size) the output's alignment with the "
-                      "plan failed the keypoint check, 5 of them 1.5-5.6 px worse; walls "
-                      "are drawn several times too thick on such maps")
+                      "their floor plans (the 14 large office maps corrected in tiles) it "
+                      "lowered it on 11; on 2 of the office maps the output's alignment "
+                      "with the plan failed the keypoint check, one of them 4.3 px worse; "
+                      "against the part of the plan the robot saw, the output's walls are "
+                      "no closer than the input's (boundary F1 equal, Chamfer 6.8 px "
+                      "against 6.4) and drawn 2-3 times as thick as the plan's")
 CPU_CHUNK = 16  # maps per forward pass on the CPU (BAModel.predict)
+#: Median wall thickness (occupied area / centre-line length) of the training SLAM maps at
+#: the dataset's 256 px (200 train maps of gen1500: 2.07 px, 5-95 % 1.84-2.93; their
+#: plans' walls 5.61): how thick the dataset's SLAM maps draw a wall (``thickness="input"``).
+SLAM_WALL_PX = 2.07
+#: Default of :func:`autocorrect`'s ``thickness`` (docs/learn.md, "Real maps beyond the
+#: training scale": on the 18 real Halmstad maps the output's alignment failed on 1
+#: instead of 6, observed-part Chamfer 8.5 px instead of 10.2; gen1500 val unchanged).
+THICKNESS = "input"
+#: Default of :func:`autocorrect`'s ``open_frontiers`` for maps corrected whole; maps
+#: corrected in tiles (``large="tile"``) leave their frontiers open unless told otherwise
+#: (a tile shows the network a piece of a building, which it closes).
+OPEN_FRONTIERS = False
+#: Default of :func:`autocorrect`'s ``large``: what is done with a map whose content is
+#: more than :data:`LARGE_SHRINK` times the dataset's size.
+LARGE = "tile"
+#: Shrink (content side / dataset size) beyond which ``large`` applies: the training
+#: plans reach 2.39 (docs/learn.md, "Table 5.3 on real maps").
+LARGE_SHRINK = 2.5
+#: ``large="tile"``: the tiles' shrink is at most this (the training plans: 0.57-2.3,
+#: median 1.1, 5-95 %).
+TILE_SHRINK = 2.0
 
 
 def pretrained_path() -> Path:
@@ -179,6 +217,58 @@ class Correction:
     map: OccupancyMap
     segments: np.ndarray
     warnings: list[str]
+
+
+def drawn_wall_px(net: BAModel, m: OccupancyMap, shrink: float, thickness: str | float,
+                  square: np.ndarray | None = None) -> float:
+    """Thickness (pixels of the input) of the walls :func:`autocorrect` draws where the
+    input saw a wall from one side only (two-sided walls are grown to
+    ``postprocess.ANCHOR_MIN_THICK`` scaled by the same factor).
+
+    ``thickness`` is one of:
+
+    * ``"shrink"``: the training plans' thickness (``net.target_wall_px``, dataset
+      pixels) times the shrink (content side / dataset size), as the whole map is
+      resized: a building five times the training size gets walls five times as thick
+      (the behaviour before 2026-11-26, 15 px on the real Halmstad maps against the
+      plans' 3);
+    * ``"resolution"``: the training plans' thickness in metres (at the dataset's
+      resolution, ``header["dataset"]["identity"]["resolution"]``, 0.05 m/px) over the
+      map's own resolution: walls do not grow with the building;
+    * ``"input"``: the training thickness times the input's own wall thickness over the
+      training SLAM maps' (:data:`SLAM_WALL_PX`), at least 1 and at most the shrink: the
+      input's walls say how many of its pixels a dataset pixel of wall is;
+    * a number: that many pixels.
+
+    Examples
+    --------
+    >>> net = load_model()
+    >>> m = OccupancyMap(np.full((10, 10), 255, np.uint8), 0.025)
+    >>> drawn_wall_px(net, m, 5.0, "shrink") == 5 * net.target_wall_px
+    True
+    >>> bool(np.isclose(drawn_wall_px(net, m, 5.0, "resolution"),
+    ...                 2 * net.target_wall_px))                    # 0.05 / 0.025
+    True
+    >>> drawn_wall_px(net, m, 5.0, 3.0)
+    3.0
+    """
+    t = net.target_wall_px
+    if thickness == "shrink":
+        return t * shrink
+    if thickness == "resolution":
+        ident = net.header.get("dataset", {}).get("identity", {})
+        return t * float(ident.get("resolution") or 0.05) / float(m.resolution)
+    if thickness == "input":
+        from .postprocess import wall_thickness_px
+
+        if shrink <= 1.0:  # the bound: no need to measure the input's walls (2 ms a map)
+            return t * shrink
+        t_in = wall_thickness_px(square[None]) if square is not None else SLAM_WALL_PX
+        return t * min(shrink, max(1.0, t_in / SLAM_WALL_PX))
+    if isinstance(thickness, str):
+        raise ValueError(f"thickness: 'shrink', 'resolution', 'input' or pixels, "
+                         f"not {thickness!r}")
+    return float(thickness)
 
 
 def _square(m: OccupancyMap, data_size: int):
@@ -282,53 +372,161 @@ def _unrotate_segments(segs: np.ndarray, angle: float, n: int) -> np.ndarray:
     return back.reshape(-1, 4)
 
 
+def tile_grid(n: int, data_size: int, max_shrink: float = TILE_SHRINK) -> tuple[int, int]:
+    """``(count, stride)`` of the tiles that cover a square of ``n`` pixels: ``count``
+    tiles per axis, each ``2 * stride`` pixels, one every ``stride`` (half-overlapping),
+    so they cover ``(count + 1) * stride >= n``; the fewest with tiles of at most
+    ``max_shrink`` times ``data_size``.
+
+    Examples
+    --------
+    >>> tile_grid(1600, 256)            # a 6.25x map: 6 x 6 tiles of 458 px (1.8x)
+    (6, 229)
+    >>> tile_grid(300, 256)             # small enough: one tile
+    (1, 150)
+    """
+    half = max_shrink * data_size / 2
+    count = max(1, math.ceil(n / half) - 1)
+    return count, math.ceil(n / (count + 1))
+
+
+def _tiles(model_sq: np.ndarray, count: int, stride: int) -> list[np.ndarray]:
+    """The ``count x count`` tiles of :func:`tile_grid` (row by row), the square padded
+    with unknown to ``(count + 1) * stride``."""
+    L = (count + 1) * stride
+    big = np.full((L, L), UNKNOWN, np.uint8)
+    n = model_sq.shape[0]
+    big[:n, :n] = model_sq
+    return [big[i * stride:(i + 2) * stride, j * stride:(j + 2) * stride]
+            for i in range(count) for j in range(count)]
+
+
+def stitch_tiles(outputs: np.ndarray, count: int) -> np.ndarray:
+    """The network's outputs of :func:`_tiles` (``count**2`` maps of ``s x s``) as one
+    output of ``(count + 1) * s / 2`` cells: of each tile its centre half across each
+    axis (and the border out to the edge at the first and last tiles), where a tile's
+    network saw context on all sides.
+
+    Examples
+    --------
+    >>> o = np.stack([np.full((4, 4), k, np.float32) for k in range(4)])
+    >>> stitch_tiles(o, 2).astype(int)[::2, ::2].tolist()   # every other cell
+    [[0, 0, 1], [0, 0, 1], [2, 2, 3]]
+    """
+    s = outputs.shape[-1]
+    h, q = s // 2, s // 4
+    out = np.empty(((count + 1) * h, (count + 1) * h), np.float32)
+    for i in range(count):
+        r0 = 0 if i == 0 else i * h + q          # rows of the stitched grid kept ...
+        r1 = (count + 1) * h if i == count - 1 else i * h + q + h
+        for j in range(count):
+            c0 = 0 if j == 0 else j * h + q
+            c1 = (count + 1) * h if j == count - 1 else j * h + q + h
+            out[r0:r1, c0:c1] = outputs[i * count + j][r0 - i * h:r1 - i * h,
+                                                       c0 - j * h:c1 - j * h]
+    return out
+
+
 def autocorrect_many(maps: list[OccupancyMap], model: str | os.PathLike | BAModel | None =
                      "pretrained", *, straighten: bool = True, deskew: bool = True,
                      anchor: bool = True, device: str = "cpu", batch: int = 256,
-                     workers: int | None = None) -> list[Correction]:
+                     workers: int | None = None, thickness: str | float | None = None,
+                     open_frontiers: bool | None = None,
+                     large: str | None = None) -> list[Correction]:
     """:func:`autocorrect` for several maps, the network run in batches.
 
     The per-map work around the network (squaring, deskewing, post-processing, the way
     back to the input's frame) runs on ``workers`` threads (default: one per CPU core, at
     most 8; OpenCV and the numba kernels release the GIL: post-processing measured 1.6x
-    faster on 2 cores). The results do not depend on ``workers``.
+    faster on 2 cores). The results do not depend on ``workers``. ``thickness``,
+    ``open_frontiers`` and ``large`` as :func:`autocorrect` (``None``: :data:`THICKNESS`,
+    :data:`OPEN_FRONTIERS` (True for a map corrected in tiles), :data:`LARGE`).
     """
     net = load_model(model, device)
+    thickness = THICKNESS if thickness is None else thickness
+    frontiers = open_frontiers  # None: by map, whole or in tiles
+    large = LARGE if large is None else large
+    if large not in ("resize", "tile", "refuse"):
+        raise ValueError(f"large: 'resize', 'tile' or 'refuse', not {large!r}")
     n_workers = max(1, min(8, os.cpu_count() or 1) if workers is None else int(workers))
     with ThreadPoolExecutor(n_workers) if n_workers > 1 else nullcontext() as pool:
         run = pool.map if pool is not None else map
         min_skew = MIN_SKEW_ANCHORED_DEG if anchor and straighten else MIN_SKEW_DEG
         squares = list(run(lambda m: _prepare(m, net.data_size, deskew, min_skew), maps))
-        todo = [i for i, s in enumerate(squares) if s is not None]
-        inputs = np.stack(list(run(lambda i: square_resize(squares[i][-1], net.data_size),
-                                   todo))) if todo \
-            else np.zeros((0, net.data_size, net.data_size), np.uint8)
+        big = {i for i, s in enumerate(squares)
+               if s is not None and s[3] > LARGE_SHRINK * net.data_size}
+        todo = [i for i, s in enumerate(squares) if s is not None
+                and not (large == "refuse" and i in big)]
+        # what goes through the network: per map its square, or its tiles
+        pieces = {i: (_tiles(squares[i][-1], *tile_grid(squares[i][-1].shape[0],
+                                                          net.data_size))
+                      if large == "tile" and i in big else [squares[i][-1]]) for i in todo}
+        flat = [(i, t) for i in todo for t in pieces[i]]
+        inputs = np.stack(list(run(lambda it: square_resize(it[1], net.data_size), flat))) \
+            if flat else np.zeros((0, net.data_size, net.data_size), np.uint8)
         outputs = net.predict(inputs, batch)
-        out_of = dict(zip(todo, outputs, strict=True))
+        out_of, k = {}, 0
+        for i in todo:
+            got = outputs[k:k + len(pieces[i])]
+            k += len(pieces[i])
+            out_of[i] = (stitch_tiles(got, tile_grid(squares[i][-1].shape[0],
+                                                     net.data_size)[0])
+                         if large == "tile" and i in big else got[0])
         results = list(run(lambda i: _finish(maps[i], squares[i], out_of.get(i), net,
-                                             straighten, anchor), range(len(maps))))
-    for i in todo:  # warnings from the caller's thread, in the maps' order
+                                             straighten, anchor, thickness,
+                                             _open(frontiers, i in big and large == "tile"),
+                                             refused=i in big and large == "refuse",
+                                             tiled=i in big and large == "tile"),
+                           range(len(maps))))
+    for i in (i for i, s in enumerate(squares) if s is not None):  # caller's thread, in order
         for w in results[i].warnings:
             warnings.warn(w, stacklevel=2)
     return results
 
 
+def _open(open_frontiers: bool | None, tiled: bool) -> bool:
+    """``open_frontiers`` for one map: as given, else on for a map corrected in tiles
+    and :data:`OPEN_FRONTIERS` for one corrected whole (docs/learn.md, "Real maps beyond
+    the training scale": tiles without it invent walls in the unknown space around the
+    building, 25-28 px observed Chamfer on the real maps against 6.4 for the input)."""
+    if open_frontiers is not None:
+        return bool(open_frontiers)
+    return True if tiled else OPEN_FRONTIERS
+
+
 def _finish(m: OccupancyMap, sq, output: np.ndarray | None, net: BAModel, straighten: bool,
-            anchor: bool) -> Correction:
+            anchor: bool, thickness: str | float = "shrink",
+            open_frontiers: bool = False, refused: bool = False,
+            tiled: bool = False) -> Correction:
     """One map of :func:`autocorrect_many` after the network: post-processing, back to
-    the input's frame and resolution, segments in metres, warnings (not yet issued)."""
-    if sq is None:
-        msg = "the map holds no known cells; nothing to correct"
+    the input's frame and resolution, segments in metres, warnings (not yet issued).
+    With ``tiled``, ``output`` is the tiles' stitched one (``large="tile"``)."""
+    if sq is None or refused:
+        msg = "the map holds no known cells; nothing to correct" if sq is None else (
+            f"the map is {sq[3] / net.data_size:.1f}x larger than the maps the model "
+            f"learnt on ({net.data_size} px; at most {LARGE_SHRINK}x is corrected with "
+            "large='refuse'): returned as it is, not corrected")
         out = m.copy()
         out.meta["autocorrect"] = {"warnings": [msg], "segments_px": [], "support": None,
-                                   "model": net.source}
+                                   "model": net.source, "refused": sq is not None}
         return Correction(out, np.zeros((0, 4)), [msg])
     square, row0, col0, side, angle, pad, model_sq = sq
     n = model_sq.shape[0]
     scale = n / net.data_size
-    data_sq, segs = postprocess(output, (n, n), model_sq,
-                                wall_px=max(1.0, net.target_wall_px * scale),
-                                straighten=straighten, anchor=anchor, data_px=scale)
+    wall_px = max(1.0, drawn_wall_px(net, m, scale, thickness, square))
+    thick_px = scale if thickness == "shrink" else wall_px / net.target_wall_px
+    frame, guide = n, model_sq
+    if tiled:  # stitched tiles: their frame, at their scale
+        count, stride = tile_grid(n, net.data_size)
+        frame = (count + 1) * stride
+        guide = np.full((frame, frame), UNKNOWN, np.uint8)
+        guide[:n, :n] = model_sq
+        scale = 2 * stride / net.data_size
+    data_sq, segs = postprocess(output, (frame, frame), guide, wall_px=wall_px,
+                                straighten=straighten, anchor=anchor, data_px=scale,
+                                thick_px=thick_px,
+                                open_frontiers=open_frontiers)
+    data_sq = data_sq[:n, :n]
     if angle:  # back from the deskewed frame
         data_sq = _rotate(data_sq, -angle)[pad:pad + side, pad:pad + side]
         segs = _unrotate_segments(segs, angle, n) - pad
@@ -343,12 +541,13 @@ def _finish(m: OccupancyMap, sq, output: np.ndarray | None, net: BAModel, straig
     seg_px = segs + np.array([col0, row0, col0, row0])
     seg_px = drawn_pieces(seg_px, data == OCCUPIED) + 0.5
     warns = []
-    if scale > MAX_SHRINK:
-        warns.append(f"the map is {scale:.1f}x larger than the maps the model learnt on "
+    if side / net.data_size > MAX_SHRINK and not tiled:
+        warns.append(f"the map is {side / net.data_size:.1f}x larger than the maps the "
+                     "model learnt on "
                      f"({net.data_size} px): small walls may be lost and the layout "
                      "invented; check the figure, or correct parts of the map separately")
-    wall_px = max(1.0, net.target_wall_px * side / net.data_size)
-    support = _support(square, data_sq, tol=0.5 * wall_px + 2 * side / net.data_size)
+    plan_px = max(1.0, net.target_wall_px * side / net.data_size)  # the training walls'
+    support = _support(square, data_sq, tol=0.5 * plan_px + 2 * side / net.data_size)
     if support is not None and support < 0.5:
         warns.append(f"only {support:.0%} of the output's wall pixels lie near a wall of "
                      "the input: the model may have invented structure; check the figure")
@@ -357,6 +556,8 @@ def _finish(m: OccupancyMap, sq, output: np.ndarray | None, net: BAModel, straig
     out.meta["autocorrect"] = {"model": net.source, "warnings": warns,
                                "support": support, "segments_px": seg_px.tolist(),
                                "deskew_deg": angle}
+    if tiled:
+        out.meta["autocorrect"]["tiles"] = tile_grid(n, net.data_size)[0] ** 2
     x0, y0 = m.pixel_to_world(seg_px[:, 1] - 0.5, seg_px[:, 0] - 0.5)
     x1, y1 = m.pixel_to_world(seg_px[:, 3] - 0.5, seg_px[:, 2] - 0.5)
     seg_w = np.stack([x0, y0, x1, y1], 1) if len(seg_px) else np.zeros((0, 4))
@@ -379,7 +580,8 @@ def _support(inp: np.ndarray, out: np.ndarray, tol: float) -> float | None:
 
 def autocorrect(m: OccupancyMap, model: str | os.PathLike | BAModel | None = "pretrained",
                 *, straighten: bool = True, deskew: bool = True, anchor: bool = True,
-                device: str = "cpu") -> OccupancyMap:
+                device: str = "cpu", thickness: str | float | None = None,
+                open_frontiers: bool | None = None, large: str | None = None) -> OccupancyMap:
     """Auto-correct a SLAM map into a CAD-like plan with Model_BA (module docstring).
 
     Parameters
@@ -397,6 +599,20 @@ def autocorrect(m: OccupancyMap, model: str | os.PathLike | BAModel | None = "pr
         default); False places them where the network's low-resolution output says.
     device : str
         Torch device for the network.
+    thickness : "shrink", "resolution", "input" or float, optional
+        How thick the walls seen from one side are drawn (:func:`drawn_wall_px`);
+        default :data:`THICKNESS`.
+    open_frontiers : bool, optional
+        Leave out the network's walls at the edge of the input's known area or beyond it
+        (:func:`map2map.learn.postprocess.frontier_walls`: on a partial map the edge of
+        what the robot saw is not a wall); default :data:`OPEN_FRONTIERS`, and on for a
+        map corrected in tiles.
+    large : "resize", "tile" or "refuse", optional
+        A map whose content is more than :data:`LARGE_SHRINK` x the dataset's size:
+        resized whole to it (the network sees the building at a scale it never learnt),
+        corrected in half-overlapping tiles of at most :data:`TILE_SHRINK` x that size,
+        the centre of each tile's output kept (:func:`tile_grid`, :func:`stitch_tiles`),
+        or returned uncorrected with a warning; default :data:`LARGE`.
 
     Returns
     -------
@@ -407,7 +623,8 @@ def autocorrect(m: OccupancyMap, model: str | os.PathLike | BAModel | None = "pr
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = autocorrect_many([m], model, straighten=straighten, deskew=deskew,
-                               anchor=anchor, device=device)[0]
+                               anchor=anchor, device=device, thickness=thickness,
+                               open_frontiers=open_frontiers, large=large)[0]
     for w in res.warnings:
         warnings.warn(w, stacklevel=2)
     return res.map

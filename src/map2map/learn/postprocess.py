@@ -108,7 +108,7 @@ from ..maps.segments import straight_segments
 
 __all__ = ["postprocess", "wall_thickness_px", "straight_segments", "anchored_walls",
            "map_tilt", "drop_free_specks", "collinear_faces", "thicken_two_sided",
-           "drawn_pieces"]
+           "drawn_pieces", "frontier_walls"]
 
 #: Grey level below which an upsampled output pixel is wall (step 2).
 WALL_BELOW = 96
@@ -761,6 +761,9 @@ ANCHOR_GROW = 0.0
 ANCHOR_TILT_MAX_DEG = 6.0
 #: Free components of the input smaller than this (dataset pixels squared) are unknown.
 ANCHOR_SPECK = 30.0
+#: With ``open_frontiers``: a network wall with more than this share of its length
+#: without seen space on one side is left out (:func:`frontier_walls`).
+ANCHOR_FRONTIER_SHARE = 0.5
 
 
 def drop_free_specks(data: np.ndarray, min_area: float) -> np.ndarray:
@@ -842,11 +845,63 @@ def drawn_pieces(segs: np.ndarray, occ: np.ndarray) -> np.ndarray:
     return np.array(out, float).reshape(-1, 4)
 
 
+def frontier_walls(segs: np.ndarray, guide: np.ndarray, tol: float,
+                   share: float = ANCHOR_FRONTIER_SHARE) -> np.ndarray:
+    """Which segments (x0, y0, x1, y1) have no seen space on one of their sides: at more
+    than ``share`` of 32 points along each, the ``guide`` is unknown (or outside it) at
+    all of ``tol``, ``2 tol`` and ``3 tol`` pixels across the segment on one side.
+
+    A wall the input does not show is drawn only over its unknown pixels (step 4b stops
+    such walls at free space). Between two spaces the robot saw, it closes a gap the
+    laser missed (free or walls on both sides: evidence). At the edge of the known area
+    (seen space on one side, unknown beyond) or out in unknown space it closes an open
+    frontier: on a partial map (a robot that drove the corridors and looked into some
+    rooms) the edge of what it saw is not a wall, and the model, which learnt whole
+    buildings, closes it (docs/learn.md, "Real maps beyond the training scale"). Step
+    4b with ``open_frontiers`` leaves those out.
+
+    Examples
+    --------
+    >>> g = np.full((40, 60), 127, np.uint8); g[5:35, 5:30] = 255   # known: left part
+    >>> g[5:35, 17:19] = 127                  # a strip the laser missed inside it
+    >>> segs = np.array([[18.0, 5, 18, 34],   # in that strip: seen space on both sides
+    ...                  [30.0, 5, 30, 34],   # along the edge of the known area
+    ...                  [45.0, 5, 45, 34]])  # in unknown space
+    >>> frontier_walls(segs, g, tol=3).tolist()
+    [False, True, True]
+    """
+    s = np.asarray(segs, float).reshape(-1, 4)
+    if not len(s):
+        return np.zeros(0, bool)
+    known = np.asarray(guide) != UNKNOWN
+    H, W = known.shape
+    t = np.linspace(0.0, 1.0, 32)
+    px = s[:, 0, None] + t * (s[:, 2, None] - s[:, 0, None])          # (K, 32)
+    py = s[:, 1, None] + t * (s[:, 3, None] - s[:, 1, None])
+    d = np.hypot(s[:, 2] - s[:, 0], s[:, 3] - s[:, 1])
+    d = np.where(d > 0, d, 1.0)
+    nx, ny = -(s[:, 3] - s[:, 1]) / d, (s[:, 2] - s[:, 0]) / d          # unit normals
+    open_side = np.zeros(px.shape, bool)
+    for sign in (-1.0, 1.0):
+        seen = np.zeros(px.shape, bool)
+        for k in (1, 2, 3):
+            x = np.round(px + sign * k * tol * nx[:, None]).astype(np.int64)
+            y = np.round(py + sign * k * tol * ny[:, None]).astype(np.int64)
+            ok = (x >= 0) & (x < W) & (y >= 0) & (y < H)
+            hit = np.zeros(px.shape, bool)
+            hit[ok] = known[y[ok], x[ok]]
+            seen |= hit
+        open_side |= ~seen
+    return open_side.mean(axis=1) > share
+
+
 def _anchored(output_segs: np.ndarray, guide: np.ndarray, wall_px: float, data_px: float,
               net_walls: np.ndarray | None = None, net_space: np.ndarray | None = None,
-              cell: float = 8.0) -> tuple[np.ndarray, np.ndarray]:
+              cell: float = 8.0, thick_px: float | None = None,
+              open_frontiers: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Step 4 in ``anchor`` mode: the guide's own walls straightened at full resolution,
     plus the network's walls the guide does not show (module docstring)."""
+    thick_px = data_px if thick_px is None else thick_px
     guide = drop_free_specks(guide, ANCHOR_SPECK * data_px * data_px)
     occ = guide == OCCUPIED
     own = straight_segments(occ, ANCHOR_CELL * data_px)
@@ -872,6 +927,10 @@ def _anchored(output_segs: np.ndarray, guide: np.ndarray, wall_px: float, data_p
             # behind the face (the plans' outer walls are thicker than the rest)
             half = cv2.distanceTransform(net_walls.astype(np.uint8), cv2.DIST_L2, 5)
             apart = np.mean(d[ys, xs] - half[ys, xs] > ANCHOR_NEW * data_px, axis=1) > 0.7
+        if open_frontiers:
+            # a wall of the network's alone (not the body behind an input wall) at the
+            # edge of the known area or beyond it is not evidence: left out
+            far &= ~(apart & frontier_walls(o, guide, ANCHOR_NEW * data_px))
         new = o[far]
         if len(new):
             segs = np.concatenate([own, new])
@@ -880,7 +939,7 @@ def _anchored(output_segs: np.ndarray, guide: np.ndarray, wall_px: float, data_p
                                    align=ANCHOR_ALIGN * data_px,
                                    grow=int(round(ANCHOR_GROW * data_px)),
                                    collinear=ANCHOR_COLLINEAR * data_px,
-                                   min_thick=int(round(ANCHOR_MIN_THICK * data_px)),
+                                   min_thick=int(round(ANCHOR_MIN_THICK * thick_px)),
                                    backing=backing, reach=max(1, int(round(wall_px)))
                                    + (ANCHOR_BAND + ANCHOR_NEW) * data_px)
     # the input's walls: replaced by their nearest non-wall value where a straight wall
@@ -920,7 +979,8 @@ def _anchored(output_segs: np.ndarray, guide: np.ndarray, wall_px: float, data_p
 
 def postprocess(output: np.ndarray, shape: tuple[int, int], guide: np.ndarray | None = None,
                 *, wall_px: float = 2.0, straighten: bool = True, anchor: bool = True,
-                data_px: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+                data_px: float = 1.0, thick_px: float | None = None,
+                open_frontiers: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Model output (grey, [0, 255], model size) -> (ternary uint8 map of ``shape``,
     wall segments (K, 4) in its pixels); the steps are in the module docstring.
 
@@ -940,6 +1000,13 @@ def postprocess(output: np.ndarray, shape: tuple[int, int], guide: np.ndarray | 
         With a ``guide``: step 4b (anchored walls) instead of 4-5.
     data_px : float
         Pixels of the frame per pixel of the dataset's maps (scales step 4b).
+    thick_px : float, optional
+        The same, for the thickness two-sided walls are grown to in step 4b
+        (``ANCHOR_MIN_THICK``; default ``data_px``): with ``wall_px`` what
+        :func:`~map2map.learn.autocorrect.autocorrect`'s ``thickness`` sets.
+    open_frontiers : bool
+        Step 4b leaves out the network's walls at the edge of the input's known area or
+        beyond it (:func:`frontier_walls`).
     """
     H, W = shape
     low = np.asarray(output, np.float32)
@@ -959,7 +1026,8 @@ def postprocess(output: np.ndarray, shape: tuple[int, int], guide: np.ndarray | 
     cell = H / low.shape[0]
     segs = straight_segments(walls, cell)
     if guide is not None and anchor:
-        return _anchored(segs, np.asarray(guide), wall_px, data_px, walls, data, cell)
+        return _anchored(segs, np.asarray(guide), wall_px, data_px, walls, data, cell,
+                         thick_px, open_frontiers)
     if guide is not None and len(segs):
         segs = _refine(segs, np.asarray(guide) == OCCUPIED, cell / 2)
     drawn = np.zeros((H, W), np.uint8)

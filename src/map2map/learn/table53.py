@@ -366,7 +366,8 @@ class _IdentityModel:
 
 def run_table53(pairs: PackedPairs, model="pretrained", *, seed: int = 0,
                 progress: bool = True, baseline: Table53 | None = None,
-                straighten: bool = True, anchor: bool = True) -> Table53:
+                straighten: bool = True, anchor: bool = True,
+                autocorrect_kw: dict | None = None) -> Table53:
     """Table 5.3 of ``model`` on held-out ``pairs`` (module docstring).
 
     Parameters
@@ -388,6 +389,8 @@ def run_table53(pairs: PackedPairs, model="pretrained", *, seed: int = 0,
         guards are reused instead of recomputed (they do not depend on the model).
     straighten, anchor : bool
         Passed to :func:`~map2map.learn.autocorrect.autocorrect_many`.
+    autocorrect_kw : dict, optional
+        More keyword arguments of it (``thickness``, ``open_frontiers``, ...).
 
     Returns
     -------
@@ -413,7 +416,8 @@ def run_table53(pairs: PackedPairs, model="pretrained", *, seed: int = 0,
             name = net.source
             t0 = time.perf_counter()
             res = autocorrect_many([OccupancyMap(x, 0.05) for x in b], net,
-                                   straighten=straighten, anchor=anchor)
+                                   straighten=straighten, anchor=anchor,
+                                   **(autocorrect_kw or {}))
             gen = np.stack([r.map.data for r in res]) if res else b.copy()
         dt = time.perf_counter() - t0
     reuse = baseline is not None and baseline.digest == digest \

@@ -482,7 +482,7 @@ class RealTable53:
 def run_table53_real(root: str | os.PathLike, names: list[str] | None = None,
                      model="pretrained", *, seed: int = 0, anchor: bool = True,
                      straighten: bool = True, workers: int | None = 1,
-                     progress: bool = True) -> RealTable53:
+                     progress: bool = True, autocorrect_kw: dict | None = None) -> RealTable53:
     """Table 5.3 of ``model`` on the Halmstad sensor maps (module docstring).
 
     Parameters
@@ -504,6 +504,9 @@ def run_table53_real(root: str | os.PathLike, names: list[str] | None = None,
         not depend on it).
     progress : bool
         tqdm progress bar over the maps.
+    autocorrect_kw : dict, optional
+        More keyword arguments of ``autocorrect_many`` (``thickness``,
+        ``open_frontiers``, ...).
 
     Returns
     -------
@@ -543,7 +546,7 @@ def run_table53_real(root: str | os.PathLike, names: list[str] | None = None,
             name = net.source + ("" if anchor else " (anchor off)")
             data_size = net.data_size
             res = autocorrect_many(maps, net, straighten=straighten, anchor=anchor,
-                                   workers=workers)
+                                   workers=workers, **(autocorrect_kw or {}))
             outs = [r.map for r in res]
             extra = [{"deskew_deg": r.map.meta["autocorrect"].get("deskew_deg"),
                       "support": r.map.meta["autocorrect"].get("support"),
