@@ -403,6 +403,39 @@ def test_synthesize_rooms_drift_is_seeded_and_leaves_the_other_choices_alone(tin
     assert np.array_equal(sq, synthesize_squares(net, plans, seed=1, drift="rooms"))
 
 
+@pytest.mark.filterwarnings("ignore::UserWarning")
+def test_synthesize_lidar_traces_are_seeded_metric_and_leave_the_default_alone(tiny_run):
+    from map2map.core.errors import InputError
+    from map2map.learn.slam_render import TraceParams, band_px
+    from map2map.learn.synthesize import load_ab_model, synthesize, synthesize_squares
+
+    net = load_ab_model(tiny_run)
+    net.sample_many = _plan_drawer(net)
+    plan = _plan()
+    base = synthesize(plan, net, samples=2, seed=2, drift="none")
+    tr = synthesize(plan, net, samples=2, seed=2, drift="none", traces="lidar")
+    again = synthesize(plan, net, samples=2, seed=2, drift="none", traces=TraceParams())
+    for a, b, c in zip(tr.maps, again.maps, base.maps, strict=True):
+        assert a.data.tobytes() == b.data.tobytes()              # same seed, same bytes
+        assert a.data.tobytes() != c.data.tobytes()              # traces drawn
+        assert "traces" not in c.meta["synthesize"]              # the default as it was
+        assert a.meta["synthesize"]["traces"]["wall_m"] == TraceParams().wall_m
+    assert tr.maps[0].data.tobytes() != tr.maps[1].data.tobytes()   # own stream per k
+    with pytest.raises(InputError):
+        synthesize(plan, net, samples=1, render="plain", traces="lidar")
+    plans = _pairs(n=2, size=32, seed=4).a
+    sq = synthesize_squares(net, plans, seed=1, drift="none", traces="lidar",
+                            resolution=[0.03, 0.12])
+    assert np.array_equal(sq, synthesize_squares(net, plans, seed=1, drift="none",
+                                                 traces="lidar", resolution=[0.03, 0.12]))
+    assert band_px(0.03, TraceParams()) > 2 * band_px(0.12, TraceParams())
+    # no strays, no rough edge: the band alone, thicker on the finer square
+    flat = TraceParams(rough_px=0.0, strays=0.0, wall_m=0.06)
+    one = synthesize_squares(net, np.stack([plans[0]] * 2), seed=1, drift="none",
+                             traces=flat, resolution=[0.02, 0.2])
+    assert np.count_nonzero(one[0] == OCCUPIED) > np.count_nonzero(one[1] == OCCUPIED)
+
+
 def _plan_drawer(net):
     """A stand-in for ``net.sample_many``: the input plans reduced to the output size,
     the same for every sample."""

@@ -88,7 +88,16 @@ from .drift import (
 from .networks import from_unit
 from .progressive import StochasticUNet
 from .room_drift import RoomDriftParams
-from .slam_render import DEFAULT_WALL_PX, RENDERS, snap
+from .slam_render import (
+    DEFAULT_WALL_PX,
+    RENDERS,
+    TraceParams,
+    band_px,
+    snap,
+    stray_hits,
+    trace_params,
+    trace_rng,
+)
 
 __all__ = ["ABModel", "SynthesisResult", "load_ab_model", "pretrained_ab_path",
            "synthesize", "synthesize_squares", "snap", "pairwise_disagreement", "export_ab_model",
@@ -220,7 +229,8 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
                render: str = "slam", drift: str | DriftParams = "parametric",
                drift_method: str | None = None, drift_scale: float | None = None,
                coverage: str = "none", drift_route: str = "tour",
-               explore: ExploreParams | None = None) -> SynthesisResult:
+               explore: ExploreParams | None = None,
+               traces: str | TraceParams | None = "none") -> SynthesisResult:
     """``samples`` SLAM-map hypotheses of ``plan`` (module doc), in its frame.
 
     Parameters
@@ -255,6 +265,12 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     explore : ExploreParams, optional
         The exploration's settings (default :class:`~map2map.learn.coverage.ExploreParams`:
         420 s, 180 degree LIDAR, ``oracle``, band = rendered wall thickness).
+    traces : {"none", "lidar"} or TraceParams
+        ``"lidar"``: what a LIDAR + SLAM leaves beyond the faces
+        (:class:`~map2map.learn.slam_render.TraceParams`: a metric wall band with a ragged
+        back edge, stray hits; ``render="slam"`` only), seeded per hypothesis by
+        :func:`~map2map.learn.slam_render.trace_rng` ``(seed, k)``, drawn before the
+        coverage (band) and after it (stray hits), before the drift.
 
     Returns
     -------
@@ -265,6 +281,7 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     if render not in RENDERS:
         raise InputError("--render", f"must be one of {', '.join(RENDERS)}, got {render!r}")
     dp = drift_params(drift, drift_method, drift_scale)
+    tp = _traces(traces, render)
     hide, along = coverage_options(coverage, drift_route)
     along = along and dp is not None
     ep = explore or ExploreParams()
@@ -282,8 +299,11 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     cs, ce = max(0, col0), min(W, col0 + side)
     maps, drifted, explored = [], {}, {}
     warns = []
+    if tp is not None:
+        wall_px = band_px(plan.resolution, tp)
     for k in range(samples):
-        s = slam_render.render(grey[k], side, render, wall_px)
+        trng = trace_rng(seed, k) if tp is not None else None
+        s = slam_render.render(grey[k], side, render, wall_px, tp, trng)
         data = np.full((H, W), UNKNOWN, np.uint8)
         data[rs:re, cs:ce] = s[rs - row0:re - row0, cs - col0:ce - col0]
         ex = None
@@ -295,7 +315,10 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
             else:
                 explored[k] = ex.stats()
                 if hide:
-                    data = hide_unseen(data, ex.seen, ep.margin(wall_px))
+                    data = hide_unseen(data, ex.seen, ep.margin(
+                        wall_px + (tp.inset_px if tp is not None else 0.0)))
+        if tp is not None:
+            data = stray_hits(data, trng, plan.resolution, tp)
         if dp is not None:
             try:
                 d = drift_field(plan, drift_rng(seed, k), dp,
@@ -336,6 +359,9 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
             m.meta["synthesize"]["drift_params"] = asdict(dp)
     for k, st in drifted.items():
         maps[k].meta["synthesize"]["drift_px"] = st
+    if tp is not None:                  # the default's meta stays as it was, key for key
+        for m in maps:
+            m.meta["synthesize"]["traces"] = asdict(tp)
     if hide or along:                   # the default's meta stays as it was, key for key
         for k, m in enumerate(maps):
             m.meta["synthesize"].update(coverage=coverage, drift_route=drift_route,
@@ -343,6 +369,17 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
             if k in explored:
                 m.meta["synthesize"]["exploration"] = explored[k]
     return SynthesisResult(maps, div, pw, warns, net.source)
+
+
+def _traces(traces, render: str) -> TraceParams | None:
+    """:func:`~map2map.learn.slam_render.trace_params`, refused with ``render="plain"``."""
+    try:
+        tp = trace_params(traces)
+    except ValueError as exc:
+        raise InputError("--traces", str(exc)) from None
+    if tp is not None and render != "slam":
+        raise InputError("--traces", "LIDAR traces need render='slam'")
+    return tp
 
 
 def _drift_name(dp) -> str:
@@ -356,7 +393,8 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
                        render: str = "slam", drift: str | DriftParams = "parametric",
                        drift_method: str | None = None, drift_scale: float | None = None,
                        resolution=None, coverage: str = "none", drift_route: str = "tour",
-                       explore: ExploreParams | None = None) -> np.ndarray:
+                       explore: ExploreParams | None = None,
+                       traces: str | TraceParams | None = "none") -> np.ndarray:
     """Model_AB's SLAM map of each preprocessed dataset plan (``A.png``: already square,
     resized and thickened as the training inputs were), raised to the plans' size as
     ``render`` says (:func:`synthesize`): (N, S, S) uint8, the thesis's single output
@@ -373,7 +411,9 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
 
     ``coverage``, ``drift_route`` and ``explore`` as :func:`synthesize`: plan ``i``'s
     square is explored at its metric resolution, seeded by
-    :func:`~map2map.learn.coverage.explore_rng` ``(seed, i)``.
+    :func:`~map2map.learn.coverage.explore_rng` ``(seed, i)``. ``traces`` as
+    :func:`synthesize` (plan ``i`` draws from :func:`~map2map.learn.slam_render.trace_rng`
+    ``(seed, i)``, its band from its own ``resolution``).
 
     Examples
     --------
@@ -385,6 +425,7 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
     if render not in RENDERS:
         raise ValueError(f"render must be one of {RENDERS}, got {render!r}")
     dp = drift_params(drift, drift_method, drift_scale)
+    tp = _traces(traces, render)
     hide, along = coverage_options(coverage, drift_route)
     along = along and dp is not None
     ep = explore or ExploreParams()
@@ -392,15 +433,19 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
     plans = np.asarray(plans, np.uint8)
     S = plans.shape[-1]
     wall_px = net.wall_px * S / net.data_size
+    res = DEFAULT_SQUARE_RESOLUTION if resolution is None else resolution
+    rs = np.broadcast_to(np.asarray(res, float), (len(plans),))
+    walls = np.full(len(plans), wall_px) if tp is None else \
+        np.array([band_px(r, tp) for r in rs])
+    trngs = [trace_rng(seed, i) if tp is not None else None for i in range(len(plans))]
+    inset = tp.inset_px if tp is not None else 0.0    # the faces lie this much deeper
     out = np.empty(plans.shape, np.uint8)
     for i in range(0, len(plans), batch):
         grey = net.sample_many(plans[i:i + batch], 1, seed)[:, 0]
         for j, gmap in enumerate(grey):
-            out[i + j] = slam_render.render(gmap, S, render, wall_px)
-    res = DEFAULT_SQUARE_RESOLUTION if resolution is None else resolution
+            out[i + j] = slam_render.render(gmap, S, render, walls[i + j], tp, trngs[i + j])
     trajs = None
     if hide or along:
-        rs = np.broadcast_to(np.asarray(res, float), (len(plans),))
         trajs = [None] * len(plans)
         for i in range(len(plans)):
             try:
@@ -409,9 +454,12 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
                 warnings.warn(f"map {i}: no exploration ({exc.problem})", stacklevel=2)
                 continue
             if hide:
-                out[i] = hide_unseen(out[i], ex.seen, ep.margin(wall_px))
+                out[i] = hide_unseen(out[i], ex.seen, ep.margin(walls[i] + inset))
             if along:
                 trajs[i] = ex.trajectory
+    if tp is not None:
+        for i in range(len(plans)):
+            out[i] = stray_hits(out[i], trngs[i], float(rs[i]), tp)
     if dp is not None:
         out, warns = drift_maps(out, plans, res, seed, dp, trajectories=trajs)
         for w in warns:
