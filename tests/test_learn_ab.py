@@ -258,6 +258,9 @@ def test_cli_train_ab_and_bad_input(tmp_path, capsys):
 
 
 # ------------------------------------------------------------------------- synthesize
+#: synthesize's settings before session 11 (its defaults since: rooms, explore, lidar)
+OLD = {"coverage": "none", "traces": "none"}
+
 @pytest.fixture(scope="module")
 def tiny_run(tmp_path_factory):
     run = tmp_path_factory.mktemp("ab") / "run"
@@ -339,13 +342,13 @@ def test_synthesize_render_slam_draws_faces_and_plain_is_the_previous_output(tin
 @pytest.mark.filterwarnings("ignore::UserWarning")
 def test_synthesize_drift_none_is_the_previous_output_and_parametric_drifts(tiny_run):
     from map2map.learn.autocorrect import _square
-    from map2map.learn.drift import apply_drift, drift_field, drift_rng
+    from map2map.learn.drift import DriftParams, apply_drift, drift_field, drift_rng
     from map2map.learn.slam_render import render
     from map2map.learn.synthesize import load_ab_model, pairwise_disagreement, synthesize
 
     net = load_ab_model(tiny_run)
     plan = _plan()
-    none = synthesize(plan, net, samples=3, seed=2, drift="none")
+    none = synthesize(plan, net, samples=3, seed=2, drift="none", **OLD)
     # the output before drift existed: rendered squares pasted into the plan's frame,
     # diversity over the square's known pixels
     square, row0, col0, side = _square(plan, net.data_size)
@@ -360,9 +363,9 @@ def test_synthesize_drift_none_is_the_previous_output_and_parametric_drifts(tiny
     assert none.diversity == pw[~np.eye(3, dtype=bool)].mean()
     # the tiny network draws nothing: let it draw the plan, so that the drift shows
     net.sample_many = _plan_drawer(net)
-    none = synthesize(plan, net, samples=3, seed=2, drift="none")
-    drift = synthesize(plan, net, samples=3, seed=2)              # default: parametric
-    again = synthesize(plan, net, samples=3, seed=2, drift="parametric")
+    none = synthesize(plan, net, samples=3, seed=2, drift="none", **OLD)
+    drift = synthesize(plan, net, samples=3, seed=2, drift="parametric", **OLD)
+    again = synthesize(plan, net, samples=3, seed=2, drift=DriftParams(), **OLD)
     for k, (a, b, c) in enumerate(zip(drift.maps, again.maps, none.maps, strict=True)):
         assert np.array_equal(a.data, b.data)                     # same seed, same bytes
         assert np.count_nonzero(c.data == OCCUPIED) > 20
@@ -372,7 +375,8 @@ def test_synthesize_drift_none_is_the_previous_output_and_parametric_drifts(tiny
         assert a.meta["synthesize"]["drift_params"]["method"] == "additive"
         assert a.meta["synthesize"]["drift_px"]["mean"] > 0
     assert drift.diversity > none.diversity == 0.0                # the drift differs
-    ekf = synthesize(plan, net, samples=1, seed=2, drift_method="ekf")
+    ekf = synthesize(plan, net, samples=1, seed=2, drift="parametric", drift_method="ekf",
+                     **OLD)
     assert ekf.maps[0].meta["synthesize"]["drift_params"]["method"] == "ekf"
     from map2map.errors import InputError
 
@@ -389,9 +393,9 @@ def test_synthesize_rooms_drift_is_seeded_and_leaves_the_other_choices_alone(tin
     net = load_ab_model(tiny_run)
     net.sample_many = _plan_drawer(net)
     plan = _plan()
-    none = synthesize(plan, net, samples=2, seed=2, drift="none")
-    rooms = synthesize(plan, net, samples=2, seed=2, drift="rooms")
-    again = synthesize(plan, net, samples=2, seed=2, drift=RoomDriftParams())
+    none = synthesize(plan, net, samples=2, seed=2, drift="none", **OLD)
+    rooms = synthesize(plan, net, samples=2, seed=2, drift="rooms", **OLD)
+    again = synthesize(plan, net, samples=2, seed=2, drift=RoomDriftParams(), **OLD)
     for k, (a, b, c) in enumerate(zip(rooms.maps, again.maps, none.maps, strict=True)):
         assert a.data.tobytes() == b.data.tobytes()              # same seed, same bytes
         want = apply_drift(c.data, drift_field(plan, drift_rng(2, k), RoomDriftParams()))
@@ -493,7 +497,7 @@ def test_synthesize_at_two_px_per_cell_draws_target_walls_without_the_coarse_war
                   alpha=1.0, data_size=S, header={"target_wall_px": 2.0}, source="test")
     net.sample_many = _plan_drawer(net)           # draws the plan at r px
     with pytest.warns(UserWarning) if cells > 2 else _no_warning():
-        res = synthesize(plan, net, samples=1, drift="none")
+        res = synthesize(plan, net, samples=1, drift="none", **OLD)
     coarse = [w for w in res.warnings if "one output cell is" in w]
     assert len(coarse) == (cells > 2)
     if cells > 2:
@@ -537,14 +541,17 @@ def test_cli_synthesize_writes_maps_summary_and_figure(tiny_run, tmp_path, capsy
     assert summary["samples"] == 3 and 0 < summary["diversity_mean_pairwise_disagreement"] < 1
     assert (out / "plan_synthesize.png").stat().st_size > 1000
     assert summary["render"] == "slam" and summary["drift"] == "none"
+    # the defaults since session 11: coverage explore, LIDAR traces (drift named here)
+    assert summary["coverage"] == "explore" and summary["traces"]["inset_px"] == 1.0
     assert main(["synthesize", str(tmp_path / "plan.yaml"), "--out", str(tmp_path / "p"),
                  "--samples", "2", "--format", "png", "--no-figure", "--model",
-                 str(tiny_run), "--render", "plain"]) == 0
+                 str(tiny_run), "--render", "plain", "--drift", "parametric"]) == 0
     p = json.loads((tmp_path / "p" / "plan_synthesize.json").read_text())
     assert p["drift"] == "parametric" and p["drift_params"]["method"] == "additive"
+    assert "traces" not in p                         # plain: no LIDAR traces by default
     assert main(["synthesize", str(tmp_path / "plan.yaml"), "--out", str(tmp_path / "e"),
                  "--samples", "1", "--no-figure", "--model", str(tiny_run),
-                 "--drift-method", "ekf", "--drift-scale", "0.5"]) == 0
+                 "--drift", "parametric", "--drift-method", "ekf", "--drift-scale", "0.5"]) == 0
     e = json.loads((tmp_path / "e" / "plan_synthesize.json").read_text())
     assert (e["drift_params"]["method"], e["drift_params"]["scale"]) == ("ekf", 0.5)
     assert main(["synthesize", str(tmp_path / "plan.yaml"), "--out", str(tmp_path / "r"),

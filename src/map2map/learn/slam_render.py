@@ -128,15 +128,15 @@ class TraceParams:
         Share of the stray hits 2-3 px large (the rest single pixels).
     """
 
-    floor_px: float = 1.0
-    wall_m: float = 0.045
+    floor_px: float = 1.2
+    wall_m: float = 0.055
     rough_px: float = 1.0
     rough_sigma_px: float = 4.0
-    inset_px: float = 0.0
-    strays: float = 4.5
+    inset_px: float = 1.0
+    strays: float = 7.0
     stray_spread: float = 0.8
     stray_free: float = 0.45
-    stray_m: tuple = (0.15, 0.6)
+    stray_m: tuple = (0.2, 0.9)
     stray_big: float = 0.35
 
     def __post_init__(self):
@@ -158,7 +158,7 @@ def trace_params(traces) -> TraceParams | None:
     Examples
     --------
     >>> trace_params("none") is None, trace_params("lidar").wall_m
-    (True, 0.045)
+    (True, 0.055)
     """
     if traces is None or isinstance(traces, TraceParams):
         return traces

@@ -21,7 +21,15 @@ wall interiors unknown; ``render="plain"``: the previous output, snapped and ups
 nearest neighbour) and pasted into a map of the plan's shape, resolution and origin,
 unknown outside.
 
-Drift (``drift="parametric"``, the default; :mod:`map2map.learn.drift`): the network
+**Defaults** (session 11, issue #15's realism rule on the gen900 validation plans:
+docs/learn_ab.md, "Rendering what a LIDAR leaves"): :func:`synthesize` draws the
+room-wise drift (``drift="rooms"``), hides what each hypothesis's own exploration did not
+see (``coverage="explore"``) and draws the LIDAR traces (``traces="lidar"`` with
+``render="slam"``). The previous defaults are ``drift="parametric", coverage="none",
+traces="none"`` (bit for bit). :func:`synthesize_squares`, the evaluation helper, keeps
+those previous defaults: its callers (the benchmarks) name what they measure.
+
+Drift (``drift="parametric"``; :mod:`map2map.learn.drift`): the network
 draws straight walls in the plan's frame, a SLAM map carries the run's accumulated pose
 error. Each hypothesis ``k`` is warped along a displacement field the parametric
 CAD->SLAM model (thesis 3.2) draws for the plan from its own generator
@@ -31,7 +39,8 @@ LIDAR and odometry error fields ``d_L + d_O`` (additive method by default,
 replaces its final factor). ``drift="rooms"`` (or a
 :class:`~map2map.learn.room_drift.RoomDriftParams`): one rigid transform per room of the
 plan, chained along a walk through its doors and blended across walls, plus the
-parametric field smoothed (:mod:`map2map.learn.room_drift`; opt-in). ``drift="none"``: the
+parametric field smoothed (:mod:`map2map.learn.room_drift`; the default of
+:func:`synthesize`). ``drift="none"``: the
 network's map as rendered (the output before drift existed, bit for bit).
 
 Coverage (:mod:`map2map.learn.coverage`, beyond the thesis): the network maps every room;
@@ -41,7 +50,13 @@ the plan (``oracle`` mapper, seeded per hypothesis by
 of hypothesis ``k`` the exploration did not see (beyond a band of the rendered wall
 thickness); ``drift_route="explore"`` drives the drift along that exploration's true
 path instead of the roadmap tour. One exploration serves both; ``coverage="none"`` with
-``drift_route="tour"`` (the defaults) is the output without them, bit for bit.
+``drift_route="tour"`` is the output without them, bit for bit.
+
+LIDAR traces (:class:`~map2map.learn.slam_render.TraceParams`, ``traces="lidar"``): the
+walls drawn as a band of metric width with a ragged back edge, their faces moved one
+pixel into the network's wall cells, and stray hits off the walls (module doc of
+:mod:`map2map.learn.slam_render`); ``traces="none"``: the band of the training targets'
+thickness, as before.
 
 Examples
 --------
@@ -226,11 +241,11 @@ class SynthesisResult:
 
 def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "pretrained",
                *, samples: int = 4, seed: int = 0, device: str = "cpu",
-               render: str = "slam", drift: str | DriftParams = "parametric",
+               render: str = "slam", drift: str | DriftParams = "rooms",
                drift_method: str | None = None, drift_scale: float | None = None,
-               coverage: str = "none", drift_route: str = "tour",
+               coverage: str = "explore", drift_route: str = "tour",
                explore: ExploreParams | None = None,
-               traces: str | TraceParams | None = "none") -> SynthesisResult:
+               traces: str | TraceParams | None = None) -> SynthesisResult:
     """``samples`` SLAM-map hypotheses of ``plan`` (module doc), in its frame.
 
     Parameters
@@ -247,26 +262,28 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
         ``"slam"``: walls as a SLAM map draws them, the faces bordering free space with
         the training targets' thickness (:func:`~map2map.learn.slam_render.render_slam`);
         ``"plain"``: the previous output (snap, nearest-neighbour upsampling).
-    drift : {"parametric", "rooms", "none"}, DriftParams or RoomDriftParams
-        Warp each hypothesis along its own parametric drift field (module doc; the
-        default :class:`~map2map.learn.drift.DriftParams`, or the given ones), along its
-        own room-wise drift (``"rooms"``, :mod:`map2map.learn.room_drift`), or not.
+    drift : {"rooms", "parametric", "none"}, DriftParams or RoomDriftParams
+        Warp each hypothesis along its own room-wise drift (``"rooms"``, the default,
+        :mod:`map2map.learn.room_drift`), along its own parametric drift field (module
+        doc; :class:`~map2map.learn.drift.DriftParams`, or the given ones), or not.
     drift_method : {"additive", "ekf"}, optional
         Replaces the drift's odometry-to-map conversion (thesis eqs. 3.81-3.90 or
         3.54-3.80).
     drift_scale : float, optional
         Replaces the drift's final factor on its field.
-    coverage : {"none", "explore"}
-        ``"explore"``: unknown wherever hypothesis ``k``'s own exploration of the plan
-        did not see (module doc, :func:`~map2map.learn.coverage.hide_unseen`).
+    coverage : {"explore", "none"}
+        ``"explore"`` (default): unknown wherever hypothesis ``k``'s own exploration of
+        the plan did not see (module doc, :func:`~map2map.learn.coverage.hide_unseen`;
+        about 0.5 s a hypothesis on gen900's plans); ``"none"``: every room drawn.
     drift_route : {"tour", "explore"}
         The drift's path: the roadmap tour, or hypothesis ``k``'s exploration (no effect
         with ``drift="none"``).
     explore : ExploreParams, optional
         The exploration's settings (default :class:`~map2map.learn.coverage.ExploreParams`:
         420 s, 180 degree LIDAR, ``oracle``, band = rendered wall thickness).
-    traces : {"none", "lidar"} or TraceParams
-        ``"lidar"``: what a LIDAR + SLAM leaves beyond the faces
+    traces : {"lidar", "none"}, TraceParams or None
+        ``"lidar"`` (the default, ``None``, with ``render="slam"``; ``None`` with
+        ``render="plain"`` is ``"none"``): what a LIDAR + SLAM leaves beyond the faces
         (:class:`~map2map.learn.slam_render.TraceParams`: a metric wall band with a ragged
         back edge, stray hits; ``render="slam"`` only), seeded per hypothesis by
         :func:`~map2map.learn.slam_render.trace_rng` ``(seed, k)``, drawn before the
@@ -372,7 +389,10 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
 
 
 def _traces(traces, render: str) -> TraceParams | None:
-    """:func:`~map2map.learn.slam_render.trace_params`, refused with ``render="plain"``."""
+    """:func:`~map2map.learn.slam_render.trace_params`, refused with ``render="plain"``
+    (``None``: ``"lidar"`` with ``render="slam"``, ``"none"`` with ``"plain"``)."""
+    if traces is None:
+        traces = "lidar" if render == "slam" else "none"
     try:
         tp = trace_params(traces)
     except ValueError as exc:
