@@ -408,7 +408,7 @@ def test_synthesize_rooms_drift_is_seeded_and_leaves_the_other_choices_alone(tin
 
 
 @pytest.mark.filterwarnings("ignore::UserWarning")
-def test_synthesize_lidar_traces_are_seeded_metric_and_leave_the_default_alone(tiny_run):
+def test_synthesize_lidar_traces_are_seeded_metric_and_leave_traces_none_alone(tiny_run):
     from map2map.core.errors import InputError
     from map2map.learn.slam_render import TraceParams, band_px
     from map2map.learn.synthesize import load_ab_model, synthesize, synthesize_squares
@@ -416,13 +416,16 @@ def test_synthesize_lidar_traces_are_seeded_metric_and_leave_the_default_alone(t
     net = load_ab_model(tiny_run)
     net.sample_many = _plan_drawer(net)
     plan = _plan()
-    base = synthesize(plan, net, samples=2, seed=2, drift="none")
-    tr = synthesize(plan, net, samples=2, seed=2, drift="none", traces="lidar")
-    again = synthesize(plan, net, samples=2, seed=2, drift="none", traces=TraceParams())
-    for a, b, c in zip(tr.maps, again.maps, base.maps, strict=True):
-        assert a.data.tobytes() == b.data.tobytes()              # same seed, same bytes
+    base = synthesize(plan, net, samples=2, seed=2, drift="none", **OLD)
+    tr = synthesize(plan, net, samples=2, seed=2, drift="none", coverage="none",
+                    traces="lidar")
+    again = synthesize(plan, net, samples=2, seed=2, drift="none", coverage="none",
+                       traces=TraceParams())
+    auto = synthesize(plan, net, samples=2, seed=2, drift="none", coverage="none")
+    for a, b, c, d in zip(tr.maps, again.maps, base.maps, auto.maps, strict=True):
+        assert a.data.tobytes() == b.data.tobytes() == d.data.tobytes()  # lidar: default
         assert a.data.tobytes() != c.data.tobytes()              # traces drawn
-        assert "traces" not in c.meta["synthesize"]              # the default as it was
+        assert "traces" not in c.meta["synthesize"]              # traces none: as before
         assert a.meta["synthesize"]["traces"]["wall_m"] == TraceParams().wall_m
     assert tr.maps[0].data.tobytes() != tr.maps[1].data.tobytes()   # own stream per k
     with pytest.raises(InputError):
@@ -432,12 +435,22 @@ def test_synthesize_lidar_traces_are_seeded_metric_and_leave_the_default_alone(t
                             resolution=[0.03, 0.12])
     assert np.array_equal(sq, synthesize_squares(net, plans, seed=1, drift="none",
                                                  traces="lidar", resolution=[0.03, 0.12]))
-    assert band_px(0.03, TraceParams()) > 2 * band_px(0.12, TraceParams())
-    # no strays, no rough edge: the band alone, thicker on the finer square
-    flat = TraceParams(rough_px=0.0, strays=0.0, wall_m=0.06)
-    one = synthesize_squares(net, np.stack([plans[0]] * 2), seed=1, drift="none",
-                             traces=flat, resolution=[0.02, 0.2])
-    assert np.count_nonzero(one[0] == OCCUPIED) > np.count_nonzero(one[1] == OCCUPIED)
+    assert band_px(0.03, TraceParams()) > 1.5 * band_px(0.12, TraceParams())
+    # no strays, no rough edge, no inset: the band alone, thicker on the finer square
+    from map2map.learn.progressive import StochasticUNet
+    from map2map.learn.synthesize import ABModel
+
+    sq = np.full((64, 64), UNKNOWN, np.uint8)
+    sq[4:60, 4:60] = OCCUPIED
+    sq[12:52, 12:28] = sq[12:52, 36:52] = FREE           # walls 8 px thick
+    wide = ABModel(StochasticUNet(size=32, channels=8, min_size=16), resolution=32,
+                   alpha=1.0, data_size=64, header={"target_wall_px": 2.0}, source="test")
+    wide.sample_many = _plan_drawer(wide)
+    flat = TraceParams(rough_px=0.0, strays=0.0, wall_m=0.06, inset_px=0.0)
+    one = synthesize_squares(wide, np.stack([sq] * 2), seed=1, drift="none", traces=flat,
+                             resolution=[0.02, 0.2])
+    n_fine, n_coarse = (np.count_nonzero(o == OCCUPIED) for o in one)
+    assert n_fine > 2.5 * n_coarse > 0                   # 4.2 px against 1.5 px bands
 
 
 def _plan_drawer(net):
@@ -532,7 +545,7 @@ def test_cli_synthesize_writes_maps_summary_and_figure(tiny_run, tmp_path, capsy
     out = tmp_path / "hyps"
     # the tiny network draws next to nothing; without drift a hypothesis still reads back
     rc = main(["synthesize", str(tmp_path / "plan.yaml"), "--out", str(out), "--samples", "3",
-               "--model", str(tiny_run), "--drift", "none"])
+               "--model", str(tiny_run), "--drift", "none", "--coverage", "none"])
     assert rc == 0
     m = load_map(out / "plan_hyp02.yaml")
     assert m.shape == (30, 44) and m.resolution == pytest.approx(0.07)
@@ -541,8 +554,7 @@ def test_cli_synthesize_writes_maps_summary_and_figure(tiny_run, tmp_path, capsy
     assert summary["samples"] == 3 and 0 < summary["diversity_mean_pairwise_disagreement"] < 1
     assert (out / "plan_synthesize.png").stat().st_size > 1000
     assert summary["render"] == "slam" and summary["drift"] == "none"
-    # the defaults since session 11: coverage explore, LIDAR traces (drift named here)
-    assert summary["coverage"] == "explore" and summary["traces"]["inset_px"] == 1.0
+    assert "coverage" not in summary and summary["traces"]["inset_px"] == 1.0   # lidar
     assert main(["synthesize", str(tmp_path / "plan.yaml"), "--out", str(tmp_path / "p"),
                  "--samples", "2", "--format", "png", "--no-figure", "--model",
                  str(tiny_run), "--render", "plain", "--drift", "parametric"]) == 0
@@ -559,6 +571,7 @@ def test_cli_synthesize_writes_maps_summary_and_figure(tiny_run, tmp_path, capsy
                  "--drift", "rooms", "--drift-scale", "0.5"]) == 0
     r = json.loads((tmp_path / "r" / "plan_synthesize.json").read_text())
     assert r["drift"] == "rooms" and r["drift_params"]["scale"] == 0.5
+    assert r["coverage"] == "explore" and "traces" in r     # the defaults since session 11
     assert sorted(p.name for p in (tmp_path / "p").iterdir()) == \
         ["plan_hyp00.png", "plan_hyp01.png", "plan_synthesize.json"]
     err = capsys.readouterr().err

@@ -175,3 +175,14 @@ def test_inset_moves_the_faces_into_the_network_wall_cells():
     # each face one pixel deeper into its wall: the rooms one pixel wider a side
     assert np.count_nonzero(row1 == FREE) == np.count_nonzero(row0 == FREE) + 4
     assert np.all(ins.map[base.map == FREE] == FREE)
+
+
+def test_inset_leaves_thin_walls_whole():
+    g = np.full((16, 16), 250.0, np.float32)
+    g[:, 8] = 5.0                                   # one cell: 4 px at 64
+    thin = render_slam(g, 64, 2.0, inset_px=1.0)
+    assert np.count_nonzero(thin.map[30] == OCCUPIED) >= 2
+    g2 = np.full((64, 64), 250.0, np.float32)
+    g2[:, 32] = 5.0                                 # one pixel at 64: nothing deeper
+    assert np.array_equal(render_slam(g2, 64, 1.0, inset_px=1.0).map,
+                          render_slam(g2, 64, 1.0).map)

@@ -36,8 +36,10 @@ Free and unknown space are those of step 2. :func:`render_plain` is the previous
 (snap at the network's resolution, nearest-neighbour upsampling): ``map2map synthesize
 --render plain``.
 
-**LIDAR traces** (opt-in, :class:`TraceParams`, ``synthesize(..., traces="lidar")``;
-issue #15, docs/learn_ab.md "Rendering what a LIDAR leaves"): what a LIDAR + SLAM run
+**LIDAR traces** (:class:`TraceParams`, ``synthesize(..., traces="lidar")``, the default
+of :func:`~map2map.learn.synthesize.synthesize` since session 11; :func:`render_slam`
+alone draws none of them unless asked; issue #15, docs/learn_ab.md "Rendering what a
+LIDAR leaves", where the defaults were tuned on gen900 val): what a LIDAR + SLAM run
 leaves on a grid map beyond the wall faces, measured on the simulated maps of the
 datasets and drawn here, seeded (:func:`trace_rng`):
 
@@ -291,7 +293,8 @@ def render_slam(grey: np.ndarray, size: int, wall_px: float = DEFAULT_WALL_PX,
         Correlation length of the edge (:func:`rough_field`).
     inset_px : float
         Faces moved this far into the network's walls (:class:`TraceParams`): occupied
-        pixels within ``inset_px`` of free space become free before the band is drawn.
+        pixels within ``inset_px`` of free space become free before the band is drawn,
+        where the wall has pixels deeper than that (a thinner wall is left whole).
 
     Returns
     -------
@@ -314,7 +317,11 @@ def render_slam(grey: np.ndarray, size: int, wall_px: float = DEFAULT_WALL_PX,
     t = max(1.0, float(wall_px))
     out = snapped.copy()
     if inset_px > 0 and free.any():
-        grow = occ & (ndimage.distance_transform_edt(~free) <= inset_px + 1e-6)
+        d0 = ndimage.distance_transform_edt(~free)
+        # only walls with a core deeper than the inset: a thin wall is not erased
+        core = occ & (d0 > inset_px + 1e-6)
+        grow = occ & (d0 <= inset_px + 1e-6) & ndimage.binary_dilation(
+            core, np.ones((3, 3), bool), iterations=int(np.ceil(inset_px)) + 1)
         out[grow] = FREE
         free, occ = free | grow, occ & ~grow
     if free.any():
