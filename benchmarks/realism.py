@@ -25,11 +25,10 @@ model and every generator: mean (median) error, plans not aligned, mean recall, 
 precision.
 
 ``--drift`` measures each model with and without the parametric drift of
-:mod:`map2map.learn.drift` (``parametric``, ``map2map synthesize``'s default before session
-11; each square
+:mod:`map2map.learn.drift` (default ``parametric``, ``map2map synthesize``'s default before
+session 11, kept here so that the commands of docs/learn_ab.md reproduce; each square
 at its own metric resolution, :func:`map2map.learn.realism.pair_square_resolution`) and
-with the room-wise rigid drift of :mod:`map2map.learn.room_drift` (``rooms``, the default,
-as ``map2map synthesize``'s since session 11),
+with the room-wise rigid drift of :mod:`map2map.learn.room_drift` (``rooms``),
 ``--drift-scale`` with each factor on the drift field (for tuning: tune on ``--split
 val``, report on ``test``). ``--diversity K`` adds, per generator, the mean pairwise
 disagreement of ``K`` hypotheses (:func:`map2map.learn.synthesize.synthesize`, test-time
@@ -39,14 +38,15 @@ dropout + the drift) over the plans.
 with the network's own extent (``none``) and/or only what its own ``oracle`` exploration
 of the square saw (``explore``), and the drift along the roadmap tour (``tour``) and/or
 the exploration's path (``explore``): every combination given is one generator (default
-``explore`` and ``tour``, as ``map2map synthesize``).
+``none`` and ``tour``).
 
 ``--traces`` (:class:`map2map.learn.slam_render.TraceParams`, session 11) measures each
 model without (``none``) and/or with (``lidar``) what a LIDAR + SLAM leaves beyond the
-faces: a metric wall band with a ragged back edge and stray hits (default ``lidar``, as
-``map2map synthesize``; ``--render plain`` is measured without); ``--trace-params`` (JSON)
-replaces fields of the ``lidar`` settings (for tuning on ``--split val``). The measure of
-session 9's default: ``--drift parametric --coverage none --traces none``.
+faces: a metric wall band with a ragged back edge and stray hits (default ``none``;
+``--render plain`` is measured without); ``--trace-params`` (JSON) replaces fields of the
+``lidar`` settings (for tuning on ``--split val``). ``map2map synthesize``'s default since
+session 11 is measured by ``--drift rooms --coverage explore --traces lidar``; the
+script's own defaults stay session 9's (``parametric``, ``none``, ``none``).
 """
 
 from __future__ import annotations
@@ -82,10 +82,10 @@ def main(argv=None) -> int:
     ap.add_argument("--render", nargs="+", choices=("slam", "plain"), default=["slam"],
                     help="Model_AB's resolution raising(s) to measure (default slam)")
     ap.add_argument("--drift", nargs="+", choices=("parametric", "rooms", "none"),
-                    default=["rooms"],
-                    help="Model_AB's drift(s) to measure (default rooms: the room-wise rigid "
-                    "drift of map2map.learn.room_drift, as map2map synthesize; parametric: "
-                    "the default before session 11)")
+                    default=["parametric"],
+                    help="Model_AB's drift(s) to measure (default parametric, map2map "
+                    "synthesize's before session 11; rooms: the room-wise rigid drift of "
+                    "map2map.learn.room_drift, its default since)")
     ap.add_argument("--drift-method", choices=("additive", "ekf"), default=None,
                     help="the parametric drift's odometry-to-map conversion (default "
                     "additive)")
@@ -94,15 +94,16 @@ def main(argv=None) -> int:
                     "own magnitudes)")
     ap.add_argument("--diversity", type=int, default=0, metavar="K",
                     help="also the mean pairwise disagreement of K hypotheses per plan")
-    ap.add_argument("--coverage", nargs="+", choices=("none", "explore"), default=["explore"],
-                    help="Model_AB's coverage(s): explore (unknown where its own exploration "
-                    "of the plan did not see; default) or none (the network's extent)")
+    ap.add_argument("--coverage", nargs="+", choices=("none", "explore"), default=["none"],
+                    help="Model_AB's coverage(s): none (the network's extent, default) or "
+                    "explore (unknown where its own exploration of the plan did not see; "
+                    "map2map synthesize's default since session 11)")
     ap.add_argument("--drift-route", nargs="+", choices=("tour", "explore"), default=["tour"],
                     help="the drift's route(s): tour (roadmap tour, default) or explore (the "
                     "exploration's true path)")
-    ap.add_argument("--traces", nargs="+", choices=("none", "lidar"), default=["lidar"],
-                    help="LIDAR traces (map2map.learn.slam_render.TraceParams): lidar "
-                    "(default) and/or none")
+    ap.add_argument("--traces", nargs="+", choices=("none", "lidar"), default=["none"],
+                    help="LIDAR traces (map2map.learn.slam_render.TraceParams): none "
+                    "(default) and/or lidar (map2map synthesize's default since session 11)")
     ap.add_argument("--trace-params", default="{}",
                     help="JSON fields replacing the lidar traces' defaults")
     ap.add_argument("--measures", action="store_true",
