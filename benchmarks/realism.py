@@ -14,6 +14,7 @@ statistic: W(generated, run 1) / W(run 2, run 1); target every ratio <= 1.5.
         [--cache refs.npz] [--csv out.csv] [--render slam plain] [--measures]
         [--drift parametric none] [--drift-method additive] [--drift-scale 1 ...]
         [--diversity K] [--coverage none explore] [--drift-route tour explore]
+        [--traces none lidar] [--trace-params '{"wall_m": 0.045}']
 
 ``--render`` measures each model with each resolution raising
 (:mod:`map2map.learn.slam_render`: ``slam``, SLAM-like walls, the default of ``map2map
@@ -24,7 +25,8 @@ model and every generator: mean (median) error, plans not aligned, mean recall, 
 precision.
 
 ``--drift`` measures each model with and without the parametric drift of
-:mod:`map2map.learn.drift` (default ``parametric``, as ``map2map synthesize``; each square
+:mod:`map2map.learn.drift` (default ``parametric``, ``map2map synthesize``'s default before
+session 11, kept here so that the commands of docs/learn_ab.md reproduce; each square
 at its own metric resolution, :func:`map2map.learn.realism.pair_square_resolution`) and
 with the room-wise rigid drift of :mod:`map2map.learn.room_drift` (``rooms``),
 ``--drift-scale`` with each factor on the drift field (for tuning: tune on ``--split
@@ -35,7 +37,16 @@ dropout + the drift) over the plans.
 ``--coverage`` and ``--drift-route`` (:mod:`map2map.learn.coverage`) measure each model
 with the network's own extent (``none``) and/or only what its own ``oracle`` exploration
 of the square saw (``explore``), and the drift along the roadmap tour (``tour``) and/or
-the exploration's path (``explore``): every combination given is one generator.
+the exploration's path (``explore``): every combination given is one generator (default
+``none`` and ``tour``).
+
+``--traces`` (:class:`map2map.learn.slam_render.TraceParams`, session 11) measures each
+model without (``none``) and/or with (``lidar``) what a LIDAR + SLAM leaves beyond the
+faces: a metric wall band with a ragged back edge and stray hits (default ``none``;
+``--render plain`` is measured without); ``--trace-params`` (JSON) replaces fields of the
+``lidar`` settings (for tuning on ``--split val``). ``map2map synthesize``'s default since
+session 11 is measured by ``--drift rooms --coverage explore --traces lidar``; the
+script's own defaults stay session 9's (``parametric``, ``none``, ``none``).
 """
 
 from __future__ import annotations
@@ -72,8 +83,9 @@ def main(argv=None) -> int:
                     help="Model_AB's resolution raising(s) to measure (default slam)")
     ap.add_argument("--drift", nargs="+", choices=("parametric", "rooms", "none"),
                     default=["parametric"],
-                    help="Model_AB's drift(s) to measure (default parametric; rooms: the "
-                    "room-wise rigid drift of map2map.learn.room_drift)")
+                    help="Model_AB's drift(s) to measure (default parametric, map2map "
+                    "synthesize's before session 11; rooms: the room-wise rigid drift of "
+                    "map2map.learn.room_drift, its default since)")
     ap.add_argument("--drift-method", choices=("additive", "ekf"), default=None,
                     help="the parametric drift's odometry-to-map conversion (default "
                     "additive)")
@@ -84,10 +96,16 @@ def main(argv=None) -> int:
                     help="also the mean pairwise disagreement of K hypotheses per plan")
     ap.add_argument("--coverage", nargs="+", choices=("none", "explore"), default=["none"],
                     help="Model_AB's coverage(s): none (the network's extent, default) or "
-                    "explore (unknown where its own exploration of the plan did not see)")
+                    "explore (unknown where its own exploration of the plan did not see; "
+                    "map2map synthesize's default since session 11)")
     ap.add_argument("--drift-route", nargs="+", choices=("tour", "explore"), default=["tour"],
                     help="the drift's route(s): tour (roadmap tour, default) or explore (the "
                     "exploration's true path)")
+    ap.add_argument("--traces", nargs="+", choices=("none", "lidar"), default=["none"],
+                    help="LIDAR traces (map2map.learn.slam_render.TraceParams): none "
+                    "(default) and/or lidar (map2map synthesize's default since session 11)")
+    ap.add_argument("--trace-params", default="{}",
+                    help="JSON fields replacing the lidar traces' defaults")
     ap.add_argument("--measures", action="store_true",
                     help="also Fig. 5.14's measures (appendix error, wall recall/precision) "
                     "on every plan")
@@ -99,16 +117,21 @@ def main(argv=None) -> int:
     gens = {"parametric": refs.parametric}
     div: dict = {}
     if args.model:
+        import json
+
+        from map2map.learn.slam_render import TraceParams
         from map2map.learn.synthesize import load_ab_model, synthesize_squares
 
-        variants = [(how, d, sc, cov, rt) for how in args.render for d in args.drift
+        lidar = TraceParams(**json.loads(args.trace_params))
+        variants = [(how, d, sc, cov, rt, tr) for how in args.render for d in args.drift
                     for sc in (args.drift_scale if d != "none" else [None])
                     for cov in args.coverage
-                    for rt in (args.drift_route if d == "parametric" else ["tour"])]
+                    for rt in (args.drift_route if d == "parametric" else ["tour"])
+                    for tr in (args.traces if how == "slam" else ["none"])]
         for m in args.model:
             net = load_ab_model(m)
             base = "Model_AB" if m == "pretrained" else f"AB:{Path(m).name}"
-            for how, d, sc, cov, rt in variants:
+            for how, d, sc, cov, rt, tr in variants:
                 tags = [how] * (len(args.render) > 1)
                 if len(args.drift) > 1 or len(args.drift_scale) > 1:
                     kind = "rooms drift" if d == "rooms" else "drift"
@@ -118,21 +141,26 @@ def main(argv=None) -> int:
                     tags.append(f"cover {cov}")
                 if len(args.drift_route) > 1 or rt != "tour":
                     tags.append(f"route {rt}")
+                if len(args.traces) > 1 or tr != "none":
+                    tags.append(f"traces {tr}")
                 name = f"{base} [{', '.join(tags)}]" if tags else base
                 t1 = time.perf_counter()
                 gens[name] = synthesize_squares(
                     net, plans, seed=args.seed, render=how, drift=d,
                     drift_method=args.drift_method, drift_scale=sc, resolution=refs.resolution,
-                    coverage=cov, drift_route=rt)
+                    coverage=cov, drift_route=rt, traces=lidar if tr == "lidar" else "none")
                 if args.diversity > 1:
                     div[name] = _diversity(net, plans, refs.resolution, args.diversity,
-                                           args.seed, how, d, args.drift_method, sc, cov, rt)
+                                           args.seed, how, d, args.drift_method, sc, cov, rt,
+                                           lidar if tr == "lidar" else "none")
                 print(f"{name}: {time.perf_counter() - t1:.0f} s")
             for d in ("parametric", "rooms"):
                 if d in args.drift:
                     from map2map.learn.drift import drift_params
 
                     print("drift: " + drift_params(d, args.drift_method).describe())
+            if "lidar" in args.traces:
+                print(f"traces lidar: {lidar}")
             print(f"{base}: {net.source} ({net.resolution} px, target walls "
                   f"{net.wall_px:.2f} px, note: {str(net.header.get('note', ''))[:90]})")
     print(f"{len(plans)} held-out '{args.split}' plans of {args.data} "
@@ -162,7 +190,7 @@ def main(argv=None) -> int:
 
 
 def _diversity(net, plans, resolution, k, seed, render, drift, method, scale,
-               coverage="none", drift_route="tour") -> list:
+               coverage="none", drift_route="tour", traces="none") -> list:
     """Per plan: mean pairwise disagreement of ``k`` hypotheses of ``synthesize``."""
     import warnings
 
@@ -175,7 +203,8 @@ def _diversity(net, plans, resolution, k, seed, render, drift, method, scale,
         for a, r in zip(plans, resolution, strict=True):
             res = synthesize(OccupancyMap(a, float(r)), net, samples=k, seed=seed,
                              render=render, drift=drift, drift_method=method,
-                             drift_scale=scale, coverage=coverage, drift_route=drift_route)
+                             drift_scale=scale, coverage=coverage, drift_route=drift_route,
+                             traces=traces)
             out.append(res.diversity)
     return out
 

@@ -93,11 +93,12 @@ def test_synthesize_coverage_hides_the_unseen_room_and_route_is_separable(drawer
     from map2map.learn.synthesize import synthesize
 
     plan = _plan()
-    base = synthesize(plan, drawer, samples=2, seed=4, drift="none")
+    old = {"traces": "none"}                  # the walls without LIDAR traces (session 11)
+    base = synthesize(plan, drawer, samples=2, seed=4, drift="none", coverage="none", **old)
     cov = synthesize(plan, drawer, samples=2, seed=4, drift="none", coverage="explore",
-                     explore=SHORT)
+                     explore=SHORT, **old)
     again = synthesize(plan, drawer, samples=2, seed=4, drift="none", coverage="explore",
-                       explore=SHORT)
+                       explore=SHORT, **old)
     wall_px = 2.0 * 44 / 64                                      # the square is the plan's width
     for k, (b, c, a) in enumerate(zip(base.maps, cov.maps, again.maps, strict=True)):
         assert np.array_equal(c.data, a.data)                     # same seed, same bytes
@@ -106,11 +107,13 @@ def test_synthesize_coverage_hides_the_unseen_room_and_route_is_separable(drawer
         assert np.count_nonzero(c.data == UNKNOWN) > np.count_nonzero(b.data == UNKNOWN) + 100
         meta = c.meta["synthesize"]
         assert meta["coverage"] == "explore" and meta["exploration"]["seed"] == ex.seed
-        assert "coverage" not in b.meta["synthesize"]             # the default's meta as before
+        assert "coverage" not in b.meta["synthesize"]             # coverage none: meta as before
     # (a) alone: the drift field is the tour's, as without coverage
-    drift = synthesize(plan, drawer, samples=1, seed=4)
-    both = synthesize(plan, drawer, samples=1, seed=4, coverage="explore", explore=SHORT)
-    route = synthesize(plan, drawer, samples=1, seed=4, drift_route="explore", explore=SHORT)
+    par = {"drift": "parametric", **old}
+    drift = synthesize(plan, drawer, samples=1, seed=4, coverage="none", **par)
+    both = synthesize(plan, drawer, samples=1, seed=4, coverage="explore", explore=SHORT, **par)
+    route = synthesize(plan, drawer, samples=1, seed=4, coverage="none", drift_route="explore",
+                       explore=SHORT, **par)
     ex = explore_plan(plan, explore_rng(4, 0), SHORT)
     tour = drift_field(plan, drift_rng(4, 0))
     assert np.array_equal(drift.maps[0].data, apply_drift(base.maps[0].data, tour))

@@ -258,6 +258,9 @@ def test_cli_train_ab_and_bad_input(tmp_path, capsys):
 
 
 # ------------------------------------------------------------------------- synthesize
+#: synthesize's settings before session 11 (its defaults since: rooms, explore, lidar)
+OLD = {"coverage": "none", "traces": "none"}
+
 @pytest.fixture(scope="module")
 def tiny_run(tmp_path_factory):
     run = tmp_path_factory.mktemp("ab") / "run"
@@ -339,13 +342,13 @@ def test_synthesize_render_slam_draws_faces_and_plain_is_the_previous_output(tin
 @pytest.mark.filterwarnings("ignore::UserWarning")
 def test_synthesize_drift_none_is_the_previous_output_and_parametric_drifts(tiny_run):
     from map2map.learn.autocorrect import _square
-    from map2map.learn.drift import apply_drift, drift_field, drift_rng
+    from map2map.learn.drift import DriftParams, apply_drift, drift_field, drift_rng
     from map2map.learn.slam_render import render
     from map2map.learn.synthesize import load_ab_model, pairwise_disagreement, synthesize
 
     net = load_ab_model(tiny_run)
     plan = _plan()
-    none = synthesize(plan, net, samples=3, seed=2, drift="none")
+    none = synthesize(plan, net, samples=3, seed=2, drift="none", **OLD)
     # the output before drift existed: rendered squares pasted into the plan's frame,
     # diversity over the square's known pixels
     square, row0, col0, side = _square(plan, net.data_size)
@@ -360,9 +363,9 @@ def test_synthesize_drift_none_is_the_previous_output_and_parametric_drifts(tiny
     assert none.diversity == pw[~np.eye(3, dtype=bool)].mean()
     # the tiny network draws nothing: let it draw the plan, so that the drift shows
     net.sample_many = _plan_drawer(net)
-    none = synthesize(plan, net, samples=3, seed=2, drift="none")
-    drift = synthesize(plan, net, samples=3, seed=2)              # default: parametric
-    again = synthesize(plan, net, samples=3, seed=2, drift="parametric")
+    none = synthesize(plan, net, samples=3, seed=2, drift="none", **OLD)
+    drift = synthesize(plan, net, samples=3, seed=2, drift="parametric", **OLD)
+    again = synthesize(plan, net, samples=3, seed=2, drift=DriftParams(), **OLD)
     for k, (a, b, c) in enumerate(zip(drift.maps, again.maps, none.maps, strict=True)):
         assert np.array_equal(a.data, b.data)                     # same seed, same bytes
         assert np.count_nonzero(c.data == OCCUPIED) > 20
@@ -372,7 +375,8 @@ def test_synthesize_drift_none_is_the_previous_output_and_parametric_drifts(tiny
         assert a.meta["synthesize"]["drift_params"]["method"] == "additive"
         assert a.meta["synthesize"]["drift_px"]["mean"] > 0
     assert drift.diversity > none.diversity == 0.0                # the drift differs
-    ekf = synthesize(plan, net, samples=1, seed=2, drift_method="ekf")
+    ekf = synthesize(plan, net, samples=1, seed=2, drift="parametric", drift_method="ekf",
+                     **OLD)
     assert ekf.maps[0].meta["synthesize"]["drift_params"]["method"] == "ekf"
     from map2map.errors import InputError
 
@@ -389,9 +393,9 @@ def test_synthesize_rooms_drift_is_seeded_and_leaves_the_other_choices_alone(tin
     net = load_ab_model(tiny_run)
     net.sample_many = _plan_drawer(net)
     plan = _plan()
-    none = synthesize(plan, net, samples=2, seed=2, drift="none")
-    rooms = synthesize(plan, net, samples=2, seed=2, drift="rooms")
-    again = synthesize(plan, net, samples=2, seed=2, drift=RoomDriftParams())
+    none = synthesize(plan, net, samples=2, seed=2, drift="none", **OLD)
+    rooms = synthesize(plan, net, samples=2, seed=2, drift="rooms", **OLD)
+    again = synthesize(plan, net, samples=2, seed=2, drift=RoomDriftParams(), **OLD)
     for k, (a, b, c) in enumerate(zip(rooms.maps, again.maps, none.maps, strict=True)):
         assert a.data.tobytes() == b.data.tobytes()              # same seed, same bytes
         want = apply_drift(c.data, drift_field(plan, drift_rng(2, k), RoomDriftParams()))
@@ -401,6 +405,52 @@ def test_synthesize_rooms_drift_is_seeded_and_leaves_the_other_choices_alone(tin
     plans = _pairs(n=2, size=32, seed=4).a
     sq = synthesize_squares(net, plans, seed=1, drift="rooms")
     assert np.array_equal(sq, synthesize_squares(net, plans, seed=1, drift="rooms"))
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+def test_synthesize_lidar_traces_are_seeded_metric_and_leave_traces_none_alone(tiny_run):
+    from map2map.core.errors import InputError
+    from map2map.learn.slam_render import TraceParams, band_px
+    from map2map.learn.synthesize import load_ab_model, synthesize, synthesize_squares
+
+    net = load_ab_model(tiny_run)
+    net.sample_many = _plan_drawer(net)
+    plan = _plan()
+    base = synthesize(plan, net, samples=2, seed=2, drift="none", **OLD)
+    tr = synthesize(plan, net, samples=2, seed=2, drift="none", coverage="none",
+                    traces="lidar")
+    again = synthesize(plan, net, samples=2, seed=2, drift="none", coverage="none",
+                       traces=TraceParams())
+    auto = synthesize(plan, net, samples=2, seed=2, drift="none", coverage="none")
+    for a, b, c, d in zip(tr.maps, again.maps, base.maps, auto.maps, strict=True):
+        assert a.data.tobytes() == b.data.tobytes() == d.data.tobytes()  # lidar: default
+        assert a.data.tobytes() != c.data.tobytes()              # traces drawn
+        assert "traces" not in c.meta["synthesize"]              # traces none: as before
+        assert a.meta["synthesize"]["traces"]["wall_m"] == TraceParams().wall_m
+    assert tr.maps[0].data.tobytes() != tr.maps[1].data.tobytes()   # own stream per k
+    with pytest.raises(InputError):
+        synthesize(plan, net, samples=1, render="plain", traces="lidar")
+    plans = _pairs(n=2, size=32, seed=4).a
+    sq = synthesize_squares(net, plans, seed=1, drift="none", traces="lidar",
+                            resolution=[0.03, 0.12])
+    assert np.array_equal(sq, synthesize_squares(net, plans, seed=1, drift="none",
+                                                 traces="lidar", resolution=[0.03, 0.12]))
+    assert band_px(0.03, TraceParams()) > 1.5 * band_px(0.12, TraceParams())
+    # no strays, no rough edge, no inset: the band alone, thicker on the finer square
+    from map2map.learn.progressive import StochasticUNet
+    from map2map.learn.synthesize import ABModel
+
+    sq = np.full((64, 64), UNKNOWN, np.uint8)
+    sq[4:60, 4:60] = OCCUPIED
+    sq[12:52, 12:28] = sq[12:52, 36:52] = FREE           # walls 8 px thick
+    wide = ABModel(StochasticUNet(size=32, channels=8, min_size=16), resolution=32,
+                   alpha=1.0, data_size=64, header={"target_wall_px": 2.0}, source="test")
+    wide.sample_many = _plan_drawer(wide)
+    flat = TraceParams(rough_px=0.0, strays=0.0, wall_m=0.06, inset_px=0.0)
+    one = synthesize_squares(wide, np.stack([sq] * 2), seed=1, drift="none", traces=flat,
+                             resolution=[0.02, 0.2])
+    n_fine, n_coarse = (np.count_nonzero(o == OCCUPIED) for o in one)
+    assert n_fine > 2.5 * n_coarse > 0                   # 4.2 px against 1.5 px bands
 
 
 def _plan_drawer(net):
@@ -460,7 +510,7 @@ def test_synthesize_at_two_px_per_cell_draws_target_walls_without_the_coarse_war
                   alpha=1.0, data_size=S, header={"target_wall_px": 2.0}, source="test")
     net.sample_many = _plan_drawer(net)           # draws the plan at r px
     with pytest.warns(UserWarning) if cells > 2 else _no_warning():
-        res = synthesize(plan, net, samples=1, drift="none")
+        res = synthesize(plan, net, samples=1, drift="none", **OLD)
     coarse = [w for w in res.warnings if "one output cell is" in w]
     assert len(coarse) == (cells > 2)
     if cells > 2:
@@ -495,7 +545,7 @@ def test_cli_synthesize_writes_maps_summary_and_figure(tiny_run, tmp_path, capsy
     out = tmp_path / "hyps"
     # the tiny network draws next to nothing; without drift a hypothesis still reads back
     rc = main(["synthesize", str(tmp_path / "plan.yaml"), "--out", str(out), "--samples", "3",
-               "--model", str(tiny_run), "--drift", "none"])
+               "--model", str(tiny_run), "--drift", "none", "--coverage", "none"])
     assert rc == 0
     m = load_map(out / "plan_hyp02.yaml")
     assert m.shape == (30, 44) and m.resolution == pytest.approx(0.07)
@@ -504,14 +554,16 @@ def test_cli_synthesize_writes_maps_summary_and_figure(tiny_run, tmp_path, capsy
     assert summary["samples"] == 3 and 0 < summary["diversity_mean_pairwise_disagreement"] < 1
     assert (out / "plan_synthesize.png").stat().st_size > 1000
     assert summary["render"] == "slam" and summary["drift"] == "none"
+    assert "coverage" not in summary and summary["traces"]["inset_px"] == 1.0   # lidar
     assert main(["synthesize", str(tmp_path / "plan.yaml"), "--out", str(tmp_path / "p"),
                  "--samples", "2", "--format", "png", "--no-figure", "--model",
-                 str(tiny_run), "--render", "plain"]) == 0
+                 str(tiny_run), "--render", "plain", "--drift", "parametric"]) == 0
     p = json.loads((tmp_path / "p" / "plan_synthesize.json").read_text())
     assert p["drift"] == "parametric" and p["drift_params"]["method"] == "additive"
+    assert "traces" not in p                         # plain: no LIDAR traces by default
     assert main(["synthesize", str(tmp_path / "plan.yaml"), "--out", str(tmp_path / "e"),
                  "--samples", "1", "--no-figure", "--model", str(tiny_run),
-                 "--drift-method", "ekf", "--drift-scale", "0.5"]) == 0
+                 "--drift", "parametric", "--drift-method", "ekf", "--drift-scale", "0.5"]) == 0
     e = json.loads((tmp_path / "e" / "plan_synthesize.json").read_text())
     assert (e["drift_params"]["method"], e["drift_params"]["scale"]) == ("ekf", 0.5)
     assert main(["synthesize", str(tmp_path / "plan.yaml"), "--out", str(tmp_path / "r"),
@@ -519,6 +571,7 @@ def test_cli_synthesize_writes_maps_summary_and_figure(tiny_run, tmp_path, capsy
                  "--drift", "rooms", "--drift-scale", "0.5"]) == 0
     r = json.loads((tmp_path / "r" / "plan_synthesize.json").read_text())
     assert r["drift"] == "rooms" and r["drift_params"]["scale"] == 0.5
+    assert r["coverage"] == "explore" and "traces" in r     # the defaults since session 11
     assert sorted(p.name for p in (tmp_path / "p").iterdir()) == \
         ["plan_hyp00.png", "plan_hyp01.png", "plan_synthesize.json"]
     err = capsys.readouterr().err

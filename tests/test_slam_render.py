@@ -95,3 +95,94 @@ def test_render_figure_is_written(tmp_path):
     save_render_figure(g, render_slam(g, 64, 2.0), tmp_path / "r.png",
                        plan=np.full((64, 64), FREE, np.uint8), title="t")
     assert (tmp_path / "r.png").stat().st_size > 1000
+
+
+# --- LIDAR traces (session 11): metric band, ragged back edge, stray hits -------------
+
+def _block(n: int = 16) -> np.ndarray:
+    """A grey n x n output: one room inside a thick (3-cell) wall block, unknown outside."""
+    g = np.full((n, n), float(UNKNOWN), np.float32)
+    g[1:n - 1, 1:n - 1] = 0.0
+    g[4:n - 4, 4:n - 4] = 240.0
+    return g
+
+
+def test_metric_band_is_thinner_in_px_on_coarser_squares():
+    from map2map.learn.slam_render import TraceParams, band_px, trace_rng
+
+    tp = TraceParams(floor_px=1.0, wall_m=0.05)
+    assert band_px(0.025, tp) == pytest.approx(3.0) and band_px(0.1, tp) == pytest.approx(1.5)
+    th = [wall_thickness_px(render_slam(_block(), 128, band_px(r, tp), tp.rough_px,
+                                        trace_rng(0, 0)).map[None]) for r in (0.025, 0.05, 0.1)]
+    assert th[0] > th[1] > th[2]                        # the same metres, fewer pixels
+    assert th[0] == pytest.approx(3.0, abs=0.5) and th[2] == pytest.approx(1.5, abs=0.4)
+
+
+def test_ragged_edge_draws_fractional_bands_seeded_and_keeps_every_face():
+    from map2map.learn.slam_render import trace_rng
+
+    plain = render_slam(_block(), 128, 1.5)             # floored: 1 px
+    a = render_slam(_block(), 128, 1.5, 1.0, trace_rng(3, 0))
+    b = render_slam(_block(), 128, 1.5, 1.0, trace_rng(3, 0))
+    c = render_slam(_block(), 128, 1.5, 1.0, trace_rng(4, 0))
+    assert a.map.tobytes() == b.map.tobytes() and a.map.tobytes() != c.map.tobytes()
+    row = plain.map[64]
+    assert np.count_nonzero(row == OCCUPIED) == 2       # the plain band: 1 px a face
+    # the ragged band: 1 or 2 px deep, about half of each, every face pixel kept
+    free = a.snapped == FREE
+    d = ndimage.distance_transform_edt(~free)
+    occ = a.map == OCCUPIED
+    assert np.all(occ[(a.snapped == OCCUPIED) & (d <= 1)])
+    second = (a.snapped == OCCUPIED) & (d == 2)
+    assert 0.35 < occ[second].mean() < 0.65 and not occ[(a.snapped == OCCUPIED) & (d > 2.5)].any()
+    with pytest.raises(ValueError):
+        render_slam(_block(), 64, 1.5, 1.0)             # rough edge without an rng
+
+
+def test_stray_hits_land_off_the_walls_on_unknown_or_free_space_only():
+    from map2map.learn.realism import map_stats
+    from map2map.learn.slam_render import TraceParams, stray_hits, trace_rng
+
+    m = render_slam(_block(32), 256, 2.0).map
+    plan = m.copy()                                    # the map itself as the plan
+    tp = TraceParams(strays=30.0, stray_spread=0.0)
+    out = stray_hits(m, trace_rng(1, 0), 0.05, tp)
+    assert out.tobytes() == stray_hits(m, trace_rng(1, 0), 0.05, tp).tobytes()
+    new = (out == OCCUPIED) & (m != OCCUPIED)
+    assert new.any() and np.all(out[m == OCCUPIED] == OCCUPIED)       # walls untouched
+    assert np.all(np.isin(m[new], [UNKNOWN, FREE]))
+    assert np.all(out[~new] == m[~new])
+    lab, n = ndimage.label(new, structure=np.ones((3, 3)))
+    assert np.bincount(lab.ravel())[1:].max() <= 3                   # 1-3 px hits
+    d = ndimage.distance_transform_edt(m != OCCUPIED)
+    assert d[new].min() >= 2.5                                      # off the walls
+    assert np.any(new & (m == UNKNOWN)) and np.any(new & (m == FREE))  # both kinds
+    assert map_stats(out, plan)["spurious"] >= 0.5 * n > 0 == map_stats(m, plan)["spurious"]
+    none = stray_hits(m, trace_rng(1, 0), 0.05, TraceParams(strays=0.0))
+    assert none.tobytes() == m.tobytes()
+    counts = [np.count_nonzero(stray_hits(m, trace_rng(s, 0), 0.05, TraceParams(
+        strays=5.0, stray_spread=0.8)) != m) for s in range(40)]
+    assert np.var(counts) > np.mean(counts)           # overdispersed: some maps get many
+
+
+def test_inset_moves_the_faces_into_the_network_wall_cells():
+    g = _rooms()
+    base = render_slam(g, 128, 2.0)
+    ins = render_slam(g, 128, 2.0, inset_px=1.0)
+    row0, row1 = base.map[64], ins.map[64]
+    occ0, occ1 = np.flatnonzero(row0 == OCCUPIED), np.flatnonzero(row1 == OCCUPIED)
+    assert len(occ0) == len(occ1) == 8                   # four 2 px faces either way
+    # each face one pixel deeper into its wall: the rooms one pixel wider a side
+    assert np.count_nonzero(row1 == FREE) == np.count_nonzero(row0 == FREE) + 4
+    assert np.all(ins.map[base.map == FREE] == FREE)
+
+
+def test_inset_leaves_thin_walls_whole():
+    g = np.full((16, 16), 250.0, np.float32)
+    g[:, 8] = 5.0                                   # one cell: 4 px at 64
+    thin = render_slam(g, 64, 2.0, inset_px=1.0)
+    assert np.count_nonzero(thin.map[30] == OCCUPIED) >= 2
+    g2 = np.full((64, 64), 250.0, np.float32)
+    g2[:, 32] = 5.0                                 # one pixel at 64: nothing deeper
+    assert np.array_equal(render_slam(g2, 64, 1.0, inset_px=1.0).map,
+                          render_slam(g2, 64, 1.0).map)

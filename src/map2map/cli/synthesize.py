@@ -31,25 +31,29 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="slam (default): walls as a SLAM map draws them, the faces next to "
                    "free space with the training maps' wall thickness, wall interiors "
                    "unknown; plain: the network's output snapped and upsampled (nearest)")
-    p.add_argument("--drift", choices=("parametric", "rooms", "none"), default="parametric",
-                   help="parametric (default): warp each hypothesis along its own drift "
-                   "field of the parametric CAD->SLAM model (thesis 3.2: a route through the "
-                   "plan, LIDAR + odometry errors), as a SLAM run bends walls and shifts "
-                   "rooms; rooms: one rigid transform per room chained along a walk through "
-                   "the doors, blended across walls (the simulated maps' wall error, walls "
-                   "kept whole), plus the parametric field smoothed; none: the network's "
-                   "straight walls")
+    p.add_argument("--drift", choices=("rooms", "parametric", "none"), default="rooms",
+                   help="rooms (default): one rigid transform per room chained along a walk "
+                   "through the doors, blended across walls (the simulated maps' wall error, "
+                   "walls kept whole), plus the parametric field smoothed; parametric: warp "
+                   "each hypothesis along its own drift field of the parametric CAD->SLAM "
+                   "model (thesis 3.2: a route through the plan, LIDAR + odometry errors), "
+                   "the default before session 11; none: the network's straight walls")
     p.add_argument("--drift-method", choices=("additive", "ekf"), default="additive",
                    help="the drift's odometry-to-map conversion (additive: thesis eqs. "
                    "3.81-3.90, default; ekf: 3.54-3.80)")
     p.add_argument("--drift-scale", type=float, default=None,
                    help="factor on the drift field (default 1: the parametric model's "
                    "own error magnitudes; docs/learn_ab.md)")
-    p.add_argument("--coverage", choices=("none", "explore"), default="none",
-                   help="none (default): every room the network draws; explore: the "
-                   "simulator's robot explores the plan for each hypothesis (oracle mapper, "
-                   "420 s, 180 degree LIDAR, seeded) and what it did not see becomes unknown, "
-                   "as a 7-minute run leaves rooms unseen")
+    p.add_argument("--coverage", choices=("explore", "none"), default="explore",
+                   help="explore (default): the simulator's robot explores the plan for each "
+                   "hypothesis (oracle mapper, 420 s, 180 degree LIDAR, seeded; about 0.5 s "
+                   "a hypothesis) and what it did not see becomes unknown, as a 7-minute run "
+                   "leaves rooms unseen; none: every room the network draws")
+    p.add_argument("--traces", choices=("lidar", "none"), default=None,
+                   help="lidar (default with --render slam): what a LIDAR + SLAM leaves "
+                   "beyond the faces, a wall band of metric width with a ragged back edge "
+                   "and stray hits off the walls; none: the training maps' wall thickness "
+                   "(the output before session 11, with --drift parametric --coverage none)")
     p.add_argument("--drift-route", choices=("tour", "explore"), default="tour",
                    help="the drift's path: tour (default), a roadmap tour of the plan; "
                    "explore: the hypothesis's exploration (the same one as --coverage "
@@ -88,7 +92,8 @@ def run(args: argparse.Namespace) -> int:
         res = synthesize(plan, args.model, samples=args.samples, seed=args.seed,
                          device=args.device, render=args.render, drift=args.drift,
                          drift_method=args.drift_method, drift_scale=args.drift_scale,
-                         coverage=args.coverage, drift_route=args.drift_route)
+                         coverage=args.coverage, drift_route=args.drift_route,
+                         traces=args.traces)
     ensure_output_dir(out)
     for path, m in zip(names, res.maps, strict=True):
         save_map(m, path)
@@ -97,6 +102,8 @@ def run(args: argparse.Namespace) -> int:
                **({"coverage": args.coverage, "drift_route": args.drift_route}
                   if (args.coverage, args.drift_route) != ("none", "tour") else {}),
                "drift_params": res.maps[0].meta["synthesize"].get("drift_params"),
+               **({"traces": res.maps[0].meta["synthesize"]["traces"]}
+                  if "traces" in res.maps[0].meta["synthesize"] else {}),
                "files": [p.name for p in names], **res.summary()}
     with atomic_path(out / f"{src.stem}_synthesize.json") as tmp:
         tmp.write_text(json.dumps(summary, indent=2))

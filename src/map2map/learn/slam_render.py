@@ -36,6 +36,30 @@ Free and unknown space are those of step 2. :func:`render_plain` is the previous
 (snap at the network's resolution, nearest-neighbour upsampling): ``map2map synthesize
 --render plain``.
 
+**LIDAR traces** (:class:`TraceParams`, ``synthesize(..., traces="lidar")``, the default
+of :func:`~map2map.learn.synthesize.synthesize` since session 11; :func:`render_slam`
+alone draws none of them unless asked; issue #15, docs/learn_ab.md "Rendering what a
+LIDAR leaves", where the defaults were tuned on gen900 val): what a LIDAR + SLAM run
+leaves on a grid map beyond the wall faces, measured on the simulated maps of the
+datasets and drawn here, seeded (:func:`trace_rng`):
+
+* a **metric wall band**: a simulated map's walls are the spread of the hits across the
+  wall (range noise, the particle filter's pose scatter, the 0.05 m grid), a width in
+  metres: in a square of ``r`` m/px it is ``floor_px + wall_m / r`` px (gen900 val, run
+  1: ``1.24 + 0.043 / r``, residual 0.13 px; a fixed px thickness misses it, and that
+  spread is what the ``thickness`` statistic's W(run 2, run 1) of 0.02 px asks for).
+  :func:`band_px`;
+* a **ragged back edge**: the band's depth is the band plus ``U(0, rough_px)``, drawn
+  from a field correlated along the wall over ``rough_sigma_px`` (hits scattered behind
+  the face by the pose error of the scans that saw that stretch; with ``rough_px = 1`` a
+  fractional band is drawn with the right mean thickness instead of being floored to
+  whole pixels);
+* **stray hits** (:func:`stray_hits`): isolated 1-3 px hits off the walls that no later
+  ray cleared: behind a face, in unknown space (a scan inserted at a wrong pose; its
+  rays pass the wall and its hits land beyond it) or inside mapped free space (random and
+  short returns, eq. of the beam model's ``p_rand``/``p_short``). Per map a Poisson count
+  with a log-normal rate (most runs leave few, some many).
+
 Examples
 --------
 A 16 px output with a 2-cell thick wall between two rooms, raised to 64 px (4 px a cell):
@@ -58,14 +82,135 @@ from scipy import ndimage
 
 from ..core.grid import FREE, OCCUPIED, UNKNOWN
 
-__all__ = ["RENDERS", "DEFAULT_WALL_PX", "SlamRender", "snap", "class_memberships",
-           "render_slam", "render_plain", "render", "save_render_figure"]
+__all__ = ["RENDERS", "TRACES", "DEFAULT_WALL_PX", "SlamRender", "TraceParams", "snap",
+           "class_memberships", "render_slam", "render_plain", "render", "band_px",
+           "trace_params", "trace_rng", "rough_field", "stray_hits", "save_render_figure"]
 
 #: ``synthesize --render`` choices: SLAM-like walls (default) or the previous output.
 RENDERS = ("slam", "plain")
 #: Wall thickness (px of a 256 px dataset square) for weights whose header lacks
 #: ``target_wall_px`` (the simulated maps of the datasets measure 2.07 px).
 DEFAULT_WALL_PX = 2.0
+#: ``synthesize --traces`` choices: none (the walls of the render only) or lidar
+#: (:class:`TraceParams`).
+TRACES = ("none", "lidar")
+_STREAM = 0x7ACE5
+
+
+@dataclass(frozen=True)
+class TraceParams:
+    """What a LIDAR + SLAM leaves beyond the wall faces (module doc, "LIDAR traces").
+
+    Parameters
+    ----------
+    floor_px : float
+        Band thickness at any resolution (px of the output square): the one pixel a
+        hit cell keeps after the square's resize.
+    wall_m : float
+        Metric part of the band [m]: ``floor_px + wall_m / resolution`` px.
+    rough_px : float
+        Extra depth of the band's back edge, ``U(0, rough_px)`` px, drawn per pixel
+        from a field correlated along the wall (:func:`rough_field`).
+    rough_sigma_px : float
+        Correlation length [px] of that field (the stretch of wall one scan's pose error
+        moves together; 0: independent per pixel).
+    inset_px : float
+        Faces moved this far into the network's wall cells (:func:`render_slam`): the
+        network places a face at the edge of its coarse wall cell, a LIDAR at the
+        wall's surface, on average inside that cell.
+    strays : float
+        Mean number of stray hits per map.
+    stray_spread : float
+        Log-normal spread of a map's stray rate (``exp(spread * z - spread^2 / 2)``).
+    stray_free : float
+        Share of the stray hits placed in mapped free space (the rest behind faces).
+    stray_m : tuple of float
+        Range [m] of a behind-face hit's distance past the face.
+    stray_big : float
+        Share of the stray hits 2-3 px large (the rest single pixels).
+    """
+
+    floor_px: float = 1.2
+    wall_m: float = 0.055
+    rough_px: float = 1.0
+    rough_sigma_px: float = 4.0
+    inset_px: float = 1.0
+    strays: float = 7.0
+    stray_spread: float = 0.8
+    stray_free: float = 0.45
+    stray_m: tuple = (0.2, 0.9)
+    stray_big: float = 0.35
+
+    def __post_init__(self):
+        vals = (self.floor_px, self.wall_m, self.rough_px, self.rough_sigma_px, self.inset_px,
+                self.strays, self.stray_spread)
+        if not all(np.isfinite(v) and v >= 0 for v in vals):
+            raise ValueError("trace parameters must be finite and >= 0")
+        if not (0 <= self.stray_free <= 1 and 0 <= self.stray_big <= 1):
+            raise ValueError("stray_free and stray_big are shares in [0, 1]")
+        lo, hi = self.stray_m
+        if not 0 <= lo <= hi:
+            raise ValueError(f"stray_m must be 0 <= lo <= hi, got {self.stray_m}")
+
+
+def trace_params(traces) -> TraceParams | None:
+    """``"none"`` / ``None`` -> None, ``"lidar"`` -> :class:`TraceParams` (), or the
+    given TraceParams.
+
+    Examples
+    --------
+    >>> trace_params("none") is None, trace_params("lidar").wall_m
+    (True, 0.055)
+    """
+    if traces is None or isinstance(traces, TraceParams):
+        return traces
+    if traces == "none":
+        return None
+    if traces == "lidar":
+        return TraceParams()
+    raise ValueError(f"traces must be one of {TRACES} or TraceParams, got {traces!r}")
+
+
+def trace_rng(seed: int, k: int) -> np.random.Generator:
+    """The LIDAR-trace generator of hypothesis (or plan) ``k`` under ``seed`` (its own
+    stream, apart from the drift's and the exploration's).
+
+    Examples
+    --------
+    >>> float(trace_rng(0, 1).random()) == float(trace_rng(0, 1).random())
+    True
+    """
+    return np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(_STREAM, int(k))))
+
+
+def rough_field(shape, rng: np.random.Generator, sigma_px: float) -> np.ndarray:
+    """A ``U(0, 1)`` field, correlated over ``sigma_px`` (Gaussian-smoothed white noise
+    mapped through the normal CDF; ``sigma_px = 0``: independent pixels).
+
+    Examples
+    --------
+    >>> f = rough_field((64, 64), trace_rng(0, 0), 4.0)
+    >>> bool(0 <= f.min() and f.max() <= 1), abs(float(f.mean()) - 0.5) < 0.1
+    (True, True)
+    """
+    from scipy.special import ndtr
+
+    z = rng.standard_normal(shape)
+    if sigma_px > 0:
+        z = ndimage.gaussian_filter(z, sigma_px, mode="wrap")
+        z /= max(float(z.std()), 1e-12)
+    return ndtr(z)
+
+
+def band_px(resolution: float, params: TraceParams) -> float:
+    """The wall band [px] of a square of ``resolution`` m/px (module doc).
+
+    Examples
+    --------
+    >>> round(band_px(0.05, TraceParams(floor_px=1.0, wall_m=0.05)), 2)
+    2.0
+    """
+    return float(params.floor_px + params.wall_m / float(resolution))
 
 
 def snap(grey: np.ndarray) -> np.ndarray:
@@ -125,7 +270,9 @@ def _upsample(p: np.ndarray, size: int) -> np.ndarray:
     return cv2.resize(p, (size, size), interpolation=how)
 
 
-def render_slam(grey: np.ndarray, size: int, wall_px: float = DEFAULT_WALL_PX) -> SlamRender:
+def render_slam(grey: np.ndarray, size: int, wall_px: float = DEFAULT_WALL_PX,
+                rough_px: float = 0.0, rng: np.random.Generator | None = None,
+                rough_sigma_px: float = 0.0, inset_px: float = 0.0) -> SlamRender:
     """The network's grey output -> a ``size x size`` map with SLAM-like walls (module doc).
 
     Parameters
@@ -137,6 +284,17 @@ def render_slam(grey: np.ndarray, size: int, wall_px: float = DEFAULT_WALL_PX) -
     wall_px : float
         Wall thickness in output pixels (at least 1 is used): occupied pixels within this
         distance of free space are kept.
+    rough_px : float
+        Ragged back edge: each occupied pixel is kept within ``wall_px + U(0, rough_px)``
+        of free space (:class:`TraceParams`; 0: the plain band).
+    rng : numpy.random.Generator, optional
+        Draws the edge (required when ``rough_px > 0``).
+    rough_sigma_px : float
+        Correlation length of the edge (:func:`rough_field`).
+    inset_px : float
+        Faces moved this far into the network's walls (:class:`TraceParams`): occupied
+        pixels within ``inset_px`` of free space become free before the band is drawn,
+        where the wall has pixels deeper than that (a thinner wall is left whole).
 
     Returns
     -------
@@ -158,9 +316,22 @@ def render_slam(grey: np.ndarray, size: int, wall_px: float = DEFAULT_WALL_PX) -
     occ = cls == 0
     t = max(1.0, float(wall_px))
     out = snapped.copy()
+    if inset_px > 0 and free.any():
+        d0 = ndimage.distance_transform_edt(~free)
+        # only walls with a core deeper than the inset: a thin wall is not erased
+        core = occ & (d0 > inset_px + 1e-6)
+        grow = occ & (d0 <= inset_px + 1e-6) & ndimage.binary_dilation(
+            core, np.ones((3, 3), bool), iterations=int(np.ceil(inset_px)) + 1)
+        out[grow] = FREE
+        free, occ = free | grow, occ & ~grow
     if free.any():
         d = ndimage.distance_transform_edt(~free)
-        drop = occ & (d > t + 1e-6)
+        lim = t + 1e-6
+        if rough_px > 0:
+            if rng is None:
+                raise ValueError("rough_px > 0 needs an rng")
+            lim = lim + rough_px * rough_field(d.shape, rng, rough_sigma_px)
+        drop = occ & (d > lim)
     else:
         drop = occ
     out[drop] = UNKNOWN
@@ -182,7 +353,8 @@ def render_plain(grey: np.ndarray, size: int) -> np.ndarray:
 
 
 def render(grey: np.ndarray, size: int, how: str = "slam",
-           wall_px: float = DEFAULT_WALL_PX) -> np.ndarray:
+           wall_px: float = DEFAULT_WALL_PX, traces: TraceParams | None = None,
+           rng: np.random.Generator | None = None) -> np.ndarray:
     """:func:`render_slam` (``how="slam"``) or :func:`render_plain` (``"plain"``), as a map.
 
     Examples
@@ -192,10 +364,91 @@ def render(grey: np.ndarray, size: int, how: str = "slam",
     ((16, 16), [127, 127, 127, 0, 255, 255])
     """
     if how == "slam":
-        return render_slam(grey, size, wall_px).map
+        if traces is None:
+            return render_slam(grey, size, wall_px).map
+        return render_slam(grey, size, wall_px, traces.rough_px, rng, traces.rough_sigma_px,
+                           traces.inset_px).map
     if how == "plain":
         return render_plain(grey, size)
     raise ValueError(f"render must be one of {RENDERS}, got {how!r}")
+
+
+def stray_hits(m: np.ndarray, rng: np.random.Generator, resolution: float,
+               params: TraceParams) -> np.ndarray:
+    """Map ``m`` with stray LIDAR hits added (module doc): a Poisson number of 1-3 px
+    occupied dots, each either behind a random wall face (along the direction away from
+    its nearest free pixel, ``stray_m`` metres past it) or at a random free pixel at least
+    3 px from any wall; a dot is only drawn where it lands on unknown (behind a face) or
+    free (in a room) space, never on a wall.
+
+    Parameters
+    ----------
+    m : (H, W) uint8
+        Ternary map.
+    rng : numpy.random.Generator
+        :func:`trace_rng`.
+    resolution : float
+        Metres per pixel of ``m``.
+    params : TraceParams
+
+    Returns
+    -------
+    (H, W) uint8
+
+    Examples
+    --------
+    >>> m = np.full((40, 40), 127, np.uint8); m[5:35, 5:20] = 255; m[5:35, 20:22] = 0
+    >>> out = stray_hits(m, trace_rng(0, 0), 0.05, TraceParams(strays=20, stray_spread=0))
+    >>> bool(((out == 0) & (m != 0)).any()), bool(((out != m) & (m == 0)).any())
+    (True, False)
+    """
+    m = np.asarray(m, np.uint8)
+    out = m.copy()
+    free, occ = m == FREE, m == OCCUPIED
+    rate = params.strays * np.exp(params.stray_spread * rng.standard_normal()
+                                  - 0.5 * params.stray_spread**2)
+    n = int(rng.poisson(rate))
+    if n == 0 or not free.any() or not occ.any():
+        return out
+    H, W = m.shape
+    in_free = rng.random(n) < params.stray_free
+    dist = rng.uniform(*params.stray_m, n) / float(resolution)
+    u = rng.random(n)
+    big = rng.random(n) < params.stray_big
+    nb = rng.integers(0, 8, (n, 2))
+    face = occ & ndimage.binary_dilation(free, np.ones((3, 3), bool))
+    fy, fx = np.nonzero(face)
+    _, (iy, ix) = ndimage.distance_transform_edt(~free, return_indices=True)
+    # behind a face: from a face pixel, away from its nearest free pixel
+    k = (u * len(fy)).astype(int).clip(0, len(fy) - 1)
+    py, px = fy[k], fx[k]
+    vy, vx = py - iy[py, px], px - ix[py, px]
+    norm = np.maximum(np.hypot(vy, vx), 1e-9)
+    by, bx = py + vy / norm * dist, px + vx / norm * dist
+    # in a room: a free pixel at least 3 px from every wall
+    room = free & (ndimage.distance_transform_edt(~occ) > 3)
+    ry, rx = np.nonzero(room)
+    if len(ry):
+        j = (u * len(ry)).astype(int).clip(0, len(ry) - 1)
+        by = np.where(in_free, ry[j], by)
+        bx = np.where(in_free, rx[j], bx)
+    else:
+        in_free[:] = False
+    ty, tx = np.rint(by).astype(int), np.rint(bx).astype(int)
+    ok = (ty >= 0) & (ty < H) & (tx >= 0) & (tx < W)
+    ty, tx, in_free, big, nb = ty[ok], tx[ok], in_free[ok], big[ok], nb[ok]
+    want = np.where(in_free, FREE, UNKNOWN)
+    ok = m[ty, tx] == want
+    out[ty[ok], tx[ok]] = OCCUPIED
+    # 2-3 px hits: one or two of the 8 neighbours, on the same kind of space
+    steps = np.array([(-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1)])
+    for c in range(2):
+        sel = ok & big & ((c == 0) | (nb[:, 1] % 2 == 0))
+        sy = (ty + steps[nb[:, c], 0]).clip(0, H - 1)
+        sx = (tx + steps[nb[:, c], 1]).clip(0, W - 1)
+        sel &= m[sy, sx] == want
+        out[sy[sel], sx[sel]] = OCCUPIED
+    return out
 
 
 def save_render_figure(grey: np.ndarray, result: SlamRender, path: str | os.PathLike,

@@ -21,7 +21,15 @@ wall interiors unknown; ``render="plain"``: the previous output, snapped and ups
 nearest neighbour) and pasted into a map of the plan's shape, resolution and origin,
 unknown outside.
 
-Drift (``drift="parametric"``, the default; :mod:`map2map.learn.drift`): the network
+**Defaults** (session 11, issue #15's realism rule on the gen900 validation plans:
+docs/learn_ab.md, "Rendering what a LIDAR leaves"): :func:`synthesize` draws the
+room-wise drift (``drift="rooms"``), hides what each hypothesis's own exploration did not
+see (``coverage="explore"``) and draws the LIDAR traces (``traces="lidar"`` with
+``render="slam"``). The previous defaults are ``drift="parametric", coverage="none",
+traces="none"`` (bit for bit). :func:`synthesize_squares`, the evaluation helper, keeps
+those previous defaults: its callers (the benchmarks) name what they measure.
+
+Drift (``drift="parametric"``; :mod:`map2map.learn.drift`): the network
 draws straight walls in the plan's frame, a SLAM map carries the run's accumulated pose
 error. Each hypothesis ``k`` is warped along a displacement field the parametric
 CAD->SLAM model (thesis 3.2) draws for the plan from its own generator
@@ -31,7 +39,8 @@ LIDAR and odometry error fields ``d_L + d_O`` (additive method by default,
 replaces its final factor). ``drift="rooms"`` (or a
 :class:`~map2map.learn.room_drift.RoomDriftParams`): one rigid transform per room of the
 plan, chained along a walk through its doors and blended across walls, plus the
-parametric field smoothed (:mod:`map2map.learn.room_drift`; opt-in). ``drift="none"``: the
+parametric field smoothed (:mod:`map2map.learn.room_drift`; the default of
+:func:`synthesize`). ``drift="none"``: the
 network's map as rendered (the output before drift existed, bit for bit).
 
 Coverage (:mod:`map2map.learn.coverage`, beyond the thesis): the network maps every room;
@@ -41,7 +50,13 @@ the plan (``oracle`` mapper, seeded per hypothesis by
 of hypothesis ``k`` the exploration did not see (beyond a band of the rendered wall
 thickness); ``drift_route="explore"`` drives the drift along that exploration's true
 path instead of the roadmap tour. One exploration serves both; ``coverage="none"`` with
-``drift_route="tour"`` (the defaults) is the output without them, bit for bit.
+``drift_route="tour"`` is the output without them, bit for bit.
+
+LIDAR traces (:class:`~map2map.learn.slam_render.TraceParams`, ``traces="lidar"``): the
+walls drawn as a band of metric width with a ragged back edge, their faces moved one
+pixel into the network's wall cells, and stray hits off the walls (module doc of
+:mod:`map2map.learn.slam_render`); ``traces="none"``: the band of the training targets'
+thickness, as before.
 
 Examples
 --------
@@ -88,7 +103,16 @@ from .drift import (
 from .networks import from_unit
 from .progressive import StochasticUNet
 from .room_drift import RoomDriftParams
-from .slam_render import DEFAULT_WALL_PX, RENDERS, snap
+from .slam_render import (
+    DEFAULT_WALL_PX,
+    RENDERS,
+    TraceParams,
+    band_px,
+    snap,
+    stray_hits,
+    trace_params,
+    trace_rng,
+)
 
 __all__ = ["ABModel", "SynthesisResult", "load_ab_model", "pretrained_ab_path",
            "synthesize", "synthesize_squares", "snap", "pairwise_disagreement", "export_ab_model",
@@ -217,10 +241,11 @@ class SynthesisResult:
 
 def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "pretrained",
                *, samples: int = 4, seed: int = 0, device: str = "cpu",
-               render: str = "slam", drift: str | DriftParams = "parametric",
+               render: str = "slam", drift: str | DriftParams = "rooms",
                drift_method: str | None = None, drift_scale: float | None = None,
-               coverage: str = "none", drift_route: str = "tour",
-               explore: ExploreParams | None = None) -> SynthesisResult:
+               coverage: str = "explore", drift_route: str = "tour",
+               explore: ExploreParams | None = None,
+               traces: str | TraceParams | None = None) -> SynthesisResult:
     """``samples`` SLAM-map hypotheses of ``plan`` (module doc), in its frame.
 
     Parameters
@@ -237,24 +262,32 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
         ``"slam"``: walls as a SLAM map draws them, the faces bordering free space with
         the training targets' thickness (:func:`~map2map.learn.slam_render.render_slam`);
         ``"plain"``: the previous output (snap, nearest-neighbour upsampling).
-    drift : {"parametric", "rooms", "none"}, DriftParams or RoomDriftParams
-        Warp each hypothesis along its own parametric drift field (module doc; the
-        default :class:`~map2map.learn.drift.DriftParams`, or the given ones), along its
-        own room-wise drift (``"rooms"``, :mod:`map2map.learn.room_drift`), or not.
+    drift : {"rooms", "parametric", "none"}, DriftParams or RoomDriftParams
+        Warp each hypothesis along its own room-wise drift (``"rooms"``, the default,
+        :mod:`map2map.learn.room_drift`), along its own parametric drift field (module
+        doc; :class:`~map2map.learn.drift.DriftParams`, or the given ones), or not.
     drift_method : {"additive", "ekf"}, optional
         Replaces the drift's odometry-to-map conversion (thesis eqs. 3.81-3.90 or
         3.54-3.80).
     drift_scale : float, optional
         Replaces the drift's final factor on its field.
-    coverage : {"none", "explore"}
-        ``"explore"``: unknown wherever hypothesis ``k``'s own exploration of the plan
-        did not see (module doc, :func:`~map2map.learn.coverage.hide_unseen`).
+    coverage : {"explore", "none"}
+        ``"explore"`` (default): unknown wherever hypothesis ``k``'s own exploration of
+        the plan did not see (module doc, :func:`~map2map.learn.coverage.hide_unseen`;
+        about 0.5 s a hypothesis on gen900's plans); ``"none"``: every room drawn.
     drift_route : {"tour", "explore"}
         The drift's path: the roadmap tour, or hypothesis ``k``'s exploration (no effect
         with ``drift="none"``).
     explore : ExploreParams, optional
         The exploration's settings (default :class:`~map2map.learn.coverage.ExploreParams`:
         420 s, 180 degree LIDAR, ``oracle``, band = rendered wall thickness).
+    traces : {"lidar", "none"}, TraceParams or None
+        ``"lidar"`` (the default, ``None``, with ``render="slam"``; ``None`` with
+        ``render="plain"`` is ``"none"``): what a LIDAR + SLAM leaves beyond the faces
+        (:class:`~map2map.learn.slam_render.TraceParams`: a metric wall band with a ragged
+        back edge, stray hits; ``render="slam"`` only), seeded per hypothesis by
+        :func:`~map2map.learn.slam_render.trace_rng` ``(seed, k)``, drawn before the
+        coverage (band) and after it (stray hits), before the drift.
 
     Returns
     -------
@@ -265,6 +298,7 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     if render not in RENDERS:
         raise InputError("--render", f"must be one of {', '.join(RENDERS)}, got {render!r}")
     dp = drift_params(drift, drift_method, drift_scale)
+    tp = _traces(traces, render)
     hide, along = coverage_options(coverage, drift_route)
     along = along and dp is not None
     ep = explore or ExploreParams()
@@ -282,8 +316,11 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     cs, ce = max(0, col0), min(W, col0 + side)
     maps, drifted, explored = [], {}, {}
     warns = []
+    if tp is not None:
+        wall_px = band_px(plan.resolution, tp)
     for k in range(samples):
-        s = slam_render.render(grey[k], side, render, wall_px)
+        trng = trace_rng(seed, k) if tp is not None else None
+        s = slam_render.render(grey[k], side, render, wall_px, tp, trng)
         data = np.full((H, W), UNKNOWN, np.uint8)
         data[rs:re, cs:ce] = s[rs - row0:re - row0, cs - col0:ce - col0]
         ex = None
@@ -295,7 +332,10 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
             else:
                 explored[k] = ex.stats()
                 if hide:
-                    data = hide_unseen(data, ex.seen, ep.margin(wall_px))
+                    data = hide_unseen(data, ex.seen, ep.margin(
+                        wall_px + (tp.inset_px if tp is not None else 0.0)))
+        if tp is not None:
+            data = stray_hits(data, trng, plan.resolution, tp)
         if dp is not None:
             try:
                 d = drift_field(plan, drift_rng(seed, k), dp,
@@ -336,6 +376,9 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
             m.meta["synthesize"]["drift_params"] = asdict(dp)
     for k, st in drifted.items():
         maps[k].meta["synthesize"]["drift_px"] = st
+    if tp is not None:                  # the default's meta stays as it was, key for key
+        for m in maps:
+            m.meta["synthesize"]["traces"] = asdict(tp)
     if hide or along:                   # the default's meta stays as it was, key for key
         for k, m in enumerate(maps):
             m.meta["synthesize"].update(coverage=coverage, drift_route=drift_route,
@@ -343,6 +386,20 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
             if k in explored:
                 m.meta["synthesize"]["exploration"] = explored[k]
     return SynthesisResult(maps, div, pw, warns, net.source)
+
+
+def _traces(traces, render: str) -> TraceParams | None:
+    """:func:`~map2map.learn.slam_render.trace_params`, refused with ``render="plain"``
+    (``None``: ``"lidar"`` with ``render="slam"``, ``"none"`` with ``"plain"``)."""
+    if traces is None:
+        traces = "lidar" if render == "slam" else "none"
+    try:
+        tp = trace_params(traces)
+    except ValueError as exc:
+        raise InputError("--traces", str(exc)) from None
+    if tp is not None and render != "slam":
+        raise InputError("--traces", "LIDAR traces need render='slam'")
+    return tp
 
 
 def _drift_name(dp) -> str:
@@ -356,7 +413,8 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
                        render: str = "slam", drift: str | DriftParams = "parametric",
                        drift_method: str | None = None, drift_scale: float | None = None,
                        resolution=None, coverage: str = "none", drift_route: str = "tour",
-                       explore: ExploreParams | None = None) -> np.ndarray:
+                       explore: ExploreParams | None = None,
+                       traces: str | TraceParams | None = "none") -> np.ndarray:
     """Model_AB's SLAM map of each preprocessed dataset plan (``A.png``: already square,
     resized and thickened as the training inputs were), raised to the plans' size as
     ``render`` says (:func:`synthesize`): (N, S, S) uint8, the thesis's single output
@@ -373,7 +431,9 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
 
     ``coverage``, ``drift_route`` and ``explore`` as :func:`synthesize`: plan ``i``'s
     square is explored at its metric resolution, seeded by
-    :func:`~map2map.learn.coverage.explore_rng` ``(seed, i)``.
+    :func:`~map2map.learn.coverage.explore_rng` ``(seed, i)``. ``traces`` as
+    :func:`synthesize` (plan ``i`` draws from :func:`~map2map.learn.slam_render.trace_rng`
+    ``(seed, i)``, its band from its own ``resolution``).
 
     Examples
     --------
@@ -385,6 +445,7 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
     if render not in RENDERS:
         raise ValueError(f"render must be one of {RENDERS}, got {render!r}")
     dp = drift_params(drift, drift_method, drift_scale)
+    tp = _traces(traces, render)
     hide, along = coverage_options(coverage, drift_route)
     along = along and dp is not None
     ep = explore or ExploreParams()
@@ -392,15 +453,19 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
     plans = np.asarray(plans, np.uint8)
     S = plans.shape[-1]
     wall_px = net.wall_px * S / net.data_size
+    res = DEFAULT_SQUARE_RESOLUTION if resolution is None else resolution
+    rs = np.broadcast_to(np.asarray(res, float), (len(plans),))
+    walls = np.full(len(plans), wall_px) if tp is None else \
+        np.array([band_px(r, tp) for r in rs])
+    trngs = [trace_rng(seed, i) if tp is not None else None for i in range(len(plans))]
+    inset = tp.inset_px if tp is not None else 0.0    # the faces lie this much deeper
     out = np.empty(plans.shape, np.uint8)
     for i in range(0, len(plans), batch):
         grey = net.sample_many(plans[i:i + batch], 1, seed)[:, 0]
         for j, gmap in enumerate(grey):
-            out[i + j] = slam_render.render(gmap, S, render, wall_px)
-    res = DEFAULT_SQUARE_RESOLUTION if resolution is None else resolution
+            out[i + j] = slam_render.render(gmap, S, render, walls[i + j], tp, trngs[i + j])
     trajs = None
     if hide or along:
-        rs = np.broadcast_to(np.asarray(res, float), (len(plans),))
         trajs = [None] * len(plans)
         for i in range(len(plans)):
             try:
@@ -409,9 +474,12 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
                 warnings.warn(f"map {i}: no exploration ({exc.problem})", stacklevel=2)
                 continue
             if hide:
-                out[i] = hide_unseen(out[i], ex.seen, ep.margin(wall_px))
+                out[i] = hide_unseen(out[i], ex.seen, ep.margin(walls[i] + inset))
             if along:
                 trajs[i] = ex.trajectory
+    if tp is not None:
+        for i in range(len(plans)):
+            out[i] = stray_hits(out[i], trngs[i], float(rs[i]), tp)
     if dp is not None:
         out, warns = drift_maps(out, plans, res, seed, dp, trajectories=trajs)
         for w in warns:
