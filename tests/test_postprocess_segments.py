@@ -157,3 +157,57 @@ def test_network_band_behind_an_input_wall_does_not_double_it():
     assert _off_walls(segs, out == OCCUPIED) == []
 
 
+
+
+def _drawn_pieces_numpy(segs, occ):
+    """The NumPy version ``drawn_pieces`` had before its numba kernel (the reference)."""
+    import cv2
+
+    s = np.asarray(segs, float).reshape(-1, 4)
+    H, W = occ.shape
+    near = cv2.dilate(occ.astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
+    out = []
+    for x0, y0, x1, y1 in s:
+        ts = [np.array([0.0, 1.0])]
+        for a, b in ((x0, x1), (y0, y1)):
+            if b != a:
+                k = np.arange(np.ceil(min(a, b) - 0.5), np.floor(max(a, b) - 0.5) + 1)
+                ts.append((k + 0.5 - a) / (b - a))
+        t = np.unique(np.clip(np.concatenate(ts), 0.0, 1.0))
+        if len(t) < 2:
+            continue
+        m = (t[:-1] + t[1:]) / 2
+        r = np.floor(y0 + m * (y1 - y0) + 0.5).astype(np.int64)
+        c = np.floor(x0 + m * (x1 - x0) + 0.5).astype(np.int64)
+        inside = (r >= 0) & (r < H) & (c >= 0) & (c < W)
+        on = np.zeros(len(m), bool)
+        on[inside] = near[r[inside], c[inside]]
+        edges = np.diff(np.concatenate([[0], on.astype(np.int8), [0]]))
+        for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
+            ta, tb = t[a] + 1e-6, t[b] - 1e-6
+            p = [x0 + ta * (x1 - x0), y0 + ta * (y1 - y0), x0 + tb * (x1 - x0),
+                 y0 + tb * (y1 - y0)]
+            if np.hypot(p[2] - p[0], p[3] - p[1]) >= 1.0:
+                out.append(p)
+    return np.array(out, float).reshape(-1, 4)
+
+
+def test_drawn_pieces_kernel_equals_the_numpy_reference():
+    """Bit for bit, on random and axis-aligned segments (integer and half-pixel ends,
+    segments leaving the grid, points) over random walls."""
+    from map2map.learn.postprocess import drawn_pieces
+
+    rng = np.random.default_rng(3)
+    for trial in range(30):
+        occ = rng.random((40, 50)) < 0.15
+        occ[rng.integers(0, 40), :] = True
+        n = 40
+        segs = rng.uniform(-5, 55, (n, 4))
+        segs[: n // 4] = np.round(segs[: n // 4])                  # integer ends
+        segs[n // 4: n // 2] = np.round(segs[n // 4: n // 2] * 2) / 2  # half-pixel ends
+        segs[n // 2: n // 2 + 5, 3] = segs[n // 2: n // 2 + 5, 1]   # horizontal
+        segs[n // 2 + 5: n // 2 + 10, 2] = segs[n // 2 + 5: n // 2 + 10, 0]  # vertical
+        segs[-1, 2:] = segs[-1, :2]                                 # a point
+        want = _drawn_pieces_numpy(segs, occ)
+        got = drawn_pieces(segs, occ)
+        assert got.shape == want.shape and np.array_equal(got, want), trial

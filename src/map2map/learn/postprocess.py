@@ -815,34 +815,60 @@ def drawn_pieces(segs: np.ndarray, occ: np.ndarray) -> np.ndarray:
     occ = np.asarray(occ, bool)
     if not len(s) or not occ.any():
         return np.zeros((0, 4))
-    H, W = occ.shape
     near = cv2.dilate(occ.astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
-    out = []
+    return _drawn_pieces(np.ascontiguousarray(s), near)
+
+
+@njit(cache=True, nogil=True)
+def _drawn_pieces(s: np.ndarray, near: np.ndarray) -> np.ndarray:
+    """Kernel of :func:`drawn_pieces` (``near``: ``occ`` dilated by one pixel); the same
+    arithmetic, in the same order, as the NumPy version it replaced (tested equal)."""
+    H, W = near.shape
+    out = np.empty((0, 4))
+    rows = []
     eps = 1e-6
-    for x0, y0, x1, y1 in s:
-        ts = [np.array([0.0, 1.0])]
+    for i in range(s.shape[0]):
+        x0, y0, x1, y1 = s[i, 0], s[i, 1], s[i, 2], s[i, 3]
+        n = 2
+        for a, b in ((x0, x1), (y0, y1)):
+            if b != a:
+                n += max(0, int(np.floor(max(a, b) - 0.5) - np.ceil(min(a, b) - 0.5)) + 1)
+        ts = np.empty(n)
+        ts[0], ts[1] = 0.0, 1.0
+        j = 2
         for a, b in ((x0, x1), (y0, y1)):  # borders at k + 0.5 crossed between a and b
             if b != a:
-                k = np.arange(np.ceil(min(a, b) - 0.5), np.floor(max(a, b) - 0.5) + 1)
-                ts.append((k + 0.5 - a) / (b - a))
-        t = np.unique(np.clip(np.concatenate(ts), 0.0, 1.0))
+                k0 = np.ceil(min(a, b) - 0.5)
+                for q in range(int(np.floor(max(a, b) - 0.5) - k0) + 1):
+                    ts[j] = ((k0 + q) + 0.5 - a) / (b - a)
+                    j += 1
+        t = np.unique(np.minimum(np.maximum(ts[:j], 0.0), 1.0))
         if len(t) < 2:
             continue
-        m = (t[:-1] + t[1:]) / 2                     # one point inside each stretch
-        r = np.floor(y0 + m * (y1 - y0) + 0.5).astype(np.int64)
-        c = np.floor(x0 + m * (x1 - x0) + 0.5).astype(np.int64)
-        inside = (r >= 0) & (r < H) & (c >= 0) & (c < W)
-        on = np.zeros(len(m), bool)
-        on[inside] = near[r[inside], c[inside]]
-        edges = np.diff(np.concatenate([[0], on.astype(np.int8), [0]]))
-        for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1),
-                        strict=True):
-            ta, tb = t[a] + eps, t[b] - eps
-            p = [x0 + ta * (x1 - x0), y0 + ta * (y1 - y0),
-                 x0 + tb * (x1 - x0), y0 + tb * (y1 - y0)]
-            if np.hypot(p[2] - p[0], p[3] - p[1]) >= 1.0:
-                out.append(p)
-    return np.array(out, float).reshape(-1, 4)
+        on = np.zeros(len(t) + 1, np.bool_)     # one point inside each stretch
+        for q in range(len(t) - 1):
+            m = (t[q] + t[q + 1]) / 2
+            r = np.int64(np.floor(y0 + m * (y1 - y0) + 0.5))
+            c = np.int64(np.floor(x0 + m * (x1 - x0) + 0.5))
+            on[q] = 0 <= r < H and 0 <= c < W and near[r, c]
+        q = 0
+        while q < len(t) - 1:
+            if not on[q]:
+                q += 1
+                continue
+            a = q
+            while on[q]:
+                q += 1
+            ta, tb = t[a] + eps, t[q] - eps
+            p0, p1 = x0 + ta * (x1 - x0), y0 + ta * (y1 - y0)
+            p2, p3 = x0 + tb * (x1 - x0), y0 + tb * (y1 - y0)
+            if np.hypot(p2 - p0, p3 - p1) >= 1.0:
+                rows.append((p0, p1, p2, p3))
+    if len(rows):
+        out = np.empty((len(rows), 4))
+        for q in range(len(rows)):
+            out[q, 0], out[q, 1], out[q, 2], out[q, 3] = rows[q]
+    return out
 
 
 def frontier_walls(segs: np.ndarray, guide: np.ndarray, tol: float,
