@@ -30,27 +30,12 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
+from table53 import ac_options  # noqa: E402  (the same --ac parsing, benchmarks/table53.py)
+
 from map2map.learn.table53_real import run_table53_real  # noqa: E402
 
 SHARED = Path(os.environ.get("MAP2MAP_SHARED_DATA",
                              Path(__file__).resolve().parents[2] / "shared" / "data"))
-
-
-def ac_options(items: list[str]) -> dict:
-    """``KEY=VALUE`` strings -> keyword arguments of ``autocorrect_many`` (true/false,
-    numbers, else strings)."""
-    out = {}
-    for item in items:
-        k, _, v = item.partition("=")
-        low = v.strip().lower()
-        if low in ("true", "false"):
-            out[k.strip()] = low == "true"
-            continue
-        try:
-            out[k.strip()] = float(v)
-        except ValueError:
-            out[k.strip()] = v.strip()
-    return out
 
 
 def main(argv=None) -> int:

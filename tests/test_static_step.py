@@ -8,14 +8,13 @@ from __future__ import annotations
 
 import warnings
 
-import numpy as np
 import pytest
 
 torch = pytest.importorskip("torch")
 pytest.importorskip("safetensors")
 
-from map2map.core.grid import FREE, OCCUPIED, UNKNOWN  # noqa: E402
-from map2map.datasets.packed import PackedPairs  # noqa: E402
+from test_learn_ab import _pairs  # noqa: E402  (boxes with walls, shifted speckled copies)
+
 from map2map.learn.checkpoint import load_checkpoint  # noqa: E402
 from map2map.learn.config import TrainConfig  # noqa: E402
 from map2map.learn.loop import gan_step, place_networks, step_autocast  # noqa: E402
@@ -107,19 +106,6 @@ def test_static_step_eager_is_gan_step_bit_for_bit_model_ab_with_alpha(growth):
     for a, b in zip(l0, l1, strict=True):
         _same(a, b)
     assert len(step.entries) == 2  # with and without alpha: two static steps
-
-
-def _pairs(n=8, size=16, seed=0) -> PackedPairs:
-    rng = np.random.default_rng(seed)
-    a = np.full((n, size, size), UNKNOWN, np.uint8)
-    for i in range(n):
-        r0, c0 = rng.integers(1, 4, 2)
-        a[i, r0:size - 2, c0:size - 2] = FREE
-        a[i, r0, c0:size - 2] = OCCUPIED
-    b = np.roll(a, 1, axis=1)
-    b[rng.random(b.shape) < 0.05] = UNKNOWN
-    split = np.array(["train"] * (n - 2) + ["val", "test"])
-    return PackedPairs(a, b, np.array([f"p{i}" for i in range(n)]), split, {"seed": seed})
 
 
 def _run_tensors(run):

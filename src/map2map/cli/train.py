@@ -42,6 +42,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     b.add_argument("--input-reduce", choices=("area", "classes"), default="area",
                    help="how the SLAM map is reduced to --size: area average (default) or "
                    "per class, walls kept")
+    _step_options(b)
+    b.set_defaults(func=run)
+    register_ab(tsub)
+
+
+def _step_options(b: argparse.ArgumentParser) -> None:
+    """The options ``train ba`` and ``train ab`` share after their own: the step, the
+    checkpoints, the progress bar."""
     b.add_argument("--no-false-targets", action="store_true",
                    help="no false-target augmentation for D_d")
     b.add_argument("--no-amp", action="store_true", help="fp32 on CUDA (no bf16 autocast)")
@@ -53,8 +61,6 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="checkpoint, sample grid and logs every N epochs (default 1; also "
                    "after the last and on Ctrl-C)")
     b.add_argument("--quiet", action="store_true", help="no progress bar")
-    b.set_defaults(func=run)
-    register_ab(tsub)
 
 
 def register_ab(tsub) -> None:
@@ -96,17 +102,7 @@ def register_ab(tsub) -> None:
     b.add_argument("--d-channels", type=int, default=32, help="discriminator width (32)")
     b.add_argument("--d-layers", type=int, default=3,
                    help="stride-2 layers of the first stage's patch discriminators (3)")
-    b.add_argument("--no-false-targets", action="store_true",
-                   help="no false-target augmentation for D_d")
-    b.add_argument("--no-amp", action="store_true", help="fp32 on CUDA (no bf16 autocast)")
-    b.add_argument("--compile", action="store_true", help="torch.compile the generator")
-    b.add_argument("--cuda-graph", action="store_true",
-                   help="run each training step as one CUDA graph replay (single process; "
-                   "falls back to eager steps if capture fails; on CPU: eager, same result)")
-    b.add_argument("--save-every", type=int, default=1, metavar="N",
-                   help="checkpoint, sample grid and logs every N epochs (default 1; also "
-                   "after the last and on Ctrl-C)")
-    b.add_argument("--quiet", action="store_true", help="no progress bar")
+    _step_options(b)
     b.set_defaults(func=run_ab)
 
 

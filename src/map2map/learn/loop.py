@@ -64,8 +64,7 @@ from .networks import count_parameters, from_unit
 
 __all__ = ["MODEL_FILE", "CHECKPOINT_FILE", "TrainResult", "resolve_device", "false_targets",
            "gan_step", "write_log_csv", "batches_per_epoch", "Dist", "RunStart", "open_run",
-           "EpochPlan", "GANRun", "place_networks", "step_autocast", "set_lr",
-           "adam_options"]
+           "EpochPlan", "GANRun", "place_networks", "step_autocast", "set_lr"]
 
 MODEL_FILE = "model.safetensors"
 CHECKPOINT_FILE = "last.safetensors"
@@ -185,23 +184,10 @@ def place_networks(nets, dev: torch.device, amp: bool, cfg: TrainConfig
         net.to(dev)
         if amp:
             net.to(memory_format=torch.channels_last)
-    kw = adam_options(dev)
-    opt_g = torch.optim.Adam(g.parameters(), lr=cfg.lr, betas=(cfg.beta1, cfg.beta2), **kw)
+    opt_g = torch.optim.Adam(g.parameters(), lr=cfg.lr, betas=(cfg.beta1, cfg.beta2))
     opt_d = torch.optim.Adam(list(dd.parameters()) + list(dr.parameters()), lr=cfg.lr,
-                             betas=(cfg.beta1, cfg.beta2), **kw)
+                             betas=(cfg.beta1, cfg.beta2))
     return opt_g, opt_d
-
-
-def adam_options(dev: torch.device) -> dict:
-    """How Adam computes its step on ``dev`` (not what it holds: checkpoints store the
-    plain form and a resumed run sets these again). Empty: torch's default (single-tensor
-    loops on CPU, ``foreach`` on CUDA)."""
-    return {}
-
-
-def _set_adam_options(opt: torch.optim.Optimizer, dev: torch.device) -> None:
-    for grp in opt.param_groups:
-        grp.update(adam_options(dev))
 
 
 def step_autocast(dev: torch.device, amp: bool):
@@ -482,7 +468,7 @@ class GANRun:
         """The static step under ``cfg.cuda_graph`` (None otherwise, or when it cannot
         apply: DDP or a compiled generator, with a warning)."""
         cfg = self.cfg
-        if not getattr(cfg, "cuda_graph", False):
+        if not cfg.cuda_graph:
             return None
         if self.dist.world > 1 or cfg.compile:
             import warnings
@@ -504,8 +490,6 @@ class GANRun:
             load_module(net, tensors, name, ck_path)
         load_optimizer(self.opt_g, tensors, "opt_G", state["opt_G"])
         load_optimizer(self.opt_d, tensors, "opt_D", state["opt_D"])
-        for o in (self.opt_g, self.opt_d):
-            _set_adam_options(o, self.dev)
         self.gen.set_state(tensors["rng.shuffle"])
         if self.torch_rng:
             torch.set_rng_state(tensors["rng.torch"])
