@@ -480,6 +480,35 @@ def test_generator_fade_in_blends_resolutions():
     assert torch.allclose(g(x, alpha=torch.tensor(1.0)), g(x))
 
 
+def test_upsample2x_layout_choice_and_values():
+    """The decoder's x2 upsampling: channels-last only for CUDA tensors with many maps of
+    few pixels (where PyTorch's NCHW kernel starves); the values never depend on the layout
+    (on CPU the channels-last kernel is checked against the NCHW one)."""
+    from map2map.learn.networks import _channels_last_faster, upsample2x
+
+    meta = torch.empty(1024, 64, 16, 16, device="meta")
+    assert not _channels_last_faster(torch.empty(4, 64, 4, 4))  # CPU: never
+    assert not _channels_last_faster(meta)  # not CUDA either
+    x = torch.rand(8, 32, 4, 4)
+    ref = torch.nn.functional.interpolate(x, scale_factor=2, mode="bilinear",
+                                          align_corners=False)
+    assert torch.equal(upsample2x(x), ref)
+    cl = upsample2x(x.contiguous(memory_format=torch.channels_last))
+    assert torch.allclose(cl, ref, atol=1e-6, rtol=0)
+
+
+@pytest.mark.skipif(not torch.cuda.is_available(), reason="needs CUDA")
+def test_upsample2x_on_cuda_equals_interpolate():
+    from map2map.learn.networks import _channels_last_faster, upsample2x
+
+    for shape in ((1024, 64, 16, 16), (64, 32, 128, 128), (4, 1, 8, 8)):
+        x = torch.randn(*shape, device="cuda", dtype=torch.bfloat16)
+        ref = torch.nn.functional.interpolate(x, scale_factor=2, mode="bilinear",
+                                              align_corners=False)
+        assert _channels_last_faster(x) == (shape[0] == 1024)
+        assert torch.equal(upsample2x(x), ref)
+
+
 def test_autocorrect_warns_with_what_the_weights_measured():
     """The shipped weights warn on every correction that they were trained on simulated
     maps (and what real maps measured); weights whose note says PROVISIONAL say so; a

@@ -109,6 +109,40 @@ def _norm(ch: int) -> nn.GroupNorm:
     return nn.GroupNorm(min(8, ch), ch)
 
 
+def upsample2x(h: torch.Tensor) -> torch.Tensor:
+    """Bilinear x2 upsampling (``align_corners=False``) of the U-Net decoder.
+
+    The same values as ``F.interpolate(h, scale_factor=2, mode="bilinear")``; only the
+    memory layout handed to PyTorch's CUDA kernel changes (:func:`_channels_last_faster`).
+    The CPU path is unchanged, bit for bit.
+
+    Examples
+    --------
+    >>> upsample2x(torch.arange(4.0).reshape(1, 1, 2, 2)).shape
+    torch.Size([1, 1, 4, 4])
+    """
+    if _channels_last_faster(h):
+        h = h.contiguous(memory_format=torch.channels_last)
+    return F.interpolate(h, scale_factor=2, mode="bilinear", align_corners=False)
+
+
+def _channels_last_faster(h: torch.Tensor) -> bool:
+    """Whether ``upsample2x`` should hand a CUDA tensor over in channels-last layout.
+
+    PyTorch's NCHW bilinear kernel runs one thread per *output pixel*, looping over
+    batch x channels; its channels-last kernel (taken from 16 channels up) runs one thread
+    per output element. With many maps of few pixels the NCHW kernel starves: on an H200
+    (2026-11-26, bf16) a (1024, 256, 4, 4) input took 60.0 ms NCHW against 0.15 ms
+    channels-last, (1024, 64, 16, 16) 24.7 against 0.60 ms, (256, 64, 32, 32) 6.3 against
+    0.67 ms (copy included), and that upsampling was 75 % of a Model_32 training step at
+    batch 1024. With few maps of many pixels NCHW wins: (64, 32, 128, 128) 0.84 ms against
+    1.34 ms with the copy. Hence: channels-last when batch x channels exceeds the output
+    pixels.
+    """
+    n, c, hh, ww = h.shape
+    return h.is_cuda and c >= 16 and n * c > 4 * hh * ww
+
+
 class _Block(nn.Sequential):
     """conv3x3 (stride ``stride``) - GroupNorm - LeakyReLU - conv3x3 - GroupNorm - LeakyReLU."""
 
@@ -219,9 +253,8 @@ class UNetGenerator(nn.Module):
         old = None
         while r < top:
             if alpha is not None and r * 2 == top:
-                old = F.interpolate(self._head(h, r), scale_factor=2, mode="bilinear",
-                                    align_corners=False)
-            h = F.interpolate(h, scale_factor=2, mode="bilinear", align_corners=False)
+                old = upsample2x(self._head(h, r))
+            h = upsample2x(h)
             r *= 2
             h = self.up[str(r)](torch.cat([h, skips.pop()], 1))
         out = self._head(h, r)
