@@ -131,16 +131,17 @@ def _channels_last_faster(h: torch.Tensor) -> bool:
 
     PyTorch's NCHW bilinear kernel runs one thread per *output pixel*, looping over
     batch x channels; its channels-last kernel (taken from 16 channels up) runs one thread
-    per output element. With many maps of few pixels the NCHW kernel starves: on an H200
-    (2026-11-26, bf16) a (1024, 256, 4, 4) input took 60.0 ms NCHW against 0.15 ms
-    channels-last, (1024, 64, 16, 16) 24.7 against 0.60 ms, (256, 64, 32, 32) 6.3 against
-    0.67 ms (copy included), and that upsampling was 75 % of a Model_32 training step at
-    batch 1024. With few maps of many pixels NCHW wins: (64, 32, 128, 128) 0.84 ms against
-    1.34 ms with the copy. Hence: channels-last when batch x channels exceeds the output
-    pixels.
+    per output element. With few output pixels the NCHW kernel leaves the GPU nearly idle:
+    on an H200 (2026-11-26, bf16) a (1024, 256, 4, 4) input took 60.0 ms NCHW against
+    0.15 ms channels-last, (1024, 64, 16, 16) 24.7 against 0.60 ms, (256, 64, 32, 32) 6.3
+    against 0.67 ms (copy included), and that upsampling was 75 % of a Model_32 training
+    step at batch 1024. With many output pixels NCHW wins: (64, 32, 128, 128) 0.84 ms
+    against 1.34 ms with the copy (1.19 without). Hence channels-last below 128 x 128
+    output pixels: the NCHW kernel's ~0.4 us per loop step and thread puts the break-even
+    near there for the batches used here; every Model_32/64 decoder level is below it.
     """
     n, c, hh, ww = h.shape
-    return h.is_cuda and c >= 16 and n * c > 4 * hh * ww
+    return h.is_cuda and c >= 16 and 4 * hh * ww < 128 * 128
 
 
 class _Block(nn.Sequential):
