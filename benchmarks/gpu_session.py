@@ -30,10 +30,13 @@ writes its checkpoint), so a slower machine gives fewer epochs, never a lost cal
         [--ba-seconds 150] [--ab-seconds 200] [--deadline 560] [--quick]
         [--skip graph,bench,ba,ab,infer] [--ba-graph auto|yes|no]
 
-The session-12 call (CUDA graphs measured, then Model_BA at up to 534 epochs):
+Session 12 ran ``--skip bench,ab,infer --ba-batch 256 --ba-seconds 300 --deadline 460``
+(H200: graphs captured, 283 BA epochs in 282 s; docs/learn.md, "Measured on a GPU: the
+graph, and the kernel that held the step"). The next call (the thesis's 534 epochs fit
+since the upsampling fix; run it on an H100 too):
 
-    python3 benchmarks/gpu_session.py --data packed.npz --out $OUT/s12
-        --skip bench,ab,infer --ba-batch 256 --ba-seconds 300 --deadline 480
+    python3 benchmarks/gpu_session.py --data .gpu/packed.npz --out $OUT/s13
+        --skip bench,ab,infer --ba-batch 256 --ba-seconds 330 --deadline 470
 
 ``--quick``: tiny budgets and networks, for checking the script on a CPU.
 """
@@ -197,6 +200,7 @@ def main(argv=None) -> int:
         use_graph = args.ba_graph == "yes" or (args.ba_graph == "auto" and graph_ok)
         res["ba_cuda_graph"] = use_graph
         # the measured rate (graphed when the run is); else H200 figures of 2026-11-26
+        # (eager, session 10)
         measured = graph_rates.get(f"64:{args.ba_batch}", {})
         rate = (measured.get("graph") if use_graph else measured.get("eager")) or \
             ba_rates.get((64, args.ba_batch)) or \
