@@ -607,7 +607,7 @@ class GANRun:
                 f = lr_factor(epoch, cfg)
                 for o in (self.opt_g, self.opt_d):
                     set_lr(o, cfg.lr * f)  # in place when a captured graph reads it
-                t_epoch = time.perf_counter()
+                t_epoch, images_epoch = time.perf_counter(), images
                 b = start_batch
                 while b < nb:
                     idx = perm[b * B:(b + 1) * B]
@@ -642,10 +642,13 @@ class GANRun:
                 sums = _host_sums(_sums_dict(dev_sums, keys, acc), n_sum)
                 row = {"epoch": epoch + 1, "lr": cfg.lr * f, **plan.log}
                 row.update(dist.mean({k: v / sums["_n"] for k, v in sums.items() if k != "_n"}))
-                row["img_per_s"] = images / max(time.perf_counter() - t_start, 1e-9)
+                t_now = time.perf_counter()
+                # this epoch's rate (the run's average, start-up included, is the result's
+                # images_per_s)
+                row["img_per_s"] = (images - images_epoch) / max(t_now - t_epoch, 1e-9)
                 if self.static is not None:  # which step ran: graph, eager, or a fallback
                     row["step"] = self.static.mode
-                row["epoch_s"] = time.perf_counter() - t_epoch
+                row["epoch_s"] = t_now - t_epoch
                 history.append(row)
                 epoch += 1
                 start_batch, sums = 0, {}
