@@ -8,7 +8,7 @@ whole Table 5.2 schedule would take on ``--pairs`` pairs (4,224: the issue's dat
 Issue #15's target: >= 700 img/s at 256 px on one H100 (bf16 + channels_last there).
 
     python3 benchmarks/bench_ab.py [--quick] [--device cpu|cuda] [--steps 10]
-        [--growth full|decoder] [--threads N]
+        [--growth full|decoder] [--threads N] [--graph] [--profile] [--only 256]
 
 On a machine without CUDA it measures the CPU and says that the GPU target is
 unmeasured (a CPU figure is no evidence for or against it).
@@ -30,11 +30,15 @@ import torch  # noqa: E402
 
 from map2map.learn.loop import place_networks, step_autocast  # noqa: E402
 from map2map.learn.progressive import ABConfig, build_ab_networks  # noqa: E402
+from map2map.learn.static_step import StaticStep, graph_autocast  # noqa: E402
 from map2map.learn.train_ab import gan_step  # noqa: E402
 
 
-def stage_speed(cfg: ABConfig, r: int, dev: torch.device, steps: int, warm: int = 2) -> float:
-    """Images/s of ``steps`` training steps at stage ``r`` (fading in)."""
+def stage_speed(cfg: ABConfig, r: int, dev: torch.device, steps: int, warm: int = 2,
+                graph: bool = False, profile: bool = False) -> tuple[float, str]:
+    """Images/s of ``steps`` training steps at stage ``r`` (fading in), and which step ran
+    (``graph``: the :class:`~map2map.learn.static_step.StaticStep` replayed as a CUDA graph,
+    eager elsewhere); ``profile``: then print where the device time goes."""
     g, dd, dr = build_ab_networks(cfg)
     amp = dev.type == "cuda" and cfg.amp
     opt_g, opt_d = place_networks((g, dd, dr), dev, amp, cfg)
@@ -52,11 +56,22 @@ def stage_speed(cfg: ABConfig, r: int, dev: torch.device, steps: int, warm: int 
         if gi is not None:
             gi = gi.contiguous(memory_format=torch.channels_last)
     alpha = torch.tensor(0.5, device=dev) if r > cfg.min_size else None
+    static = None
+    if graph:
+        static = StaticStep((g, dd, dr), (opt_g, opt_d), cfg, graph_autocast(dev, amp),
+                            (dd, dr), graph=True)
+        warm = max(warm, static.warmup + 3)  # warm-up steps, the capture, two replays
     autocast = step_autocast(dev, amp)
+
+    def one(i=0):
+        if static is not None:
+            static(x, y, 1, alpha, gi)
+        else:
+            gan_step(g, dd, dr, opt_g, opt_d, x, y, alpha, cfg, 1, autocast, (dd, dr), gi)
 
     def run(n):
         for _ in range(n):
-            gan_step(g, dd, dr, opt_g, opt_d, x, y, alpha, cfg, 1, autocast, (dd, dr), gi)
+            one()
 
     run(warm)
     if dev.type == "cuda":
@@ -65,7 +80,12 @@ def stage_speed(cfg: ABConfig, r: int, dev: torch.device, steps: int, warm: int 
     run(steps)
     if dev.type == "cuda":
         torch.cuda.synchronize()
-    return steps * B / (time.perf_counter() - t0)
+    ips = steps * B / (time.perf_counter() - t0)
+    if profile:
+        from _profile import print_top
+
+        print_top(one, min(steps, 5), dev, title=f"Model_prog stage {r}, batch {B}")
+    return ips, (static.mode if static is not None else "eager")
 
 
 def main(argv=None) -> int:
@@ -82,6 +102,10 @@ def main(argv=None) -> int:
     ap.add_argument("--only", type=int, help="time this stage resolution alone")
     ap.add_argument("--g-channels", type=int, help="generator width (default ABConfig's)")
     ap.add_argument("--g-max-channels", type=int, help="generator cap (default ABConfig's)")
+    ap.add_argument("--graph", action="store_true", help="the step as one CUDA graph "
+                    "replay (StaticStep; on a CPU it runs eagerly)")
+    ap.add_argument("--profile", action="store_true", help="after each stage's timing, "
+                    "print its top kernels (torch.profiler)")
     args = ap.parse_args(argv)
     if args.threads:
         torch.set_num_threads(args.threads)
@@ -103,12 +127,13 @@ def main(argv=None) -> int:
           f"{cfg.g_max_channels} ch, D {cfg.d_channels} ch x {cfg.d_scales} scales; "
           "CPU figures depend on whatever else the machine runs")
     total_s = 0.0
-    print(f"{'stage':>6} {'batch':>6} {'epochs':>7} {'img/s':>9} {'stage time':>11}")
+    print(f"{'stage':>6} {'batch':>6} {'epochs':>7} {'img/s':>9} {'stage time':>11}  step")
     for r, epochs in stages:
-        ips = stage_speed(cfg, r, dev, steps)
+        ips, mode = stage_speed(cfg, r, dev, steps, graph=args.graph, profile=args.profile)
         t = epochs * args.pairs / ips
         total_s += t
-        print(f"{r:>6} {cfg.stage_batch(r):>6} {epochs:>7} {ips:>9.1f} {t / 60:>9.1f} min")
+        print(f"{r:>6} {cfg.stage_batch(r):>6} {epochs:>7} {ips:>9.1f} {t / 60:>9.1f} min"
+              f"  {mode}", flush=True)
     what = "stages shown" if args.quick else "Table 5.2"
     print(f"{what} on {args.pairs} pairs: {total_s / 60:.1f} min (issue target: the whole "
           "schedule <= 20 min on one H100, >= 700 img/s at 256)")

@@ -85,6 +85,8 @@ def main(argv=None) -> int:
                     "top-level operator calls of one step (torch.profiler) instead of timing")
     ap.add_argument("--check-graph", action="store_true", help="--steps-at: compare 8 "
                     "graphed steps with 8 eager ones (losses, weights, lr set to 0) first")
+    ap.add_argument("--profile", action="store_true", help="--steps-at: then print the "
+                    "eager step's top kernels (torch.profiler, 5 steps)")
     args = ap.parse_args(argv)
     if args.threads:
         torch.set_num_threads(args.threads)
@@ -105,6 +107,14 @@ def main(argv=None) -> int:
                 print(f"training step, Model_{size} default widths, batch {batch}{label}: "
                       f"{ips:.0f} img/s ({n} steps, {1e3 * batch / ips:.2f} ms a step)",
                       flush=True)
+            if args.profile:
+                from _profile import print_top
+
+                fn, _ = _step_fn(size, batch, args.device, False, False)
+                for i in range(3):
+                    fn(i)
+                print_top(fn, 5, torch.device(args.device),
+                          title=f"Model_{size} default widths, batch {batch}, eager")
         return 0
     if not args.inference_only:
         _training(args)
