@@ -8,7 +8,7 @@ whole Table 5.2 schedule would take on ``--pairs`` pairs (4,224: the issue's dat
 Issue #15's target: >= 700 img/s at 256 px on one H100 (bf16 + channels_last there).
 
     python3 benchmarks/bench_ab.py [--quick] [--device cpu|cuda] [--steps 10]
-        [--growth full|decoder] [--threads N] [--graph] [--profile] [--only 256]
+        [--growth full|decoder] [--threads N] [--graph | --compile] [--profile] [--only 256]
 
 On a machine without CUDA it measures the CPU and says that the GPU target is
 unmeasured (a CPU figure is no evidence for or against it).
@@ -35,10 +35,12 @@ from map2map.learn.train_ab import gan_step  # noqa: E402
 
 
 def stage_speed(cfg: ABConfig, r: int, dev: torch.device, steps: int, warm: int = 2,
-                graph: bool = False, profile: bool = False) -> tuple[float, str]:
+                graph: bool = False, profile: bool = False,
+                compiled: bool = False) -> tuple[float, str]:
     """Images/s of ``steps`` training steps at stage ``r`` (fading in), and which step ran
     (``graph``: the :class:`~map2map.learn.static_step.StaticStep` replayed as a CUDA graph,
-    eager elsewhere); ``profile``: then print where the device time goes."""
+    eager elsewhere); ``profile``: then print where the device time goes; ``compiled``:
+    G through ``torch.compile`` (as ``train ab --compile``; not with ``graph``)."""
     g, dd, dr = build_ab_networks(cfg)
     amp = dev.type == "cuda" and cfg.amp
     opt_g, opt_d = place_networks((g, dd, dr), dev, amp, cfg)
@@ -56,8 +58,11 @@ def stage_speed(cfg: ABConfig, r: int, dev: torch.device, steps: int, warm: int 
         if gi is not None:
             gi = gi.contiguous(memory_format=torch.channels_last)
     alpha = torch.tensor(0.5, device=dev) if r > cfg.min_size else None
+    if compiled:
+        g = torch.compile(g)
+        warm = max(warm, 3)
     static = None
-    if graph:
+    if graph and not compiled:
         static = StaticStep((g, dd, dr), (opt_g, opt_d), cfg, graph_autocast(dev, amp),
                             (dd, dr), graph=True)
         warm = max(warm, static.warmup + 3)  # warm-up steps, the capture, two replays
@@ -85,7 +90,8 @@ def stage_speed(cfg: ABConfig, r: int, dev: torch.device, steps: int, warm: int 
         from _profile import print_top
 
         print_top(one, min(steps, 5), dev, title=f"Model_prog stage {r}, batch {B}")
-    return ips, (static.mode if static is not None else "eager")
+    return ips, (static.mode if static is not None else
+                 "eager, compiled G" if compiled else "eager")
 
 
 def main(argv=None) -> int:
@@ -104,6 +110,8 @@ def main(argv=None) -> int:
     ap.add_argument("--g-max-channels", type=int, help="generator cap (default ABConfig's)")
     ap.add_argument("--graph", action="store_true", help="the step as one CUDA graph "
                     "replay (StaticStep; on a CPU it runs eagerly)")
+    ap.add_argument("--compile", action="store_true", help="G through torch.compile "
+                    "(eager step; overrides --graph)")
     ap.add_argument("--profile", action="store_true", help="after each stage's timing, "
                     "print its top kernels (torch.profiler)")
     args = ap.parse_args(argv)
@@ -129,7 +137,8 @@ def main(argv=None) -> int:
     total_s = 0.0
     print(f"{'stage':>6} {'batch':>6} {'epochs':>7} {'img/s':>9} {'stage time':>11}  step")
     for r, epochs in stages:
-        ips, mode = stage_speed(cfg, r, dev, steps, graph=args.graph, profile=args.profile)
+        ips, mode = stage_speed(cfg, r, dev, steps, graph=args.graph, profile=args.profile,
+                                compiled=args.compile)
         t = epochs * args.pairs / ips
         total_s += t
         print(f"{r:>6} {cfg.stage_batch(r):>6} {epochs:>7} {ips:>9.1f} {t / 60:>9.1f} min"

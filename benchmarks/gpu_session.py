@@ -134,8 +134,10 @@ def main(argv=None) -> int:
     ap.add_argument("--ba-graph", choices=("auto", "yes", "no"), default="auto",
                     help="train ba with --cuda-graph: auto = when part 0 captured one")
     ap.add_argument("--ab-graph", choices=("auto", "yes", "no"), default="no",
-                    help="train ab with --cuda-graph (default no: its epochs are fitted "
-                    "from eager rates)")
+                    help="train ab with --cuda-graph (part 1 then measures Model_prog's "
+                    "graphed rates, which fit its epochs); auto = when part 0 captured one")
+    ap.add_argument("--ab-schedule", help="train ab with this RES:EPOCHS schedule as is "
+                    "(default: Table 5.2's stages fitted into --ab-seconds)")
     args = ap.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
     skip = set(filter(None, args.skip.split(",")))
@@ -179,9 +181,11 @@ def main(argv=None) -> int:
         q = ["--quick"] if args.quick else []
         _run([py, "benchmarks/bench_ab.py", "--device", args.device, "--steps", "6",
               *q], 90, log)
+        g = ["--graph"] if args.ab_graph == "yes" or (args.ab_graph == "auto" and graph_ok) \
+            else []
         _, t2 = _run([py, "benchmarks/bench_ab.py", "--device", args.device, "--steps", "6",
                       "--batch-rate", str(args.ab_batch_rate), "--g-channels", "16",
-                      "--g-max-channels", "128", *q], 90, log)
+                      "--g-max-channels", "128", *g, *q], 120, log)
         ab_rates = {k[0]: v for k, v in
                     _rates(t2, r"^\s*(\d+)\s+(\d+)\s+\d+\s+([\d.]+)").items()}
     res["ba_rates"] = {f"{k[0]}:{k[1]}": v for k, v in ba_rates.items()}
@@ -230,6 +234,8 @@ def main(argv=None) -> int:
             sched.append(f"{r}:{max(1, int(0.75 * share * budget * rate / n_train))}")
         if args.quick:
             sched = sched[:2]
+        if args.ab_schedule:
+            sched = [s.strip() for s in args.ab_schedule.split(",")]
         total = sum(int(s.split(":")[1]) for s in sched)
         cmd = [py, "-c", CLI_TRAIN, "train", "ab", "--data", str(args.data), "--out",
                str(args.out / "ab_run"), "--schedule", ",".join(sched), "--batch-rate",
