@@ -8,7 +8,8 @@ whole Table 5.2 schedule would take on ``--pairs`` pairs (4,224: the issue's dat
 Issue #15's target: >= 700 img/s at 256 px on one H100 (bf16 + channels_last there).
 
     python3 benchmarks/bench_ab.py [--quick] [--device cpu|cuda] [--steps 10]
-        [--growth full|decoder] [--threads N] [--graph | --compile] [--profile] [--only 256]
+        [--growth full|decoder] [--threads N] [--graph | --compile] [--nchw] [--profile]
+        [--only 256]
 
 On a machine without CUDA it measures the CPU and says that the GPU target is
 unmeasured (a CPU figure is no evidence for or against it).
@@ -36,14 +37,19 @@ from map2map.learn.train_ab import gan_step  # noqa: E402
 
 def stage_speed(cfg: ABConfig, r: int, dev: torch.device, steps: int, warm: int = 2,
                 graph: bool = False, profile: bool = False,
-                compiled: bool = False) -> tuple[float, str]:
+                compiled: bool = False, nchw: bool = False) -> tuple[float, str]:
     """Images/s of ``steps`` training steps at stage ``r`` (fading in), and which step ran
     (``graph``: the :class:`~map2map.learn.static_step.StaticStep` replayed as a CUDA graph,
     eager elsewhere); ``profile``: then print where the device time goes; ``compiled``:
-    G through ``torch.compile`` (as ``train ab --compile``; not with ``graph``)."""
+    G through ``torch.compile`` (as ``train ab --compile``; not with ``graph``); ``nchw``:
+    networks and data kept in NCHW under bf16 (the trainer uses channels-last; GroupNorm
+    returns NCHW, so cuDNN transposes around every convolution after it)."""
     g, dd, dr = build_ab_networks(cfg)
     amp = dev.type == "cuda" and cfg.amp
     opt_g, opt_d = place_networks((g, dd, dr), dev, amp, cfg)
+    if nchw:
+        for net in (g, dd, dr):
+            net.to(memory_format=torch.contiguous_format)
     B = cfg.stage_batch(r)
     gen = torch.Generator().manual_seed(0)
     x = (torch.randint(0, 3, (B, 1, r, r), generator=gen).float() - 1).to(dev)
@@ -53,7 +59,7 @@ def stage_speed(cfg: ABConfig, r: int, dev: torch.device, steps: int, warm: int 
     if cfg.growth == "decoder":  # the generator reads the full-size input, exits at r
         gi = (torch.randint(0, 3, (B, 1, s, s), generator=gen).float() - 1).to(dev)
         g.out_size = r
-    if amp:
+    if amp and not nchw:
         x, y = (t.contiguous(memory_format=torch.channels_last) for t in (x, y))
         if gi is not None:
             gi = gi.contiguous(memory_format=torch.channels_last)
@@ -112,6 +118,8 @@ def main(argv=None) -> int:
                     "replay (StaticStep; on a CPU it runs eagerly)")
     ap.add_argument("--compile", action="store_true", help="G through torch.compile "
                     "(eager step; overrides --graph)")
+    ap.add_argument("--nchw", action="store_true", help="keep networks and data NCHW "
+                    "under bf16 (the trainer uses channels-last)")
     ap.add_argument("--profile", action="store_true", help="after each stage's timing, "
                     "print its top kernels (torch.profiler)")
     args = ap.parse_args(argv)
@@ -138,7 +146,7 @@ def main(argv=None) -> int:
     print(f"{'stage':>6} {'batch':>6} {'epochs':>7} {'img/s':>9} {'stage time':>11}  step")
     for r, epochs in stages:
         ips, mode = stage_speed(cfg, r, dev, steps, graph=args.graph, profile=args.profile,
-                                compiled=args.compile)
+                                compiled=args.compile, nchw=args.nchw)
         t = epochs * args.pairs / ips
         total_s += t
         print(f"{r:>6} {cfg.stage_batch(r):>6} {epochs:>7} {ips:>9.1f} {t / 60:>9.1f} min"
