@@ -28,7 +28,7 @@ writes its checkpoint), so a slower machine gives fewer epochs, never a lost cal
 
     python3 benchmarks/gpu_session.py --data packed.npz --out OUTDIR [--device cuda]
         [--ba-seconds 150] [--ab-seconds 200] [--deadline 560] [--quick]
-        [--skip graph,bench,ba,ab,infer] [--ba-graph auto|yes|no]
+        [--skip graph,bench,ba,ab,infer] [--parts abprof] [--ba-graph auto|yes|no]
 
 Session 12 ran ``--skip bench,ab,infer --ba-batch 256 --ba-seconds 300 --deadline 460``
 (H200: graphs captured, 283 BA epochs in 282 s; docs/learn.md, "Measured on a GPU: the
@@ -131,6 +131,8 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--skip", default="", help="comma list of parts to skip: "
                     "graph,bench,ba,ab,infer")
+    ap.add_argument("--parts", default="", help="comma list of optional parts to run: "
+                    "abprof")
     ap.add_argument("--ba-graph", choices=("auto", "yes", "no"), default="auto",
                     help="train ba with --cuda-graph: auto = when part 0 captured one")
     ap.add_argument("--ab-graph", choices=("auto", "yes", "no"), default="no",
@@ -251,6 +253,20 @@ def main(argv=None) -> int:
         res["ab_rc"] = rc
         res.update(_last_epoch(args.out / "ab_run" / "log.csv", "ab"))
         _pack(args.out / "ab_run", args.out / "ab.tar")
+
+    # 4b. where Model_prog's 256 px step goes
+    if "abprof" in set(filter(None, args.parts.split(","))):
+        base = [py, "benchmarks/bench_ab.py", "--device", args.device, "--only",
+                "32" if args.quick else "256", "--batch", "8" if args.quick else "64",
+                "--g-channels", "16", "--g-max-channels", "128", "--steps",
+                "2" if args.quick else "10", "--profile"]
+        for extra in (["--graph"], ["--graph", "--nchw"], ["--compile"]):
+            if left(20) < 60:
+                break
+            _, t3 = _run(base + extra, min(150, left(20)), log)
+            m = re.search(r"^\s*\d+\s+\d+\s+\d+\s+([\d.]+)\s+[\d.]+ min\s+(\S.*)$", t3, re.M)
+            if m:
+                res.setdefault("abprof", {})[" ".join(extra)] = f"{m.group(1)} img/s ({m.group(2)})"
 
     # 4. inference at 256 px
     if "infer" not in skip:
