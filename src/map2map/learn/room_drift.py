@@ -476,10 +476,14 @@ def solenoidal(field: DisplacementField) -> DisplacementField:
     c = fft.dctn(div, type=2, norm="ortho") / lam
     c[0, 0] = 0.0                                # the mean of phi is free
     phi = fft.idctn(c, type=2, norm="ortho")
+    # grad(phi) on the faces (zero flow across the border's faces); a border pixel takes
+    # its one inner face's value, so the field has no step at the square's edge
     gx = np.zeros((H, W + 1))
-    gx[:, 1:-1] = phi[:, 1:] - phi[:, :-1]       # zero on the border's faces
+    gx[:, 1:-1] = phi[:, 1:] - phi[:, :-1]
+    gx[:, 0], gx[:, -1] = gx[:, 1], gx[:, -2]
     gy = np.zeros((H + 1, W))
     gy[1:-1] = phi[1:] - phi[:-1]
+    gy[0], gy[-1] = gy[1], gy[-2]
     return DisplacementField(dx - 0.5 * (gx[:, 1:] + gx[:, :-1]),
                              dy - 0.5 * (gy[1:] + gy[:-1]))
 
