@@ -15,6 +15,7 @@ statistic: W(generated, run 1) / W(run 2, run 1); target every ratio <= 1.5.
         [--drift parametric none] [--drift-method additive] [--drift-scale 1 ...]
         [--diversity K] [--coverage none explore] [--drift-route tour explore]
         [--traces none lidar] [--trace-params '{"wall_m": 0.045}']
+        [--room-params '{"conserve": true, "scale": 0.7}']
 
 ``--render`` measures each model with each resolution raising
 (:mod:`map2map.learn.slam_render`: ``slam``, SLAM-like walls, the default of ``map2map
@@ -47,6 +48,9 @@ faces: a metric wall band with a ragged back edge and stray hits (default ``none
 ``lidar`` settings (for tuning on ``--split val``). ``map2map synthesize``'s default since
 session 11 is measured by ``--drift rooms --coverage explore --traces lidar``; the
 script's own defaults stay session 9's (``parametric``, ``none``, ``none``).
+``--room-params`` (JSON) replaces fields of the ``rooms`` drift's
+:class:`~map2map.learn.room_drift.RoomDriftParams` (session 12: ``conserve``, the
+parametric field's divergence-free part only).
 """
 
 from __future__ import annotations
@@ -106,6 +110,11 @@ def main(argv=None) -> int:
                     "(default) and/or lidar (map2map synthesize's default since session 11)")
     ap.add_argument("--trace-params", default="{}",
                     help="JSON fields replacing the lidar traces' defaults")
+    ap.add_argument("--room-params", default="{}",
+                    help="JSON fields replacing the rooms drift's defaults "
+                    "(map2map.learn.room_drift.RoomDriftParams; session 12's val choice: "
+                    "'{\"conserve\": true, \"scale\": 0.7}' with --trace-params "
+                    "'{\"floor_px\": 0.85}')")
     ap.add_argument("--measures", action="store_true",
                     help="also Fig. 5.14's measures (appendix error, wall recall/precision) "
                     "on every plan")
@@ -119,10 +128,12 @@ def main(argv=None) -> int:
     if args.model:
         import json
 
+        from map2map.learn.room_drift import RoomDriftParams
         from map2map.learn.slam_render import TraceParams
         from map2map.learn.synthesize import load_ab_model, synthesize_squares
 
         lidar = TraceParams(**json.loads(args.trace_params))
+        rooms = RoomDriftParams(**json.loads(args.room_params))
         variants = [(how, d, sc, cov, rt, tr) for how in args.render for d in args.drift
                     for sc in (args.drift_scale if d != "none" else [None])
                     for cov in args.coverage
@@ -146,19 +157,22 @@ def main(argv=None) -> int:
                 name = f"{base} [{', '.join(tags)}]" if tags else base
                 t1 = time.perf_counter()
                 gens[name] = synthesize_squares(
-                    net, plans, seed=args.seed, render=how, drift=d,
+                    net, plans, seed=args.seed, render=how,
+                    drift=rooms if d == "rooms" else d,
                     drift_method=args.drift_method, drift_scale=sc, resolution=refs.resolution,
                     coverage=cov, drift_route=rt, traces=lidar if tr == "lidar" else "none")
                 if args.diversity > 1:
                     div[name] = _diversity(net, plans, refs.resolution, args.diversity,
-                                           args.seed, how, d, args.drift_method, sc, cov, rt,
+                                           args.seed, how, rooms if d == "rooms" else d,
+                                           args.drift_method, sc, cov, rt,
                                            lidar if tr == "lidar" else "none")
                 print(f"{name}: {time.perf_counter() - t1:.0f} s")
             for d in ("parametric", "rooms"):
                 if d in args.drift:
                     from map2map.learn.drift import drift_params
 
-                    print("drift: " + drift_params(d, args.drift_method).describe())
+                    print("drift: " + drift_params(rooms if d == "rooms" else d,
+                                                   args.drift_method).describe())
             if "lidar" in args.traces:
                 print(f"traces lidar: {lidar}")
             print(f"{base}: {net.source} ({net.resolution} px, target walls "

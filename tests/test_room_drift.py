@@ -15,8 +15,10 @@ from map2map.learn.room_drift import (
     room_adjacency,
     room_drift_field,
     segment_rooms,
+    solenoidal,
 )
 from map2map.maps.floorplan import generate_floorplan
+from map2map.parametric.field import DisplacementField, warp_map
 
 
 def _three_rooms() -> np.ndarray:
@@ -137,9 +139,11 @@ def test_drift_params_rooms_and_parametric_sum():
     assert alone.extra is None and summed.extra is not None
     par = drift_field(plan, drift_rng(0, 0), DriftParams())
     assert np.array_equal(summed.extra.dx, par.field.dx)
-    smooth = drift_field(plan, drift_rng(0, 0), RoomDriftParams(h_px=2.0))   # the default
+    smooth = drift_field(plan, drift_rng(0, 0), RoomDriftParams(h_px=2.0, conserve=False))
     par = drift_field(plan, drift_rng(0, 0), DriftParams(smooth_m=0.2))
     assert np.array_equal(smooth.extra.dx, par.field.dx)
+    kept = drift_field(plan, drift_rng(0, 0), RoomDriftParams(h_px=2.0, conserve=True))
+    assert np.array_equal(kept.extra.dy, solenoidal(par.field).dy)  # its divergence-free part
     zero = drift_field(plan, drift_rng(0, 0), RoomDriftParams(h_px=2.0, scale=0.0))
     assert np.array_equal(apply_drift(data, zero), data)          # scale 0: both parts off
     out = apply_drift(data, summed)
@@ -159,3 +163,59 @@ def test_default_rooms_drift_keeps_walls_whole_where_the_parametric_tears_them(s
     assert _wall_parts(apply_drift(plan.data, rooms)) <= before + 3
     torn = apply_drift(plan.data, drift_field(plan, drift_rng(seed, 0), DriftParams()))
     assert _wall_parts(torn) > before + 50
+
+
+def _face_divergence(dx: np.ndarray, dy: np.ndarray) -> np.ndarray:
+    """Divergence per pixel of the field averaged onto the faces between pixels."""
+    ux, uy = 0.5 * (dx[:, 1:] + dx[:, :-1]), 0.5 * (dy[1:] + dy[:-1])
+    div = np.zeros(dx.shape)
+    div[:, :-1] += ux
+    div[:, 1:] -= ux
+    div[:-1] += uy
+    div[1:] -= uy
+    return div
+
+
+def test_solenoidal_removes_growth_keeps_turns():
+    """solenoidal(): no divergence left inside the square; a local growth (source)
+    vanishes, a local turn (what bends walls) stays."""
+    rng = np.random.default_rng(0)
+    dx, dy = (ndimage.gaussian_filter(rng.normal(0, 5, (60, 80)), 4) for _ in range(2))
+    out = solenoidal(DisplacementField(dx, dy))
+    div = _face_divergence(out.dx.astype(float), out.dy.astype(float))
+    before = _face_divergence(dx, dy)
+    assert np.abs(div[2:-2, 2:-2]).max() < 0.05 * np.abs(before[2:-2, 2:-2]).max()
+    yy, xx = np.mgrid[:50, :60] - np.array([24.5, 29.5])[:, None, None]
+    gy, gx = np.gradient(30 * np.exp(-(xx**2 + yy**2) / (2 * 5.0**2)))
+    grow = solenoidal(DisplacementField(gx, gy))
+    assert grow.magnitude.max() < 0.03 * np.hypot(gx, gy).max()
+    turn = DisplacementField(gy, -gx)
+    kept = solenoidal(turn)
+    assert np.abs(kept.dx - turn.dx).max() < 0.01 and np.abs(kept.dy - turn.dy).max() < 0.01
+
+
+@pytest.mark.parametrize("seed", [1, 3])
+def test_default_rooms_drift_conserves_free_space_and_walls(seed):
+    """Session 12: the added parametric field (thesis eqs. 3.83-3.90: a positive range
+    error pushes what every pose sees away from it, summed over poses) grew the drifted
+    maps' free space and squeezed walls; its divergence-free part (``conserve=True``)
+    moves them without growing or shrinking them. Fails on the code
+    before (no ``conserve``; the field as drawn, still the default, grows free space by
+    4-7 % here)."""
+    p = generate_floorplan(seed, size=(14, 10))
+    plan = OccupancyMap(np.pad(p.data, 40, constant_values=UNKNOWN), p.resolution)
+    d = plan.data
+    free, walls = int((d == FREE).sum()), int((d == OCCUPIED).sum())
+    new = drift_field(plan, drift_rng(seed, 0), RoomDriftParams(conserve=True))
+    old = drift_field(plan, drift_rng(seed, 0), RoomDriftParams())
+    assert not RoomDriftParams().conserve and new.extra is not None
+    one = np.ones(d.shape, bool)
+    par_new, par_old = warp_map(d, new.extra, one), warp_map(d, old.extra, one)
+    assert abs((par_new == FREE).sum() / free - 1) < 0.01          # the field alone
+    assert abs((par_new == OCCUPIED).sum() / walls - 1) < 0.02
+    assert (par_old == FREE).sum() / free > 1.03                     # the old one grew it
+    out = apply_drift(d, new)                                        # rooms + field
+    assert abs((out == FREE).sum() / free - 1) < 0.01
+    assert abs((out == OCCUPIED).sum() / walls - 1) < 0.03
+    assert (apply_drift(d, old) == FREE).sum() / free > 1.03
+    assert _wall_parts(out) <= _wall_parts(d) + 3

@@ -74,7 +74,13 @@ from ..parametric.field import DisplacementField, warp_map
 from ..parametric.params import ParametricParams
 from ..parametric.pipeline import METHODS, deform, make_trajectory
 from ..trajectory.timing import Trajectory
-from .room_drift import RoomDrift, RoomDriftParams, apply_room_drift, room_drift_field
+from .room_drift import (
+    RoomDrift,
+    RoomDriftParams,
+    apply_room_drift,
+    room_drift_field,
+    solenoidal,
+)
 
 __all__ = ["DRIFTS", "DRIFT_METHODS", "COVERAGES", "DEFAULT_FOV_DEG", "TUNED_ON_VAL",
            "DEFAULT_SQUARE_RESOLUTION", "DriftParams", "DriftField", "drift_params",
@@ -317,7 +323,8 @@ def drift_field(plan: OccupancyMap, rng: np.random.Generator,
     DriftField, or RoomDrift for a :class:`~map2map.learn.room_drift.RoomDriftParams`
     (:func:`~map2map.learn.room_drift.room_drift_field` of the plan's pixels; with
     ``parametric=True`` the default parametric field, smoothed ``smooth_m`` and scaled
-    ``scale``, is drawn first from the same ``rng`` and added)
+    ``scale``, is drawn first from the same ``rng`` and added; with ``conserve=True``
+    only its divergence-free part, :func:`~map2map.learn.room_drift.solenoidal`)
 
     Raises
     ------
@@ -332,6 +339,8 @@ def drift_field(plan: OccupancyMap, rng: np.random.Generator,
                                                        smooth_m=params.smooth_m,
                                                        scale=params.scale), model,
                                 trajectory=trajectory).field
+            if params.conserve:
+                extra = solenoidal(extra)
         rd = room_drift_field(plan.data, rng, params)
         rd.extra = extra
         return rd

@@ -105,7 +105,10 @@ class TraceParams:
     ----------
     floor_px : float
         Band thickness at any resolution (px of the output square): the one pixel a
-        hit cell keeps after the square's resize.
+        hit cell keeps after the square's resize. 1.2 was tuned while the room drift's
+        parametric field squeezed walls by ~15 %; with
+        :class:`~map2map.learn.room_drift.RoomDriftParams` ``conserve=True`` 0.85 draws
+        the simulated thickness (docs/learn_ab.md, session 12).
     wall_m : float
         Metric part of the band [m]: ``floor_px + wall_m / resolution`` px.
     rough_px : float
