@@ -206,11 +206,13 @@ def main(argv=None) -> int:
         use_graph = args.ba_graph == "yes" or (args.ba_graph == "auto" and graph_ok)
         res["ba_cuda_graph"] = use_graph
         # the measured rate (graphed when the run is); else H200 figures of 2026-11-26
-        # (eager, session 10)
+        # (eager: session 10; graphed, with the upsampling fix: session 12)
         measured = graph_rates.get(f"64:{args.ba_batch}", {})
+        known = {16: 1342.0, 256: 7275.0} if use_graph else {16: 233.0, 64: 1017.0,
+                                                              256: 3129.0}
         rate = (measured.get("graph") if use_graph else measured.get("eager")) or \
-            ba_rates.get((64, args.ba_batch)) or \
-            {16: 233.0, 64: 1017.0, 256: 3129.0}.get(args.ba_batch, 1000.0)
+            (None if use_graph else ba_rates.get((64, args.ba_batch))) or \
+            known.get(args.ba_batch, 1000.0)
         epochs = int(max(2, min(THESIS_BA_EPOCHS, 0.8 * budget * rate / n_train)))
         every = max(1, epochs // 20)
         cmd = [py, "-c", CLI_TRAIN, "train", "ba", "--data", str(args.data), "--out",
