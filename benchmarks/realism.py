@@ -156,15 +156,15 @@ def main(argv=None) -> int:
                     tags.append(f"traces {tr}")
                 name = f"{base} [{', '.join(tags)}]" if tags else base
                 t1 = time.perf_counter()
+                drift = rooms if d == "rooms" else d  # --room-params for the rooms drift
                 gens[name] = synthesize_squares(
-                    net, plans, seed=args.seed, render=how,
-                    drift=rooms if d == "rooms" else d,
+                    net, plans, seed=args.seed, render=how, drift=drift,
                     drift_method=args.drift_method, drift_scale=sc, resolution=refs.resolution,
                     coverage=cov, drift_route=rt, traces=lidar if tr == "lidar" else "none")
                 if args.diversity > 1:
                     div[name] = _diversity(net, plans, refs.resolution, args.diversity,
-                                           args.seed, how, rooms if d == "rooms" else d,
-                                           args.drift_method, sc, cov, rt,
+                                           args.seed, how, drift, args.drift_method, sc,
+                                           cov, rt,
                                            lidar if tr == "lidar" else "none")
                 print(f"{name}: {time.perf_counter() - t1:.0f} s")
             for d in ("parametric", "rooms"):

@@ -36,3 +36,15 @@ def chromium() -> str:
             pytest.fail(f"{message}; MAP2MAP_REQUIRE_BROWSER=1 requires it")
         pytest.skip(message)
     return path
+
+
+@pytest.fixture
+def one_torch_thread():
+    """One intra-op torch thread for the test: tiny networks on a shared machine run
+    faster without them (torch imported here, so the conftest stays light)."""
+    import torch
+
+    n = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(n)

@@ -24,14 +24,7 @@ from map2map.learn.autocorrect import BAModel, autocorrect_many, load_model  # n
 from map2map.learn.config import TrainConfig  # noqa: E402
 from map2map.learn.data import downsample_target  # noqa: E402
 
-
-@pytest.fixture(autouse=True)
-def _one_thread():
-    """One intra-op thread: tiny networks on a shared machine run faster without them."""
-    n = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(n)
+pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
 
 TINY = dict(size=16, epochs=2, batch=4, g_channels=8, g_max_channels=16, d_channels=8,

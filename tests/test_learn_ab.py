@@ -31,13 +31,7 @@ from map2map.learn.progressive import (  # noqa: E402
     stage_of,
 )
 
-
-@pytest.fixture(autouse=True)
-def _one_thread():
-    n = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(n)
+pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
 
 #: two stages, 8 then 16 px; 6 train pairs in batches of 2: 3 batches per epoch
