@@ -186,3 +186,19 @@ def test_inset_leaves_thin_walls_whole():
     g2[:, 32] = 5.0                                 # one pixel at 64: nothing deeper
     assert np.array_equal(render_slam(g2, 64, 1.0, inset_px=1.0).map,
                           render_slam(g2, 64, 1.0).map)
+
+
+def test_stray_hits_without_a_wall_face_go_to_the_rooms_or_nowhere():
+    from map2map.learn.slam_render import TraceParams, stray_hits, trace_rng
+
+    tp = TraceParams(strays=30.0, stray_spread=0.0)
+    m = np.full((64, 64), UNKNOWN, np.uint8)
+    m[4:30, 4:30] = FREE
+    m[50:54, 50:54] = OCCUPIED                 # a wall that borders no free space
+    out = stray_hits(m, trace_rng(0, 0), 0.05, tp)   # raised IndexError before
+    new = (out == OCCUPIED) & (m != OCCUPIED)
+    assert new.any() and np.all(m[new] == FREE)
+    small = np.full((64, 64), UNKNOWN, np.uint8)
+    small[10:14, 12] = FREE                     # no free pixel 3 px from a wall either
+    small[8:16, 14] = OCCUPIED
+    assert stray_hits(small, trace_rng(0, 0), 0.05, tp).tobytes() == small.tobytes()

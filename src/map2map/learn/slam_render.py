@@ -421,16 +421,22 @@ def stray_hits(m: np.ndarray, rng: np.random.Generator, resolution: float,
     nb = rng.integers(0, 8, (n, 2))
     face = occ & ndimage.binary_dilation(free, np.ones((3, 3), bool))
     fy, fx = np.nonzero(face)
-    _, (iy, ix) = ndimage.distance_transform_edt(~free, return_indices=True)
-    # behind a face: from a face pixel, away from its nearest free pixel
-    k = (u * len(fy)).astype(int).clip(0, len(fy) - 1)
-    py, px = fy[k], fx[k]
-    vy, vx = py - iy[py, px], px - ix[py, px]
-    norm = np.maximum(np.hypot(vy, vx), 1e-9)
-    by, bx = py + vy / norm * dist, px + vx / norm * dist
     # in a room: a free pixel at least 3 px from every wall
     room = free & (ndimage.distance_transform_edt(~occ) > 3)
     ry, rx = np.nonzero(room)
+    if len(fy):
+        _, (iy, ix) = ndimage.distance_transform_edt(~free, return_indices=True)
+        # behind a face: from a face pixel, away from its nearest free pixel
+        k = (u * len(fy)).astype(int).clip(0, len(fy) - 1)
+        py, px = fy[k], fx[k]
+        vy, vx = py - iy[py, px], px - ix[py, px]
+        norm = np.maximum(np.hypot(vy, vx), 1e-9)
+        by, bx = py + vy / norm * dist, px + vx / norm * dist
+    elif len(ry):                       # no wall borders free space: room hits only
+        by, bx = np.zeros(n), np.zeros(n)
+        in_free[:] = True
+    else:
+        return out
     if len(ry):
         j = (u * len(ry)).astype(int).clip(0, len(ry) - 1)
         by = np.where(in_free, ry[j], by)
