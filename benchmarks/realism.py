@@ -16,6 +16,7 @@ statistic: W(generated, run 1) / W(run 2, run 1); target every ratio <= 1.5.
         [--diversity K] [--coverage none explore] [--drift-route tour explore]
         [--traces none lidar] [--trace-params '{"wall_m": 0.045}']
         [--room-params '{"conserve": true, "scale": 0.7}']
+        [--explore-at square native] [--explore-seconds 420]
 
 ``--render`` measures each model with each resolution raising
 (:mod:`map2map.learn.slam_render`: ``slam``, SLAM-like walls, the default of ``map2map
@@ -48,7 +49,11 @@ faces: a metric wall band with a ragged back edge and stray hits (default ``none
 ``lidar`` settings (for tuning on ``--split val``). ``map2map synthesize``'s default since
 session 11 is measured by ``--drift rooms --coverage explore --traces lidar``; the
 script's own defaults stay session 9's (``parametric``, ``none``, ``none``).
-``--room-params`` (JSON) replaces fields of the ``rooms`` drift's
+``--explore-at native`` (session 13) explores each plan at its own resolution
+(:func:`map2map.learn.realism.native_seen`, as ``map2map synthesize`` does) instead of
+the dataset's square, whose coarse pixels and thickened walls can close doors;
+``--explore-seconds`` sets the exploration's simulated time. ``--room-params`` (JSON)
+replaces fields of the ``rooms`` drift's
 :class:`~map2map.learn.room_drift.RoomDriftParams` (session 12: ``conserve``, the
 parametric field's divergence-free part only).
 """
@@ -115,6 +120,13 @@ def main(argv=None) -> int:
                     "(map2map.learn.room_drift.RoomDriftParams; session 12's val choice: "
                     "'{\"conserve\": true, \"scale\": 0.7}' with --trace-params "
                     "'{\"floor_px\": 0.85}')")
+    ap.add_argument("--explore-at", choices=("square", "native"), default="square",
+                    help="where --coverage explore's robot explores: the dataset's 256 px "
+                    "square (default, sessions 10-12's figures; 0.04-0.12 m a pixel, walls "
+                    "thickened, so doors can close) or each plan at its own resolution "
+                    "(native: what map2map synthesize does; realism.native_seen)")
+    ap.add_argument("--explore-seconds", type=float, default=None,
+                    help="the exploration's simulated seconds (default ExploreParams': 420)")
     ap.add_argument("--measures", action="store_true",
                     help="also Fig. 5.14's measures (appendix error, wall recall/precision) "
                     "on every plan")
@@ -128,10 +140,24 @@ def main(argv=None) -> int:
     if args.model:
         import json
 
+        from map2map.learn.coverage import ExploreParams
         from map2map.learn.room_drift import RoomDriftParams
         from map2map.learn.slam_render import TraceParams
         from map2map.learn.synthesize import load_ab_model, synthesize_squares
 
+        ep = ExploreParams() if args.explore_seconds is None else \
+            ExploreParams(duration=args.explore_seconds)
+        seen = None
+        if args.explore_at == "native" and "explore" in args.coverage:
+            from map2map.learn.realism import native_seen
+
+            if "explore" in args.drift_route:
+                ap.error("--explore-at native gives no trajectory: use --drift-route tour")
+            t1 = time.perf_counter()
+            seen = native_seen(args.data, refs.indices, plans.shape[-1], seed=args.seed,
+                               params=ep)
+            print(f"explored {len(plans)} plans at their own resolution: "
+                  f"{time.perf_counter() - t1:.0f} s")
         lidar = TraceParams(**json.loads(args.trace_params))
         rooms = RoomDriftParams(**json.loads(args.room_params))
         variants = [(how, d, sc, cov, rt, tr) for how in args.render for d in args.drift
@@ -152,6 +178,9 @@ def main(argv=None) -> int:
                     tags.append(f"cover {cov}")
                 if len(args.drift_route) > 1 or rt != "tour":
                     tags.append(f"route {rt}")
+                if cov == "explore" and (args.explore_at != "square"
+                                         or args.explore_seconds is not None):
+                    tags.append(f"{args.explore_at} {ep.duration:g} s")
                 if len(args.traces) > 1 or tr != "none":
                     tags.append(f"traces {tr}")
                 name = f"{base} [{', '.join(tags)}]" if tags else base
@@ -160,7 +189,8 @@ def main(argv=None) -> int:
                 gens[name] = synthesize_squares(
                     net, plans, seed=args.seed, render=how, drift=drift,
                     drift_method=args.drift_method, drift_scale=sc, resolution=refs.resolution,
-                    coverage=cov, drift_route=rt, traces=lidar if tr == "lidar" else "none")
+                    coverage=cov, drift_route=rt, traces=lidar if tr == "lidar" else "none",
+                    explore=ep, seen=seen if cov == "explore" else None)
                 if args.diversity > 1:
                     div[name] = _diversity(net, plans, refs.resolution, args.diversity,
                                            args.seed, how, drift, args.drift_method, sc,

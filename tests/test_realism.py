@@ -166,3 +166,62 @@ def test_fig514_from_a_dataset_and_from_plans(tiny_dataset, tmp_path):
                    drift="none")
     assert g.drift == "none"
     assert g.plan_ids == ["plan 0"] and len(g.rows) == len(METHODS)
+
+
+def test_native_seen_maps_the_plans_own_exploration_onto_the_square(tiny_dataset):
+    from map2map.datasets.build import open_dataset
+    from map2map.datasets.pair import crop_box, preprocess_pair
+    from map2map.learn.coverage import ExploreParams
+    from map2map.learn.realism import native_seen
+    from map2map.maps.formats import load_map
+
+    with open_dataset(tiny_dataset) as man:
+        idx = sorted(int(r["idx"]) for r in man.rows("done"))
+    ep = ExploreParams(duration=60.0, fov=360.0)
+    seen = native_seen(tiny_dataset, idx, 32, seed=3, params=ep, progress=False)
+    assert seen.shape == (len(idx), 32, 32) and seen.dtype == bool
+    assert np.array_equal(seen, native_seen(tiny_dataset, idx, 32, seed=3, params=ep,
+                                            progress=False))
+    for j, i in enumerate(idx):
+        folder = pair_dir(tiny_dataset, i)
+        a, b = load_map(folder / "A.yaml"), load_map(folder / "B.yaml")
+        sq, _ = preprocess_pair(a, b, 32, 0, crop_box(a, b))
+        # the room explored for a minute: its square's free pixels are seen, the square's
+        # unknown padding around the plan is not (but for a few hits past the walls)
+        assert seen[j][sq == FREE].mean() > 0.95
+        pad = ndimage_far(sq != UNKNOWN, 2)
+        assert pad.sum() > 100 and seen[j][pad].mean() < 0.05
+    short = native_seen(tiny_dataset, idx[:1], 32, seed=3, progress=False,
+                        params=ExploreParams(duration=0.5, fov=180.0))
+    assert short[0].sum() < seen[0].sum()           # half a second sees less
+
+
+def ndimage_far(known: np.ndarray, d: int) -> np.ndarray:
+    from scipy import ndimage
+
+    return ndimage.distance_transform_edt(~known) > d
+
+
+def test_synthesize_squares_hides_what_given_seen_cells_leave_out():
+    from map2map.learn.synthesize import synthesize_squares
+
+    net = _untrained(32)
+    plans = np.stack([_plan(32)] * 2)
+    seen = np.zeros(plans.shape, bool)
+    seen[0] = True
+    seen[1, :8, :8] = True
+    out = synthesize_squares(net, plans, drift="none", coverage="explore", seen=seen)
+    ref = synthesize_squares(net, plans, drift="none")
+    assert np.array_equal(out[0], ref[0])                    # all seen: nothing hidden
+    from scipy import ndimage
+
+    from map2map.learn.coverage import ExploreParams
+
+    k = ExploreParams().margin(net.wall_px)                  # the rendered walls' band
+    keep = ndimage.binary_dilation(seen[1], np.ones((3, 3), bool), iterations=k)
+    assert np.all(out[1][~keep] == UNKNOWN) and np.array_equal(out[1][keep], ref[1][keep])
+    assert (out[1] != ref[1]).any()
+    with pytest.raises(ValueError, match="differ in shape"):
+        synthesize_squares(net, plans, drift="none", coverage="explore", seen=seen[:1])
+    with pytest.raises(ValueError, match="coverage='explore'"):
+        synthesize_squares(net, plans, drift="none", seen=seen)

@@ -414,7 +414,8 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
                        drift_method: str | None = None, drift_scale: float | None = None,
                        resolution=None, coverage: str = "none", drift_route: str = "tour",
                        explore: ExploreParams | None = None,
-                       traces: str | TraceParams | None = "none") -> np.ndarray:
+                       traces: str | TraceParams | None = "none",
+                       seen: np.ndarray | None = None) -> np.ndarray:
     """Model_AB's SLAM map of each preprocessed dataset plan (``A.png``: already square,
     resized and thickened as the training inputs were), raised to the plans' size as
     ``render`` says (:func:`synthesize`): (N, S, S) uint8, the thesis's single output
@@ -434,6 +435,13 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
     :func:`~map2map.learn.coverage.explore_rng` ``(seed, i)``. ``traces`` as
     :func:`synthesize` (plan ``i`` draws from :func:`~map2map.learn.slam_render.trace_rng`
     ``(seed, i)``, its band from its own ``resolution``).
+
+    ``seen`` ((N, S, S) bool, optional; ``coverage="explore"`` with ``drift_route="tour"``
+    only) replaces the exploration of each square by cells seen elsewhere, e.g. by an
+    exploration of the plan at its own resolution mapped onto the square
+    (:func:`map2map.learn.realism.native_seen`, what :func:`synthesize` does for a plan).
+    A 256 px square of a dataset pair is 0.04-0.12 m a pixel with walls thickened for the
+    network, so the robot exploring it may not fit through doors it passes at 0.05 m.
 
     Examples
     --------
@@ -465,7 +473,16 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
         for j, gmap in enumerate(grey):
             out[i + j] = slam_render.render(gmap, S, render, walls[i + j], tp, trngs[i + j])
     trajs = None
-    if hide or along:
+    if seen is not None:
+        seen = np.asarray(seen, bool)
+        if seen.shape != plans.shape:
+            raise ValueError(f"seen {seen.shape} and plans {plans.shape} differ in shape")
+        if not hide or along:
+            raise ValueError("seen= needs coverage='explore' and a drift route other than "
+                             "'explore' (no trajectory comes with it)")
+        for i in range(len(plans)):
+            out[i] = hide_unseen(out[i], seen[i], ep.margin(walls[i] + inset))
+    elif hide or along:
         trajs = [None] * len(plans)
         for i in range(len(plans)):
             try:
