@@ -46,7 +46,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "own error magnitudes; docs/learn_ab.md)")
     p.add_argument("--coverage", choices=("explore", "none"), default="explore",
                    help="explore (default): the simulator's robot explores the plan for each "
-                   "hypothesis (oracle mapper, 420 s, 180 degree LIDAR, seeded; about 0.5 s "
+                   "hypothesis (oracle mapper, 275 s, 180 degree LIDAR, seeded; about 0.5 s "
                    "a hypothesis) and what it did not see becomes unknown, as a 7-minute run "
                    "leaves rooms unseen; none: every room the network draws")
     p.add_argument("--traces", choices=("lidar", "none"), default=None,

@@ -105,10 +105,11 @@ class TraceParams:
     ----------
     floor_px : float
         Band thickness at any resolution (px of the output square): the one pixel a
-        hit cell keeps after the square's resize. 1.2 was tuned while the room drift's
-        parametric field squeezed walls by ~15 %; with
+        hit cell keeps after the square's resize. 1.2 was tuned for the session-9
+        weights while the room drift's parametric field squeezed walls by ~15 %; with
         :class:`~map2map.learn.room_drift.RoomDriftParams` ``conserve=True`` 0.85 draws
-        the simulated thickness (docs/learn_ab.md, session 12).
+        the simulated thickness (session 12); 1.05 for the weights shipped in session
+        13, whose network walls are ~0.15 px thicker (docs/learn_ab.md).
     wall_m : float
         Metric part of the band [m]: ``floor_px + wall_m / resolution`` px.
     rough_px : float
@@ -133,7 +134,7 @@ class TraceParams:
         Share of the stray hits 2-3 px large (the rest single pixels).
     """
 
-    floor_px: float = 1.2
+    floor_px: float = 1.05
     wall_m: float = 0.055
     rough_px: float = 1.0
     rough_sigma_px: float = 4.0

@@ -280,7 +280,7 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
         with ``drift="none"``).
     explore : ExploreParams, optional
         The exploration's settings (default :class:`~map2map.learn.coverage.ExploreParams`:
-        420 s, 180 degree LIDAR, ``oracle``, band = rendered wall thickness).
+        275 s, 180 degree LIDAR, ``oracle``, band = rendered wall thickness).
     traces : {"lidar", "none"}, TraceParams or None
         ``"lidar"`` (the default, ``None``, with ``render="slam"``; ``None`` with
         ``render="plain"`` is ``"none"``): what a LIDAR + SLAM leaves beyond the faces
