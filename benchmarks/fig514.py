@@ -7,6 +7,12 @@ the table.
     python3 benchmarks/fig514.py --data DS --n 6 --out DIR [--model pretrained|RUN] [--seed 0]
         [--render slam|plain] [--drift parametric|none] [--drift-method additive|ekf]
         [--drift-scale F] [--coverage none|explore] [--drift-route tour|explore]
+        [--traces none|lidar] [--explore-at square|native] [--as-synthesize]
+
+``--as-synthesize`` draws Model_AB as ``map2map synthesize`` makes it by default (session
+13: ``--drift rooms --coverage explore --traces lidar --explore-at native``); without it
+the defaults stay session 9's (parametric drift, the network's extent, no traces), as in
+``map2map reproduce``.
 """
 
 from __future__ import annotations
@@ -31,8 +37,9 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--render", choices=("slam", "plain"), default="slam",
                     help="Model_AB's resolution raising (slam: SLAM-like walls, default)")
-    ap.add_argument("--drift", choices=("parametric", "none"), default="parametric",
-                    help="Model_AB's parametric drift (default) or none")
+    ap.add_argument("--drift", choices=("parametric", "rooms", "none"), default="parametric",
+                    help="Model_AB's parametric drift (default), the room-wise drift "
+                    "(rooms, synthesize's default) or none")
     ap.add_argument("--drift-method", choices=("additive", "ekf"), default=None,
                     help="the drift's odometry-to-map conversion (default additive)")
     ap.add_argument("--drift-scale", type=float, default=None,
@@ -42,13 +49,25 @@ def main(argv=None) -> int:
                     "what its own exploration saw (explore)")
     ap.add_argument("--drift-route", choices=("tour", "explore"), default="tour",
                     help="the drift's route: roadmap tour (default) or the exploration's path")
+    ap.add_argument("--traces", choices=("none", "lidar"), default="none",
+                    help="LIDAR traces beyond the faces (lidar: synthesize's default)")
+    ap.add_argument("--explore-at", choices=("square", "native"), default="square",
+                    help="where --coverage explore's robot explores: the 256 px square "
+                    "(default) or the plan at its own resolution (native: as synthesize)")
+    ap.add_argument("--as-synthesize", action="store_true",
+                    help="map2map synthesize's defaults: --drift rooms --coverage explore "
+                    "--traces lidar --explore-at native")
     args = ap.parse_args(argv)
+    if args.as_synthesize:
+        args.drift, args.coverage, args.traces, args.explore_at = \
+            "rooms", "explore", "lidar", "native"
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     f = run_fig514(args.data, args.n, args.model, args.seed, split=args.split,
                    render=args.render, drift=args.drift, drift_method=args.drift_method,
                    drift_scale=args.drift_scale, coverage=args.coverage,
-                   drift_route=args.drift_route)
+                   drift_route=args.drift_route, traces=args.traces,
+                   explore_at=args.explore_at)
     f.figure(out / "fig514.png")
     f.write_csv(out / "fig514.csv")
     (out / "fig514_summary.json").write_text(json.dumps(

@@ -225,3 +225,23 @@ def test_synthesize_squares_hides_what_given_seen_cells_leave_out():
         synthesize_squares(net, plans, drift="none", coverage="explore", seen=seen[:1])
     with pytest.raises(ValueError, match="coverage='explore'"):
         synthesize_squares(net, plans, drift="none", seen=seen)
+
+
+def test_fig514_draws_model_ab_as_synthesize_does(tiny_dataset):
+    from map2map.datasets.build import open_dataset
+    from map2map.learn.fig514 import run_fig514
+
+    with open_dataset(tiny_dataset) as man:
+        split = man.rows("done")[0]["split"]
+    kw = dict(split=split, progress=False, drift="none", coverage="explore")
+    sq = run_fig514(tiny_dataset, 1, _untrained(32), **kw)
+    nat = run_fig514(tiny_dataset, 1, _untrained(32), explore_at="native", **kw)
+    full = run_fig514(tiny_dataset, 1, _untrained(32), explore_at="native", traces="lidar",
+                      **{**kw, "drift": "rooms"})
+    assert "explored at native resolution" in nat.drift and "square" in sq.drift
+    assert full.drift.startswith("rooms") and "LIDAR traces" in full.drift
+    assert nat.maps["simulated"].tobytes() == sq.maps["simulated"].tobytes()
+    assert nat.maps["model_ab"].shape == (1, 32, 32)
+    assert nat.maps["model_ab"].tobytes() != sq.maps["model_ab"].tobytes()
+    with pytest.raises(ValueError, match="explore_at"):
+        run_fig514(tiny_dataset, 1, _untrained(32), explore_at="moon", **kw)

@@ -237,7 +237,7 @@ def _from_dataset(ds, n, seed, split, progress):
         info["reproduces_dataset_map"] = same
         info["square_resolution_m"] = window_resolution(rr.plan, rr.box, rr.a_n.shape[-1])
         out.append((meta["plan_id"], i, rr.a_n, rr.b_n, parametric_on_run(rr, seed=seed),
-                    info))
+                    info, rr.plan, rr.box))
     return out
 
 
@@ -259,7 +259,7 @@ def _from_plans(plans, seed, progress, params):
         info = {k2: rep.get(k2) for k2 in ("coverage", "ate_rmse_m", "path_length_m",
                                             "stop_reason")}
         info["square_resolution_m"] = window_resolution(plan, box, p.size)
-        out.append((f"plan {k}", -1, a_n, b_n, par, info))
+        out.append((f"plan {k}", -1, a_n, b_n, par, info, plan, box))
     return out
 
 
@@ -276,7 +276,8 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
                params=None, progress: bool = True, render: str = "slam",
                drift="parametric", drift_method: str | None = None,
                drift_scale: float | None = None, coverage: str = "none",
-               drift_route: str = "tour") -> Fig514:
+               drift_route: str = "tour", traces="none",
+               explore_at: str = "square") -> Fig514:
     """Fig. 5.14 for ``n`` held-out plans (module doc).
 
     Parameters
@@ -304,6 +305,15 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
     coverage, drift_route
         Model_AB's coverage from its own exploration and the drift's route
         (:func:`~map2map.learn.synthesize.synthesize_squares`, :mod:`map2map.learn.coverage`).
+    traces : {"none", "lidar"} or TraceParams
+        What a LIDAR leaves beyond the faces (:class:`~map2map.learn.slam_render.
+        TraceParams`; ``render="slam"`` only).
+    explore_at : {"square", "native"}
+        Where ``coverage="explore"``'s robot explores: the preprocessed square, or each
+        plan at its own resolution, as :func:`~map2map.learn.synthesize.synthesize` does
+        (:func:`~map2map.learn.realism.seen_on_square`; needs ``drift_route="tour"``).
+        ``drift="rooms", coverage="explore", traces="lidar", explore_at="native"`` is
+        what ``map2map synthesize`` makes (its defaults).
 
     Returns
     -------
@@ -321,14 +331,27 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
 
         raise InputError(source if isinstance(source, str | os.PathLike) else None,
                          f"no simulated '{split}' pairs to draw")
+    if explore_at not in ("square", "native"):
+        raise ValueError(f"explore_at must be 'square' or 'native', got {explore_at!r}")
     net = load_ab_model(model)
     plans = np.stack([m[2] for m in made])
+    seen = None
+    if explore_at == "native" and coverage == "explore":
+        from .coverage import explore_rng
+        from .realism import seen_on_square
+
+        seen = np.ones(plans.shape, bool)           # a plan not explored: nothing hidden
+        for j, m in enumerate(made):
+            sq = seen_on_square(m[6], m[7], plans.shape[-1], explore_rng(seed, j))
+            if sq is not None:
+                seen[j] = sq
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         gen = synthesize_squares(net, plans, seed=seed, render=render, drift=drift,
                                  drift_method=drift_method, drift_scale=drift_scale,
                                  resolution=[m[5]["square_resolution_m"] for m in made],
-                                 coverage=coverage, drift_route=drift_route)
+                                 coverage=coverage, drift_route=drift_route,
+                                 traces=traces, seen=seen)
     warns = []
     if "PROVISIONAL" in str(net.header.get("note", "")):
         warns.append("Model_AB weights are provisional (their note says so)")
@@ -349,8 +372,15 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
     from .drift import drift_params
 
     dp = drift_params(drift, drift_method, drift_scale)
-    how = "none" if dp is None else f"parametric ({dp.describe()})"
+    from .room_drift import RoomDriftParams
+
+    how = "none" if dp is None else dp.describe() if isinstance(dp, RoomDriftParams) else \
+        f"parametric ({dp.describe()})"
     if coverage != "none" or (drift_route != "tour" and dp is not None):
         how += f"; own exploration: coverage {coverage}, drift route {drift_route}"
+        if coverage == "explore":
+            how += f", explored at {explore_at} resolution"
+    if traces not in ("none", None):
+        how += "; LIDAR traces"
     return Fig514([m[0] for m in made], [int(m[1]) for m in made], plans, maps, rows, info,
                   net.source, warns, how)

@@ -65,11 +65,12 @@ import numpy as np
 from scipy import ndimage
 from scipy.stats import wasserstein_distance
 
-from ..core.grid import FREE, OCCUPIED, UNKNOWN
+from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 
 __all__ = ["STATS", "STAT_INFO", "TARGET_RATIO", "map_stats", "stats_of", "RealismRow",
            "realism_table", "format_realism_table", "References", "simulated_references",
-           "split_indices", "native_seen", "pair_square_resolution"]
+           "split_indices", "seen_on_square", "native_seen",
+           "pair_square_resolution"]
 
 STATS = ("wall_err", "wall_seen", "free_mapped", "unknown", "spurious", "thickness", "bend")
 #: What each statistic is (units).
@@ -394,6 +395,38 @@ def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int |
                       np.array([pair_square_resolution(ds, i, a.shape[-1]) for i in idx]))
 
 
+def seen_on_square(plan: OccupancyMap, box, size: int, rng: np.random.Generator,
+                   params=None) -> np.ndarray | None:
+    """Cells an exploration of ``plan`` (at its own resolution) sees, cut and resized as
+    :func:`~map2map.datasets.pair.preprocess_pair` cuts a pair with window ``box``
+    (``None``: the whole map) to ``size`` px: a square pixel is seen when seen plan cells
+    cover at least ``0.5 / f`` of it (the rule that keeps thin walls). ``None`` when the
+    robot cannot explore the plan (no free space, too small).
+
+    Examples
+    --------
+    >>> from map2map.maps.floorplan import generate_floorplan
+    >>> from map2map.learn.coverage import ExploreParams, explore_rng
+    >>> plan = generate_floorplan(3, size=(10, 8))
+    >>> s = seen_on_square(plan, None, 64, explore_rng(0, 0), ExploreParams(duration=20.0))
+    >>> s.shape, s.dtype.name, bool(0.0 < s.mean() < 1.0)
+    ((64, 64), 'bool', True)
+    """
+    from ..core.errors import InputError
+    from ..datasets.pair import preprocess_pair
+    from ..maps.preprocess import preprocess
+    from .coverage import explore_plan
+
+    try:
+        ex = explore_plan(plan, rng, params)
+    except InputError:
+        return None
+    m = plan.copy(data=np.where(ex.seen, OCCUPIED, UNKNOWN).astype(np.uint8))
+    sq = preprocess(m, size=int(size), crop=False).data if box is None else \
+        preprocess_pair(m, m, int(size), 0, box)[0]
+    return sq == OCCUPIED
+
+
 def native_seen(ds: str | os.PathLike, indices, size: int, *, seed: int = 0,
                 params=None, progress: bool = True) -> np.ndarray:
     """Cells seen by an exploration of each pair's plan at its own resolution, on the
@@ -405,10 +438,8 @@ def native_seen(ds: str | os.PathLike, indices, size: int, *, seed: int = 0,
     pixel, walls thickened by the build) blocks doors the dataset's 0.05 m robot passes.
     Pair ``indices[j]``'s plan (``A.yaml``) is explored with
     :func:`~map2map.learn.coverage.explore_rng` ``(seed, j)`` (the stream
-    ``synthesize_squares`` gives square ``j``), and its seen cells are cut and resized as
-    the build cut the pair (:func:`~map2map.datasets.pair.preprocess_pair`: a square pixel
-    is seen when a seen plan cell covers at least ``0.5 / f`` of it, the rule that keeps
-    thin walls).
+    ``synthesize_squares`` gives square ``j``) and its seen cells are put on the pair's
+    square by :func:`seen_on_square` with the pair's window.
 
     Parameters
     ----------
@@ -429,14 +460,11 @@ def native_seen(ds: str | os.PathLike, indices, size: int, *, seed: int = 0,
     """
     import warnings
 
-    from ..core.errors import InputError
     from ..datasets.build import pair_dir
-    from ..datasets.pair import crop_box, preprocess_pair
+    from ..datasets.pair import crop_box
     from ..maps.formats import load_map
-    from ..maps.preprocess import preprocess
-    from .coverage import ExploreParams, explore_plan, explore_rng
+    from .coverage import explore_rng
 
-    ep = params or ExploreParams()
     out = np.ones((len(indices), int(size), int(size)), bool)
     it = enumerate(indices)
     if progress:
@@ -446,17 +474,12 @@ def native_seen(ds: str | os.PathLike, indices, size: int, *, seed: int = 0,
     for j, i in it:
         folder = pair_dir(ds, int(i))
         a, b = load_map(folder / "A.yaml"), load_map(folder / "B.yaml")
-        try:
-            ex = explore_plan(a, explore_rng(seed, j), ep)
-        except InputError as exc:
-            warnings.warn(f"pair {i}: no exploration ({exc.problem}); nothing hidden",
+        sq = seen_on_square(a, crop_box(a, b), size, explore_rng(seed, j), params)
+        if sq is None:
+            warnings.warn(f"pair {i}: the robot cannot explore its plan; nothing hidden",
                           stacklevel=2)
             continue
-        m = a.copy(data=np.where(ex.seen, OCCUPIED, UNKNOWN).astype(np.uint8))
-        box = crop_box(a, b)
-        sq = preprocess(m, size=int(size), crop=False).data if box is None else \
-            preprocess_pair(m, m, int(size), 0, box)[0]
-        out[j] = sq == OCCUPIED
+        out[j] = sq
     return out
 
 
