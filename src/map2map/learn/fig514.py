@@ -191,11 +191,14 @@ class Fig514:
                 if box is not None:
                     ax.set_xlim(box[2] - 3, box[3] + 3)
                     ax.set_ylim(box[1] + 3, box[0] - 3)
-        fig.suptitle(f"Fig. 5.14 reproduced: same plan, same trajectory (appendix-metric "
-                     f"error px of the {self.plans.shape[-1]} px square; wall recall 2 px); "
-                     f"Model_AB: {Path(self.model).name}"
-                     + (f"\nModel_AB's drift: {self.drift}" if self.drift else ""), fontsize=9)
-        top = 0.75 if self.drift else 0.45
+        import textwrap
+
+        extra = textwrap.wrap(f"Model_AB's drift: {self.drift}", 130) if self.drift else []
+        fig.suptitle("\n".join([
+            f"Fig. 5.14 reproduced: same plan, same trajectory (appendix-metric error px of "
+            f"the {self.plans.shape[-1]} px square; wall recall 2 px); "
+            f"Model_AB: {Path(self.model).name}", *extra]), fontsize=9)
+        top = 0.45 + 0.3 * len(extra)
         fig.tight_layout(rect=(0, 0, 1, 1 - top / (3.1 * max(n, 1))))
         if path is not None:
             from ..core._io import atomic_path
