@@ -245,3 +245,29 @@ def test_fig514_draws_model_ab_as_synthesize_does(tiny_dataset):
     assert nat.maps["model_ab"].tobytes() != sq.maps["model_ab"].tobytes()
     with pytest.raises(ValueError, match="explore_at"):
         run_fig514(tiny_dataset, 1, _untrained(32), explore_at="moon", **kw)
+
+
+def test_realism_table_bootstrap_interval_brackets_the_ratio_and_narrows_with_plans():
+    rng = np.random.default_rng(1)
+
+    def stats(n, shift):
+        return {s: rng.normal(shift, 1.0, n) for s in STATS}
+
+    def width(n):
+        rows = realism_table(stats(n, 0.5), stats(n, 0.0), stats(n, 0.0), None,
+                             bootstrap=300, seed=2)
+        r = rows[0]
+        assert r.ratio_lo <= r.ratio <= r.ratio_hi or not math.isfinite(r.ratio)
+        return r.ratio_hi / r.ratio_lo
+
+    assert width(400) < width(25)
+    st = [stats(50, m) for m in (0.4, 0.0, 0.0)]
+    a = realism_table(*st, None, bootstrap=100, seed=3)
+    b = realism_table(*st, None, bootstrap=100, seed=3)
+    assert [(r.ratio_lo, r.ratio_hi) for r in a] == [(r.ratio_lo, r.ratio_hi) for r in b]
+    plain = realism_table(*st, None)
+    assert all(math.isnan(r.ratio_lo) for r in plain)
+    assert [r.ratio for r in plain] == [r.ratio for r in a]     # the ratio itself unchanged
+    text = format_realism_table(a, "g")
+    assert "interval" in text.splitlines()[0] and "[" in text.splitlines()[1]
+    assert "interval" not in format_realism_table(plain, "g")

@@ -178,7 +178,8 @@ def stats_of(maps, plans) -> dict[str, np.ndarray]:
 class RealismRow:
     """One statistic: means over the generated maps and the two simulated runs, the
     Wasserstein distances ``W(generated, run 1)`` and ``W(run 2, run 1)``, their ratio
-    and whether it meets :data:`TARGET_RATIO` (``None``: no values)."""
+    and whether it meets :data:`TARGET_RATIO` (``None``: no values); ``ratio_lo`` and
+    ``ratio_hi``: the ratio's bootstrap interval over the plans (NaN when not drawn)."""
 
     statistic: str
     generated: float
@@ -188,6 +189,8 @@ class RealismRow:
     w_sims: float
     ratio: float
     met: bool | None
+    ratio_lo: float = float("nan")
+    ratio_hi: float = float("nan")
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -199,7 +202,8 @@ def _ratio(w_g: float, w_r: float) -> float:
     return 1.0 if w_g <= 1e-12 else math.inf
 
 
-def realism_table(generated, sim1, sim2, plans) -> list[RealismRow]:
+def realism_table(generated, sim1, sim2, plans, *, bootstrap: int = 0, seed: int = 0,
+                  level: float = 0.9) -> list[RealismRow]:
     """Wasserstein ratio per statistic (module doc) of ``generated`` maps against two
     simulated runs of the same ``plans``.
 
@@ -208,6 +212,16 @@ def realism_table(generated, sim1, sim2, plans) -> list[RealismRow]:
     generated, sim1, sim2, plans : (N, S, S) uint8 or dicts of :func:`stats_of`
         Maps in the same order (map ``i`` of each is of plan ``i``); precomputed
         statistics may be passed instead of maps.
+    bootstrap : int
+        Draw this many resamples of the plans (with replacement, the same plans for all
+        three sets of maps) and give each ratio's central ``level`` interval over them
+        (``ratio_lo``, ``ratio_hi``). ``W(run 2, run 1)`` is small (two runs of the same
+        plans agree), so the ratio is noisy; the interval says how far a table of ``N``
+        plans pins it down. 0: no interval.
+    seed : int
+        Seeds the resampling.
+    level : float
+        The interval's coverage (0.9: the 5th to 95th percentile).
 
     Returns
     -------
@@ -215,18 +229,40 @@ def realism_table(generated, sim1, sim2, plans) -> list[RealismRow]:
         One per :data:`STATS`. A ratio is ``inf`` when the two runs agree exactly on a
         statistic and the generated maps do not; NaN values (a map with no wall) are
         left out of that statistic.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> st = [{s: rng.normal(m, 1.0, 60) for s in STATS} for m in (0.0, 0.0, 0.3)]
+    >>> r = realism_table(st[2], st[0], st[1], None, bootstrap=200)[0]
+    >>> bool(r.ratio_lo < r.ratio < r.ratio_hi)
+    True
     """
     st = [g if isinstance(g, dict) else stats_of(g, plans) for g in (generated, sim1, sim2)]
+    rng = np.random.default_rng(seed) if bootstrap > 0 else None
     rows = []
     for s in STATS:
-        g, r1, r2 = (v[s][np.isfinite(v[s])] for v in st)
+        v = [np.asarray(x[s], float) for x in st]
+        g, r1, r2 = (x[np.isfinite(x)] for x in v)
         if not (len(g) and len(r1) and len(r2)):
             rows.append(RealismRow(s, *(float("nan"),) * 6, None))
             continue
         w_g, w_r = float(wasserstein_distance(g, r1)), float(wasserstein_distance(r2, r1))
         ratio = _ratio(w_g, w_r)
+        lo = hi = float("nan")
+        if rng is not None and len({len(x) for x in v}) == 1:
+            draws = []
+            for _ in range(int(bootstrap)):
+                k = rng.integers(0, len(v[0]), len(v[0]))
+                gb, r1b, r2b = (x[k][np.isfinite(x[k])] for x in v)
+                if len(gb) and len(r1b) and len(r2b):
+                    draws.append(_ratio(float(wasserstein_distance(gb, r1b)),
+                                        float(wasserstein_distance(r2b, r1b))))
+            if draws:
+                a = (1.0 - level) / 2.0
+                lo, hi = (float(q) for q in np.quantile(draws, [a, 1.0 - a]))
         rows.append(RealismRow(s, float(g.mean()), float(r1.mean()), float(r2.mean()), w_g,
-                               w_r, ratio, bool(ratio <= TARGET_RATIO)))
+                               w_r, ratio, bool(ratio <= TARGET_RATIO), lo, hi))
     return rows
 
 
@@ -242,11 +278,13 @@ def format_realism_table(rows: list[RealismRow], name: str = "generated") -> str
     worst ratio 2.00 (unknown); target <= 1.5: NOT met (1 of 1 statistics above)
     """
     w = max(9, len(name))
+    ci = any(math.isfinite(r.ratio_lo) for r in rows)
     out = [f"{'statistic':>11} {name:>{w}} {'sim 1':>8} {'sim 2':>8} {'W(gen,1)':>9} "
-           f"{'W(2,1)':>8} {'ratio':>7}"]
+           f"{'W(2,1)':>8} {'ratio':>7}" + (f" {'interval':>13}" if ci else "")]
     for r in rows:
         out.append(f"{r.statistic:>11} {r.generated:>{w}.3f} {r.sim1:>8.3f} {r.sim2:>8.3f} "
-                   f"{r.w_generated:>9.3f} {r.w_sims:>8.3f} {r.ratio:>7.2f}")
+                   f"{r.w_generated:>9.3f} {r.w_sims:>8.3f} {r.ratio:>7.2f}"
+                   + (f" {f'[{r.ratio_lo:.2f}, {r.ratio_hi:.2f}]':>13}" if ci else ""))
     valid = [r for r in rows if r.met is not None]
     if not valid:
         return "\n".join(out + ["no values"])
