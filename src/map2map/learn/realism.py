@@ -286,6 +286,12 @@ def realism_table(generated, sim1, sim2, plans, *, bootstrap: int = 0, seed: int
     return rows
 
 
+def _interval(r: RealismRow) -> str:
+    if math.isfinite(r.ratio_lo) and math.isfinite(r.ratio_hi):
+        return f"[{r.ratio_lo:.2f}, {r.ratio_hi:.2f}]"
+    return "-"
+
+
 def format_realism_table(rows: list[RealismRow], name: str = "generated") -> str:
     """The table as text, the worst ratio and the verdict on the last line.
 
@@ -304,7 +310,7 @@ def format_realism_table(rows: list[RealismRow], name: str = "generated") -> str
     for r in rows:
         out.append(f"{r.statistic:>11} {r.generated:>{w}.3f} {r.sim1:>8.3f} {r.sim2:>8.3f} "
                    f"{r.w_generated:>9.3f} {r.w_sims:>8.3f} {r.ratio:>7.2f}"
-                   + (f" {f'[{r.ratio_lo:.2f}, {r.ratio_hi:.2f}]':>13}" if ci else ""))
+                   + (f" {_interval(r):>13}" if ci else ""))
     valid = [r for r in rows if r.met is not None]
     if not valid:
         return "\n".join(out + ["no values"])
