@@ -247,34 +247,21 @@ def test_fig514_draws_model_ab_as_synthesize_does(tiny_dataset):
         run_fig514(tiny_dataset, 1, _untrained(32), explore_at="moon", **kw)
 
 
-def test_realism_table_bootstrap_interval_brackets_the_ratio_and_narrows_with_plans():
+def test_realism_table_halves_are_the_ratio_on_every_other_plan():
+    from scipy.stats import wasserstein_distance as W
+
     rng = np.random.default_rng(1)
-
-    def stats(n, shift):
-        return {s: rng.normal(shift, 1.0, n) for s in STATS}
-
-    def width(n):
-        rows = realism_table(stats(n, 0.5), stats(n, 0.0), stats(n, 0.0), None,
-                             bootstrap=300, seed=2)
-        r = rows[0]
-        assert r.ratio_lo <= r.ratio <= r.ratio_hi or not math.isfinite(r.ratio)
-        return r.ratio_hi / r.ratio_lo
-
-    assert width(400) < width(25)
-    # two runs that agree plan by plan (a small W(2, 1), as for wall thickness): a plain
-    # percentile interval is biased low here (resampling inflates W(2, 1)); BCa is not
-    r1 = rng.normal(2.06, 0.1, 90)
-    close = {s: r1 + rng.normal(0, 0.01, 90) for s in STATS}
-    gen = {s: r1 + 0.03 + rng.normal(0, 0.02, 90) for s in STATS}
-    r = realism_table(gen, {s: r1 for s in STATS}, close, None, bootstrap=500, seed=0)[0]
-    assert r.ratio > 2 and r.ratio_lo <= r.ratio <= r.ratio_hi
-    st = [stats(50, m) for m in (0.4, 0.0, 0.0)]
-    a = realism_table(*st, None, bootstrap=100, seed=3)
-    b = realism_table(*st, None, bootstrap=100, seed=3)
-    assert [(r.ratio_lo, r.ratio_hi) for r in a] == [(r.ratio_lo, r.ratio_hi) for r in b]
+    st = [{s: rng.normal(m, 1.0, 50) for s in STATS} for m in (0.4, 0.0, 0.0)]
+    st[0]["wall_err"][3] = np.nan                        # a map without walls
+    rows = realism_table(*st, None, halves=True)
     plain = realism_table(*st, None)
-    assert all(math.isnan(r.ratio_lo) for r in plain)
-    assert [r.ratio for r in plain] == [r.ratio for r in a]     # the ratio itself unchanged
-    text = format_realism_table(a, "g")
-    assert "interval" in text.splitlines()[0] and "[" in text.splitlines()[1]
-    assert "interval" not in format_realism_table(plain, "g")
+    assert [r.ratio for r in plain] == [r.ratio for r in rows]    # the ratio unchanged
+    assert all(math.isnan(r.ratio_even) for r in plain)
+    g, r1, r2 = (x["bend"][1::2] for x in st)
+    assert math.isclose(rows[STATS.index("bend")].ratio_odd, W(g, r1) / W(r2, r1))
+    g, r1, r2 = (x["wall_err"][0::2] for x in st)
+    assert np.isnan(g).sum() == 0 and rows[0].ratio_even == W(g, r1) / W(r2, r1)
+    assert math.isfinite(rows[0].ratio_odd)                  # the NaN map is left out
+    text = format_realism_table(rows, "g")
+    assert "even / odd" in text.splitlines()[0] and " / " in text.splitlines()[1]
+    assert "even / odd" not in format_realism_table(plain, "g")
