@@ -211,3 +211,27 @@ def test_drawn_pieces_kernel_equals_the_numpy_reference():
         want = _drawn_pieces_numpy(segs, occ)
         got = drawn_pieces(segs, occ)
         assert got.shape == want.shape and np.array_equal(got, want), trial
+
+
+def test_join_supported_bridges_hough_cuts_but_not_doors():
+    from map2map.maps.segments import join_supported
+
+    walls = np.zeros((80, 80), bool)
+    walls[10:70, 20:22] = True                      # a vertical wall, whole
+    walls[40:42, 22:60] = True                      # a T-junction on it
+    walls[10:70, 50:52] = True                      # a second one, with a door
+    walls[30:45, 50:52] = False
+    segs = np.array([[20.5, 10, 20.5, 35], [21.0, 47, 21.0, 69],      # cut at the T
+                     [50.5, 10, 50.5, 29], [50.5, 46, 50.5, 69],      # cut by the door
+                     [22.0, 40.5, 59, 40.5]])
+    out = join_supported(segs, walls, 1.5, 16)
+    vert = out[out[:, 0] == out[:, 2]]
+    assert len(vert) == 3 and len(out) == 4
+    whole = vert[np.argmax(vert[:, 3] - vert[:, 1])]
+    assert whole[1] == 10 and whole[3] == 69 and 20.5 < whole[0] < 21.0
+    assert sorted(vert[vert[:, 0] == 50.5][:, 1].tolist()) == [10, 46]   # the door stays
+    assert len(join_supported(segs, walls, 1.5, 10)) == 5    # a gap longer than max_gap
+    far = segs.copy()
+    far[1, [0, 2]] = 24.0                                    # not collinear within tol
+    assert len(join_supported(far, walls, 1.5, 16)) == 5
+    assert join_supported(np.zeros((0, 4)), walls, 1.5, 16).shape == (0, 4)

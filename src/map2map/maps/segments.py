@@ -23,7 +23,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["AXIS_TOLERANCE_DEG", "straight_segments"]
+__all__ = ["AXIS_TOLERANCE_DEG", "straight_segments", "join_supported"]
 
 #: Segments within this angle (degrees) of horizontal or vertical are made exactly so.
 AXIS_TOLERANCE_DEG = 10.0
@@ -119,3 +119,89 @@ def _join(h: np.ndarray, v: np.ndarray, reach: float) -> tuple[np.ndarray, np.nd
             ok = d[np.arange(len(a)), k] <= reach
             a[ok, j] = bc[k[ok]]
     return h, v
+
+
+def join_supported(segs: np.ndarray, walls: np.ndarray, tol: float, max_gap: float,
+                   min_cover: float = 0.8) -> np.ndarray:
+    """Join collinear axis-aligned segments across a gap the wall mask fills.
+
+    :func:`straight_segments` merges collinear pieces only across gaps shorter than a
+    model cell; the Hough transform also cuts a continuous wall at T-junctions and
+    where its thinned centre line wobbles. Two consecutive segments of one line (fixed
+    coordinates within ``tol``) whose gap is at most ``max_gap`` pixels long become one
+    when ``walls`` holds a pixel within ``tol`` of the line at ``min_cover`` of the
+    gap's positions or more (the input shows a wall there: not a door). The joined
+    segment lies at the pieces' length-weighted mean coordinate. Other segments are
+    returned as they are (axis-aligned first, then the rest).
+
+    Parameters
+    ----------
+    segs : (K, 4) float
+        ``x0, y0, x1, y1`` in pixels (x: column, y: row).
+    walls : (H, W) bool
+    tol : float
+    max_gap : float
+    min_cover : float
+
+    Returns
+    -------
+    (K', 4) float
+
+    Examples
+    --------
+    >>> w = np.zeros((30, 60), bool); w[10, 2:58] = True      # one wall, cut by Hough
+    >>> s = np.array([[2.0, 10, 25, 10], [33, 10.4, 57, 10.4]])
+    >>> join_supported(s, w, 1.5, 20).round(1).tolist()
+    [[2.0, 10.2, 57.0, 10.2]]
+    >>> w[10, 26:33] = False                                  # a door: left apart
+    >>> len(join_supported(s, w, 1.5, 20))
+    2
+    """
+    segs = np.asarray(segs, float).reshape(-1, 4)
+    walls = np.asarray(walls, bool)
+    horiz = np.abs(segs[:, 1] - segs[:, 3]) < 1e-9
+    vert = np.abs(segs[:, 0] - segs[:, 2]) < 1e-9
+    out = []
+    for axis, sel in ((0, horiz & ~vert), (1, vert & ~horiz)):
+        a = segs[sel]
+        if len(a) < 2:
+            out.append(a)
+            continue
+        c = a[:, 1] if axis == 0 else a[:, 0]
+        lo = np.minimum(a[:, 0], a[:, 2]) if axis == 0 else np.minimum(a[:, 1], a[:, 3])
+        hi = np.maximum(a[:, 0], a[:, 2]) if axis == 0 else np.maximum(a[:, 1], a[:, 3])
+        order = np.lexsort((lo, np.round(c / max(tol, 1e-9))))
+        merged = []
+        cur = None
+        for i in order:                      # one pass over the segments, not pixels
+            if cur is not None and abs(c[i] - cur[0]) <= tol and \
+                    0 < lo[i] - cur[2] <= max_gap and \
+                    _covered(walls, axis, cur[0], c[i], cur[2], lo[i], tol) >= min_cover:
+                w0, w1 = max(cur[2] - cur[1], 1.0), max(hi[i] - lo[i], 1.0)
+                cur = [(cur[0] * w0 + c[i] * w1) / (w0 + w1), cur[1], max(cur[2], hi[i])]
+                continue
+            if cur is not None:
+                merged.append(cur)
+            cur = [c[i], lo[i], hi[i]]
+        merged.append(cur)
+        m = np.array(merged, float)
+        out.append(np.stack([m[:, 1], m[:, 0], m[:, 2], m[:, 0]] if axis == 0 else
+                            [m[:, 0], m[:, 1], m[:, 0], m[:, 2]], axis=1))
+    out.append(segs[~(horiz ^ vert)])
+    return np.concatenate(out).reshape(-1, 4)
+
+
+def _covered(walls, axis, c0, c1, g0, g1, tol) -> float:
+    """Share of the positions strictly between ``g0`` and ``g1`` along a line at
+    ``(c0 + c1) / 2`` where ``walls`` has a pixel within ``tol`` across."""
+    H, W = walls.shape
+    c = (c0 + c1) / 2.0
+    j0, j1 = int(np.floor(g0)) + 1, int(np.ceil(g1))
+    i0, i1 = int(np.floor(c - tol)), int(np.ceil(c + tol)) + 1
+    n_along, n_across = (W, H) if axis == 0 else (H, W)
+    j0, j1 = max(0, j0), min(n_along, j1)
+    i0, i1 = max(0, i0), min(n_across, i1)
+    if j1 <= j0 or i1 <= i0:
+        return 0.0 if j1 > j0 else 1.0
+    band = walls[i0:i1, j0:j1] if axis == 0 else walls[j0:j1, i0:i1].T
+    return float(band.any(axis=0).mean())
