@@ -17,6 +17,10 @@ statistic: W(generated, run 1) / W(run 2, run 1); target every ratio <= 1.5.
         [--traces none lidar] [--trace-params '{"wall_m": 0.045}']
         [--room-params '{"conserve": true, "scale": 0.7}']
         [--explore-at square native] [--explore-seconds 420] [--no-halves]
+        [--as-synthesize]
+
+``--as-synthesize`` measures what ``map2map synthesize`` makes by default (session 13:
+``--drift rooms --coverage explore --traces lidar --explore-at native``).
 
 Each ratio comes with the same ratio on the even- and on the odd-numbered plans alone
 (session 13): how much it moves with the plan set (``--no-halves`` leaves them out).
@@ -135,7 +139,13 @@ def main(argv=None) -> int:
     ap.add_argument("--measures", action="store_true",
                     help="also Fig. 5.14's measures (appendix error, wall recall/precision) "
                     "on every plan")
+    ap.add_argument("--as-synthesize", action="store_true",
+                    help="measure map2map synthesize's defaults: --drift rooms --coverage "
+                    "explore --traces lidar --explore-at native")
     args = ap.parse_args(argv)
+    if args.as_synthesize:
+        args.drift, args.coverage, args.traces, args.explore_at = \
+            ["rooms"], ["explore"], ["lidar"], "native"
     t0 = time.perf_counter()
     refs = simulated_references(args.data, split=args.split, n=args.plans, cache=args.cache)
     plans = refs.a
