@@ -435,8 +435,24 @@ def seen_on_square(plan: OccupancyMap, box, size: int, rng: np.random.Generator,
     """Cells an exploration of ``plan`` (at its own resolution) sees, cut and resized as
     :func:`~map2map.datasets.pair.preprocess_pair` cuts a pair with window ``box``
     (``None``: the whole map) to ``size`` px: a square pixel is seen when seen plan cells
-    cover at least ``0.5 / f`` of it (the rule that keeps thin walls). ``None`` when the
-    robot cannot explore the plan (no free space, too small).
+    cover at least ``0.5 / f`` of it (the rule that keeps thin walls).
+
+    Parameters
+    ----------
+    plan : OccupancyMap
+        The plan at its own resolution (a pair's ``A.yaml``).
+    box : (r0, r1, c0, c1) or None
+        The pair's crop window (:func:`~map2map.datasets.pair.crop_box`).
+    size : int
+        Side of the pair's squares.
+    rng : numpy.random.Generator
+        Draws the exploration's seed (:func:`~map2map.learn.coverage.explore_rng`).
+    params : ExploreParams, optional
+
+    Returns
+    -------
+    (size, size) bool or None
+        ``None`` when the robot cannot explore the plan (no free space, too small).
 
     Examples
     --------
