@@ -235,3 +235,27 @@ def test_join_supported_bridges_hough_cuts_but_not_doors():
     far[1, [0, 2]] = 24.0                                    # not collinear within tol
     assert len(join_supported(far, walls, 1.5, 16)) == 5
     assert join_supported(np.zeros((0, 4)), walls, 1.5, 16).shape == (0, 4)
+    # junction=: only the cut at the T (the horizontal segment ends on the line) joins
+    assert len(join_supported(segs, walls, 1.5, 16, junction=4)) == 4
+    alone = segs[[0, 1, 2, 3]]                              # the T's other wall gone
+    assert len(join_supported(alone, walls, 1.5, 16, junction=4)) == 4
+    assert len(join_supported(alone, walls, 1.5, 16)) == 3
+
+
+def test_anchored_walls_join_a_wall_hough_cut_at_a_t_junction(monkeypatch):
+    from map2map.learn import postprocess as P
+
+    guide = np.full((80, 80), FREE, np.uint8)
+    guide[10:70, 20:22] = OCCUPIED                         # a whole wall in the input ...
+    guide[40:42, 22:60] = OCCUPIED                         # ... with a T-junction
+    cut = np.array([[20.5, 10, 20.5, 35], [20.5, 47, 20.5, 69], [22.0, 40.5, 59, 40.5]])
+    monkeypatch.setattr(P, "straight_segments", lambda occ, cell: cut.copy())
+
+    def drawn():
+        data, _ = P._anchored(np.zeros((0, 4)), guide, 2.0, 1.0)
+        return data[34:49, 20:22]
+
+    assert P.ANCHOR_JOIN > 0                                # on by default (session 13)
+    assert np.all(drawn() == OCCUPIED)                     # drawn through the cut
+    monkeypatch.setattr(P, "ANCHOR_JOIN", 0.0)
+    assert np.any(drawn() == FREE)                         # without: a hole at the cut

@@ -760,11 +760,12 @@ ANCHOR_GROW = 0.0
 #: Largest map wall angle (degrees) the anchored faces follow (:func:`anchored_walls`).
 ANCHOR_TILT_MAX_DEG = 6.0
 #: Gaps (dataset pixels) across which collinear pieces of an input wall are joined when
-#: the input shows the wall there (:func:`~map2map.maps.segments.join_supported`; 0:
-#: off). Session 13: Hough cuts the demo's walls at T-junctions, drawn as dashes; 16
-#: joins them, and on gen1500 val it improved 97 of 101 maps (96 without), but on test 91
-#: of 99 (95 without), so it is off (docs/learn.md, "Joining walls Hough cut").
-ANCHOR_JOIN = 0.0
+#: the input shows the wall there and a perpendicular wall ends in the gap (a T-junction,
+#: where the Hough transform cuts a wall; :func:`~map2map.maps.segments.join_supported`;
+#: 0: off). Session 13: gen1500 val 96 -> 97 of 101 maps improved, test 95 -> 95 of 99
+#: (without the T-junction condition: test 91, not kept); docs/learn.md, "Joining walls
+#: Hough cut".
+ANCHOR_JOIN = 16.0
 #: Free components of the input smaller than this (dataset pixels squared) are unknown.
 ANCHOR_SPECK = 30.0
 #: With ``open_frontiers``: a network wall with more than this share of its length
@@ -939,7 +940,7 @@ def _anchored(output_segs: np.ndarray, guide: np.ndarray, wall_px: float, data_p
     own = straight_segments(occ, ANCHOR_CELL * data_px)
     if ANCHOR_JOIN > 0:
         own = join_supported(own, occ, max(1.5, ANCHOR_CELL * data_px / 4),
-                             ANCHOR_JOIN * data_px)
+                             ANCHOR_JOIN * data_px, junction=ANCHOR_CELL * data_px)
     segs = own
     backing = None
     if len(output_segs):

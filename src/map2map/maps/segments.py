@@ -122,7 +122,7 @@ def _join(h: np.ndarray, v: np.ndarray, reach: float) -> tuple[np.ndarray, np.nd
 
 
 def join_supported(segs: np.ndarray, walls: np.ndarray, tol: float, max_gap: float,
-                   min_cover: float = 0.8) -> np.ndarray:
+                   min_cover: float = 0.8, junction: float | None = None) -> np.ndarray:
     """Join collinear axis-aligned segments across a gap the wall mask fills.
 
     :func:`straight_segments` merges collinear pieces only across gaps shorter than a
@@ -132,7 +132,9 @@ def join_supported(segs: np.ndarray, walls: np.ndarray, tol: float, max_gap: flo
     when ``walls`` holds a pixel within ``tol`` of the line at ``min_cover`` of the
     gap's positions or more (the input shows a wall there: not a door). The joined
     segment lies at the pieces' length-weighted mean coordinate. Other segments are
-    returned as they are (axis-aligned first, then the rest).
+    returned as they are (axis-aligned first, then the rest). With ``junction``, only
+    gaps where a perpendicular segment ends (within ``junction`` pixels of the line) are
+    joined: the T-junctions at which the Hough transform cuts a wall.
 
     Parameters
     ----------
@@ -142,6 +144,7 @@ def join_supported(segs: np.ndarray, walls: np.ndarray, tol: float, max_gap: flo
     tol : float
     max_gap : float
     min_cover : float
+    junction : float, optional
 
     Returns
     -------
@@ -164,6 +167,10 @@ def join_supported(segs: np.ndarray, walls: np.ndarray, tol: float, max_gap: flo
     out = []
     for axis, sel in ((0, horiz & ~vert), (1, vert & ~horiz)):
         a = segs[sel]
+        # the ends of the perpendicular segments: (across, along) in this axis's terms
+        p = segs[vert & ~horiz] if axis == 0 else segs[horiz & ~vert]
+        ends = np.concatenate([p[:, [0, 1]], p[:, [2, 3]]]) if axis == 0 else \
+            np.concatenate([p[:, [1, 0]], p[:, [3, 2]]])
         if len(a) < 2:
             out.append(a)
             continue
@@ -176,6 +183,7 @@ def join_supported(segs: np.ndarray, walls: np.ndarray, tol: float, max_gap: flo
         for i in order:                      # one pass over the segments, not pixels
             if cur is not None and abs(c[i] - cur[0]) <= tol and \
                     0 < lo[i] - cur[2] <= max_gap and \
+                    (junction is None or _junction(ends, cur[0], cur[2], lo[i], junction)) and \
                     _covered(walls, axis, cur[0], c[i], cur[2], lo[i], tol) >= min_cover:
                 w0, w1 = max(cur[2] - cur[1], 1.0), max(hi[i] - lo[i], 1.0)
                 cur = [(cur[0] * w0 + c[i] * w1) / (w0 + w1), cur[1], max(cur[2], hi[i])]
@@ -189,6 +197,17 @@ def join_supported(segs: np.ndarray, walls: np.ndarray, tol: float, max_gap: flo
                             [m[:, 0], m[:, 1], m[:, 0], m[:, 2]], axis=1))
     out.append(segs[~(horiz ^ vert)])
     return np.concatenate(out).reshape(-1, 4)
+
+
+def _junction(ends: np.ndarray, c: float, g0: float, g1: float, reach: float) -> bool:
+    """Whether a perpendicular segment ends within ``reach`` of the line at ``c`` (its
+    ``y`` for a horizontal line) between ``g0`` and ``g1`` along it: ``ends`` rows
+    ``(along, across)`` = ``(x, y)`` of vertical segments' ends for a horizontal line."""
+    if len(ends) == 0:
+        return False
+    along, across = ends[:, 0], ends[:, 1]
+    return bool(np.any((np.abs(across - c) <= reach) & (along >= g0 - reach)
+                       & (along <= g1 + reach)))
 
 
 def _covered(walls, axis, c0, c1, g0, g1, tol) -> float:
