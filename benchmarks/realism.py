@@ -133,7 +133,7 @@ def main(argv=None) -> int:
                     "thickened, so doors can close) or each plan at its own resolution "
                     "(native: what map2map synthesize does; realism.native_seen)")
     ap.add_argument("--explore-seconds", type=float, default=None,
-                    help="the exploration's simulated seconds (default ExploreParams': 420)")
+                    help="the exploration's simulated seconds (default ExploreParams': 275)")
     ap.add_argument("--no-halves", action="store_true",
                     help="leave out each ratio on the even- and odd-numbered plans alone")
     ap.add_argument("--measures", action="store_true",

@@ -339,6 +339,7 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
     net = load_ab_model(model)
     plans = np.stack([m[2] for m in made])
     seen = None
+    unexplored = []
     if explore_at == "native" and coverage == "explore":
         from .coverage import explore_rng
         from .realism import seen_on_square
@@ -346,7 +347,9 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
         seen = np.ones(plans.shape, bool)           # a plan not explored: nothing hidden
         for j, m in enumerate(made):
             sq = seen_on_square(m[6], m[7], plans.shape[-1], explore_rng(seed, j))
-            if sq is not None:
+            if sq is None:
+                unexplored.append(m[0])
+            else:
                 seen[j] = sq
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -358,6 +361,9 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
     warns = []
     if "PROVISIONAL" in str(net.header.get("note", "")):
         warns.append("Model_AB weights are provisional (their note says so)")
+    if unexplored:
+        warns.append(f"the robot could not explore {len(unexplored)} plan(s) "
+                     f"({', '.join(unexplored[:4])}): Model_AB's map there hides nothing")
     warns += sorted({str(w.message) for w in caught})
     maps = {"simulated": np.stack([m[3] for m in made]),
             "parametric": np.stack([m[4] for m in made]), "model_ab": gen}

@@ -128,7 +128,8 @@ def join_supported(segs: np.ndarray, walls: np.ndarray, tol: float, max_gap: flo
     :func:`straight_segments` merges collinear pieces only across gaps shorter than a
     model cell; the Hough transform also cuts a continuous wall at T-junctions and
     where its thinned centre line wobbles. Two consecutive segments of one line (fixed
-    coordinates within ``tol``) whose gap is at most ``max_gap`` pixels long become one
+    coordinates within ``tol`` and in the same ``tol``-wide bin of that coordinate, the
+    order they are scanned in) whose gap is at most ``max_gap`` pixels long become one
     when ``walls`` holds a pixel within ``tol`` of the line at ``min_cover`` of the
     gap's positions or more (the input shows a wall there: not a door). The joined
     segment lies at the pieces' length-weighted mean coordinate. Other segments are
@@ -167,13 +168,13 @@ def join_supported(segs: np.ndarray, walls: np.ndarray, tol: float, max_gap: flo
     out = []
     for axis, sel in ((0, horiz & ~vert), (1, vert & ~horiz)):
         a = segs[sel]
-        # the ends of the perpendicular segments: (across, along) in this axis's terms
-        p = segs[vert & ~horiz] if axis == 0 else segs[horiz & ~vert]
-        ends = np.concatenate([p[:, [0, 1]], p[:, [2, 3]]]) if axis == 0 else \
-            np.concatenate([p[:, [1, 0]], p[:, [3, 2]]])
         if len(a) < 2:
             out.append(a)
             continue
+        # the ends of the perpendicular segments as rows (along, across) of this axis
+        p = segs[vert & ~horiz] if axis == 0 else segs[horiz & ~vert]
+        ends = np.concatenate([p[:, [0, 1]], p[:, [2, 3]]]) if axis == 0 else \
+            np.concatenate([p[:, [1, 0]], p[:, [3, 2]]])
         c = a[:, 1] if axis == 0 else a[:, 0]
         lo = np.minimum(a[:, 0], a[:, 2]) if axis == 0 else np.minimum(a[:, 1], a[:, 3])
         hi = np.maximum(a[:, 0], a[:, 2]) if axis == 0 else np.maximum(a[:, 1], a[:, 3])
