@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import signal
+import warnings
 
 import numpy as np
 import pytest
@@ -460,10 +461,10 @@ def _plan_drawer(net):
 
 
 def thicken_input(square, net):
+    from map2map.learn.synthesize import dataset_thicken
     from map2map.maps.preprocess import square_resize, thicken
 
-    k = int(net.header.get("dataset", {}).get("thicken", 0) or 0)
-    return thicken(square_resize(square, net.data_size), k)
+    return thicken(square_resize(square, net.data_size), dataset_thicken(net.header))
 
 
 @pytest.mark.filterwarnings("ignore::UserWarning")
@@ -676,3 +677,37 @@ def test_decoder_growth_trains_feeds_full_size_inputs_and_loads(monkeypatch, tmp
     assert net.generator.growth == "decoder" and net.resolution == 16
     out = synthesize_squares(net, _pairs().a[:3])
     assert out.shape == (3, 16, 16) and set(np.unique(out)) <= {OCCUPIED, UNKNOWN, FREE}
+
+
+@pytest.mark.parametrize("header", [{"dataset": {"thicken": 1}},
+                                    {"dataset": {"identity": {"params": {"thicken": 1}}}}])
+def test_synthesize_thickens_the_plan_as_the_training_dataset_did(header):
+    """A dataset build records ``thicken`` under ``identity.params`` (packed pairs too):
+    the shipped weights' header. synthesize read only ``dataset.thicken`` and fed those
+    models plans 1 px thinner a side than they were trained on (fixed session 14)."""
+    from map2map.core.grid import OccupancyMap
+    from map2map.learn.synthesize import ABModel, synthesize
+
+    S = 64
+    data = np.full((S, S), UNKNOWN, np.uint8)
+    data[4:60, 4:60] = OCCUPIED
+    data[6:58, 6:30] = data[6:58, 32:58] = FREE          # a 2 px dividing wall
+    plan = OccupancyMap(data, resolution=0.05)
+    net = ABModel(StochasticUNet(size=16, channels=8, min_size=8), resolution=16,
+                  alpha=1.0, data_size=S, header={"target_wall_px": 2.0, **header},
+                  source="test")
+    seen = []
+
+    def sample(inp, samples=1, seed=0):
+        seen.append(np.asarray(inp).copy())
+        return np.full((samples, 16, 16), 255.0, np.float32)
+
+    net.sample = sample
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        synthesize(plan, net, samples=1, drift="none", **OLD)
+    (inp,) = seen
+    row = inp[inp.shape[0] // 2]
+    walls = np.flatnonzero(row == OCCUPIED)
+    mid = walls[(walls > 10) & (walls < 54)]
+    assert len(mid) == 4                              # the 2 px wall, 1 px more a side

@@ -116,7 +116,7 @@ from .slam_render import (
 
 __all__ = ["ABModel", "SynthesisResult", "load_ab_model", "pretrained_ab_path",
            "synthesize", "synthesize_squares", "snap", "pairwise_disagreement", "export_ab_model",
-           "save_synthesis_figure"]
+           "save_synthesis_figure", "dataset_thicken"]
 
 PRETRAINED = "model_ab.safetensors"
 FORMAT_AB = "map2map-model-ab"
@@ -239,6 +239,25 @@ class SynthesisResult:
                 "warnings": self.warnings}
 
 
+def dataset_thicken(header: dict) -> int:
+    """Pixels the training plans' walls were thickened by (:func:`~map2map.maps.preprocess.
+    thicken`), from a model header: ``dataset.thicken`` (synthetic pairs) or the dataset
+    build's ``dataset.identity.params.thicken``; 0 when neither is there.
+
+    Examples
+    --------
+    >>> dataset_thicken({"dataset": {"identity": {"params": {"thicken": 1}}}})
+    1
+    >>> dataset_thicken({"dataset": {"thicken": 2}}), dataset_thicken({})
+    (2, 0)
+    """
+    ds = header.get("dataset") or {}
+    k = ds.get("thicken")
+    if k is None:
+        k = ((ds.get("identity") or {}).get("params") or {}).get("thicken")
+    return int(k or 0)
+
+
 def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "pretrained",
                *, samples: int = 4, seed: int = 0, device: str = "cpu",
                render: str = "slam", drift: str | DriftParams = "rooms",
@@ -307,7 +326,7 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     if sq is None:
         raise InputError(None, "the plan holds no known cells; nothing to synthesize")
     square, row0, col0, side = sq
-    k_thick = int(net.header.get("dataset", {}).get("thicken", 0) or 0)
+    k_thick = dataset_thicken(net.header)
     inp = thicken(square_resize(square, net.data_size), k_thick)
     grey = net.sample(inp, samples, seed)
     wall_px = net.wall_px * side / net.data_size
