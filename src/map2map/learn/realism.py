@@ -58,6 +58,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -85,6 +86,8 @@ STAT_INFO = {
 }
 #: Issue #15's target for every statistic's Wasserstein ratio.
 TARGET_RATIO = 1.5
+#: :func:`simulated_references` rewrites its cache at most this often (seconds).
+SAVE_EVERY_S = 60.0
 
 
 def map_stats(m: np.ndarray, plan: np.ndarray) -> dict[str, float]:
@@ -410,13 +413,17 @@ def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int |
         from tqdm.auto import tqdm
 
         bar = tqdm(total=len(todo), desc=f"simulating run {run}", unit="plan")
-    for i in todo:
+    last = time.monotonic()
+    for k, i in enumerate(todo):
         rr = rerun_pair(ds, i, run)
         have[i] = {"sim2": rr.b_n, "parametric": parametric_on_run(rr),
                    "meta": {k: rr.meta.get(k) for k in ("sim_seed", "coverage", "ate_rmse_m",
                                                           "path_length_m", "stop_reason",
                                                           "wall_error_m", "plan_id")}}
-        save()
+        # the whole cache is rewritten each time: every minute, not every plan
+        if time.monotonic() - last > SAVE_EVERY_S or k == len(todo) - 1:
+            save()
+            last = time.monotonic()
         if bar is not None:
             bar.update(1)
     if bar is not None:
