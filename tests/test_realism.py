@@ -265,3 +265,28 @@ def test_realism_table_halves_are_the_ratio_on_every_other_plan():
     text = format_realism_table(rows, "g")
     assert "even / odd" in text.splitlines()[0] and " / " in text.splitlines()[1]
     assert "even / odd" not in format_realism_table(plain, "g")
+
+
+def test_benchmark_third_run_is_measured_as_a_generator(tiny_dataset, tmp_path, capsys):
+    """benchmarks/realism.py --third-run: a third simulation of every plan, measured like a
+    generator (the benchmark's noise floor), cached in its own file."""
+    import importlib.util
+    from pathlib import Path
+
+    from map2map.datasets.build import open_dataset
+
+    with open_dataset(tiny_dataset) as man:
+        split = man.rows("done")[0]["split"]
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "realism.py"
+    spec = importlib.util.spec_from_file_location("bench_realism", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    c2, c3 = tmp_path / "refs2.npz", tmp_path / "refs3.npz"
+    assert mod.main(["--data", str(tiny_dataset), "--split", split, "--plans", "1",
+                     "--cache", str(c2), "--third-run", str(c3), "--model"]) == 0
+    out = capsys.readouterr().out
+    assert "statistic simulated run 3" in out and c3.is_file()
+    run2 = simulated_references(tiny_dataset, split=split, n=1, cache=c2, progress=False)
+    run3 = simulated_references(tiny_dataset, split=split, n=1, cache=c3, run=3,
+                                progress=False)
+    assert run3.meta[0]["sim_seed"] != run2.meta[0]["sim_seed"]
