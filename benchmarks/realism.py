@@ -157,14 +157,16 @@ def main(argv=None) -> int:
             ["rooms"], ["explore"], ["lidar"], "native"
     t0 = time.perf_counter()
     refs = simulated_references(args.data, split=args.split, n=args.plans, cache=args.cache)
-    plans = refs.a
-    st1, st2 = stats_of(refs.sim1, plans), stats_of(refs.sim2, plans)
-    gens = {"parametric": refs.parametric}
+    run3 = None
     if args.third_run:
         run3 = simulated_references(args.data, split=args.split, n=args.plans,
                                     cache=args.third_run, run=3)
-        if not np.array_equal(run3.indices, refs.indices):
-            ap.error("--third-run: its plans differ from the second runs'")
+        both = np.intersect1d(refs.indices, run3.indices)
+        refs, run3 = refs.only(both), run3.only(both)   # plans whose runs 2 and 3 both ran
+    plans = refs.a
+    st1, st2 = stats_of(refs.sim1, plans), stats_of(refs.sim2, plans)
+    gens = {"parametric": refs.parametric}
+    if run3 is not None:
         gens["simulated run 3"] = run3.sim2
     div: dict = {}
     if args.model:

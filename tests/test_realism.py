@@ -290,3 +290,33 @@ def test_benchmark_third_run_is_measured_as_a_generator(tiny_dataset, tmp_path, 
     run3 = simulated_references(tiny_dataset, split=split, n=1, cache=c3, run=3,
                                 progress=False)
     assert run3.meta[0]["sim_seed"] != run2.meta[0]["sim_seed"]
+
+
+def test_a_failed_second_run_leaves_its_plan_out_and_is_cached(tiny_dataset, tmp_path,
+                                                               monkeypatch):
+    """A second simulation can fail where the first ran (a gen6400 test plan's robot
+    could not move with run 2's seed): the plan is left out with a warning, not the
+    whole benchmark, and the failure is not simulated again."""
+    import map2map.datasets.rerun as R
+    from map2map.core.errors import InputError
+    from map2map.datasets.build import open_dataset
+
+    with open_dataset(tiny_dataset) as man:
+        split = man.rows("done")[0]["split"]
+    cache = tmp_path / "refs.npz"
+    good = simulated_references(tiny_dataset, split=split, n=1, cache=tmp_path / "ok.npz",
+                                progress=False)
+    assert len(good.only([]).indices) == 0
+    assert np.array_equal(good.only(good.indices).sim2, good.sim2)
+
+    def stuck(ds, index, run=2, **kw):
+        raise InputError(None, "the robot could not move (drove 0.00 m)")
+
+    monkeypatch.setattr(R, "rerun_pair", stuck)
+    with pytest.warns(UserWarning, match="could not move"), \
+            pytest.raises(InputError, match="no .* plan has a simulated run 2"):
+        simulated_references(tiny_dataset, split=split, n=1, cache=cache, progress=False)
+    monkeypatch.setattr(R, "rerun_pair", lambda *a, **k: pytest.fail("simulated again"))
+    with pytest.warns(UserWarning, match="1 of 1 plans left out"), \
+            pytest.raises(InputError):
+        simulated_references(tiny_dataset, split=split, n=1, cache=cache, progress=False)

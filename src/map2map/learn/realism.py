@@ -331,6 +331,15 @@ class References:
     meta: list
     resolution: np.ndarray | None = None
 
+    def only(self, indices) -> References:
+        """The same references for those of ``indices`` (pair indices) they hold, in
+        their order (e.g. the plans two :func:`simulated_references` calls share)."""
+        keep = np.flatnonzero(np.isin(self.indices, np.asarray(indices, int)))
+        return References(self.indices[keep], [self.plan_ids[k] for k in keep],
+                          self.a[keep], self.sim1[keep], self.sim2[keep],
+                          self.parametric[keep], [self.meta[k] for k in keep],
+                          None if self.resolution is None else self.resolution[keep])
+
 
 def split_indices(ds: str | os.PathLike, split: str = "test") -> list[int]:
     """Indices of the simulated pairs of ``split`` in dataset ``ds``, sorted."""
@@ -369,16 +378,21 @@ def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int |
     run : int
         Run number of the second simulation (:func:`~map2map.datasets.pair.rerun_seed`).
     cache : path, optional
-        An ``.npz`` kept between calls (written atomically after every plan): plans
-        already there are not simulated again. Tied to the dataset's folder and ``run``.
+        An ``.npz`` kept between calls (written atomically at most every
+        :data:`SAVE_EVERY_S` seconds and at the end): plans already there are not
+        simulated again. Tied to the dataset's folder and ``run``.
     progress : bool
         tqdm bar over the plans.
 
     Returns
     -------
     References
+        Without the plans whose second simulation failed (e.g. a robot that cannot move
+        from its start with that seed), with a warning naming them; the failures are
+        cached too.
     """
     from ..core._io import atomic_path
+    from ..core.errors import InputError
     from ..datasets.build import pair_dir
     from ..datasets.rerun import parametric_on_run, rerun_pair
 
@@ -387,6 +401,7 @@ def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int |
     if n is not None:
         idx = idx[:n]
     have: dict[int, dict] = {}
+    failed: dict[int, str] = {}
     key = {"dataset": str(ds.resolve()), "run": int(run), "version": 1}
     if cache is not None and Path(cache).is_file():
         with np.load(cache, allow_pickle=False) as z:
@@ -394,20 +409,26 @@ def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int |
                 for j, i in enumerate(z["indices"]):
                     have[int(i)] = {k: z[k][j] for k in ("sim2", "parametric")}
                     have[int(i)]["meta"] = json.loads(str(z["meta"][j]))
+                if "failed" in z.files:
+                    failed = {int(k): v for k, v in json.loads(str(z["failed"])).items()}
 
     def save():
-        if cache is None:
+        if cache is None or not (have or failed):
             return
         ks = sorted(have)
+        shape = (0,) + tuple(np.shape(next(iter(have.values()))["sim2"]) if have else (0, 0))
         with atomic_path(cache) as tmp:
             with open(tmp, "wb") as fh:
                 np.savez_compressed(
                     fh, key=json.dumps(key), indices=np.array(ks, int),
-                    sim2=np.stack([have[i]["sim2"] for i in ks]),
-                    parametric=np.stack([have[i]["parametric"] for i in ks]),
-                    meta=np.array([json.dumps(have[i]["meta"]) for i in ks]))
+                    sim2=np.stack([have[i]["sim2"] for i in ks]) if ks else
+                    np.zeros(shape, np.uint8),
+                    parametric=np.stack([have[i]["parametric"] for i in ks]) if ks else
+                    np.zeros(shape, np.uint8),
+                    meta=np.array([json.dumps(have[i]["meta"]) for i in ks]),
+                    failed=json.dumps({str(k): v for k, v in failed.items()}))
 
-    todo = [i for i in idx if i not in have]
+    todo = [i for i in idx if i not in have and i not in failed]
     bar = None
     if progress and todo:
         from tqdm.auto import tqdm
@@ -415,11 +436,16 @@ def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int |
         bar = tqdm(total=len(todo), desc=f"simulating run {run}", unit="plan")
     last = time.monotonic()
     for k, i in enumerate(todo):
-        rr = rerun_pair(ds, i, run)
-        have[i] = {"sim2": rr.b_n, "parametric": parametric_on_run(rr),
-                   "meta": {k: rr.meta.get(k) for k in ("sim_seed", "coverage", "ate_rmse_m",
-                                                          "path_length_m", "stop_reason",
-                                                          "wall_error_m", "plan_id")}}
+        try:
+            rr = rerun_pair(ds, i, run)
+        except InputError as exc:
+            failed[i] = exc.problem
+            rr = None
+        if rr is not None:
+            have[i] = {"sim2": rr.b_n, "parametric": parametric_on_run(rr),
+                       "meta": {k: rr.meta.get(k) for k in (
+                           "sim_seed", "coverage", "ate_rmse_m", "path_length_m",
+                           "stop_reason", "wall_error_m", "plan_id")}}
         # the whole cache is rewritten each time: every minute, not every plan
         if time.monotonic() - last > SAVE_EVERY_S or k == len(todo) - 1:
             save()
@@ -428,6 +454,16 @@ def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int |
             bar.update(1)
     if bar is not None:
         bar.close()
+    gone = [i for i in idx if i in failed]
+    if gone:
+        import warnings
+
+        warnings.warn(f"{len(gone)} of {len(idx)} plans left out: their run {run} failed ("
+                      + "; ".join(f"pair {i}: {failed[i]}" for i in gone[:5])
+                      + ("; ..." if len(gone) > 5 else "") + ")", stacklevel=2)
+        idx = [i for i in idx if i not in failed]
+    if not idx:
+        raise InputError(ds, f"no {split!r} plan has a simulated run {run}")
     a = np.stack([_read_png(pair_dir(ds, i) / "A.png") for i in idx])
     sim1 = np.stack([_read_png(pair_dir(ds, i) / "B.png") for i in idx])
     return References(np.array(idx, int), [have[i]["meta"]["plan_id"] for i in idx], a, sim1,
