@@ -25,7 +25,8 @@ statistic: W(generated, run 1) / W(run 2, run 1); target every ratio <= 1.5.
 ``--third-run CACHE`` (session 14) adds a third simulation + SLAM of every plan (seed of
 run 3) as one more generator: W(run 3, run 1) / W(run 2, run 1) is what a generator as
 good as the simulator itself scores on these plans, so a ratio above 1.5 there says how
-far the 1.5 target is below this benchmark's noise at this many plans.
+far the 1.5 target is below this benchmark's noise at this many plans. With a Model_AB
+generator, a last table sets each of its ratios beside run 3's.
 
 Each ratio comes with the same ratio on the even- and on the odd-numbered plans alone
 (session 13): how much it moves with the plan set (``--no-halves`` leaves them out).
@@ -252,6 +253,8 @@ def main(argv=None) -> int:
         print()
         print(format_realism_table(rows, name))
         out_rows += [{"generator": name, **r.as_dict()} for r in rows]
+    if run3 is not None and len(gens) > 2:
+        _against_floor(out_rows)
     if div:
         print(f"\ndiversity: mean pairwise disagreement of {args.diversity} hypotheses "
               f"(share of the plan's known pixels), mean (min, max) over {len(plans)} plans")
@@ -266,6 +269,22 @@ def main(argv=None) -> int:
             w.writerows(out_rows)
     print(f"\n{time.perf_counter() - t0:.0f} s")
     return 0
+
+
+def _against_floor(rows: list) -> None:
+    """Every generator's ratio beside the third simulated run's (the floor), per statistic."""
+    gens = list(dict.fromkeys(r["generator"] for r in rows))
+    ratio = {(r["generator"], r["statistic"]): r["ratio"] for r in rows}
+    stats = list(dict.fromkeys(r["statistic"] for r in rows))
+    others = [g for g in gens if g not in ("simulated run 3", "parametric")]
+    print("\nagainst the floor: each ratio beside a third simulated run's on the same plans")
+    print(f"{'statistic':>11} {'run 3':>7} " + " ".join(f"{g[:28]:>28}" for g in others))
+    for st in stats:
+        print(f"{st:>11} {ratio['simulated run 3', st]:>7.2f} "
+              + " ".join(f"{ratio[g, st]:>28.2f}" for g in others))
+    worst = {g: max(ratio[g, st] for st in stats) for g in ["simulated run 3"] + others}
+    print(f"{'worst':>11} {worst['simulated run 3']:>7.2f} "
+          + " ".join(f"{worst[g]:>28.2f}" for g in others))
 
 
 def _diversity(net, plans, resolution, k, seed, render, drift, method, scale,

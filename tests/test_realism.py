@@ -290,6 +290,16 @@ def test_benchmark_third_run_is_measured_as_a_generator(tiny_dataset, tmp_path, 
     run3 = simulated_references(tiny_dataset, split=split, n=1, cache=c3, run=3,
                                 progress=False)
     assert run3.meta[0]["sim_seed"] != run2.meta[0]["sim_seed"]
+    # with a Model_AB generator: its ratios beside run 3's, per statistic and worst
+    rows = [{"generator": g, "statistic": st, "ratio": r}
+            for g, rs in (("parametric", (9.0, 9.0)), ("simulated run 3", (1.2, 0.8)),
+                          ("Model_AB [x]", (3.0, 2.5)))
+            for st, r in zip(("wall_err", "bend"), rs, strict=True)]
+    mod._against_floor(rows)
+    out = capsys.readouterr().out.splitlines()
+    assert "Model_AB [x]" in out[2] and "parametric" not in out[2]
+    assert out[3].split() == ["wall_err", "1.20", "3.00"]
+    assert out[-1].split() == ["worst", "1.20", "3.00"]
 
 
 def test_a_failed_second_run_leaves_its_plan_out_and_is_cached(tiny_dataset, tmp_path,
