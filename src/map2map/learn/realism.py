@@ -419,15 +419,13 @@ def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int |
         if cache is None or not (have or failed):
             return
         ks = sorted(have)
-        shape = (0,) + tuple(np.shape(next(iter(have.values()))["sim2"]) if have else (0, 0))
         with atomic_path(cache) as tmp:
             with open(tmp, "wb") as fh:
+                # np.array, not np.stack: a cache of failures only holds no map at all
                 np.savez_compressed(
                     fh, key=json.dumps(key), indices=np.array(ks, int),
-                    sim2=np.stack([have[i]["sim2"] for i in ks]) if ks else
-                    np.zeros(shape, np.uint8),
-                    parametric=np.stack([have[i]["parametric"] for i in ks]) if ks else
-                    np.zeros(shape, np.uint8),
+                    sim2=np.array([have[i]["sim2"] for i in ks], np.uint8),
+                    parametric=np.array([have[i]["parametric"] for i in ks], np.uint8),
                     meta=np.array([json.dumps(have[i]["meta"]) for i in ks]),
                     failed=json.dumps({str(k): v for k, v in failed.items()}))
 
@@ -438,7 +436,7 @@ def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int |
 
         bar = tqdm(total=len(todo), desc=f"simulating run {run}", unit="plan")
     last = time.monotonic()
-    for k, i in enumerate(todo):
+    for done, i in enumerate(todo, 1):
         try:
             rr = rerun_pair(ds, i, run)
         except InputError as exc:
@@ -450,7 +448,7 @@ def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int |
                            "sim_seed", "coverage", "ate_rmse_m", "path_length_m",
                            "stop_reason", "wall_error_m", "plan_id")}}
         # the whole cache is rewritten each time: every minute, not every plan
-        if time.monotonic() - last > SAVE_EVERY_S or k == len(todo) - 1:
+        if time.monotonic() - last > SAVE_EVERY_S or done == len(todo):
             save()
             last = time.monotonic()
         if bar is not None:
