@@ -25,8 +25,13 @@ statistic: W(generated, run 1) / W(run 2, run 1); target every ratio <= 1.5.
 ``--third-run CACHE`` (session 14) adds a third simulation + SLAM of every plan (seed of
 run 3) as one more generator: W(run 3, run 1) / W(run 2, run 1) is what a generator as
 good as the simulator itself scores on these plans, so a ratio above 1.5 there says how
-far the 1.5 target is below this benchmark's noise at this many plans. With a Model_AB
-generator, a last table sets each of its ratios beside run 3's.
+far the 1.5 target is below this benchmark's noise at this many plans. With three runs
+a plan, the benchmark also draws what a perfect generator scores
+(:func:`map2map.learn.realism.null_ratios`, session 15: per plan, the three runs' roles --
+generated, run 1, run 2 -- shuffled, ``--null-draws`` times): each ratio's quantiles and
+the chance that every ratio is <= 1.5. With a Model_AB generator, a last table sets each
+of its ratios beside run 3's, with the share of perfect-generator draws that score
+lower (100 %: no perfect generator scores that badly).
 
 Each ratio comes with the same ratio on the even- and on the odd-numbered plans alone
 (session 13): how much it moves with the plan set (``--no-halves`` leaves them out).
@@ -84,7 +89,9 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
 from map2map.learn.realism import (  # noqa: E402
+    format_null,
     format_realism_table,
+    null_ratios,
     realism_table,
     simulated_references,
     stats_of,
@@ -149,6 +156,9 @@ def main(argv=None) -> int:
                     help="also measure a third simulated run of every plan (another seed; "
                     "second runs' cache format, kept in CACHE) as a generator: the ratio a "
                     "perfect generator gets on these plans, the benchmark's noise floor")
+    ap.add_argument("--null-draws", type=int, default=2000,
+                    help="with --third-run: random relabellings of the three simulated runs "
+                    "drawn for the perfect generator's ratios (default 2000)")
     ap.add_argument("--as-synthesize", action="store_true",
                     help="measure map2map synthesize's defaults: --drift rooms --coverage "
                     "explore --traces lidar --explore-at native")
@@ -167,8 +177,10 @@ def main(argv=None) -> int:
     plans = refs.a
     st1, st2 = stats_of(refs.sim1, plans), stats_of(refs.sim2, plans)
     gens = {"parametric": refs.parametric}
+    known: dict = {}  # statistics already computed, by generator
     if run3 is not None:
         gens["simulated run 3"] = run3.sim2
+        known["simulated run 3"] = stats_of(run3.sim2, plans)
     div: dict = {}
     if args.model:
         import json
@@ -248,13 +260,21 @@ def main(argv=None) -> int:
              if not args.no_halves else ""))
     out_rows = []
     for name, maps in gens.items():
-        rows = realism_table(stats_of(maps, plans), st1, st2, plans,
-                             halves=not args.no_halves)
+        st = known[name] if name in known else stats_of(maps, plans)
+        rows = realism_table(st, st1, st2, plans, halves=not args.no_halves)
         print()
         print(format_realism_table(rows, name))
         out_rows += [{"generator": name, **r.as_dict()} for r in rows]
-    if run3 is not None and len(gens) > 2:
-        _against_floor(out_rows)
+    if run3 is not None:
+        t1 = time.perf_counter()
+        null = null_ratios([st1, st2, known["simulated run 3"]], draws=args.null_draws)
+        print(f"\na perfect generator on these {len(plans)} plans: each ratio's quantiles over "
+              f"{args.null_draws} draws, per plan the three simulated runs' roles (generated, "
+              f"run 1, run 2) shuffled ({time.perf_counter() - t1:.0f} s); P: the share of "
+              "draws that meet the target")
+        print(format_null(null))
+        if len(gens) > 2:
+            _against_floor(out_rows, null)
     if div:
         print(f"\ndiversity: mean pairwise disagreement of {args.diversity} hypotheses "
               f"(share of the plan's known pixels), mean (min, max) over {len(plans)} plans")
@@ -271,20 +291,29 @@ def main(argv=None) -> int:
     return 0
 
 
-def _against_floor(rows: list) -> None:
-    """Every generator's ratio beside the third simulated run's (the floor), per statistic."""
+def _against_floor(rows: list, null=None) -> None:
+    """Every generator's ratio beside the third simulated run's (the floor), per statistic;
+    with ``null`` (:class:`~map2map.learn.realism.NullRatios`), each ratio's rank among a
+    perfect generator's draws in brackets."""
     gens = list(dict.fromkeys(r["generator"] for r in rows))
     ratio = {(r["generator"], r["statistic"]): r["ratio"] for r in rows}
     stats = list(dict.fromkeys(r["statistic"] for r in rows))
     others = [g for g in gens if g not in ("simulated run 3", "parametric")]
-    print("\nagainst the floor: each ratio beside a third simulated run's on the same plans")
-    print(f"{'statistic':>11} {'run 3':>7} " + " ".join(f"{g[:28]:>28}" for g in others))
+
+    def cell(v: float, st: str, w: int) -> str:
+        text = f"{v:.2f}" + ("" if null is None else f" ({null.rank(st, v):.1%})")
+        return f"{text:>{w}}"
+
+    print("\nagainst the floor: each ratio beside a third simulated run's on the same plans"
+          + ("; in brackets the share of a perfect generator's draws scoring lower"
+             if null is not None else ""))
+    print(f"{'statistic':>11} {'run 3':>16} " + " ".join(f"{g[:28]:>28}" for g in others))
     for st in stats:
-        print(f"{st:>11} {ratio['simulated run 3', st]:>7.2f} "
-              + " ".join(f"{ratio[g, st]:>28.2f}" for g in others))
+        print(f"{st:>11} {cell(ratio['simulated run 3', st], st, 16)} "
+              + " ".join(cell(ratio[g, st], st, 28) for g in others))
     worst = {g: max(ratio[g, st] for st in stats) for g in ["simulated run 3"] + others}
-    print(f"{'worst':>11} {worst['simulated run 3']:>7.2f} "
-          + " ".join(f"{worst[g]:>28.2f}" for g in others))
+    print(f"{'worst':>11} {cell(worst['simulated run 3'], 'worst', 16)} "
+          + " ".join(cell(worst[g], "worst", 28) for g in others))
 
 
 def _diversity(net, plans, resolution, k, seed, render, drift, method, scale,

@@ -14,8 +14,12 @@ from map2map.datasets.pair import BuildParams, read_pair_meta
 from map2map.datasets.rerun import rerun_pair
 from map2map.learn.realism import (
     STATS,
+    TARGET_RATIO,
+    NullRatios,
+    format_null,
     format_realism_table,
     map_stats,
+    null_ratios,
     realism_table,
     simulated_references,
 )
@@ -267,6 +271,37 @@ def test_realism_table_halves_are_the_ratio_on_every_other_plan():
     assert "even / odd" not in format_realism_table(plain, "g")
 
 
+def test_null_ratios_are_a_perfect_generators_scatter_and_flag_a_shifted_one():
+    """null_ratios: per plan, three exchangeable runs' roles shuffled. Its draws centre on
+    1 (the runs are alike) yet scatter widely (a ratio of two sample distances), the
+    same seed gives the same draws, and a generator shifted by a tenth of a run's spread
+    ranks above every draw."""
+    rng = np.random.default_rng(3)
+    n = 300
+    plan_effect = {s: rng.normal(0, 1, n) for s in STATS}  # plans differ; runs of a plan less
+    runs = [{s: plan_effect[s] + rng.normal(0, 0.3, n) for s in STATS} for _ in range(3)]
+    null = null_ratios(runs, draws=300, seed=1)
+    assert null.ratios.shape == (300, len(STATS)) and (null.runs, null.plans) == (3, n)
+    assert np.array_equal(null.ratios, null_ratios(runs, draws=300, seed=1).ratios)
+    med = np.median(null.ratios, 0)
+    assert np.all((med > 0.75) & (med < 1.35))
+    p = null.p_within()
+    assert 0.0 < p["worst"] < min(p[s] for s in STATS) <= 1.0  # all 7 at once: rarer
+    q = null.quantiles()
+    assert q["worst"][0] >= max(q[s][0] for s in STATS) and q["worst"][3] > TARGET_RATIO
+    shifted = {s: plan_effect[s] + rng.normal(0, 0.3, n) + 0.1 for s in STATS}
+    r = realism_table(shifted, runs[0], runs[1], None)[0]
+    assert null.rank(r.statistic, r.ratio) > 0.99
+    assert null.rank("worst", 0.0) == 0.0
+    # a NaN (map without walls) is left out of its statistic, as realism_table does
+    runs[2]["bend"][:5] = np.nan
+    assert np.isfinite(null_ratios(runs, draws=5).ratios).all()
+    with pytest.raises(ValueError, match=">= 3"):
+        null_ratios(runs[:2])
+    text = format_null(NullRatios(np.full((2, len(STATS)), 2.0), 3, 5))
+    assert text.splitlines()[-1].split()[0] == "worst" and text.endswith("0.000")
+
+
 def test_benchmark_third_run_is_measured_as_a_generator(tiny_dataset, tmp_path, capsys):
     """benchmarks/realism.py --third-run: a third simulation of every plan, measured like a
     generator (the benchmark's noise floor), cached in its own file."""
@@ -286,6 +321,7 @@ def test_benchmark_third_run_is_measured_as_a_generator(tiny_dataset, tmp_path, 
                      "--cache", str(c2), "--third-run", str(c3), "--model"]) == 0
     out = capsys.readouterr().out
     assert "statistic simulated run 3" in out and c3.is_file()
+    assert "a perfect generator on these 1 plans" in out  # the null table
     run2 = simulated_references(tiny_dataset, split=split, n=1, cache=c2, progress=False)
     run3 = simulated_references(tiny_dataset, split=split, n=1, cache=c3, run=3,
                                 progress=False)
@@ -300,6 +336,10 @@ def test_benchmark_third_run_is_measured_as_a_generator(tiny_dataset, tmp_path, 
     assert "Model_AB [x]" in out[2] and "parametric" not in out[2]
     assert out[3].split() == ["wall_err", "1.20", "3.00"]
     assert out[-1].split() == ["worst", "1.20", "3.00"]
+    null = NullRatios(np.ones((4, len(STATS))), 3, 1)  # every draw scores 1
+    mod._against_floor(rows, null)
+    out = capsys.readouterr().out.splitlines()
+    assert out[3].split() == ["wall_err", "1.20", "(100.0%)", "3.00", "(100.0%)"]
 
 
 def test_a_failed_second_run_leaves_its_plan_out_and_is_cached(tiny_dataset, tmp_path,
