@@ -269,6 +269,9 @@ def test_realism_table_halves_are_the_ratio_on_every_other_plan():
     text = format_realism_table(rows, "g")
     assert "even / odd" in text.splitlines()[0] and " / " in text.splitlines()[1]
     assert "even / odd" not in format_realism_table(plain, "g")
+    long = format_realism_table(plain, "AB:model.safetensors [cover explore, traces lidar]")
+    assert long.splitlines()[0].startswith("generator: AB:model.safetensors [cover")
+    assert long.splitlines()[1].split()[:2] == ["statistic", "generated"]
 
 
 def test_null_ratios_are_a_perfect_generators_scatter_and_flag_a_shifted_one():

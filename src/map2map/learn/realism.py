@@ -91,6 +91,8 @@ STAT_INFO = {
 }
 #: Issue #15's target for every statistic's Wasserstein ratio.
 TARGET_RATIO = 1.5
+#: :func:`format_realism_table` puts a longer generator name on a line of its own.
+NAME_WIDTH = 24
 #: :func:`simulated_references` rewrites its cache at most this often (seconds).
 SAVE_EVERY_S = 60.0
 
@@ -282,10 +284,14 @@ def format_realism_table(rows: list[RealismRow], name: str = "generated") -> str
       unknown    0.300  0.200  0.210     0.100   0.050   2.00
     worst ratio 2.00 (unknown); target <= 1.5: NOT met (1 of 1 statistics above)
     """
+    out = []
+    if len(name) > NAME_WIDTH:  # a long name on its own line, the column stays narrow
+        out.append(f"generator: {name}")
+        name = "generated"
     w = max(9, len(name))
     ci = any(math.isfinite(r.ratio_even) or math.isfinite(r.ratio_odd) for r in rows)
-    out = [f"{'statistic':>11} {name:>{w}} {'sim 1':>8} {'sim 2':>8} {'W(gen,1)':>9} "
-           f"{'W(2,1)':>8} {'ratio':>7}" + (f" {'even / odd':>13}" if ci else "")]
+    out.append(f"{'statistic':>11} {name:>{w}} {'sim 1':>8} {'sim 2':>8} {'W(gen,1)':>9} "
+               f"{'W(2,1)':>8} {'ratio':>7}" + (f" {'even / odd':>13}" if ci else ""))
     for r in rows:
         out.append(f"{r.statistic:>11} {r.generated:>{w}.3f} {r.sim1:>8.3f} {r.sim2:>8.3f} "
                    f"{r.w_generated:>9.3f} {r.w_sims:>8.3f} {r.ratio:>7.2f}"
