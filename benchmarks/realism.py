@@ -270,8 +270,9 @@ def main(argv=None) -> int:
         null = null_ratios([st1, st2, known["simulated run 3"]], draws=args.null_draws)
         print(f"\na perfect generator on these {len(plans)} plans: each ratio's quantiles over "
               f"{args.null_draws} draws, per plan the three simulated runs' roles (generated, "
-              f"run 1, run 2) shuffled ({time.perf_counter() - t1:.0f} s); P: the share of "
-              "draws that meet the target")
+              f"run 1, run 2) shuffled ({time.perf_counter() - t1:.0f} s; valid if a plan's "
+              "runs are exchangeable, which run 1's selection by the dataset's cleaner may "
+              "bend); P: the share of draws that meet the target")
         print(format_null(null))
         if len(gens) > 2:
             _against_floor(out_rows, null)

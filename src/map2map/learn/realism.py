@@ -213,6 +213,17 @@ def _ratio(w_g: float, w_r: float) -> float:
     return 1.0 if w_g <= 1e-12 else math.inf
 
 
+def _w_ratio(g: np.ndarray, r1: np.ndarray, r2: np.ndarray
+             ) -> tuple[float, float, float] | None:
+    """``(W(g, r1), W(r2, r1), ratio)`` over the finite values of each, None when one of
+    them has none: the one ratio :func:`realism_table` and :func:`null_ratios` compute."""
+    g, r1, r2 = (x[np.isfinite(x)] for x in (g, r1, r2))
+    if not (len(g) and len(r1) and len(r2)):
+        return None
+    w_g, w_r = float(wasserstein_distance(g, r1)), float(wasserstein_distance(r2, r1))
+    return w_g, w_r, _ratio(w_g, w_r)
+
+
 def realism_table(generated, sim1, sim2, plans, *, halves: bool = False
                   ) -> list[RealismRow]:
     """Wasserstein ratio per statistic (module doc) of ``generated`` maps against two
@@ -250,21 +261,20 @@ def realism_table(generated, sim1, sim2, plans, *, halves: bool = False
     rows = []
     for s in STATS:
         v = [np.asarray(x[s], float) for x in st]
-        g, r1, r2 = (x[np.isfinite(x)] for x in v)
-        if not (len(g) and len(r1) and len(r2)):
+        whole = _w_ratio(*v)
+        if whole is None:
             rows.append(RealismRow(s, *(float("nan"),) * 6, None))
             continue
-        w_g, w_r = float(wasserstein_distance(g, r1)), float(wasserstein_distance(r2, r1))
-        ratio = _ratio(w_g, w_r)
+        w_g, w_r, ratio = whole
         half = [float("nan"), float("nan")]
         if halves and len({len(x) for x in v}) == 1:
             for j in (0, 1):
-                gh, r1h, r2h = (x[j::2][np.isfinite(x[j::2])] for x in v)
-                if len(gh) and len(r1h) and len(r2h):
-                    half[j] = _ratio(float(wasserstein_distance(gh, r1h)),
-                                     float(wasserstein_distance(r2h, r1h)))
-        rows.append(RealismRow(s, float(g.mean()), float(r1.mean()), float(r2.mean()), w_g,
-                               w_r, ratio, bool(ratio <= TARGET_RATIO), *half))
+                part = _w_ratio(*(x[j::2] for x in v))
+                if part is not None:
+                    half[j] = part[2]
+        means = (float(np.nanmean(x)) for x in v)
+        rows.append(RealismRow(s, *means, w_g, w_r, ratio, bool(ratio <= TARGET_RATIO),
+                               *half))
     return rows
 
 
@@ -305,7 +315,6 @@ def format_realism_table(rows: list[RealismRow], name: str = "generated") -> str
     out.append(f"worst ratio {worst.ratio:.2f} ({worst.statistic}); target <= "
                f"{TARGET_RATIO:g}: {verdict}")
     return "\n".join(out)
-
 
 
 @dataclass
@@ -363,8 +372,8 @@ def null_ratios(runs, *, draws: int = 2000, seed: int = 0) -> NullRatios:
 
     Parameters
     ----------
-    runs : sequence of K dicts of :func:`stats_of` (or K ``(N, S, S)`` map stacks)
-        The runs, plan ``i`` at position ``i`` of each.
+    runs : sequence of K dicts of :func:`stats_of`
+        The runs' statistics, plan ``i`` at position ``i`` of each.
     draws : int
     seed : int
         Seed of the relabelling (same seed, same draws).
@@ -395,12 +404,8 @@ def null_ratios(runs, *, draws: int = 2000, seed: int = 0) -> NullRatios:
     for d in range(draws):
         roles = np.argsort(rng.random((k, n)), axis=0)[:3]  # per plan: 3 runs, in order
         for j, s in enumerate(STATS):
-            g, r1, r2 = (v[np.isfinite(v)] for v in (vals[s][roles[i], cols] for i in range(3)))
-            if not (len(g) and len(r1) and len(r2)):
-                out[d, j] = np.nan
-                continue
-            out[d, j] = _ratio(float(wasserstein_distance(g, r1)),
-                               float(wasserstein_distance(r2, r1)))
+            got = _w_ratio(*(vals[s][roles[i], cols] for i in range(3)))
+            out[d, j] = np.nan if got is None else got[2]
     return NullRatios(out, k, n)
 
 
