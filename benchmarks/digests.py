@@ -36,12 +36,15 @@ HERE = Path(__file__).resolve().parent
 VOLATILE = {
     ".json": "keys wall_seconds, seconds, timings_s (measured times)",
     "pairs.csv": "column seconds (measured time)",
+    "log.csv": "columns epoch_s, img_per_s (a training log's measured times)",
+    "paths": "the run's own work folder in JSON files and stdout, the source tree in stdout",
     ".dxf": "header $TDCREATE $TDUCREATE $TDUPDATE $TDUUPDATE $TDINDWG $TDUSRTIMER "
     "$FINGERPRINTGUID $VERSIONGUID and the '<version> @ <date>' XRECORD (ezdxf stamps); "
     "commands run with PYTHONHASHSEED=0 "
     "(ezdxf orders the CLASSES section by a set)",
 }
 _JSON_TIMES = {"wall_seconds", "seconds", "timings_s"}
+_CSV_TIMES = {"pairs.csv": {"seconds"}, "log.csv": {"epoch_s", "img_per_s"}}
 _DXF_STAMPS = {
     "$TDCREATE", "$TDUCREATE", "$TDUPDATE", "$TDUUPDATE", "$TDINDWG", "$TDUSRTIMER",
     "$FINGERPRINTGUID", "$VERSIONGUID",
@@ -114,6 +117,15 @@ def commands(w: Path) -> list[list[str]]:
     evaluate run/slam_map.yaml in/plan.yaml --out ev --quiet
     evaluate run/slam_map.pgm plan.png --out ev_png --resolution 0.05 --quiet
     evaluate --pairs in/pairs.csv --out batch --quiet
+    autocorrect run/slam_map.yaml --out ac.yaml --dxf ac.dxf --figure ac.png
+    synthesize in/plan.yaml --out syn --samples 2 --seed 0
+    dataset build --out ds --plans generated --count 8 --seed 0 --source deform --size 64 --quiet
+    dataset clean ds
+    dataset export ds --format packed
+    train ba --data ds --out tb --epochs 2 --device cpu --batch 4 --quiet
+    train ab --data ds --out ta --schedule 32:1,64:1 --device cpu --batch 4 --quiet
+    autocorrect in/plan.yaml --out ac_tb.yaml --model tb
+    synthesize in/plan.yaml --out syn_ta --samples 1 --seed 0 --model ta
     deform in/plan.yaml --out bad --start 1 1
     slam in/wp.txt --out bad2
     """  # the last two: bad input, one line and exit 2
@@ -146,7 +158,9 @@ def run_all(out: Path, src: Path, demo: bool = True) -> dict:
         p = subprocess.run([sys.executable, "-m", "map2map", *cmd], cwd=work, env=env,
                            capture_output=True, text=True)  # fmt: skip
         key = " ".join(cmd)
-        stdout = re.sub(r"\d+\.\d+ s\b", "<s>", p.stdout)  # printed times
+        stdout = p.stdout.replace(str(src), "<src>").replace(str(work), "<work>")
+        stdout = re.sub(r"\d+\.\d+ s\b", "<s>", stdout)  # printed times
+        stdout = re.sub(r"at \d+ img/s", "at <n> img/s", stdout)
         stdout = re.sub(r"in \d+\.\d s:", "in <s>:", stdout)
         log[key] = {
             "rc": p.returncode,
@@ -163,7 +177,7 @@ def run_all(out: Path, src: Path, demo: bool = True) -> dict:
         if path.parent == work / "in" and path.name in inputs:
             continue
         if path.is_file() and path.name != "digests.json":
-            files[str(path.relative_to(out))] = digest(path)
+            files[str(path.relative_to(out))] = digest(path, {str(work): "<work>"})
     doc = {"src": str(src), "commands": log, "files": files, "volatile": VOLATILE}
     (out / "digests.json").write_text(json.dumps(doc, indent=1) + "\n")
     print(f"{len(files)} files digested -> {out / 'digests.json'}")
@@ -178,20 +192,25 @@ def _strip_times(o):
     return o
 
 
-def digest(path: Path) -> str:
-    """sha256 of a file, with the fields listed in :data:`VOLATILE` blanked."""
+def digest(path: Path, paths: dict[str, str] | None = None) -> str:
+    """sha256 of a file, with the fields listed in :data:`VOLATILE` blanked.
+
+    ``paths`` maps absolute folder names (the run's work folder) to placeholders in
+    JSON files, which record where their inputs were read."""
     data = path.read_bytes()
     if path.suffix == ".json":
+        for k, v in (paths or {}).items():
+            data = data.replace(k.encode(), v.encode())
         try:
             data = json.dumps(_strip_times(json.loads(data)), sort_keys=True).encode()
         except ValueError:
             pass
-    elif path.name == "pairs.csv":
+    elif path.name in _CSV_TIMES:
         lines = data.decode().splitlines()
         head = lines[0].split(",") if lines else []
-        col = head.index("seconds") if "seconds" in head else -1
+        cols = {i for i, h in enumerate(head) if h in _CSV_TIMES[path.name]}
         data = "\n".join(
-            ",".join("<t>" if i == col else c for i, c in enumerate(line.split(",")))
+            ",".join("<t>" if i in cols else c for i, c in enumerate(line.split(",")))
             for line in lines
         ).encode()
     elif path.suffix == ".dxf":
