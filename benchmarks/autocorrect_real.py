@@ -23,8 +23,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
 from map2map.evaluate.wallmetrics import wall_metrics  # noqa: E402
-from map2map.learn.autocorrect import autocorrect_many, load_model, save_segments_dxf  # noqa: E402
-from map2map.learn.figures import save_before_after  # noqa: E402
+from map2map.learn.ba.autocorrect import autocorrect_many, load_model, save_segments_dxf  # noqa: E402
+from map2map.learn.training.figures import save_before_after  # noqa: E402
 from map2map.maps.formats import load_map, save_map  # noqa: E402
 
 SHARED = Path(os.environ.get("MAP2MAP_SHARED_DATA",

@@ -1,6 +1,6 @@
 """Speed of Model_prog (Model_AB) training per stage, and Table 5.2's schedule projected.
 
-For each stage resolution: the full eq. 3.2 step (:func:`map2map.learn.train_ab.gan_step`:
+For each stage resolution: the full eq. 3.2 step (:func:`map2map.learn.ab.train.gan_step`:
 two 3-scale progressive discriminators with false targets, feature matching, input
 consistency, L1) at Table 5.1's batch (batch_rate 1) on data resident on the device,
 during the fade-in (alpha a tensor), after warm-up steps; images/s. Then the time the
@@ -29,17 +29,17 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
 import torch  # noqa: E402
 
-from map2map.learn.loop import place_networks, step_autocast  # noqa: E402
-from map2map.learn.progressive import ABConfig, build_ab_networks  # noqa: E402
-from map2map.learn.static_step import StaticStep, graph_autocast  # noqa: E402
-from map2map.learn.train_ab import gan_step  # noqa: E402
+from map2map.learn.ab.train import gan_step  # noqa: E402
+from map2map.learn.nets.progressive import ABConfig, build_ab_networks  # noqa: E402
+from map2map.learn.training.loop import place_networks, step_autocast  # noqa: E402
+from map2map.learn.training.static_step import StaticStep, graph_autocast  # noqa: E402
 
 
 def stage_speed(cfg: ABConfig, r: int, dev: torch.device, steps: int, warm: int = 2,
                 graph: bool = False, profile: bool = False,
                 compiled: bool = False, nchw: bool = False) -> tuple[float, str]:
     """Images/s of ``steps`` training steps at stage ``r`` (fading in), and which step ran
-    (``graph``: the :class:`~map2map.learn.static_step.StaticStep` replayed as a CUDA graph,
+    (``graph``: the :class:`~map2map.learn.training.static_step.StaticStep` replayed as a CUDA graph,
     eager elsewhere); ``profile``: then print where the device time goes; ``compiled``:
     G through ``torch.compile`` (as ``train ab --compile``; not with ``graph``); ``nchw``:
     networks and data kept in NCHW under bf16 (the trainer uses channels-last; GroupNorm

@@ -15,11 +15,11 @@
 instead of generated boxes (the maps ``autocorrect`` is for).
 
 ``--steps-at SIZE:BATCH,...`` measures instead the training step alone (the full eq. 3.2
-step of :func:`map2map.learn.loop.gan_step`, default widths, bf16 + channels_last on
+step of :func:`map2map.learn.training.loop.gan_step`, default widths, bf16 + channels_last on
 CUDA) on random ternary maps resident on the device, for each resolution and batch,
 over ``--seconds`` after warm-up; ``--compile`` also times a ``torch.compile``d generator.
 ``--graph`` also times the same step as one CUDA graph replay
-(:class:`map2map.learn.static_step.StaticStep`: 3 eager warm-up steps, capture, replays;
+(:class:`map2map.learn.training.static_step.StaticStep`: 3 eager warm-up steps, capture, replays;
 it falls back to eager steps if capture fails and the line says which ran); on CPU it
 runs eagerly; ``--check-graph`` first runs 8 steps both ways from the same weights and
 prints how far losses and weights differ and whether a learning rate set to 0 in place
@@ -48,9 +48,9 @@ import torch  # noqa: E402
 
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap  # noqa: E402
 from map2map.datasets.packed import PackedPairs  # noqa: E402
-from map2map.learn.autocorrect import autocorrect_many, load_model  # noqa: E402
-from map2map.learn.config import TrainConfig  # noqa: E402
-from map2map.learn.train import train_ba  # noqa: E402
+from map2map.learn.ba.autocorrect import autocorrect_many, load_model  # noqa: E402
+from map2map.learn.ba.train import train_ba  # noqa: E402
+from map2map.learn.training.config import TrainConfig  # noqa: E402
 
 
 def _maps(n: int, size: int = 256, seed: int = 0) -> np.ndarray:
@@ -150,8 +150,8 @@ def _training(args) -> None:
 def _step_setup(size: int, batch: int, device: str, compiled: bool = False):
     """Networks, optimisers, autocast and a random ternary batch resident on ``device``
     (module doc), as the trainer sets them up."""
-    from map2map.learn.loop import place_networks, step_autocast
-    from map2map.learn.train import build_networks
+    from map2map.learn.ba.train import build_networks
+    from map2map.learn.training.loop import place_networks, step_autocast
 
     cfg = TrainConfig(size=size, batch=batch, device=device)
     dev = torch.device(device)
@@ -170,9 +170,9 @@ def _step_setup(size: int, batch: int, device: str, compiled: bool = False):
 
 def _step_fn(size: int, batch: int, device: str, compiled: bool, graph: bool):
     """``(step(i), mode)``: one eq. 3.2 training step; ``graph``: the
-    :class:`~map2map.learn.static_step.StaticStep` with ``graph=True`` (eager on CPU)."""
-    from map2map.learn.loop import gan_step
-    from map2map.learn.static_step import StaticStep, graph_autocast
+    :class:`~map2map.learn.training.static_step.StaticStep` with ``graph=True`` (eager on CPU)."""
+    from map2map.learn.training.loop import gan_step
+    from map2map.learn.training.static_step import StaticStep, graph_autocast
 
     cfg, dev, amp, nets, opts, x, y, autocast = _step_setup(size, batch, device, compiled)
     freeze = nets[1:]
@@ -211,7 +211,7 @@ def _step_rate(size: int, batch: int, device: str, seconds: float, compiled: boo
 def _count(size: int, batch: int, device: str) -> None:
     """Top-level operator calls of one step (``--count-ops``): today's ``gan_step`` and the
     static step run eagerly (what a capture records), by name."""
-    from map2map.learn.static_step import StaticStep, count_ops
+    from map2map.learn.training.static_step import StaticStep, count_ops
 
     plain, _ = _step_fn(size, batch, device, False, False)
     cfg, dev, amp, nets, opts, x, y, autocast = _step_setup(size, batch, device)
@@ -235,8 +235,8 @@ def _check_graph(size: int, batch: int, device: str, steps: int = 8) -> None:
     A second eager run gives the baseline: on CUDA two eager runs differ too (cuDNN's
     algorithm choice, atomics), and the graph's differences mean something only beside
     those."""
-    from map2map.learn.loop import set_lr
-    from map2map.learn.static_step import StaticStep, graph_autocast
+    from map2map.learn.training.loop import set_lr
+    from map2map.learn.training.static_step import StaticStep, graph_autocast
 
     gen = torch.Generator().manual_seed(1)
     data = [tuple(torch.randint(0, 3, (batch, 1, size, size), generator=gen).float() - 1

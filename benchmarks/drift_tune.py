@@ -1,5 +1,5 @@
-"""Tune Model_AB's parametric drift (:mod:`map2map.learn.drift`) against simulated SLAM
-maps: the realism ratios (:mod:`map2map.learn.realism`) of the shipped Model_AB's maps
+"""Tune Model_AB's parametric drift (:mod:`map2map.learn.ab.drift`) against simulated SLAM
+maps: the realism ratios (:mod:`map2map.experiments.realism.measure`) of the shipped Model_AB's maps
 warped along drift fields of each ``--variant`` (``DriftParams`` fields as JSON), on the
 plans of ``--split`` (tune on ``val``; report on ``test`` with ``benchmarks/realism.py``).
 The network runs once; each variant only redraws the drift.
@@ -7,7 +7,7 @@ The network runs once; each variant only redraws the drift.
     python3 benchmarks/drift_tune.py --data DS --cache refs_val.npz [--split val]
         [--plans N] [--model pretrained] --variant '{}' '{"scale": 2, "smooth_m": 0.3}' ...
 
-A variant with ``"rooms": true`` is a room-wise drift (:mod:`map2map.learn.room_drift`;
+A variant with ``"rooms": true`` is a room-wise drift (:mod:`map2map.learn.ab.room_drift`;
 its other fields are ``RoomDriftParams``'), e.g. ``'{"rooms": true, "rot_deg": 1.5}'``.
 
 Prints, per variant, the seven ratios and the worst, then the generated maps' means.
@@ -26,7 +26,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
-from map2map.learn.realism import (  # noqa: E402
+from map2map.experiments.realism.measure import (  # noqa: E402
     STATS,
     realism_table,
     simulated_references,
@@ -45,9 +45,9 @@ def main(argv=None) -> int:
     ap.add_argument("--variant", nargs="+", default=["{}"],
                     help="DriftParams fields as JSON objects ({}: the defaults)")
     args = ap.parse_args(argv)
-    from map2map.learn.drift import DriftParams, drift_maps
-    from map2map.learn.room_drift import RoomDriftParams
-    from map2map.learn.synthesize import load_ab_model, synthesize_squares
+    from map2map.learn.ab.drift import DriftParams, drift_maps
+    from map2map.learn.ab.room_drift import RoomDriftParams
+    from map2map.learn.ab.synthesize import load_ab_model, synthesize_squares
 
     t0 = time.perf_counter()
     refs = simulated_references(args.data, split=args.split, n=args.plans, cache=args.cache)

@@ -1,6 +1,6 @@
 """Thesis Fig. 5.14 reproduced (issue #15): for N held-out plans, the simulated SLAM map,
 the parametric model (deform, additive) on the same trajectory, and Model_AB, each with
-its appendix-metric error and wall recall. :func:`map2map.learn.fig514.run_fig514` does
+its appendix-metric error and wall recall. :func:`map2map.experiments.fig514.measure.run_fig514` does
 the work; this script writes ``fig514.png`` and ``fig514.csv`` into ``--out`` and prints
 the table.
 
@@ -24,7 +24,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
-from map2map.learn.fig514 import run_fig514  # noqa: E402
+from map2map.experiments.fig514.measure import run_fig514  # noqa: E402
 
 
 def main(argv=None) -> int:

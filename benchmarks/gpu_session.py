@@ -6,7 +6,7 @@ each part is capped by a wall-clock budget:
 
 0. ``graph``: the eq. 3.2 step eager against the same step as one CUDA graph replay
    (``bench_learn.py --steps-at ... --graph --check-graph``;
-   :class:`map2map.learn.static_step.StaticStep`) for Model_32 at batch 32 / 256 / 1024
+   :class:`map2map.learn.training.static_step.StaticStep`) for Model_32 at batch 32 / 256 / 1024
    and Model_64 at 16 / 256: first 8 steps both ways from the same weights (loss and
    weight differences, a zero learning rate reaching the graph), then the rates; which
    step ran is recorded (a failed capture falls back to eager and says so);

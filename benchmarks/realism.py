@@ -1,5 +1,5 @@
 """Realism of Model_AB's SLAM maps against simulated ones (issue #15; the thesis judged it
-by eye). The statistics and the table are :mod:`map2map.learn.realism`'s; this script
+by eye). The statistics and the table are :mod:`map2map.experiments.realism.measure`'s; this script
 only picks the data and prints.
 
 On the held-out plans of a ``map2map dataset build`` dataset (``--split test``: plans
@@ -27,7 +27,7 @@ run 3) as one more generator: W(run 3, run 1) / W(run 2, run 1) is what a genera
 good as the simulator itself scores on these plans, so a ratio above 1.5 there says how
 far the 1.5 target is below this benchmark's noise at this many plans. With three runs
 a plan, the benchmark also draws what a perfect generator scores
-(:func:`map2map.learn.realism.null_ratios`, session 15: per plan, the three runs' roles --
+(:func:`map2map.experiments.realism.measure.null_ratios`, session 15: per plan, the three runs' roles --
 generated, run 1, run 2 -- shuffled, ``--null-draws`` times): each ratio's quantiles and
 the chance that every ratio is <= 1.5. With a Model_AB generator, a last table sets each
 of its ratios beside run 3's, with the share of perfect-generator draws that score
@@ -37,30 +37,30 @@ Each ratio comes with the same ratio on the even- and on the odd-numbered plans 
 (session 13): how much it moves with the plan set (``--no-halves`` leaves them out).
 
 ``--render`` measures each model with each resolution raising
-(:mod:`map2map.learn.slam_render`: ``slam``, SLAM-like walls, the default of ``map2map
+(:mod:`map2map.learn.ab.render`: ``slam``, SLAM-like walls, the default of ``map2map
 synthesize``; ``plain``, the previous snap + nearest upsampling). ``--measures`` adds Fig.
-5.14's measures on every plan (:func:`map2map.learn.fig514.measure`: appendix-metric error
+5.14's measures on every plan (:func:`map2map.experiments.fig514.measure.measure`: appendix-metric error
 after alignment, wall recall and precision at 2 px) for the simulated runs, the parametric
 model and every generator: mean (median) error, plans not aligned, mean recall, mean
 precision.
 
 ``--drift`` measures each model with and without the parametric drift of
-:mod:`map2map.learn.drift` (default ``parametric``, ``map2map synthesize``'s default before
+:mod:`map2map.learn.ab.drift` (default ``parametric``, ``map2map synthesize``'s default before
 session 11, kept here so that the commands of docs/learn_ab.md reproduce; each square
-at its own metric resolution, :func:`map2map.learn.realism.pair_square_resolution`) and
-with the room-wise rigid drift of :mod:`map2map.learn.room_drift` (``rooms``),
+at its own metric resolution, :func:`map2map.experiments.realism.measure.pair_square_resolution`) and
+with the room-wise rigid drift of :mod:`map2map.learn.ab.room_drift` (``rooms``),
 ``--drift-scale`` with each factor on the drift field (for tuning: tune on ``--split
 val``, report on ``test``). ``--diversity K`` adds, per generator, the mean pairwise
-disagreement of ``K`` hypotheses (:func:`map2map.learn.synthesize.synthesize`, test-time
+disagreement of ``K`` hypotheses (:func:`map2map.learn.ab.synthesize.synthesize`, test-time
 dropout + the drift) over the plans.
 
-``--coverage`` and ``--drift-route`` (:mod:`map2map.learn.coverage`) measure each model
+``--coverage`` and ``--drift-route`` (:mod:`map2map.learn.ab.coverage`) measure each model
 with the network's own extent (``none``) and/or only what its own ``oracle`` exploration
 of the square saw (``explore``), and the drift along the roadmap tour (``tour``) and/or
 the exploration's path (``explore``): every combination given is one generator (default
 ``none`` and ``tour``).
 
-``--traces`` (:class:`map2map.learn.slam_render.TraceParams`, session 11) measures each
+``--traces`` (:class:`map2map.learn.ab.render.TraceParams`, session 11) measures each
 model without (``none``) and/or with (``lidar``) what a LIDAR + SLAM leaves beyond the
 faces: a metric wall band with a ragged back edge and stray hits (default ``none``;
 ``--render plain`` is measured without); ``--trace-params`` (JSON) replaces fields of the
@@ -68,11 +68,11 @@ faces: a metric wall band with a ragged back edge and stray hits (default ``none
 session 11 is measured by ``--drift rooms --coverage explore --traces lidar``; the
 script's own defaults stay session 9's (``parametric``, ``none``, ``none``).
 ``--explore-at native`` (session 13) explores each plan at its own resolution
-(:func:`map2map.learn.realism.native_seen`, as ``map2map synthesize`` does) instead of
+(:func:`map2map.experiments.realism.measure.native_seen`, as ``map2map synthesize`` does) instead of
 the dataset's square, whose coarse pixels and thickened walls can close doors;
 ``--explore-seconds`` sets the exploration's simulated time. ``--room-params`` (JSON)
 replaces fields of the ``rooms`` drift's
-:class:`~map2map.learn.room_drift.RoomDriftParams` (session 12: ``conserve``, the
+:class:`~map2map.learn.ab.room_drift.RoomDriftParams` (session 12: ``conserve``, the
 parametric field's divergence-free part only).
 """
 
@@ -88,7 +88,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
-from map2map.learn.realism import (  # noqa: E402
+from map2map.experiments.realism.measure import (  # noqa: E402
     format_null,
     format_realism_table,
     null_ratios,
@@ -114,7 +114,7 @@ def main(argv=None) -> int:
                     default=["parametric"],
                     help="Model_AB's drift(s) to measure (default parametric, map2map "
                     "synthesize's before session 11; rooms: the room-wise rigid drift of "
-                    "map2map.learn.room_drift, its default since)")
+                    "map2map.learn.ab.room_drift, its default since)")
     ap.add_argument("--drift-method", choices=("additive", "ekf"), default=None,
                     help="the parametric drift's odometry-to-map conversion (default "
                     "additive)")
@@ -131,13 +131,13 @@ def main(argv=None) -> int:
                     help="the drift's route(s): tour (roadmap tour, default) or explore (the "
                     "exploration's true path)")
     ap.add_argument("--traces", nargs="+", choices=("none", "lidar"), default=["none"],
-                    help="LIDAR traces (map2map.learn.slam_render.TraceParams): none "
+                    help="LIDAR traces (map2map.learn.ab.render.TraceParams): none "
                     "(default) and/or lidar (map2map synthesize's default since session 11)")
     ap.add_argument("--trace-params", default="{}",
                     help="JSON fields replacing the lidar traces' defaults")
     ap.add_argument("--room-params", default="{}",
                     help="JSON fields replacing the rooms drift's defaults "
-                    "(map2map.learn.room_drift.RoomDriftParams; session 12's val choice: "
+                    "(map2map.learn.ab.room_drift.RoomDriftParams; session 12's val choice: "
                     "'{\"conserve\": true, \"scale\": 0.7}' with --trace-params "
                     "'{\"floor_px\": 0.85}')")
     ap.add_argument("--explore-at", choices=("square", "native"), default="square",
@@ -185,16 +185,16 @@ def main(argv=None) -> int:
     if args.model:
         import json
 
-        from map2map.learn.coverage import ExploreParams
-        from map2map.learn.room_drift import RoomDriftParams
-        from map2map.learn.slam_render import TraceParams
-        from map2map.learn.synthesize import load_ab_model, synthesize_squares
+        from map2map.learn.ab.coverage import ExploreParams
+        from map2map.learn.ab.render import TraceParams
+        from map2map.learn.ab.room_drift import RoomDriftParams
+        from map2map.learn.ab.synthesize import load_ab_model, synthesize_squares
 
         ep = ExploreParams() if args.explore_seconds is None else \
             ExploreParams(duration=args.explore_seconds)
         seen = None
         if args.explore_at == "native" and "explore" in args.coverage:
-            from map2map.learn.realism import native_seen
+            from map2map.experiments.realism.measure import native_seen
 
             if "explore" in args.drift_route:
                 ap.error("--explore-at native gives no trajectory: use --drift-route tour")
@@ -244,7 +244,7 @@ def main(argv=None) -> int:
                 print(f"{name}: {time.perf_counter() - t1:.0f} s")
             for d in ("parametric", "rooms"):
                 if d in args.drift:
-                    from map2map.learn.drift import drift_params
+                    from map2map.learn.ab.drift import drift_params
 
                     print("drift: " + drift_params(rooms if d == "rooms" else d,
                                                    args.drift_method).describe())
@@ -294,7 +294,7 @@ def main(argv=None) -> int:
 
 def _against_floor(rows: list, null=None) -> None:
     """Every generator's ratio beside the third simulated run's (the floor), per statistic;
-    with ``null`` (:class:`~map2map.learn.realism.NullRatios`), each ratio's rank among a
+    with ``null`` (:class:`~map2map.experiments.realism.measure.NullRatios`), each ratio's rank among a
     perfect generator's draws in brackets."""
     gens = list(dict.fromkeys(r["generator"] for r in rows))
     ratio = {(r["generator"], r["statistic"]): r["ratio"] for r in rows}
@@ -323,7 +323,7 @@ def _diversity(net, plans, resolution, k, seed, render, drift, method, scale,
     import warnings
 
     from map2map.core.grid import OccupancyMap
-    from map2map.learn.synthesize import synthesize
+    from map2map.learn.ab.synthesize import synthesize
 
     out = []
     with warnings.catch_warnings():
@@ -341,7 +341,7 @@ def _measures(gens: dict, plans) -> None:
     """Fig. 5.14's measures of every generator on every plan, one line each."""
     import numpy as np
 
-    from map2map.learn.fig514 import measure
+    from map2map.experiments.fig514.measure import measure
 
     print(f"\nFig. 5.14 measures on {len(plans)} plans (appendix metric, px of the "
           f"{plans.shape[-1]} px square; wall recall / precision at 2 px)")

@@ -2,7 +2,7 @@
 maps' wall error looks like, so that a drift model is fitted to it).
 
 For each plan of ``--split`` (a ``map2map dataset build`` folder): the plan's rooms
-(:func:`map2map.learn.room_drift.segment_rooms` of ``A.png``), every occupied pixel of a
+(:func:`map2map.learn.ab.room_drift.segment_rooms` of ``A.png``), every occupied pixel of a
 map given to the room its pixel belongs to, and per room with at least ``--min-pts``
 such pixels the rigid transform (rotation about the room's centroid, then a shift) that
 brings them closest to the plan's walls: brute force over rotations (``--max-deg``) and
@@ -34,7 +34,7 @@ from scipy import ndimage
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
-from map2map.learn.room_drift import segment_rooms  # noqa: E402
+from map2map.learn.ab.room_drift import segment_rooms  # noqa: E402
 
 
 def fit_room(pts: np.ndarray, dist: np.ndarray, centre, max_deg=8.0, max_px=14.0, cap=3.0):
@@ -135,7 +135,7 @@ def main(argv=None) -> int:
     import cv2
 
     from map2map.datasets.build import pair_dir
-    from map2map.learn.realism import pair_square_resolution, split_indices
+    from map2map.experiments.realism.measure import pair_square_resolution, split_indices
 
     t0 = time.perf_counter()
     idx = split_indices(args.data, args.split)[:args.plans]
@@ -143,8 +143,8 @@ def main(argv=None) -> int:
     b = np.stack([cv2.imread(str(pair_dir(args.data, i) / "B.png"), 0) for i in idx])
     kinds = {"sim1": b}
     if args.model:
-        from map2map.learn.room_drift import RoomDriftParams
-        from map2map.learn.synthesize import synthesize_squares
+        from map2map.learn.ab.room_drift import RoomDriftParams
+        from map2map.learn.ab.synthesize import synthesize_squares
 
         res = np.array([pair_square_resolution(args.data, i, a.shape[-1]) for i in idx])
         with warnings.catch_warnings():

@@ -1,5 +1,5 @@
 """Thesis Table 5.3 / Fig. 5.12 as a command: does Model_BA bring SLAM maps closer to
-their plans? A thin caller of :mod:`map2map.learn.table53` (the metric, the guards and
+their plans? A thin caller of :mod:`map2map.experiments.table53.measure` (the metric, the guards and
 the sign test are documented there).
 
     python3 benchmarks/table53.py                        # 100 generated held-out pairs
@@ -26,7 +26,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
 from map2map.datasets.packed import save_packed  # noqa: E402
-from map2map.learn.table53 import (  # noqa: E402
+from map2map.experiments.table53.measure import (  # noqa: E402
     generated_heldout_pairs,
     heldout_pairs_from_dataset,
     merge_pairs,

@@ -3,7 +3,7 @@ network's, and the face a post-processing rule would draw? (docs/learn.md, "Movi
 drifted walls".)
 
 For every held-out pair whose map is not deskewed, the anchored step's faces
-(:func:`map2map.learn.postprocess.anchored_walls` before any move: straight segments of
+(:func:`map2map.learn.ba.postprocess.anchored_walls` before any move: straight segments of
 the input, faces at the map's angle) are compared with the plan after the SLAM map's own
 rigid alignment (:func:`map2map.evaluate.pipeline.evaluate_maps`): per face, the median
 offset across the wall to the nearest plan face pixel facing the same way (within 1.5 px
@@ -13,9 +13,9 @@ along, 5 px across). Printed, length-weighted mean absolute offsets (px):
 * ``network``: moved to where the upsampled network output crosses the wall level,
   less each map's median per side (the network draws thicker walls);
 * ``collinear``: moved to its group's length-weighted mean line
-  (:func:`~map2map.learn.postprocess.collinear_faces`, 3 px, one map at a time);
+  (:func:`~map2map.learn.ba.postprocess.collinear_faces`, 3 px, one map at a time);
 * ``two-sided``: faces of walls seen from both sides, grown to 4 / 5 / 6 px
-  (:func:`~map2map.learn.postprocess.thicken_two_sided`).
+  (:func:`~map2map.learn.ba.postprocess.thicken_two_sided`).
 
     python3 benchmarks/table53_face_offsets.py --data /work/datasets/gen6300 --split val
 """
@@ -35,9 +35,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 from map2map.core.geometry import apply  # noqa: E402
 from map2map.core.grid import OCCUPIED, OccupancyMap  # noqa: E402
 from map2map.evaluate.pipeline import EvaluateParams, evaluate_maps  # noqa: E402
-from map2map.learn import autocorrect as ac  # noqa: E402
-from map2map.learn import postprocess as pp  # noqa: E402
-from map2map.learn.table53 import heldout_pairs_from_dataset  # noqa: E402
+from map2map.experiments.table53.measure import heldout_pairs_from_dataset  # noqa: E402
+from map2map.learn.ba import autocorrect as ac  # noqa: E402
+from map2map.learn.ba import postprocess as pp  # noqa: E402
 from map2map.maps.segments import straight_segments  # noqa: E402
 
 

@@ -1,5 +1,5 @@
 """Table 5.3 on REAL maps: does auto-correct bring the Halmstad sensor maps closer to their
-floor plans? (issue #14; library: :mod:`map2map.learn.table53_real`.)
+floor plans? (issue #14; library: :mod:`map2map.experiments.table53_real.measure`.)
 
 Usage::
 
@@ -32,7 +32,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
 from table53 import ac_options  # noqa: E402  (the same --ac parsing, benchmarks/table53.py)
 
-from map2map.learn.table53_real import run_table53_real  # noqa: E402
+from map2map.experiments.table53_real.measure import run_table53_real  # noqa: E402
 
 SHARED = Path(os.environ.get("MAP2MAP_SHARED_DATA",
                              Path(__file__).resolve().parents[2] / "shared" / "data"))

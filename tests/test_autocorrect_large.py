@@ -10,7 +10,7 @@ import pytest
 pytest.importorskip("torch")
 
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap  # noqa: E402
-from map2map.learn.autocorrect import (  # noqa: E402
+from map2map.learn.ba.autocorrect import (  # noqa: E402
     LARGE_SHRINK,
     TILE_SHRINK,
     BAModel,
@@ -19,8 +19,8 @@ from map2map.learn.autocorrect import (  # noqa: E402
     stitch_tiles,
     tile_grid,
 )
-from map2map.learn.data import downsample_target  # noqa: E402
-from map2map.learn.postprocess import frontier_walls, wall_thickness_px  # noqa: E402
+from map2map.learn.ba.postprocess import frontier_walls, wall_thickness_px  # noqa: E402
+from map2map.learn.training.data import downsample_target  # noqa: E402
 
 
 class _Identity(BAModel):
@@ -87,7 +87,7 @@ def test_thickness_modes_set_the_drawn_walls():
 def test_thickness_input_follows_the_input_walls():
     """``input``: walls as thick as the training SLAM maps' give the training thickness;
     thicker input walls give thicker drawn walls, never more than the shrink's."""
-    from map2map.learn.autocorrect import SLAM_WALL_PX
+    from map2map.learn.ba.autocorrect import SLAM_WALL_PX
 
     net = _Identity()
     thin = _rooms(wall=2)
@@ -238,7 +238,7 @@ def test_cli_passes_the_new_options(tmp_path, capsys):
 def test_tiled_maps_leave_frontiers_open_unless_told():
     """``open_frontiers=None``: on for a map corrected in tiles, the module default for
     one corrected whole; an explicit value holds for both."""
-    from map2map.learn.autocorrect import OPEN_FRONTIERS, _open
+    from map2map.learn.ba.autocorrect import OPEN_FRONTIERS, _open
 
     assert _open(None, True) is True and _open(None, False) is OPEN_FRONTIERS
     assert _open(False, True) is False and _open(True, False) is True

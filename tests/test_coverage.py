@@ -1,4 +1,4 @@
-"""Coverage from the robot's own exploration (map2map.learn.coverage) and its wiring into
+"""Coverage from the robot's own exploration (map2map.learn.ab.coverage) and its wiring into
 synthesize / synthesize_squares / the CLI: seeded per hypothesis, separable from the
 drift's route, the defaults unchanged. Tiny plans, short explorations."""
 
@@ -9,7 +9,7 @@ import pytest
 
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from map2map.errors import InputError
-from map2map.learn.coverage import (
+from map2map.learn.ab.coverage import (
     ExploreParams,
     coverage_options,
     explore_plan,
@@ -71,9 +71,9 @@ def drawer():
     pytest.importorskip("torch")
     import torch
 
-    from map2map.learn.data import reduce_input
-    from map2map.learn.progressive import StochasticUNet
-    from map2map.learn.synthesize import ABModel
+    from map2map.learn.ab.synthesize import ABModel
+    from map2map.learn.nets.progressive import StochasticUNet
+    from map2map.learn.training.data import reduce_input
 
     torch.manual_seed(0)
     net = ABModel(StochasticUNet(size=32, channels=8, min_size=16), resolution=32, alpha=1.0,
@@ -89,8 +89,8 @@ def drawer():
 
 @pytest.mark.filterwarnings("ignore::UserWarning")
 def test_synthesize_coverage_hides_the_unseen_room_and_route_is_separable(drawer):
-    from map2map.learn.drift import apply_drift, drift_field, drift_rng
-    from map2map.learn.synthesize import synthesize
+    from map2map.learn.ab.drift import apply_drift, drift_field, drift_rng
+    from map2map.learn.ab.synthesize import synthesize
 
     plan = _plan()
     old = {"traces": "none"}                  # the walls without LIDAR traces (session 11)
@@ -128,8 +128,8 @@ def test_synthesize_coverage_hides_the_unseen_room_and_route_is_separable(drawer
 
 @pytest.mark.filterwarnings("ignore::UserWarning")
 def test_synthesize_squares_explores_each_square_at_its_resolution(drawer):
-    from map2map.learn.drift import DriftParams, drift_maps
-    from map2map.learn.synthesize import synthesize_squares
+    from map2map.learn.ab.drift import DriftParams, drift_maps
+    from map2map.learn.ab.synthesize import synthesize_squares
 
     plans = np.full((2, 64, 64), UNKNOWN, np.uint8)
     for p in plans:
@@ -161,7 +161,7 @@ def test_cli_synthesize_coverage(tmp_path, capsys, drawer, monkeypatch):
     import json
 
     from map2map.cli.main import main
-    from map2map.learn import synthesize as S
+    from map2map.learn.ab import synthesize as S
     from map2map.maps.formats import save_map
 
     monkeypatch.setattr(S, "load_ab_model", lambda model, device="cpu": drawer)

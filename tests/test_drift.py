@@ -1,4 +1,4 @@
-"""Parametric drift on synthesized maps (map2map.learn.drift): seeded, per hypothesis,
+"""Parametric drift on synthesized maps (map2map.learn.ab.drift): seeded, per hypothesis,
 the parametric model's field, generated maps' own unknown cells kept. No torch needed."""
 
 import numpy as np
@@ -6,7 +6,7 @@ import pytest
 
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from map2map.errors import InputError
-from map2map.learn.drift import (
+from map2map.learn.ab.drift import (
     DriftParams,
     apply_drift,
     drift_field,

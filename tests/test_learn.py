@@ -18,11 +18,11 @@ pytest.importorskip("safetensors")
 from map2map.cli.main import main  # noqa: E402
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap  # noqa: E402
 from map2map.datasets.packed import PackedPairs, save_packed  # noqa: E402
-from map2map.learn import losses as L  # noqa: E402
-from map2map.learn import train as T  # noqa: E402
-from map2map.learn.autocorrect import BAModel, autocorrect_many, load_model  # noqa: E402
-from map2map.learn.config import TrainConfig  # noqa: E402
-from map2map.learn.data import downsample_target  # noqa: E402
+from map2map.learn.nets import losses as L  # noqa: E402
+from map2map.learn.ba import train as T  # noqa: E402
+from map2map.learn.ba.autocorrect import BAModel, autocorrect_many, load_model  # noqa: E402
+from map2map.learn.training.config import TrainConfig  # noqa: E402
+from map2map.learn.training.data import downsample_target  # noqa: E402
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
@@ -263,7 +263,7 @@ def test_pretrained_weights_load_and_run():
     model = load_model("pretrained")
     assert model.header["format"] == "map2map-model-ba"
     assert model.generator.to_map[str(model.size)].weight.dtype == torch.float32
-    from map2map.learn.autocorrect import pretrained_path
+    from map2map.learn.ba.autocorrect import pretrained_path
 
     assert pretrained_path().stat().st_size <= 10 * 2**20
 
@@ -430,7 +430,7 @@ def test_ctrl_c_checkpoints_mid_epoch_and_resume_is_exact(monkeypatch, tmp_path)
     monkeypatch.setattr(T, "build_networks", build)
     with pytest.raises(KeyboardInterrupt):
         T.train_ba(data, tmp_path / "cut", TrainConfig(**cfg), progress=False, figures=False)
-    from map2map.learn.checkpoint import load_checkpoint
+    from map2map.learn.training.checkpoint import load_checkpoint
 
     _, state = load_checkpoint(tmp_path / "cut" / "last.safetensors")
     assert (state["epoch"], state["batch"]) == (0, 1)
@@ -443,7 +443,7 @@ def test_ctrl_c_checkpoints_mid_epoch_and_resume_is_exact(monkeypatch, tmp_path)
 
 
 def test_output_head_and_logits_stay_float32_under_bf16_autocast():
-    from map2map.learn.networks import MultiScaleDiscriminator, UNetGenerator
+    from map2map.learn.nets.networks import MultiScaleDiscriminator, UNetGenerator
 
     g = UNetGenerator(16, channels=8)
     d = MultiScaleDiscriminator(1, channels=8, n_layers=2)
@@ -459,7 +459,7 @@ def test_output_head_and_logits_stay_float32_under_bf16_autocast():
 
 def test_generator_fade_in_blends_resolutions():
     """Issue #15 hook: with alpha the finest block fades in; 0 is the coarser path."""
-    from map2map.learn.networks import UNetGenerator, area_downsample
+    from map2map.learn.nets.networks import UNetGenerator, area_downsample
 
     torch.manual_seed(0)
     g = UNetGenerator(32, channels=8, min_size=16)
@@ -477,7 +477,7 @@ def test_upsample2x_layout_choice_and_values():
     """The decoder's x2 upsampling: channels-last only for CUDA tensors with many maps of
     few pixels (where PyTorch's NCHW kernel starves); the values never depend on the layout
     (on CPU the channels-last kernel is checked against the NCHW one)."""
-    from map2map.learn.networks import _channels_last_faster, upsample2x
+    from map2map.learn.nets.networks import _channels_last_faster, upsample2x
 
     meta = torch.empty(1024, 64, 16, 16, device="meta")
     assert not _channels_last_faster(torch.empty(4, 64, 4, 4))  # CPU: never
@@ -492,7 +492,7 @@ def test_upsample2x_layout_choice_and_values():
 
 @pytest.mark.skipif(not torch.cuda.is_available(), reason="needs CUDA")
 def test_upsample2x_on_cuda_equals_interpolate():
-    from map2map.learn.networks import _channels_last_faster, upsample2x
+    from map2map.learn.nets.networks import _channels_last_faster, upsample2x
 
     for shape in ((1024, 64, 16, 16), (64, 32, 128, 128), (4, 1, 8, 8)):
         x = torch.randn(*shape, device="cuda", dtype=torch.bfloat16)
@@ -530,8 +530,8 @@ def test_exporters_write_fp16_with_header_and_refuse_the_other_model(tmp_path):
     from safetensors import safe_open
 
     from map2map.core.errors import InputError
-    from map2map.learn.autocorrect import export_model, pretrained_path
-    from map2map.learn.synthesize import export_ab_model
+    from map2map.learn.ab.synthesize import export_ab_model
+    from map2map.learn.ba.autocorrect import export_model, pretrained_path
 
     run = tmp_path / "run"
     T.train_ba(_pairs(6), run, TrainConfig(**{**TINY, "epochs": 1, "samples": 0}),

@@ -19,8 +19,8 @@ import torch.nn.functional as F  # noqa: E402
 from map2map.cli.main import main  # noqa: E402
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN  # noqa: E402
 from map2map.datasets.packed import PackedPairs, save_packed  # noqa: E402
-from map2map.learn import train_ab as TA  # noqa: E402
-from map2map.learn.progressive import (  # noqa: E402
+from map2map.learn.ab import train as TA  # noqa: E402
+from map2map.learn.nets.progressive import (  # noqa: E402
     TABLE_5_2,
     ABConfig,
     ProgMultiScaleDiscriminator,
@@ -212,7 +212,7 @@ def test_resume_mid_fade_continues_at_the_right_resolution_and_alpha(monkeypatch
     monkeypatch.setattr(TA, "gan_step", step)
     with pytest.raises(KeyboardInterrupt):
         TA.train_ab(data, tmp_path / "cut", ABConfig(**TINY), progress=False, figures=False)
-    from map2map.learn.checkpoint import load_checkpoint
+    from map2map.learn.training.checkpoint import load_checkpoint
 
     _, state = load_checkpoint(tmp_path / "cut" / "last.safetensors")
     assert (state["epoch"], state["batch"]) == (1, 2)
@@ -279,7 +279,7 @@ def _plan():
 
 @pytest.mark.filterwarnings("ignore::UserWarning")
 def test_synthesize_keeps_the_plan_frame_and_gives_seeded_distinct_hypotheses(tiny_run):
-    from map2map.learn.synthesize import load_ab_model, synthesize
+    from map2map.learn.ab.synthesize import load_ab_model, synthesize
 
     plan = _plan()
     with pytest.warns(UserWarning):
@@ -311,8 +311,8 @@ def test_synthesize_keeps_the_plan_frame_and_gives_seeded_distinct_hypotheses(ti
 @pytest.mark.filterwarnings("ignore::UserWarning")
 def test_synthesize_render_slam_draws_faces_and_plain_is_the_previous_output(tiny_run):
     from map2map.errors import InputError
-    from map2map.learn.slam_render import render_plain, render_slam
-    from map2map.learn.synthesize import load_ab_model, synthesize, synthesize_squares
+    from map2map.learn.ab.render import render_plain, render_slam
+    from map2map.learn.ab.synthesize import load_ab_model, synthesize, synthesize_squares
 
     net = load_ab_model(tiny_run)
     assert net.wall_px == pytest.approx(net.header["target_wall_px"])
@@ -336,10 +336,10 @@ def test_synthesize_render_slam_draws_faces_and_plain_is_the_previous_output(tin
 
 @pytest.mark.filterwarnings("ignore::UserWarning")
 def test_synthesize_drift_none_is_the_previous_output_and_parametric_drifts(tiny_run):
-    from map2map.learn.autocorrect import _square
-    from map2map.learn.drift import DriftParams, apply_drift, drift_field, drift_rng
-    from map2map.learn.slam_render import render
-    from map2map.learn.synthesize import load_ab_model, pairwise_disagreement, synthesize
+    from map2map.learn.ab.drift import DriftParams, apply_drift, drift_field, drift_rng
+    from map2map.learn.ab.render import render
+    from map2map.learn.ab.synthesize import load_ab_model, pairwise_disagreement, synthesize
+    from map2map.learn.ba.autocorrect import _square
 
     net = load_ab_model(tiny_run)
     plan = _plan()
@@ -381,9 +381,9 @@ def test_synthesize_drift_none_is_the_previous_output_and_parametric_drifts(tiny
 
 @pytest.mark.filterwarnings("ignore::UserWarning")
 def test_synthesize_rooms_drift_is_seeded_and_leaves_the_other_choices_alone(tiny_run):
-    from map2map.learn.drift import apply_drift, drift_field, drift_rng
-    from map2map.learn.room_drift import RoomDriftParams
-    from map2map.learn.synthesize import load_ab_model, synthesize, synthesize_squares
+    from map2map.learn.ab.drift import apply_drift, drift_field, drift_rng
+    from map2map.learn.ab.room_drift import RoomDriftParams
+    from map2map.learn.ab.synthesize import load_ab_model, synthesize, synthesize_squares
 
     net = load_ab_model(tiny_run)
     net.sample_many = _plan_drawer(net)
@@ -405,8 +405,8 @@ def test_synthesize_rooms_drift_is_seeded_and_leaves_the_other_choices_alone(tin
 @pytest.mark.filterwarnings("ignore::UserWarning")
 def test_synthesize_lidar_traces_are_seeded_metric_and_leave_traces_none_alone(tiny_run):
     from map2map.core.errors import InputError
-    from map2map.learn.slam_render import TraceParams, band_px
-    from map2map.learn.synthesize import load_ab_model, synthesize, synthesize_squares
+    from map2map.learn.ab.render import TraceParams, band_px
+    from map2map.learn.ab.synthesize import load_ab_model, synthesize, synthesize_squares
 
     net = load_ab_model(tiny_run)
     net.sample_many = _plan_drawer(net)
@@ -432,8 +432,8 @@ def test_synthesize_lidar_traces_are_seeded_metric_and_leave_traces_none_alone(t
                                                  traces="lidar", resolution=[0.03, 0.12]))
     assert band_px(0.03, TraceParams()) > 1.5 * band_px(0.12, TraceParams())
     # no strays, no rough edge, no inset: the band alone, thicker on the finer square
-    from map2map.learn.progressive import StochasticUNet
-    from map2map.learn.synthesize import ABModel
+    from map2map.learn.ab.synthesize import ABModel
+    from map2map.learn.nets.progressive import StochasticUNet
 
     sq = np.full((64, 64), UNKNOWN, np.uint8)
     sq[4:60, 4:60] = OCCUPIED
@@ -451,7 +451,7 @@ def test_synthesize_lidar_traces_are_seeded_metric_and_leave_traces_none_alone(t
 def _plan_drawer(net):
     """A stand-in for ``net.sample_many``: the input plans reduced to the output size,
     the same for every sample."""
-    from map2map.learn.data import reduce_input
+    from map2map.learn.training.data import reduce_input
 
     def sample_many(inputs, samples=1, seed=0):
         x = reduce_input(np.asarray(inputs, np.uint8), net.resolution, "area")
@@ -461,7 +461,7 @@ def _plan_drawer(net):
 
 
 def thicken_input(square, net):
-    from map2map.learn.synthesize import dataset_thicken
+    from map2map.learn.ab.synthesize import dataset_thicken
     from map2map.maps.preprocess import square_resize, thicken
 
     return thicken(square_resize(square, net.data_size), dataset_thicken(net.header))
@@ -469,8 +469,8 @@ def thicken_input(square, net):
 
 @pytest.mark.filterwarnings("ignore::UserWarning")
 def test_synthesize_squares_drifts_each_plan_at_its_resolution(tiny_run):
-    from map2map.learn.drift import DriftParams, drift_maps
-    from map2map.learn.synthesize import load_ab_model, synthesize_squares
+    from map2map.learn.ab.drift import DriftParams, drift_maps
+    from map2map.learn.ab.synthesize import load_ab_model, synthesize_squares
 
     net = load_ab_model(tiny_run)
     net.sample_many = _plan_drawer(net)                 # draws the plan (tiny net: nothing)
@@ -492,8 +492,8 @@ def test_synthesize_at_two_px_per_cell_draws_target_walls_without_the_coarse_war
     cell is 2 px, the simulated walls' thickness) draws its walls ``target_wall_px`` thick
     and is not called coarse; at 4 px a cell (the 64 px models) the warning stays."""
     from map2map.core.grid import OccupancyMap
-    from map2map.learn.postprocess import wall_thickness_px
-    from map2map.learn.synthesize import ABModel, synthesize
+    from map2map.learn.ab.synthesize import ABModel, synthesize
+    from map2map.learn.ba.postprocess import wall_thickness_px
 
     S = 64
     data = np.full((S, S), UNKNOWN, np.uint8)
@@ -571,7 +571,7 @@ def test_cli_synthesize_writes_maps_summary_and_figure(tiny_run, tmp_path, capsy
         ["plan_hyp00.png", "plan_hyp01.png", "plan_synthesize.json"]
     err = capsys.readouterr().err
     assert "mean pairwise disagreement" in err
-    from map2map.learn.autocorrect import pretrained_path
+    from map2map.learn.ba.autocorrect import pretrained_path
 
     bad = [["--samples", "0"], ["--model", str(pretrained_path())],
            ["--model", str(tmp_path / "nope")], ["--drift-scale", "-1"]]
@@ -609,13 +609,13 @@ def test_ddp_two_processes_gloo(tmp_path):
                           "trained"))]
     assert out.returncode == 0, "\n".join(cause[:40]) + "\n...\n" + out.stderr[-1500:]
     assert out.stderr.count("trained 2 epochs") == 1
-    from map2map.learn.synthesize import load_ab_model
+    from map2map.learn.ab.synthesize import load_ab_model
 
     assert load_ab_model(tmp_path / "run").resolution == 16
 
 
 def test_pretrained_weights_load_and_synthesize():
-    from map2map.learn.synthesize import load_ab_model, pretrained_ab_path, synthesize
+    from map2map.learn.ab.synthesize import load_ab_model, pretrained_ab_path, synthesize
 
     path = pretrained_ab_path()
     assert path.is_file() and path.stat().st_size <= 10 * 2**20
@@ -675,7 +675,7 @@ def test_decoder_growth_trains_feeds_full_size_inputs_and_loads(monkeypatch, tmp
     # D_d's input and the target at the stage's size, the generator's input always 16 px
     assert inputs == [(8, 8, 16)] * 3 + [(16, 16, 16)] * 6
     assert [r["resolution"] for r in res.history] == [8, 16, 16]
-    from map2map.learn.synthesize import load_ab_model, synthesize_squares
+    from map2map.learn.ab.synthesize import load_ab_model, synthesize_squares
 
     net = load_ab_model(tmp_path / "run")
     assert net.generator.growth == "decoder" and net.resolution == 16
@@ -690,7 +690,7 @@ def test_synthesize_thickens_the_plan_as_the_training_dataset_did(header):
     the shipped weights' header. synthesize read only ``dataset.thicken`` and fed those
     models plans 1 px thinner a side than they were trained on (fixed session 14)."""
     from map2map.core.grid import OccupancyMap
-    from map2map.learn.synthesize import ABModel, synthesize
+    from map2map.learn.ab.synthesize import ABModel, synthesize
 
     S = 64
     data = np.full((S, S), UNKNOWN, np.uint8)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN
-from map2map.learn.postprocess import (
+from map2map.learn.ba.postprocess import (
     _faces_kernel,
     _paint_walls,
     _surface_masks,
@@ -12,7 +12,7 @@ from map2map.learn.postprocess import (
 )
 
 pytest.importorskip("torch")
-from map2map.learn.autocorrect import dominant_angle  # noqa: E402
+from map2map.learn.ba.autocorrect import dominant_angle  # noqa: E402
 
 
 def _face(mask, top, offset, min_cover):
@@ -132,7 +132,7 @@ def test_faces_kernel_tilted_matches_reference(seed):
 
 
 def test_line_fit_trims_outliers():
-    from map2map.learn.postprocess import _line_fit
+    from map2map.learn.ba.postprocess import _line_fit
 
     x = np.arange(40, dtype=float)
     y = 0.05 * x + 3.0
@@ -162,7 +162,7 @@ def test_anchored_walls_follow_the_map_angle():
     and every straight wall gets the map's angle."""
     import cv2
 
-    from map2map.learn.postprocess import straight_segments
+    from map2map.learn.ba.postprocess import straight_segments
 
     img = np.full((200, 200), UNKNOWN, np.uint8)
     cv2.rectangle(img, (30, 40), (170, 160), FREE, -1)
@@ -180,7 +180,7 @@ def test_anchored_walls_follow_the_map_angle():
 
 
 def test_drop_free_specks():
-    from map2map.learn.postprocess import drop_free_specks
+    from map2map.learn.ba.postprocess import drop_free_specks
 
     g = np.full((30, 30), UNKNOWN, np.uint8)
     g[2:20, 2:28] = FREE
@@ -224,7 +224,7 @@ def test_dominant_angle_matches_the_complex_formula(angle):
 
 def test_autocorrect_many_same_with_any_number_of_threads():
     from map2map.core.grid import OccupancyMap
-    from map2map.learn.autocorrect import autocorrect_many
+    from map2map.learn.ba.autocorrect import autocorrect_many
 
     rng = np.random.default_rng(5)
     maps = []
@@ -249,7 +249,7 @@ def test_autocorrect_many_same_with_any_number_of_threads():
 def test_anchored_postprocess_leaves_no_free_specks():
     """Free pixels beyond an outer wall (rays through it) become unknown in the anchored
     output: the wall gets no second face there (before, it was drawn around them)."""
-    from map2map.learn.postprocess import postprocess
+    from map2map.learn.ba.postprocess import postprocess
 
     g = np.full((128, 128), UNKNOWN, np.uint8)
     g[20:100, 20:100] = FREE
@@ -331,7 +331,7 @@ def test_collinear_faces_snap_pieces_of_one_line():
     """Pieces of one wall line displaced by drift go to their length-weighted mean line
     (the long piece dominates); a face farther than ``tol`` and a face of the other side
     stay; with ``gap`` a piece far along the line is its own group."""
-    from map2map.learn.postprocess import collinear_faces
+    from map2map.learn.ba.postprocess import collinear_faces
 
     h = np.array([True, True, True, True, False])
     side = np.array([0, 0, 0, 1, 0])
@@ -345,7 +345,7 @@ def test_collinear_faces_snap_pieces_of_one_line():
 @pytest.mark.parametrize("seed", range(4))
 def test_collinear_faces_matches_the_loop(seed):
     """The vectorised grouping gives the plain loop's faces on random face sets."""
-    from map2map.learn.postprocess import collinear_faces
+    from map2map.learn.ba.postprocess import collinear_faces
 
     rng = np.random.default_rng(seed)
     n = 60
@@ -372,7 +372,7 @@ def test_collinear_faces_follow_the_map_angle():
     """On a map turned by its heading error the faces of one line differ by the slope
     times their distance along it: they are compared where their line crosses the axis,
     so collinear tilted pieces stay where they are and a displaced one joins them."""
-    from map2map.learn.postprocess import collinear_faces
+    from map2map.learn.ba.postprocess import collinear_faces
 
     q = 0.05
     lo, hi = np.array([0, 100, 200]), np.array([59, 159, 259])
@@ -429,7 +429,7 @@ def test_anchored_output_has_no_unknown_pocket_where_the_input_is_free(monkeypat
     """The network's unknown inside a room the input shows free (far from walls, so the
     streak rule makes it unknown) goes back to free: a plan has no such pocket."""
     from map2map.core.grid import FREE, OCCUPIED, UNKNOWN
-    from map2map.learn import postprocess as pp
+    from map2map.learn.ba import postprocess as pp
 
     guide = np.full((64, 64), UNKNOWN, np.uint8)
     guide[8:57, 8:57] = OCCUPIED

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN
-from map2map.learn.data import downsample_target
-from map2map.learn.postprocess import postprocess
-from map2map.learn.synthetic import make_pair
+from map2map.learn.ba.postprocess import postprocess
+from map2map.learn.training.data import downsample_target
+from map2map.learn.training.synthetic import make_pair
 from map2map.maps.segments import straight_segments
 
 
@@ -109,7 +109,7 @@ def test_imagined_wall_across_a_room_seen_free_has_no_segment():
 
 
 def test_drawn_pieces_cut_at_gaps():
-    from map2map.learn.postprocess import drawn_pieces
+    from map2map.learn.ba.postprocess import drawn_pieces
 
     occ = np.zeros((10, 40), bool)
     occ[4, 2:10] = occ[4, 20:28] = True
@@ -195,7 +195,7 @@ def _drawn_pieces_numpy(segs, occ):
 def test_drawn_pieces_kernel_equals_the_numpy_reference():
     """Bit for bit, on random and axis-aligned segments (integer and half-pixel ends,
     segments leaving the grid, points) over random walls."""
-    from map2map.learn.postprocess import drawn_pieces
+    from map2map.learn.ba.postprocess import drawn_pieces
 
     rng = np.random.default_rng(3)
     for trial in range(30):
@@ -243,7 +243,7 @@ def test_join_supported_bridges_hough_cuts_but_not_doors():
 
 
 def test_anchored_walls_join_a_wall_hough_cut_at_a_t_junction(monkeypatch):
-    from map2map.learn import postprocess as P
+    from map2map.learn.ba import postprocess as P
 
     guide = np.full((80, 80), FREE, np.uint8)
     guide[10:70, 20:22] = OCCUPIED                         # a whole wall in the input ...

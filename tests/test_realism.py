@@ -12,7 +12,7 @@ from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from map2map.datasets.build import build_dataset, pair_dir
 from map2map.datasets.pair import BuildParams, read_pair_meta
 from map2map.datasets.rerun import rerun_pair
-from map2map.learn.realism import (
+from map2map.experiments.realism.measure import (
     STATS,
     TARGET_RATIO,
     NullRatios,
@@ -135,8 +135,8 @@ def test_simulated_references_are_cached(tiny_dataset, tmp_path, monkeypatch):
 
 def _untrained(size):
     torch = pytest.importorskip("torch")
-    from map2map.learn.progressive import StochasticUNet
-    from map2map.learn.synthesize import ABModel
+    from map2map.learn.ab.synthesize import ABModel
+    from map2map.learn.nets.progressive import StochasticUNet
 
     torch.manual_seed(0)
     return ABModel(StochasticUNet(size=16, channels=8), resolution=16, alpha=1.0,
@@ -145,7 +145,7 @@ def _untrained(size):
 
 def test_fig514_from_a_dataset_and_from_plans(tiny_dataset, tmp_path):
     from map2map.datasets.build import open_dataset
-    from map2map.learn.fig514 import METHODS, run_fig514
+    from map2map.experiments.fig514.measure import METHODS, run_fig514
 
     with open_dataset(tiny_dataset) as man:
         split = man.rows("done")[0]["split"]
@@ -175,8 +175,8 @@ def test_fig514_from_a_dataset_and_from_plans(tiny_dataset, tmp_path):
 def test_native_seen_maps_the_plans_own_exploration_onto_the_square(tiny_dataset):
     from map2map.datasets.build import open_dataset
     from map2map.datasets.pair import crop_box, preprocess_pair
-    from map2map.learn.coverage import ExploreParams
-    from map2map.learn.realism import native_seen
+    from map2map.experiments.realism.measure import native_seen
+    from map2map.learn.ab.coverage import ExploreParams
     from map2map.maps.formats import load_map
 
     with open_dataset(tiny_dataset) as man:
@@ -207,7 +207,7 @@ def ndimage_far(known: np.ndarray, d: int) -> np.ndarray:
 
 
 def test_synthesize_squares_hides_what_given_seen_cells_leave_out():
-    from map2map.learn.synthesize import synthesize_squares
+    from map2map.learn.ab.synthesize import synthesize_squares
 
     net = _untrained(32)
     plans = np.stack([_plan(32)] * 2)
@@ -219,7 +219,7 @@ def test_synthesize_squares_hides_what_given_seen_cells_leave_out():
     assert np.array_equal(out[0], ref[0])                    # all seen: nothing hidden
     from scipy import ndimage
 
-    from map2map.learn.coverage import ExploreParams
+    from map2map.learn.ab.coverage import ExploreParams
 
     k = ExploreParams().margin(net.wall_px)                  # the rendered walls' band
     keep = ndimage.binary_dilation(seen[1], np.ones((3, 3), bool), iterations=k)
@@ -233,7 +233,7 @@ def test_synthesize_squares_hides_what_given_seen_cells_leave_out():
 
 def test_fig514_draws_model_ab_as_synthesize_does(tiny_dataset):
     from map2map.datasets.build import open_dataset
-    from map2map.learn.fig514 import run_fig514
+    from map2map.experiments.fig514.measure import run_fig514
 
     with open_dataset(tiny_dataset) as man:
         split = man.rows("done")[0]["split"]

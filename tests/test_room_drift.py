@@ -1,4 +1,4 @@
-"""Room-wise rigid drift (map2map.learn.room_drift): rooms from the plan, seeded draws,
+"""Room-wise rigid drift (map2map.learn.ab.room_drift): rooms from the plan, seeded draws,
 nearly rigid inside rooms, walls not torn, wired into drift_params / drift_field /
 apply_drift. No torch needed."""
 
@@ -8,8 +8,8 @@ from scipy import ndimage
 
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from map2map.errors import InputError
-from map2map.learn.drift import DriftParams, apply_drift, drift_field, drift_params, drift_rng
-from map2map.learn.room_drift import (
+from map2map.learn.ab.drift import DriftParams, apply_drift, drift_field, drift_params, drift_rng
+from map2map.learn.ab.room_drift import (
     RoomDriftParams,
     apply_room_drift,
     room_adjacency,

@@ -1,4 +1,4 @@
-"""Model_AB's resolution raising with SLAM-like walls (map2map.learn.slam_render), on
+"""Model_AB's resolution raising with SLAM-like walls (map2map.learn.ab.render), on
 hand-made network outputs (numpy only, no torch)."""
 
 from __future__ import annotations
@@ -8,8 +8,7 @@ import pytest
 from scipy import ndimage
 
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN
-from map2map.learn.postprocess import wall_thickness_px
-from map2map.learn.slam_render import (
+from map2map.learn.ab.render import (
     class_memberships,
     render,
     render_plain,
@@ -17,6 +16,7 @@ from map2map.learn.slam_render import (
     save_render_figure,
     snap,
 )
+from map2map.learn.ba.postprocess import wall_thickness_px
 
 
 def _rooms(n: int = 16) -> np.ndarray:
@@ -108,7 +108,7 @@ def _block(n: int = 16) -> np.ndarray:
 
 
 def test_metric_band_is_thinner_in_px_on_coarser_squares():
-    from map2map.learn.slam_render import TraceParams, band_px, trace_rng
+    from map2map.learn.ab.render import TraceParams, band_px, trace_rng
 
     tp = TraceParams(floor_px=1.0, wall_m=0.05)
     assert band_px(0.025, tp) == pytest.approx(3.0) and band_px(0.1, tp) == pytest.approx(1.5)
@@ -119,7 +119,7 @@ def test_metric_band_is_thinner_in_px_on_coarser_squares():
 
 
 def test_ragged_edge_draws_fractional_bands_seeded_and_keeps_every_face():
-    from map2map.learn.slam_render import trace_rng
+    from map2map.learn.ab.render import trace_rng
 
     plain = render_slam(_block(), 128, 1.5)             # floored: 1 px
     a = render_slam(_block(), 128, 1.5, 1.0, trace_rng(3, 0))
@@ -140,8 +140,8 @@ def test_ragged_edge_draws_fractional_bands_seeded_and_keeps_every_face():
 
 
 def test_stray_hits_land_off_the_walls_on_unknown_or_free_space_only():
-    from map2map.learn.realism import map_stats
-    from map2map.learn.slam_render import TraceParams, stray_hits, trace_rng
+    from map2map.experiments.realism.measure import map_stats
+    from map2map.learn.ab.render import TraceParams, stray_hits, trace_rng
 
     m = render_slam(_block(32), 256, 2.0).map
     plan = m.copy()                                    # the map itself as the plan
@@ -189,7 +189,7 @@ def test_inset_leaves_thin_walls_whole():
 
 
 def test_stray_hits_without_a_wall_face_go_to_the_rooms_or_nowhere():
-    from map2map.learn.slam_render import TraceParams, stray_hits, trace_rng
+    from map2map.learn.ab.render import TraceParams, stray_hits, trace_rng
 
     tp = TraceParams(strays=30.0, stray_spread=0.0)
     m = np.full((64, 64), UNKNOWN, np.uint8)

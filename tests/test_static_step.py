@@ -1,4 +1,4 @@
-"""The CUDA-graph-ready training step (:mod:`map2map.learn.static_step`): run eagerly it is
+"""The CUDA-graph-ready training step (:mod:`map2map.learn.training.static_step`): run eagerly it is
 bit for bit today's ``gan_step`` (Model_BA; Model_AB with a fade-in alpha, dropout and
 the decoder growth's full-size input), a training run with ``cuda_graph`` equals one
 without, a capture failure falls back to eager steps, the op counter counts. On a CUDA
@@ -15,13 +15,13 @@ pytest.importorskip("safetensors")
 
 from test_learn_ab import _pairs  # noqa: E402  (boxes with walls, shifted speckled copies)
 
-from map2map.learn.checkpoint import load_checkpoint  # noqa: E402
-from map2map.learn.config import TrainConfig  # noqa: E402
-from map2map.learn.loop import gan_step, place_networks, step_autocast  # noqa: E402
-from map2map.learn.progressive import ABConfig, build_ab_networks  # noqa: E402
-from map2map.learn.static_step import StaticStep, count_ops  # noqa: E402
-from map2map.learn.train import build_networks, train_ba  # noqa: E402
-from map2map.learn.train_ab import train_ab  # noqa: E402
+from map2map.learn.ab.train import train_ab  # noqa: E402
+from map2map.learn.ba.train import build_networks, train_ba  # noqa: E402
+from map2map.learn.nets.progressive import ABConfig, build_ab_networks  # noqa: E402
+from map2map.learn.training.checkpoint import load_checkpoint  # noqa: E402
+from map2map.learn.training.config import TrainConfig  # noqa: E402
+from map2map.learn.training.loop import gan_step, place_networks, step_autocast  # noqa: E402
+from map2map.learn.training.static_step import StaticStep, count_ops  # noqa: E402
 
 CPU = torch.device("cpu")
 
@@ -218,7 +218,7 @@ class _Emulation:
     def __init__(self, monkeypatch):
         import contextlib
 
-        import map2map.learn.static_step as SS
+        import map2map.learn.training.static_step as SS
 
         self.captures, self.replays = 0, 0
         real_eager = SS.StaticStep._eager

@@ -1,5 +1,5 @@
-"""Table 5.3 as a library (map2map.learn.table53) and the input-anchored walls of
-autocorrect's post-processing (map2map.learn.postprocess.anchored_walls)."""
+"""Table 5.3 as a library (map2map.experiments.table53.measure) and the input-anchored walls of
+autocorrect's post-processing (map2map.learn.ba.postprocess.anchored_walls)."""
 
 from __future__ import annotations
 
@@ -13,12 +13,12 @@ from map2map.core.grid import FREE, OCCUPIED, UNKNOWN  # noqa: E402
 from map2map.datasets.build import pair_dir  # noqa: E402
 from map2map.datasets.manifest import Manifest  # noqa: E402
 from map2map.datasets.packed import PackedPairs  # noqa: E402
-from map2map.learn.postprocess import anchored_walls, postprocess  # noqa: E402
-from map2map.learn.table53 import (  # noqa: E402
+from map2map.experiments.table53.measure import (  # noqa: E402
     heldout_pairs_from_dataset,
     merge_pairs,
     run_table53,
 )
+from map2map.learn.ba.postprocess import anchored_walls, postprocess  # noqa: E402
 
 
 def _plan(n=96, seed=0) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""Table 5.3 on real maps (map2map.learn.table53_real): a generated pair with a known
+"""Table 5.3 on real maps (map2map.experiments.table53_real.measure): a generated pair with a known
 ground truth, and one real Halmstad map when the shared data is there."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ pytest.importorskip("torch")
 
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap  # noqa: E402
 from map2map.evaluate.nonrigid import warp_image  # noqa: E402
-from map2map.learn.table53_real import (  # noqa: E402
+from map2map.experiments.table53_real.measure import (  # noqa: E402
     real_pair_row,
     run_table53_real,
     summarise_real,
@@ -69,7 +69,7 @@ def test_a_dropped_wall_shows_in_the_guards():
 @pytest.mark.filterwarnings("ignore::UserWarning")
 def test_autocorrect_does_not_read_the_resolution():
     """What the docs state: the output pixels are the same at any metres per pixel."""
-    from map2map.learn.autocorrect import autocorrect
+    from map2map.learn.ba.autocorrect import autocorrect
 
     plan = _plan()
     a = autocorrect(OccupancyMap(plan, 0.05))

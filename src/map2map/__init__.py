@@ -46,8 +46,8 @@ _LAZY = {
     "evaluate_maps": "map2map.evaluate.pipeline",
     "run_align": "map2map.jobs.evaluate",
     "run_evaluate": "map2map.jobs.evaluate",
-    "autocorrect": "map2map.learn.autocorrect",
-    "train_ba": "map2map.learn.train",
+    "autocorrect": "map2map.learn.ba.autocorrect",
+    "train_ba": "map2map.learn.ba.train",
 }
 
 __all__ = [

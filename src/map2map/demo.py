@@ -359,8 +359,8 @@ def stage_autocorrect(ctx: DemoContext) -> None:
         ctx.say("autocorrect: no SLAM map in this demo run; skipped")
         return
     try:
-        from .learn.autocorrect import autocorrect_many, save_segments_dxf
-        from .learn.figures import save_before_after
+        from .learn.ba.autocorrect import autocorrect_many, save_segments_dxf
+        from .learn.training.figures import save_before_after
     except ImportError:
         ctx.say("autocorrect: PyTorch not installed (pip install -e '.[learn]'); skipped")
         return

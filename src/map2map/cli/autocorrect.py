@@ -56,8 +56,8 @@ def run(args: argparse.Namespace) -> int:
     from ..maps.formats import check_output_path, save_map
 
     try:
-        from ..learn.autocorrect import autocorrect_many, load_model, save_segments_dxf
-        from ..learn.figures import save_before_after
+        from ..learn.ba.autocorrect import autocorrect_many, load_model, save_segments_dxf
+        from ..learn.training.figures import save_before_after
     except ImportError as exc:
         raise InputError("autocorrect", f"needs PyTorch: pip install 'map2map[learn]' ({exc})"
                          ) from None

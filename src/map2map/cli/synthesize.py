@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     from ..maps.formats import check_output_path, save_map
 
     try:
-        from ..learn.synthesize import save_synthesis_figure, synthesize
+        from ..learn.ab.synthesize import save_synthesis_figure, synthesize
     except ImportError as exc:
         raise InputError("synthesize", f"needs PyTorch: pip install 'map2map[learn]' ({exc})"
                          ) from None

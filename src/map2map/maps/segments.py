@@ -6,7 +6,7 @@ Hough transform, ``cv2.HoughLinesP``), makes a segment within
 :data:`AXIS_TOLERANCE_DEG` of horizontal or vertical exactly so at its mean coordinate,
 merges collinear overlapping segments and moves a segment end that stops short of (or
 overshoots) a perpendicular wall onto it, so corners and T-junctions close. Step 3 of
-Model_BA's post-processing (thesis sec. 3.1, :mod:`map2map.learn.postprocess`) and the
+Model_BA's post-processing (thesis sec. 3.1, :mod:`map2map.learn.ba.postprocess`) and the
 wall segments of the as-built inspection report (:mod:`map2map.reports.inspection`)
 both use it. Coordinates are pixels: ``x`` = column, ``y`` = row.
 

@@ -5,11 +5,11 @@ and, on the same plans and the same trajectory, the parametric model's map and a
 simulated SLAM map (Fig. 5.14): "both methods give very realistic results", the
 parametric one closer to the simulation of the same trajectory, Model_AB better at
 removed walls and room shrinkage, the parametric one better at doors. Here:
-:func:`map2map.learn.fig514.run_fig514` on generated plans never used in training: each
+:func:`map2map.experiments.fig514.measure.run_fig514` on generated plans never used in training: each
 plan simulated (TurtleBot3, 7 minutes, 180 degrees, ``rbpf``, as ``map2map dataset
 build``), the parametric model (additive) driven along the simulation's own trajectory,
 Model_AB's single output (pretrained weights) warped along a parametric drift field
-(:mod:`map2map.learn.drift`, ``run_fig514``'s default), all three preprocessed alike (thesis 4.1)
+(:mod:`map2map.learn.ab.drift`, ``run_fig514``'s default), all three preprocessed alike (thesis 4.1)
 and measured against the plan the same way: the appendix paper's metric (mean local
 error, px) and wall recall / precision at 2 px.
 
@@ -35,7 +35,7 @@ PLAN_SEED = 200_000
 def run(ctx: Context, out: Output) -> None:
     need_torch()
     from map2map.datasets.pair import BuildParams
-    from map2map.learn.fig514 import METHOD_TITLES, METHODS, run_fig514
+    from map2map.experiments.fig514.measure import METHOD_TITLES, METHODS, run_fig514
     from map2map.maps.floorplan import generate_floorplan
 
     n = ctx.size(4, 2, 1)

@@ -9,7 +9,7 @@ Here: held-out simulated pairs made for the run (:func:`map2map.datasets.build.b
 with ``map2map dataset build``'s defaults -- TurtleBot3, 7 minutes, 180 degrees, ``rbpf``,
 256 px -- on generated plans of a dataset seed never trained on), the maps whose
 exploration finished (coverage of the reachable free space >= 0.8, the cleaner's label:
-the thesis cleaned its data too), and :func:`map2map.learn.table53.run_table53` with the
+the thesis cleaned its data too), and :func:`map2map.experiments.table53.measure.run_table53` with the
 pretrained Model_BA: the same metric (chosen chain's mean, px), the one-sided sign test,
 and the wall guards (recall, boundary F1) against outputs that score low by losing walls.
 
@@ -45,7 +45,7 @@ def heldout_simulated(ctx: Context, want: int, build: int):
     from map2map.datasets.clean import COVERAGE_COMPLETE
     from map2map.datasets.packed import PackedPairs
     from map2map.datasets.pair import BuildParams
-    from map2map.learn.table53 import heldout_pairs_from_dataset
+    from map2map.experiments.table53.measure import heldout_pairs_from_dataset
 
     params = BuildParams() if not ctx.tiny else BuildParams(duration=60.0, size=64)
     ds = ctx.work / "heldout"
@@ -66,7 +66,7 @@ def heldout_simulated(ctx: Context, want: int, build: int):
 
 def run(ctx: Context, out: Output) -> None:
     need_torch()
-    from map2map.learn.table53 import run_table53
+    from map2map.experiments.table53.measure import run_table53
 
     want, build = ctx.size((20, 32), (6, 10), (2, 2))
     pairs, built = heldout_simulated(ctx, want, build)
@@ -150,7 +150,7 @@ def spread_sentence(median: float, p: float) -> str:
 def _provisional() -> bool:
     """The shipped Model_BA's note says PROVISIONAL."""
     try:
-        from map2map.learn.autocorrect import load_model
+        from map2map.learn.ba.autocorrect import load_model
 
         return "PROVISIONAL" in str(load_model("pretrained").header.get("note", ""))
     except Exception:  # no header or unreadable: say nothing

@@ -5,14 +5,14 @@ The objective is eq. 3.2 with the roles of the maps swapped against Model_BA: th
 ``x`` is the plan (``a`` of the packed pairs), the target ``y`` the SLAM map (``b``).
 ``D_d`` (eq. 3.3, with false targets: other plans' SLAM maps), ``D_r`` (eq. 3.4), feature
 matching (3.5), input consistency (3.6) and L1 (3.7) are the functions of
-:mod:`~map2map.learn.losses`; the networks are those of :mod:`~map2map.learn.progressive`
+:mod:`~map2map.learn.nets.losses`; the networks are those of :mod:`~map2map.learn.nets.progressive`
 (generator and both discriminators grown coarse to fine, each new block faded in).
 
-The training loop is the one Model_BA uses (:mod:`~map2map.learn.loop`; this module
+The training loop is the one Model_BA uses (:mod:`~map2map.learn.training.loop`; this module
 states only the stages, the fade-in and the stage switches): data resident on the device
-(:class:`~map2map.learn.data.ResidentPairs`, one per stage, built when the stage starts),
+(:class:`~map2map.learn.training.data.ResidentPairs`, one per stage, built when the stage starts),
 Adam 2e-4 / (0.55, 0.99) with the learning rate a pure function of the epoch
-(:func:`~map2map.learn.config.lr_factor` over all the epochs), safetensors checkpoints
+(:func:`~map2map.learn.training.config.lr_factor` over all the epochs), safetensors checkpoints
 written atomically after every epoch and on Ctrl-C, exact ``--resume`` (the dropout's
 random state is saved too; the stage and the fade-in alpha are functions of (epoch,
 batch), so nothing else has to be stored), DDP under
@@ -45,11 +45,12 @@ import os
 
 import torch
 
-from ..core.errors import InputError
-from ..datasets.packed import PackedPairs
-from .data import ResidentPairs
-from .figures import save_loss_curves
-from .loop import (
+from ...core.errors import InputError
+from ...datasets.packed import PackedPairs
+from ..nets.progressive import ABConfig, build_ab_networks, fade_alpha, fade_steps, stage_of
+from ..training.data import ResidentPairs
+from ..training.figures import save_loss_curves
+from ..training.loop import (
     EpochPlan,
     GANRun,
     RunStart,
@@ -58,7 +59,6 @@ from .loop import (
     gan_step,
     open_run,
 )
-from .progressive import ABConfig, build_ab_networks, fade_alpha, fade_steps, stage_of
 
 __all__ = ["train_ab", "gan_step", "save_prog_loss_curves", "FORMAT_AB", "schedule_table"]
 
@@ -91,7 +91,7 @@ def save_prog_loss_curves(history: list[dict], path: str | os.PathLike,
                           title: str = "Model_AB") -> None:
     """G and D losses per epoch as thesis Fig. 5.1, a dashed line and the new resolution
     at every stage switch, the terms of eq. 3.2 in a second panel
-    (:func:`~map2map.learn.figures.save_loss_curves` with Fig. 5.1's title).
+    (:func:`~map2map.learn.training.figures.save_loss_curves` with Fig. 5.1's title).
 
     Examples
     --------
@@ -106,7 +106,7 @@ def save_prog_loss_curves(history: list[dict], path: str | os.PathLike,
 
 
 def model_header_ab(cfg: ABConfig, meta: dict, extra: dict) -> dict:
-    """The JSON stored with the generator: what :func:`~map2map.learn.synthesize.synthesize`
+    """The JSON stored with the generator: what :func:`~map2map.learn.ab.synthesize.synthesize`
     needs and where it came from."""
     return {"format": FORMAT_AB,
             "generator": dict(size=cfg.size, channels=cfg.g_channels,

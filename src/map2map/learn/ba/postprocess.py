@@ -103,8 +103,8 @@ import numpy as np
 from numba import njit
 from scipy import ndimage
 
-from ..core.grid import FREE, OCCUPIED, UNKNOWN
-from ..maps.segments import join_supported, straight_segments
+from ...core.grid import FREE, OCCUPIED, UNKNOWN
+from ...maps.segments import join_supported, straight_segments
 
 __all__ = ["postprocess", "wall_thickness_px", "straight_segments", "anchored_walls",
            "map_tilt", "drop_free_specks", "collinear_faces", "thicken_two_sided",
@@ -608,7 +608,7 @@ def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px:
     With ``tilt`` (default), the faces are straight lines at the **map's own wall
     angle** rather than along the pixel grid: a SLAM map is turned against its plan by
     its heading error (the metric's rigid alignment turns 22 of the 38 val maps of the
-    gen6300 build by 1 to 7.6 degrees; :func:`~map2map.learn.autocorrect.autocorrect`
+    gen6300 build by 1 to 7.6 degrees; :func:`~map2map.learn.ba.autocorrect.autocorrect`
     deskews anchored maps only beyond 6), and a face made exactly horizontal on a wall
     turned by 2 degrees leaves it, across a 100 px wall, up to 1.7 px off at its ends.
     The angle is one for the map (the building's walls are parallel or perpendicular,
@@ -1023,7 +1023,7 @@ def postprocess(output: np.ndarray, shape: tuple[int, int], guide: np.ndarray | 
     Parameters
     ----------
     output : ndarray (s, s) float
-        The generator's output as grey values (:func:`map2map.learn.networks.from_unit`).
+        The generator's output as grey values (:func:`map2map.learn.nets.networks.from_unit`).
     shape : (H, W)
         The working frame to return to.
     guide : ndarray (H, W) uint8, optional
@@ -1039,7 +1039,7 @@ def postprocess(output: np.ndarray, shape: tuple[int, int], guide: np.ndarray | 
     thick_px : float, optional
         The same, for the thickness two-sided walls are grown to in step 4b
         (``ANCHOR_MIN_THICK``; default ``data_px``): with ``wall_px`` what
-        :func:`~map2map.learn.autocorrect.autocorrect`'s ``thickness`` sets.
+        :func:`~map2map.learn.ba.autocorrect.autocorrect`'s ``thickness`` sets.
     open_frontiers : bool
         Step 4b leaves out the network's walls at the edge of the input's known area or
         beyond it (:func:`frontier_walls`).

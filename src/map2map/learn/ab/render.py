@@ -3,7 +3,7 @@
 map's, not like the plan's.
 
 The thesis raises Model_32's output to the input's resolution and removes the blur
-(:mod:`map2map.learn.postprocess` does it for Model_BA, whose targets are plans with thick
+(:mod:`map2map.learn.ba.postprocess` does it for Model_BA, whose targets are plans with thick
 walls). Model_AB's targets are SLAM maps, and a SLAM map's walls are what the laser traced:
 the faces of the walls that border mapped free space, about two pixels thick (the
 simulated maps of the datasets: 2.1 px at 256 px), with unknown space behind a face where
@@ -23,7 +23,7 @@ simulated 2.1 px, the realism table's worst ratio). :func:`render_slam` does, in
 3. **Faces**: the distance ``d`` of every pixel to the nearest free pixel (Euclidean
    distance transform). An occupied pixel is kept as a wall if ``d <= wall_px``: the band
    of the given thickness along every face that borders free space. ``wall_px`` is the
-   training targets' wall thickness (:func:`~map2map.learn.postprocess.wall_thickness_px`
+   training targets' wall thickness (:func:`~map2map.learn.ba.postprocess.wall_thickness_px`
    of the SLAM maps, measured when the model was trained and stored in its header as
    ``target_wall_px``; :data:`DEFAULT_WALL_PX` for weights without it), scaled to the
    output frame. Every occupied pixel touching free space (``d = 1``) is kept, so no wall
@@ -37,7 +37,7 @@ Free and unknown space are those of step 2. :func:`render_plain` is the previous
 --render plain``.
 
 **LIDAR traces** (:class:`TraceParams`, ``synthesize(..., traces="lidar")``, the default
-of :func:`~map2map.learn.synthesize.synthesize` since session 11; :func:`render_slam`
+of :func:`~map2map.learn.ab.synthesize.synthesize` since session 11; :func:`render_slam`
 alone draws none of them unless asked; issue #15, docs/learn_ab.md "Rendering what a
 LIDAR leaves", where the defaults were tuned on gen900 val): what a LIDAR + SLAM run
 leaves on a grid map beyond the wall faces, measured on the simulated maps of the
@@ -80,7 +80,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from ..core.grid import FREE, OCCUPIED, UNKNOWN
+from ...core.grid import FREE, OCCUPIED, UNKNOWN
 
 __all__ = ["RENDERS", "TRACES", "DEFAULT_WALL_PX", "SlamRender", "TraceParams", "snap",
            "class_memberships", "render_slam", "render_plain", "render", "band_px",
@@ -107,7 +107,7 @@ class TraceParams:
         Band thickness at any resolution (px of the output square): the one pixel a
         hit cell keeps after the square's resize. 1.2 was tuned for the session-9
         weights while the room drift's parametric field squeezed walls by ~15 %; with
-        :class:`~map2map.learn.room_drift.RoomDriftParams` ``conserve=True`` 0.85 draws
+        :class:`~map2map.learn.ab.room_drift.RoomDriftParams` ``conserve=True`` 0.85 draws
         the simulated thickness (session 12); 1.05 for the weights shipped in session
         13, whose network walls are ~0.15 px thicker (docs/learn_ab.md).
     wall_m : float
@@ -482,7 +482,7 @@ def save_render_figure(grey: np.ndarray, result: SlamRender, path: str | os.Path
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from ..core._io import atomic_path
+    from ...core._io import atomic_path
 
     size = result.map.shape[0]
     dropped = (result.snapped == OCCUPIED) & (result.map != OCCUPIED)

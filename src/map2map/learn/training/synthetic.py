@@ -14,7 +14,7 @@ Examples
 --------
 >>> pairs = make_pairs(3, size=64, seed=0, progress=False)
 >>> pairs.a.shape, sorted(set(pairs.split.tolist())), pairs.meta["generator"]
-((3, 64, 64), ['test', 'train', 'val'], 'map2map.learn.synthetic.make_pairs')
+((3, 64, 64), ['test', 'train', 'val'], 'map2map.learn.training.synthetic.make_pairs')
 """
 
 from __future__ import annotations
@@ -22,9 +22,9 @@ from __future__ import annotations
 import numpy as np
 from tqdm.auto import tqdm
 
-from ..datasets.packed import PackedPairs
-from ..maps.floorplan import generate_floorplan
-from ..maps.preprocess import preprocess
+from ...datasets.packed import PackedPairs
+from ...maps.floorplan import generate_floorplan
+from ...maps.preprocess import preprocess
 
 __all__ = ["make_pairs", "make_pair"]
 
@@ -39,8 +39,8 @@ def make_pair(seed: int, size: int = 256, thicken: int = 1, tour: int = 5,
     >>> a.shape == b.shape == (32, 32)
     True
     """
-    from ..parametric.params import ParametricParams
-    from ..parametric.pipeline import deform, make_trajectory
+    from ...parametric.params import ParametricParams
+    from ...parametric.pipeline import deform, make_trajectory
 
     rng = np.random.default_rng(seed)
     kind = kind or ("office" if rng.random() < 0.25 else "apartment")
@@ -74,6 +74,6 @@ def make_pairs(n: int, size: int = 256, seed: int = 0, *, thicken: int = 1,
     order = np.random.default_rng(seed).permutation(n)
     split = split[np.argsort(order)]
     plan_id = np.array([f"synthetic-{seed + i}" for i in range(n)])
-    meta = {"generator": "map2map.learn.synthetic.make_pairs", "n": n, "size": size,
+    meta = {"generator": "map2map.learn.training.synthetic.make_pairs", "n": n, "size": size,
             "seed": seed, "thicken": thicken}
     return PackedPairs(a, b, plan_id, split, meta)

@@ -26,9 +26,9 @@ For one plan and one random generator (:func:`drift_field`, settings
 4. optionally smoothed (``smooth_m``), resized (``magnitude_px``, ``resolution_ref``)
    and scaled by ``scale`` (1: the parametric model's own magnitude).
 
-``drift="rooms"`` (:class:`~map2map.learn.room_drift.RoomDriftParams`) draws instead one
+``drift="rooms"`` (:class:`~map2map.learn.ab.room_drift.RoomDriftParams`) draws instead one
 rigid transform per room of the plan, chained along a walk through the doors and blended
-across the walls (:mod:`map2map.learn.room_drift`), plus by default this module's field
+across the walls (:mod:`map2map.learn.ab.room_drift`), plus by default this module's field
 smoothed 0.2 m: the simulated maps' wall error without torn walls (opt-in; docs/learn_ab.md,
 "Room-wise drift").
 
@@ -68,12 +68,12 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy import ndimage
 
-from ..core.errors import InputError
-from ..core.grid import OccupancyMap
-from ..parametric.field import DisplacementField, warp_map
-from ..parametric.params import ParametricParams
-from ..parametric.pipeline import METHODS, deform, make_trajectory
-from ..trajectory.timing import Trajectory
+from ...core.errors import InputError
+from ...core.grid import OccupancyMap
+from ...parametric.field import DisplacementField, warp_map
+from ...parametric.params import ParametricParams
+from ...parametric.pipeline import METHODS, deform, make_trajectory
+from ...trajectory.timing import Trajectory
 from .room_drift import (
     RoomDrift,
     RoomDriftParams,
@@ -86,8 +86,8 @@ __all__ = ["DRIFTS", "DRIFT_METHODS", "COVERAGES", "DEFAULT_FOV_DEG", "TUNED_ON_
            "DEFAULT_SQUARE_RESOLUTION", "DriftParams", "DriftField", "drift_params",
            "drift_rng", "drift_field", "apply_drift", "drift_maps"]
 
-#: ``drift`` choices of :func:`map2map.learn.synthesize.synthesize` (``"rooms"``: the
-#: room-wise rigid drift of :mod:`map2map.learn.room_drift`).
+#: ``drift`` choices of :func:`map2map.learn.ab.synthesize.synthesize` (``"rooms"``: the
+#: room-wise rigid drift of :mod:`map2map.learn.ab.room_drift`).
 DRIFTS = ("parametric", "rooms", "none")
 #: The parametric model's odometry-to-map conversions (``drift_method``).
 DRIFT_METHODS = METHODS
@@ -201,7 +201,7 @@ TUNED_ON_VAL = DriftParams(scale=1.75, duration=420.0, smooth_m=0.2, coverage="r
 def drift_params(drift: str | DriftParams | RoomDriftParams, method: str | None = None,
                  scale: float | None = None) -> DriftParams | RoomDriftParams | None:
     """``drift`` (``"parametric"``: the default :class:`DriftParams`, ``"rooms"``: the
-    default :class:`~map2map.learn.room_drift.RoomDriftParams`, ``"none"``: None, or
+    default :class:`~map2map.learn.ab.room_drift.RoomDriftParams`, ``"none"``: None, or
     either dataclass) with ``method`` and ``scale`` replaced where given (the room-wise
     drift has no odometry conversion: ``method`` is checked and otherwise ignored there;
     with ``RoomDriftParams(parametric=True)`` it goes to the added parametric field).
@@ -315,16 +315,16 @@ def drift_field(plan: OccupancyMap, rng: np.random.Generator,
         :data:`DEFAULT_FOV_DEG` LIDAR.
     trajectory : Trajectory, optional
         Drive the model along this path (plan frame; e.g. an exploration's true poses,
-        :func:`map2map.learn.coverage.explore_plan`) instead of step 1's roadmap tour;
+        :func:`map2map.learn.ab.coverage.explore_plan`) instead of step 1's roadmap tour;
         ``params.duration`` still cuts it, and ``rng`` then draws no route.
 
     Returns
     -------
-    DriftField, or RoomDrift for a :class:`~map2map.learn.room_drift.RoomDriftParams`
-    (:func:`~map2map.learn.room_drift.room_drift_field` of the plan's pixels; with
+    DriftField, or RoomDrift for a :class:`~map2map.learn.ab.room_drift.RoomDriftParams`
+    (:func:`~map2map.learn.ab.room_drift.room_drift_field` of the plan's pixels; with
     ``parametric=True`` the default parametric field, smoothed ``smooth_m`` and scaled
     ``scale``, is drawn first from the same ``rng`` and added; with ``conserve=True``
-    only its divergence-free part, :func:`~map2map.learn.room_drift.solenoidal`)
+    only its divergence-free part, :func:`~map2map.learn.ab.room_drift.solenoidal`)
 
     Raises
     ------
@@ -383,7 +383,7 @@ def apply_drift(m: np.ndarray, drift: DriftField | RoomDrift) -> np.ndarray:
     m : (H, W) uint8
         Ternary map (occupied 0, unknown 127, free 255).
     drift : DriftField or RoomDrift
-        (a RoomDrift: :func:`~map2map.learn.room_drift.apply_room_drift`, plus its
+        (a RoomDrift: :func:`~map2map.learn.ab.room_drift.apply_room_drift`, plus its
         ``extra`` parametric field)
 
     Returns

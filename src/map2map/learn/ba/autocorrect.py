@@ -12,10 +12,10 @@
    (``meta["autocorrect"]["deskew_deg"]``);
 2. that square is brought to the dataset's size (256) exactly as the dataset was made
    (:func:`map2map.maps.preprocess.square_resize`: walls survive any reduction) and then to
-   the model's size by area averaging (:func:`map2map.learn.data.downsample_input`) --
+   the model's size by area averaging (:func:`map2map.learn.training.data.downsample_input`) --
    the same path the training inputs took;
 3. the generator's output is post-processed back to the square *at the input's own
-   resolution* (:func:`map2map.learn.postprocess.postprocess`: upsampling, snapping to the
+   resolution* (:func:`map2map.learn.ba.postprocess.postprocess`: upsampling, snapping to the
    three values, straight walls; by default (``anchor=True``) the input's own walls,
    straightened at full resolution on the median of their observed faces, pieces of
    one wall line put on one line, and given the plan's thickness, plus the network's
@@ -77,10 +77,10 @@ import numpy as np
 import torch
 from numba import njit
 
-from ..core.grid import OCCUPIED, UNKNOWN, OccupancyMap
-from ..maps.preprocess import square_resize
-from .data import reduce_input
-from .networks import UNetGenerator, from_unit
+from ...core.grid import OCCUPIED, UNKNOWN, OccupancyMap
+from ...maps.preprocess import square_resize
+from ..nets.networks import UNetGenerator, from_unit
+from ..training.data import reduce_input
 from .postprocess import drawn_pieces, postprocess
 
 __all__ = ["BAModel", "load_model", "autocorrect", "autocorrect_many", "Correction",
@@ -132,7 +132,7 @@ TILE_SHRINK = 2.0
 
 def pretrained_path() -> Path:
     """The weights shipped in the package (``map2map/learn/weights/model_ba.safetensors``)."""
-    from .checkpoint import shipped_weights
+    from ..training.checkpoint import shipped_weights
 
     return shipped_weights(PRETRAINED)
 
@@ -174,7 +174,7 @@ def load_model(model: str | os.PathLike | BAModel | None = "pretrained",
     (its ``model.safetensors``) or a ``.safetensors`` file written by the trainer."""
     if isinstance(model, BAModel):
         return model
-    from .checkpoint import load_generator, read_model_file
+    from ..training.checkpoint import load_generator, read_model_file
 
     path, header, tensors = read_model_file(
         model, pretrained_path(), "map2map-model-ba", "Model_BA",
@@ -604,7 +604,7 @@ def autocorrect(m: OccupancyMap, model: str | os.PathLike | BAModel | None = "pr
         default :data:`THICKNESS`.
     open_frontiers : bool, optional
         Leave out the network's walls at the edge of the input's known area or beyond it
-        (:func:`map2map.learn.postprocess.frontier_walls`: on a partial map the edge of
+        (:func:`map2map.learn.ba.postprocess.frontier_walls`: on a partial map the edge of
         what the robot saw is not a wall); default :data:`OPEN_FRONTIERS`, and on for a
         map corrected in tiles.
     large : "resize", "tile" or "refuse", optional
@@ -648,7 +648,7 @@ def save_segments_dxf(segments: np.ndarray, path: str | os.PathLike, *, layer: s
     """
     import ezdxf
 
-    from ..core._io import atomic_path
+    from ...core._io import atomic_path
 
     doc = ezdxf.new(units=6)
     doc.header["$INSUNITS"] = 6
@@ -668,7 +668,7 @@ def save_segments_dxf(segments: np.ndarray, path: str | os.PathLike, *, layer: s
 def export_model(run: str | os.PathLike, dest: str | os.PathLike, *, note: str = "") -> Path:
     """Copy a run's generator to ``dest`` in float16 with its header (and ``note``), plus a
     readable ``.json`` beside it: how the shipped ``model_ba.safetensors`` is made
-    (:func:`~map2map.learn.checkpoint.export_generator` with :func:`load_model`).
+    (:func:`~map2map.learn.training.checkpoint.export_generator` with :func:`load_model`).
 
     Examples
     --------
@@ -678,6 +678,6 @@ def export_model(run: str | os.PathLike, dest: str | os.PathLike, *, note: str =
     >>> load_model(p).header["note"]
     'copy'
     """
-    from .checkpoint import export_generator
+    from ..training.checkpoint import export_generator
 
     return export_generator(run, dest, lambda p: load_model(p).header, note=note)

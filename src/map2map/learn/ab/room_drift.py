@@ -4,7 +4,7 @@ The simulated (``rbpf``) SLAM maps of the datasets place their walls 1.5-1.6 px 
 plan's on average, with a heavy tail: whole rooms, or every room mapped after some moment
 of the run, are rotated or shifted against the plan by a pose error the particle filter
 kept (docs/learn_ab.md, "Room-wise drift"). The parametric field of
-:mod:`map2map.learn.drift` is a per-pixel field; scaled up to that size it tears the
+:mod:`map2map.learn.ab.drift` is a per-pixel field; scaled up to that size it tears the
 network's walls into dots. This module draws the error the way the simulated maps show
 it, as one small rigid transform per room, chained along the order in which a robot
 starting in one room would reach the others, and blends the rooms' transforms over a few
@@ -70,9 +70,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from ..core.errors import InputError
-from ..core.grid import FREE
-from ..parametric.field import DisplacementField, warp_map
+from ...core.errors import InputError
+from ...core.grid import FREE
+from ...parametric.field import DisplacementField, warp_map
 
 __all__ = ["RoomDriftParams", "RoomDrift", "segment_rooms", "room_adjacency",
            "room_drift_field", "apply_room_drift", "solenoidal"]
@@ -108,8 +108,8 @@ class RoomDriftParams:
         (0: no drift). Session 12's val choice with ``conserve=True``: 0.7 (not the
         default: worse on test, docs/learn_ab.md).
     parametric : bool
-        Also add the default parametric field of :mod:`map2map.learn.drift` (drawn first,
-        from the same generator; :func:`map2map.learn.drift.drift_field`).
+        Also add the default parametric field of :mod:`map2map.learn.ab.drift` (drawn first,
+        from the same generator; :func:`map2map.learn.ab.drift.drift_field`).
     method : {"additive", "ekf"}
         That parametric field's odometry-to-map conversion.
     smooth_m : float

@@ -1,5 +1,5 @@
 """Coverage from the robot's own exploration for synthesized SLAM maps (issue #15: realism
-of Model_AB's maps; beyond the thesis, a hybrid like :mod:`map2map.learn.drift`).
+of Model_AB's maps; beyond the thesis, a hybrid like :mod:`map2map.learn.ab.drift`).
 
 Model_AB's network maps every room of a plan; a simulated 7-minute exploration does not
 (gen6300's val plans: free mapped 0.95 against 0.82, unknown share 0.12 against 0.21).
@@ -8,7 +8,7 @@ goes, which the network cannot know. This module lets the simulator's robot expl
 plan itself, with the ``oracle`` mapper (true poses, no particle filter: the exploration
 ``explore_lite`` would make with a perfect map, about 0.5-3 s of CPU a plan against
 10-60 s for the dataset's ``rbpf`` runs), and hands two things to
-:func:`map2map.learn.synthesize.synthesize`:
+:func:`map2map.learn.ab.synthesize.synthesize`:
 
 (a) **what was seen** (``coverage="explore"``): every generated pixel farther than
     ``margin_px`` from a cell the exploration's map knows (free or occupied) becomes
@@ -20,13 +20,13 @@ plan itself, with the ``oracle`` mapper (true poses, no particle filter: the exp
     fixed before any measurement;
 (b) **the route** (``drift_route="explore"``): the exploration's true trajectory (its
     poses at the scan times) drives the parametric drift
-    (:func:`map2map.learn.drift.drift_field` ``trajectory=``) instead of the 12-node
+    (:func:`map2map.learn.ab.drift.drift_field` ``trajectory=``) instead of the 12-node
     roadmap tour.
 
 The two are separable; both come from one exploration per hypothesis. Hypothesis (or
 plan) ``k`` of seed ``s`` explores with the simulation seed drawn from its own generator
 :func:`explore_rng` ``(s, k)`` (start pose, sensor noise), a stream apart from the drift's
-:func:`~map2map.learn.drift.drift_rng` ``(s, k)``, so (a) alone leaves the drift field
+:func:`~map2map.learn.ab.drift.drift_rng` ``(s, k)``, so (a) alone leaves the drift field
 exactly as without it, and the same seed gives the same bytes.
 
 Examples
@@ -49,14 +49,14 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from ..core.errors import InputError
-from ..core.grid import UNKNOWN, OccupancyMap
-from ..trajectory.timing import Trajectory
+from ...core.errors import InputError
+from ...core.grid import UNKNOWN, OccupancyMap
+from ...trajectory.timing import Trajectory
 
 __all__ = ["COVERAGES", "DRIFT_ROUTES", "ExploreParams", "Exploration", "explore_rng",
            "explore_plan", "hide_unseen", "coverage_options"]
 
-#: ``coverage`` choices of :func:`map2map.learn.synthesize.synthesize`: the network's own
+#: ``coverage`` choices of :func:`map2map.learn.ab.synthesize.synthesize`: the network's own
 #: extent, or only what the hypothesis's exploration saw.
 COVERAGES = ("none", "explore")
 #: ``drift_route`` choices: the drift's 12-node roadmap tour, or the exploration's path.
@@ -154,7 +154,7 @@ def explore_rng(seed: int, k: int) -> np.random.Generator:
 
     Examples
     --------
-    >>> from map2map.learn.drift import drift_rng
+    >>> from map2map.learn.ab.drift import drift_rng
     >>> int(explore_rng(0, 1).integers(1 << 30)) == int(explore_rng(0, 1).integers(1 << 30))
     True
     >>> int(explore_rng(0, 1).integers(1 << 30)) == int(drift_rng(0, 1).integers(1 << 30))
@@ -184,8 +184,8 @@ def explore_plan(plan: OccupancyMap, rng: np.random.Generator,
     InputError
         A plan without free space or too small for the robot.
     """
-    from ..sim.runner import simulate
-    from ..trajectory.timing import trajectory_from_poses
+    from ...sim.runner import simulate
+    from ...trajectory.timing import trajectory_from_poses
 
     ep = params or ExploreParams()
     seed = int(rng.integers(1 << 32))

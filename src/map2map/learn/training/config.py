@@ -77,7 +77,7 @@ class TrainConfig:
         ``torch.compile`` the generator (not the spectral-normalised discriminators).
     cuda_graph : bool
         Run each training step as one CUDA graph replay
-        (:class:`~map2map.learn.static_step.StaticStep`): one graph per (resolution,
+        (:class:`~map2map.learn.training.static_step.StaticStep`): one graph per (resolution,
         batch size), captured after 3 eager warm-up steps; a capture failure falls back
         to eager steps with a warning. Single process only (under DDP, or with
         ``compile``, the steps run eagerly); on CPU the same static step runs eagerly
@@ -91,7 +91,7 @@ class TrainConfig:
     input_reduce : {"area", "classes"}
         How the input (SLAM map) is brought to ``size``: ``"area"`` averages grey values
         (a one-pixel wall becomes a faint line), ``"classes"`` reduces per class as the
-        targets are (walls kept dark; :func:`map2map.learn.data.downsample_target`).
+        targets are (walls kept dark; :func:`map2map.learn.training.data.downsample_target`).
     """
 
     size: int = 64

@@ -13,7 +13,7 @@ One step (a batch of SLAM maps ``x`` and their plans ``y``, in [-1, 1]):
 3. generator (min side): eqs. 3.3 + 3.4 (non-saturating) + 3.5 + 3.6 + lambda 3.7.
 
 Adam (2e-4, betas 0.55/0.99) for ``G`` and for both discriminators; the learning rate is
-a pure function of the epoch (:func:`~map2map.learn.config.lr_factor`). On CUDA: bf16
+a pure function of the epoch (:func:`~map2map.learn.training.config.lr_factor`). On CUDA: bf16
 autocast with the output head and the losses in fp32, channels_last, data resident on the
 GPU; ``torchrun --nproc_per_node K -m map2map train ba ...`` runs DDP (NCCL on GPUs,
 gloo on CPU): every process draws the same permutation and takes its share of each batch.
@@ -26,7 +26,7 @@ in it, loss history), ``log.csv`` (every logged value, one row per epoch),
 ``losses.png`` (thesis Fig. 5.2) and ``samples/epoch_NNNN.png`` (input | output | target).
 Checkpoints are written atomically after every epoch and on Ctrl-C. The machinery (device,
 DDP, resident data, checkpoints and exact resume, logs, figures, progress) is the one
-Model_AB uses too (:mod:`~map2map.learn.loop`); this module states only Model_BA's part.
+Model_AB uses too (:mod:`~map2map.learn.training.loop`); this module states only Model_BA's part.
 
 Examples
 --------
@@ -47,11 +47,12 @@ import os
 
 import torch
 
-from ..core.errors import InputError
-from ..datasets.packed import PackedPairs
-from .config import TrainConfig
-from .data import ResidentPairs
-from .loop import (
+from ...core.errors import InputError
+from ...datasets.packed import PackedPairs
+from ..nets.networks import MultiScaleDiscriminator, UNetGenerator
+from ..training.config import TrainConfig
+from ..training.data import ResidentPairs
+from ..training.loop import (
     CHECKPOINT_FILE,
     MODEL_FILE,
     EpochPlan,
@@ -64,7 +65,6 @@ from .loop import (
     open_run,
     resolve_device,
 )
-from .networks import MultiScaleDiscriminator, UNetGenerator
 
 __all__ = ["TrainResult", "build_networks", "train_ba", "resolve_device", "MODEL_FILE",
            "CHECKPOINT_FILE", "false_targets"]

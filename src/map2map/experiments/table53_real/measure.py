@@ -1,7 +1,7 @@
 """Thesis Table 5.3 on REAL maps: does auto-correct bring a real SLAM map closer to its
 real floor plan? (issue #14; the Halmstad sensor maps and their layouts.)
 
-:mod:`map2map.learn.table53` measures Model_BA on simulated pairs. Here the pairs are
+:mod:`map2map.experiments.table53.measure` measures Model_BA on simulated pairs. Here the pairs are
 real: a sensor map ``B`` built by a real robot and the layout ``A`` (the floor plan) of
 the same building, in another frame and at another scale, with annotated keypoint
 correspondences (:mod:`map2map.maps.halmstad`). Per map:
@@ -17,7 +17,7 @@ correspondences (:mod:`map2map.maps.halmstad`). Per map:
   so the metric is run twice: with the scale known (``rigid_scale`` = the ground-truth
   scale, what ``--source-resolution/--target-resolution`` give ``map2map evaluate``;
   the analogue of the simulated table, keys without prefix) and at scale 1
-  (:func:`~map2map.learn.table53.run_table53`'s settings, keys ``s1_``), where the
+  (:func:`~map2map.experiments.table53.measure.run_table53`'s settings, keys ``s1_``), where the
   error is mostly the scale mismatch, growing with the distance from where the rigid
   placement pins the map.
 * **whether the metric's own alignment succeeded**, for ``B`` and for
@@ -44,7 +44,7 @@ correspondences (:mod:`map2map.maps.halmstad`). Per map:
 
 The summary counts improved / worse maps among those counted, the one-sided sign test
 (:func:`scipy.stats.binomtest`, ties left out) and the medians, as
-:func:`~map2map.learn.table53.run_table53` does. ``benchmarks/table53_real.py`` is the
+:func:`~map2map.experiments.table53.measure.run_table53` does. ``benchmarks/table53_real.py`` is the
 command line.
 
 Resolution: the data give none; maps are read at 0.05 m/px
@@ -52,7 +52,7 @@ Resolution: the data give none; maps are read at 0.05 m/px
 in metres (``EvaluateParams.sigma_f``), so that assumption sets its pixel scale, the
 same for ``B`` and ``autocorrect(B)``. Auto-correct itself does not read the
 resolution: it squares the map's known content and resizes it to the dataset's 256 px
-whatever the metres per pixel (:mod:`map2map.learn.autocorrect`); the shrink factor
+whatever the metres per pixel (:mod:`map2map.learn.ba.autocorrect`); the shrink factor
 (``shrink``: content side / 256) is recorded per map.
 
 Examples
@@ -87,8 +87,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
-from .table53 import GUARDS
+from ...core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from ..table53.measure import GUARDS
 
 __all__ = ["RealTable53", "run_table53_real", "real_pair_row", "summarise_real",
            "KP_GOOD_RATIO", "KP_GOOD_PX", "KP_FLOOR_MIN_PX",
@@ -109,10 +109,10 @@ KP_FLOOR_MIN_PX = 2.0
 
 
 def _metric(src: OccupancyMap, plan: OccupancyMap, seed: int, scale: float | None = None):
-    """(error px, evaluation or None): the metric of :func:`map2map.learn.table53._error`
+    """(error px, evaluation or None): the metric of :func:`map2map.experiments.table53.measure._error`
     (``scale=None``: both maps at one resolution), or with the metric scale ratio known
     (``rigid_scale=scale``), the evaluation kept for the alignment check."""
-    from ..evaluate.pipeline import EvaluateParams, evaluate_maps
+    from ...evaluate.pipeline import EvaluateParams, evaluate_maps
 
     try:
         ev = evaluate_maps(OccupancyMap(src.data, 0.05), OccupancyMap(plan.data, 0.05),
@@ -159,12 +159,12 @@ def real_pair_row(name: str, sensor: OccupancyMap, corrected: OccupancyMap,
     """
     from scipy import ndimage
 
-    from ..core.geometry import apply
-    from ..evaluate.nonrigid import warp_image
-    from ..evaluate.transforms import decompose_similarity
-    from ..evaluate.wallmetrics import wall_metrics
-    from ..maps.halmstad import robust_similarity
-    from .postprocess import wall_thickness_px
+    from ...core.geometry import apply
+    from ...evaluate.nonrigid import warp_image
+    from ...evaluate.transforms import decompose_similarity
+    from ...evaluate.wallmetrics import wall_metrics
+    from ...learn.ba.postprocess import wall_thickness_px
+    from ...maps.halmstad import robust_similarity
 
     t0 = time.perf_counter()
     ks, kt = np.asarray(ks, float), np.asarray(kt, float)
@@ -368,7 +368,7 @@ class RealTable53:
 
     def to_csv(self, path: str | os.PathLike) -> Path:
         """Write :attr:`rows` as CSV (atomically)."""
-        from ..core._io import atomic_path
+        from ...core._io import atomic_path
 
         path = Path(path)
         with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
@@ -381,7 +381,7 @@ class RealTable53:
         """Fig. 5.12 on real maps: box plots of the counted diffs (layout px), the metric
         with the scale known and at scale 1, every map a dot (E5 circles, HIH squares;
         flagged maps hollow red). Returns the figure."""
-        from ..core.viz import plt
+        from ...core.viz import plt
 
         env = np.array([str(r["map"]).split("_")[0] for r in self.rows])
         pres = [p for p in ("", "s1_") if self.rows and f"{p}diff" in self.rows[0]]
@@ -413,7 +413,7 @@ class RealTable53:
         ax.legend(fontsize=7, loc="best")
         fig.tight_layout()
         if path is not None:
-            from ..core.viz import save_figure
+            from ...core.viz import save_figure
 
             save_figure(fig, path, dpi=100)
         return fig
@@ -426,8 +426,8 @@ class RealTable53:
         any wall pixel in a reduced cell draws it)."""
         import cv2
 
-        from ..core.viz import plt
-        from ..evaluate.nonrigid import warp_image
+        from ...core.viz import plt
+        from ...evaluate.nonrigid import warp_image
 
         names = [n for n in names if n in self.inputs]
         fig, axes = plt.subplots(max(1, len(names)), 3, figsize=(10.5, 3.6 * max(1, len(names))),
@@ -473,7 +473,7 @@ class RealTable53:
                      fontsize=9)
         fig.tight_layout()
         if path is not None:
-            from ..core.viz import save_figure
+            from ...core.viz import save_figure
 
             save_figure(fig, path, dpi=90)
         return fig
@@ -492,12 +492,12 @@ def run_table53_real(root: str | os.PathLike, names: list[str] | None = None,
     names : list of str, optional
         Sensor maps (``E5_01``, ``HIH_03``, ...); default all 18.
     model : "pretrained", run folder, weights file, BAModel, or a corrector
-        As :func:`~map2map.learn.table53.run_table53`: the Model_BA to measure, or an
+        As :func:`~map2map.experiments.table53.measure.run_table53`: the Model_BA to measure, or an
         object with ``correct(list of uint8 maps) -> list of maps`` and ``source``.
     seed : int
         Seed of the metric's point subsampling.
     anchor, straighten : bool
-        Passed to :func:`~map2map.learn.autocorrect.autocorrect_many` (defaults: the
+        Passed to :func:`~map2map.learn.ba.autocorrect.autocorrect_many` (defaults: the
         shipped behaviour).
     workers : int or None
         Threads of the auto-correct's per-map work (1: single-threaded; the output does
@@ -514,14 +514,14 @@ def run_table53_real(root: str | os.PathLike, names: list[str] | None = None,
     """
     from tqdm import tqdm
 
-    from ..maps.halmstad import (
+    from ...learn.ba.autocorrect import _square
+    from ...maps.halmstad import (
         halmstad_pairs,
         load_association,
         load_halmstad,
         load_keypoints,
         robust_similarity,
     )
-    from .autocorrect import _square
 
     t_all = time.perf_counter()
     root = Path(root)
@@ -540,7 +540,7 @@ def run_table53_real(root: str | os.PathLike, names: list[str] | None = None,
             name = model.source
             data_size = 256
         else:
-            from .autocorrect import autocorrect_many, load_model
+            from ...learn.ba.autocorrect import autocorrect_many, load_model
 
             net = load_model(model)
             name = net.source + ("" if anchor else " (anchor off)")

@@ -15,8 +15,8 @@ given in memory):
   (:func:`map2map.datasets.rerun.parametric_on_trajectory`; the model draws its own
   odometry and LIDAR errors);
 * **Model_AB** -- the generator's single output for the preprocessed plan (dropout off,
-  :func:`map2map.learn.synthesize.synthesize_squares`), warped along a parametric drift
-  field of the plan (``drift="parametric"``, the default, :mod:`map2map.learn.drift`: its
+  :func:`map2map.learn.ab.synthesize.synthesize_squares`), warped along a parametric drift
+  field of the plan (``drift="parametric"``, the default, :mod:`map2map.learn.ab.drift`: its
   own route and errors, not the simulation's trajectory; ``"none"``: no drift).
 
 All three are cut and preprocessed as the dataset's ``B`` (thesis 4.1: the pair's crop
@@ -47,7 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.grid import OccupancyMap
+from ...core.grid import OccupancyMap
 
 __all__ = ["METHODS", "METHOD_TITLES", "Fig514", "run_fig514", "measure"]
 
@@ -70,8 +70,8 @@ def measure(m: np.ndarray, plan: np.ndarray) -> dict:
     >>> round(measure(plan, plan)["wall_recall"], 2)
     1.0
     """
-    from ..evaluate.pipeline import evaluate_maps
-    from ..evaluate.wallmetrics import wall_metrics
+    from ...evaluate.pipeline import evaluate_maps
+    from ...evaluate.wallmetrics import wall_metrics
 
     out = {"error_px": float("nan"), "wall_recall": float("nan"),
            "wall_precision": float("nan"), "note": ""}
@@ -201,7 +201,7 @@ class Fig514:
         top = 0.45 + 0.3 * len(extra)
         fig.tight_layout(rect=(0, 0, 1, 1 - top / (3.1 * max(n, 1))))
         if path is not None:
-            from ..core._io import atomic_path
+            from ...core._io import atomic_path
 
             with atomic_path(path) as tmp:
                 fig.savefig(tmp, dpi=dpi, format="png")
@@ -212,7 +212,7 @@ class Fig514:
         """The rows as CSV (atomically)."""
         import csv
 
-        from ..core._io import atomic_path
+        from ...core._io import atomic_path
 
         keys = ["plan", "index", "method", "error_px", "wall_recall", "wall_precision", "note"]
         with atomic_path(path) as tmp:
@@ -223,10 +223,10 @@ class Fig514:
 
 
 def _from_dataset(ds, n, seed, split, progress):
-    from ..datasets.build import pair_dir
-    from ..datasets.pair import read_pair_meta, window_resolution
-    from ..datasets.rerun import parametric_on_run, rerun_pair
-    from .realism import _read_png, split_indices
+    from ...datasets.build import pair_dir
+    from ...datasets.pair import read_pair_meta, window_resolution
+    from ...datasets.rerun import parametric_on_run, rerun_pair
+    from ..realism.measure import _read_png, split_indices
 
     idx = split_indices(ds, split)[:n]
     out = []
@@ -245,9 +245,9 @@ def _from_dataset(ds, n, seed, split, progress):
 
 
 def _from_plans(plans, seed, progress, params):
-    from ..datasets.pair import BuildParams, crop_box, preprocess_pair, window_resolution
-    from ..datasets.rerun import parametric_on_trajectory
-    from ..sim.runner import simulate
+    from ...datasets.pair import BuildParams, crop_box, preprocess_pair, window_resolution
+    from ...datasets.rerun import parametric_on_trajectory
+    from ...sim.runner import simulate
 
     p = params or BuildParams()
     out = []
@@ -301,20 +301,20 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
     progress : bool
     render : {"slam", "plain"}
         How Model_AB's output is raised to the plans' size
-        (:func:`~map2map.learn.synthesize.synthesize_squares`).
+        (:func:`~map2map.learn.ab.synthesize.synthesize_squares`).
     drift, drift_method, drift_scale
-        Model_AB's drift (:func:`~map2map.learn.synthesize.synthesize_squares`; each
+        Model_AB's drift (:func:`~map2map.learn.ab.synthesize.synthesize_squares`; each
         square at its metric resolution, ``info[plan]["square_resolution_m"]``).
     coverage, drift_route
         Model_AB's coverage from its own exploration and the drift's route
-        (:func:`~map2map.learn.synthesize.synthesize_squares`, :mod:`map2map.learn.coverage`).
+        (:func:`~map2map.learn.ab.synthesize.synthesize_squares`, :mod:`map2map.learn.ab.coverage`).
     traces : {"none", "lidar"} or TraceParams
-        What a LIDAR leaves beyond the faces (:class:`~map2map.learn.slam_render.
+        What a LIDAR leaves beyond the faces (:class:`~map2map.learn.ab.render.
         TraceParams`; ``render="slam"`` only).
     explore_at : {"square", "native"}
         Where ``coverage="explore"``'s robot explores: the preprocessed square, or each
-        plan at its own resolution, as :func:`~map2map.learn.synthesize.synthesize` does
-        (:func:`~map2map.learn.realism.seen_on_square`; needs ``drift_route="tour"``).
+        plan at its own resolution, as :func:`~map2map.learn.ab.synthesize.synthesize` does
+        (:func:`~map2map.experiments.realism.measure.seen_on_square`; needs ``drift_route="tour"``).
         ``drift="rooms", coverage="explore", traces="lidar", explore_at="native"`` is
         what ``map2map synthesize`` makes (its defaults).
 
@@ -323,14 +323,14 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
     Fig514
         ``.rows``, ``.summary``, ``.figure()``, ``.table()``.
     """
-    from .synthesize import load_ab_model, synthesize_squares
+    from ...learn.ab.synthesize import load_ab_model, synthesize_squares
 
     if isinstance(source, str | os.PathLike):
         made = _from_dataset(Path(source), int(n), int(seed), split, progress)
     else:
         made = _from_plans(list(source)[:int(n)], int(seed), progress, params)
     if not made:
-        from ..core.errors import InputError
+        from ...core.errors import InputError
 
         raise InputError(source if isinstance(source, str | os.PathLike) else None,
                          f"no simulated '{split}' pairs to draw")
@@ -341,8 +341,8 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
     seen = None
     unexplored = []
     if explore_at == "native" and coverage == "explore":
-        from .coverage import explore_rng
-        from .realism import seen_on_square
+        from ...learn.ab.coverage import explore_rng
+        from ..realism.measure import seen_on_square
 
         seen = np.ones(plans.shape, bool)           # a plan not explored: nothing hidden
         for j, m in enumerate(made):
@@ -378,10 +378,10 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
         warns.append(f"the re-run of {len(bad)} pair(s) ({', '.join(bad[:4])}) did not give "
                      "the dataset's map; the figure shows the re-run (whose trajectory the "
                      "parametric model follows)")
-    from .drift import drift_params
+    from ...learn.ab.drift import drift_params
 
     dp = drift_params(drift, drift_method, drift_scale)
-    from .room_drift import RoomDriftParams
+    from ...learn.ab.room_drift import RoomDriftParams
 
     how = "none" if dp is None else dp.describe() if isinstance(dp, RoomDriftParams) else \
         f"parametric ({dp.describe()})"

@@ -19,8 +19,8 @@ import os
 import cv2
 import numpy as np
 
-from ..core._io import atomic_path
-from ..core.grid import OccupancyMap
+from ...core._io import atomic_path
+from ...core.grid import OccupancyMap
 
 __all__ = ["save_loss_curves", "save_sample_grid", "save_before_after"]
 

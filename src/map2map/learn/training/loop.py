@@ -9,7 +9,7 @@ way; only what the networks see differs. This module holds everything that does 
 * :func:`open_run` -- a new run or ``--resume`` of one (format, dataset digest, config);
 * :class:`GANRun` -- device and DDP set-up (:class:`Dist`), Adam for ``G`` and for both
   discriminators with the learning rate a pure function of the epoch
-  (:func:`~map2map.learn.config.lr_factor`), the epoch/batch loop over data resident on
+  (:func:`~map2map.learn.training.config.lr_factor`), the epoch/batch loop over data resident on
   the device, Ctrl-C handling, atomic checkpoints after every epoch and on Ctrl-C with
   everything ``--resume`` needs to continue bit for bit (weights, optimiser moments,
   random-generator states, epoch and position in it, loss history), ``log.csv``,
@@ -18,8 +18,8 @@ way; only what the networks see differs. This module holds everything that does 
 A trainer subclasses :class:`GANRun` and states only what is its own: the data and batch
 size of an epoch (:meth:`GANRun.epoch_plan`), the step (:meth:`GANRun.step`), the
 generator's output for the sample grid, the extra fields of the model header. Model_BA
-(:mod:`~map2map.learn.train`): one resolution, one batch size. Model_AB
-(:mod:`~map2map.learn.train_ab`): a resolution and batch size per stage, the fade-in
+(:mod:`~map2map.learn.ba.train`): one resolution, one batch size. Model_AB
+(:mod:`~map2map.learn.ab.train`): a resolution and batch size per stage, the fade-in
 alpha, the stage switches marked in the loss curves.
 
 Examples
@@ -45,9 +45,11 @@ from pathlib import Path
 
 import torch
 
-from ..core._io import atomic_path, ensure_output_dir
-from ..core.errors import InputError
-from ..datasets.packed import PackedPairs
+from ...core._io import atomic_path, ensure_output_dir
+from ...core.errors import InputError
+from ...datasets.packed import PackedPairs
+from ..nets.losses import discriminator_loss_3_2, generator_loss_3_2
+from ..nets.networks import count_parameters, from_unit
 from .checkpoint import (
     load_checkpoint,
     load_module,
@@ -59,8 +61,6 @@ from .checkpoint import (
 from .config import TrainConfig, lr_factor
 from .data import ResidentPairs, load_pairs
 from .figures import save_loss_curves, save_sample_grid
-from .losses import discriminator_loss_3_2, generator_loss_3_2
-from .networks import count_parameters, from_unit
 
 __all__ = ["MODEL_FILE", "CHECKPOINT_FILE", "TrainResult", "resolve_device", "false_targets",
            "gan_step", "write_log_csv", "batches_per_epoch", "Dist", "RunStart", "open_run",
@@ -72,8 +72,8 @@ CHECKPOINT_FILE = "last.safetensors"
 
 @dataclass
 class TrainResult:
-    """What a call of :func:`~map2map.learn.train.train_ba` or
-    :func:`~map2map.learn.train_ab.train_ab` did."""
+    """What a call of :func:`~map2map.learn.ba.train.train_ba` or
+    :func:`~map2map.learn.ab.train.train_ab` did."""
 
     run: Path
     epochs_done: int
@@ -140,7 +140,7 @@ def gan_step(g_run, dd_run, dr_run, opt_g, opt_d, x: torch.Tensor, y: torch.Tens
     ``false_index`` (an int64 tensor of the batch's length, the rolled ``arange``): the
     false targets as ``y.index_select(0, false_index)`` instead of ``torch.roll`` by
     ``shift`` -- the same values, but no Python int in the step, which a CUDA graph needs
-    (:class:`~map2map.learn.static_step.StaticStep`). Returns the logged values as
+    (:class:`~map2map.learn.training.static_step.StaticStep`). Returns the logged values as
     tensors.
     """
     a = () if alpha is None else (alpha,)
@@ -447,7 +447,7 @@ class GANRun:
              y: torch.Tensor, shift: int) -> dict:
         """Train on batch ``b`` of ``epoch`` (pairs ``idx``, tensors ``x``, ``y``);
         returns the logged values as tensors (:func:`gan_step`'s, or :attr:`static`'s
-        -- the :class:`~map2map.learn.static_step.StaticStep` -- when it is not None)."""
+        -- the :class:`~map2map.learn.training.static_step.StaticStep` -- when it is not None)."""
         raise NotImplementedError
 
     def generate(self, plan: EpochPlan, idx: torch.Tensor, x: torch.Tensor) -> torch.Tensor:
@@ -502,7 +502,7 @@ class GANRun:
     def header_fields(targets, data_size: int, nets) -> dict:
         """The model-header fields both models carry: the training targets' wall
         thickness, the dataset's map size and the networks' parameter counts."""
-        from .postprocess import wall_thickness_px
+        from ..ba.postprocess import wall_thickness_px
 
         g, dd, dr = nets
         return {"target_wall_px": wall_thickness_px(targets), "data_size": int(data_size),

@@ -35,8 +35,8 @@ import torch
 from safetensors import SafetensorError, safe_open
 from safetensors.torch import save_file
 
-from ..core._io import atomic_path
-from ..core.errors import InputError
+from ...core._io import atomic_path
+from ...core.errors import InputError
 
 __all__ = ["read_model_file", "save_checkpoint", "load_checkpoint", "module_tensors", "load_module",
            "optimizer_tensors", "load_optimizer", "export_generator"]
@@ -105,7 +105,7 @@ def optimizer_tensors(opt: torch.optim.Optimizer, prefix: str) -> tuple[dict, li
     """(tensors of the optimiser's per-parameter state, its param groups as JSON data).
 
     The groups are stored in the plain (eager) form whatever ran: a tensor learning rate
-    (CUDA-graph training, :func:`~map2map.learn.static_step.make_capturable`) as a float,
+    (CUDA-graph training, :func:`~map2map.learn.training.static_step.make_capturable`) as a float,
     ``capturable``/``foreach``/``fused`` at Adam's defaults -- they say how a step is
     computed, not what the optimiser holds, and a resumed run sets its own.
     """

@@ -36,9 +36,9 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from ..core.errors import InputError
-from ..core.grid import FREE, OCCUPIED, UNKNOWN
-from ..datasets.packed import PackedPairs, load_packed
+from ...core.errors import InputError
+from ...core.grid import FREE, OCCUPIED, UNKNOWN
+from ...datasets.packed import PackedPairs, load_packed
 
 __all__ = ["resolve_packed", "load_pairs", "downsample_input", "downsample_target",
            "reduce_input", "ResidentPairs"]

@@ -18,7 +18,7 @@ wall recall is counted apart (``improved_but_lost_recall``).
 Held-out pairs come from a dataset built by ``map2map dataset build``
 (:func:`heldout_pairs_from_dataset`: a split of its plans, never trained on; a running
 build is read without writing to it) or from generated plans
-(:func:`generated_heldout_pairs`, the parametric model of :mod:`map2map.learn.synthetic`).
+(:func:`generated_heldout_pairs`, the parametric model of :mod:`map2map.learn.training.synthetic`).
 ``benchmarks/table53.py`` is the command line.
 
 Examples
@@ -47,9 +47,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.errors import InputError
-from ..core.grid import OccupancyMap
-from ..datasets.packed import PackedPairs
+from ...core.errors import InputError
+from ...core.grid import OccupancyMap
+from ...datasets.packed import PackedPairs
 
 __all__ = ["Table53", "run_table53", "heldout_pairs_from_dataset", "generated_heldout_pairs",
            "merge_pairs", "HELD_OUT_SEED", "GUARDS"]
@@ -153,7 +153,7 @@ def heldout_pairs_from_dataset(ds: str | os.PathLike, split: str | tuple[str, ..
     if (p / "manifest.sqlite").is_file():
         out = _from_manifest(p, splits, keep, cleaner)
     else:
-        from .data import load_pairs
+        from ...learn.training.data import load_pairs
 
         allp = load_pairs(p)
         sel = np.flatnonzero(np.isin(allp.split, splits))
@@ -166,7 +166,7 @@ def heldout_pairs_from_dataset(ds: str | os.PathLike, split: str | tuple[str, ..
 
 
 def _from_manifest(ds: Path, splits, keep, cleaner) -> PackedPairs:
-    from ..datasets.build import pair_dir
+    from ...datasets.build import pair_dir
 
     try:
         db = sqlite3.connect(f"file:{ds / 'manifest.sqlite'}?mode=ro", uri=True, timeout=30)
@@ -184,7 +184,7 @@ def _from_manifest(ds: Path, splits, keep, cleaner) -> PackedPairs:
             if cleaner is None:
                 raise InputError(ds, "the dataset has not been cleaned: give a cleaner "
                                      "(another dataset's cleaner.skops) or keep=()")
-            from ..datasets.clean import _p_complete, dataset_features, decide, load_cleaner
+            from ...datasets.clean import _p_complete, dataset_features, decide, load_cleaner
 
             prob = _p_complete(load_cleaner(cleaner), dataset_features(ds, rows))
             for r, q in zip(rows, prob, strict=True):
@@ -207,10 +207,10 @@ def _from_manifest(ds: Path, splits, keep, cleaner) -> PackedPairs:
 def generated_heldout_pairs(n: int = 100, *, seed: int = HELD_OUT_SEED, size: int = 256,
                             cache: str | os.PathLike | None = None) -> PackedPairs:
     """``n`` generated held-out pairs (plans seeded ``seed..seed+n-1``, SLAM maps from the
-    parametric model: :func:`map2map.learn.synthetic.make_pairs`), cached in ``cache``
+    parametric model: :func:`map2map.learn.training.synthetic.make_pairs`), cached in ``cache``
     (a ``.npz``) so that several models are compared on the same maps."""
-    from ..datasets.packed import load_packed, save_packed
-    from .synthetic import make_pairs
+    from ...datasets.packed import load_packed, save_packed
+    from ...learn.training.synthetic import make_pairs
 
     if cache is not None and Path(cache).is_file():
         return load_packed(cache)
@@ -283,7 +283,7 @@ class Table53:
 
     def to_csv(self, path: str | os.PathLike) -> Path:
         """Write :attr:`rows` as CSV (atomically)."""
-        from ..core._io import atomic_path
+        from ...core._io import atomic_path
 
         path = Path(path)
         with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
@@ -298,7 +298,7 @@ class Table53:
     def figure(self, path: str | os.PathLike | None = None):
         """Fig. 5.12: box plot of ``Error(sim) - Error(gen)`` (px); saved to ``path`` when
         given. Returns the matplotlib figure."""
-        from ..core.viz import plt
+        from ...core.viz import plt
         d = self._diff()
         ok = np.isfinite(d)
         fig, ax = plt.subplots(figsize=(4, 5))
@@ -308,14 +308,14 @@ class Table53:
                title=f"Fig. 5.12: {self.summary['improved']}/{self.summary['n']} improved")
         fig.tight_layout()
         if path is not None:
-            from ..core.viz import save_figure
+            from ...core.viz import save_figure
 
             save_figure(fig, path, dpi=100)
         return fig
 
     def examples_figure(self, path: str | os.PathLike | None = None, k: int = 3):
         """The ``k`` worst and ``k`` best maps: SLAM map | auto-corrected | plan."""
-        from ..core.viz import plt
+        from ...core.viz import plt
         d = self._diff()
         ok = np.isfinite(d)
         worst = [int(i) for i in np.argsort(np.where(ok, d, np.inf))[:k] if ok[i]]
@@ -338,14 +338,14 @@ class Table53:
         fig.suptitle("worst (top) and best (bottom) Error(sim) - Error(gen)", fontsize=9)
         fig.tight_layout()
         if path is not None:
-            from ..core.viz import save_figure
+            from ...core.viz import save_figure
 
             save_figure(fig, path, dpi=90)
         return fig
 
 
 def _error(src: np.ndarray, plan: np.ndarray, seed: int) -> float:
-    from ..evaluate.pipeline import EvaluateParams, evaluate_maps
+    from ...evaluate.pipeline import EvaluateParams, evaluate_maps
 
     try:
         ev = evaluate_maps(OccupancyMap(src, 0.05), OccupancyMap(plan, 0.05),
@@ -376,7 +376,7 @@ def run_table53(pairs: PackedPairs, model="pretrained", *, seed: int = 0,
         Held-out pairs (``a`` plans, ``b`` SLAM maps), from
         :func:`heldout_pairs_from_dataset` or :func:`generated_heldout_pairs`.
     model : "pretrained", run folder, weights file, BAModel, or a corrector
-        The Model_BA to measure (:func:`map2map.learn.autocorrect.load_model`); or any
+        The Model_BA to measure (:func:`map2map.learn.ba.autocorrect.load_model`); or any
         object with ``correct(list of uint8 maps) -> list of maps`` and a ``source``
         string (a baseline or an ablation measured the same way).
     seed : int
@@ -388,7 +388,7 @@ def run_table53(pairs: PackedPairs, model="pretrained", *, seed: int = 0,
         A previous table on the same pairs with the same seed: its ``Error(sim)`` and SLAM
         guards are reused instead of recomputed (they do not depend on the model).
     straighten, anchor : bool
-        Passed to :func:`~map2map.learn.autocorrect.autocorrect_many`.
+        Passed to :func:`~map2map.learn.ba.autocorrect.autocorrect_many`.
     autocorrect_kw : dict, optional
         More keyword arguments of it (``thickness``, ``open_frontiers``, ...).
 
@@ -399,7 +399,7 @@ def run_table53(pairs: PackedPairs, model="pretrained", *, seed: int = 0,
     from scipy.stats import binomtest
     from tqdm import tqdm
 
-    from ..evaluate.wallmetrics import wall_metrics
+    from ...evaluate.wallmetrics import wall_metrics
 
     a, b = pairs.a, pairs.b
     digest = _digest(pairs)
@@ -410,7 +410,7 @@ def run_table53(pairs: PackedPairs, model="pretrained", *, seed: int = 0,
             gen = np.stack(model.correct(list(b))) if len(b) else b.copy()
             name = model.source
         else:
-            from .autocorrect import autocorrect_many, load_model
+            from ...learn.ba.autocorrect import autocorrect_many, load_model
 
             net = load_model(model)
             name = net.source

@@ -3,7 +3,7 @@
 
 The thesis's Model_AB gives one SLAM map per plan and calls that a weakness against the
 parametric model (sec. 5.2). Here one plan gives ``K`` hypotheses: the generator's
-decoder dropout (:class:`~map2map.learn.progressive.StochasticUNet`, trained with it on)
+decoder dropout (:class:`~map2map.learn.nets.progressive.StochasticUNet`, trained with it on)
 stays on at test time, and the ``K`` copies of the plan run as one batch, each with its
 own dropout masks, all drawn from ``seed`` (same seed, same maps, bit for bit on CPU).
 Their **diversity** is measured, not assumed: the mean over pairs of hypotheses of the
@@ -12,10 +12,10 @@ share of the plan's content pixels whose class (occupied / free / unknown) diffe
 collapsed (pix2pix's known limitation); it is reported with a warning.
 
 Frame: the plan's known part is cut into a square (as the datasets are,
-:func:`map2map.learn.autocorrect` does the same), resized to the model's data size and
+:func:`map2map.learn.ba.autocorrect` does the same), resized to the model's data size and
 its walls thickened as in the training pairs, reduced to the resolution the model was
 trained up to, run, raised to the square's size with SLAM-like walls
-(:func:`map2map.learn.slam_render.render_slam`: bilinear class memberships, walls kept as
+(:func:`map2map.learn.ab.render.render_slam`: bilinear class memberships, walls kept as
 the band of the training targets' wall thickness along the faces that border free space,
 wall interiors unknown; ``render="plain"``: the previous output, snapped and upsampled by
 nearest neighbour) and pasted into a map of the plan's shape, resolution and origin,
@@ -29,33 +29,33 @@ see (``coverage="explore"``) and draws the LIDAR traces (``traces="lidar"`` with
 traces="none"`` (bit for bit). :func:`synthesize_squares`, the evaluation helper, keeps
 those previous defaults: its callers (the benchmarks) name what they measure.
 
-Drift (``drift="parametric"``; :mod:`map2map.learn.drift`): the network
+Drift (``drift="parametric"``; :mod:`map2map.learn.ab.drift`): the network
 draws straight walls in the plan's frame, a SLAM map carries the run's accumulated pose
 error. Each hypothesis ``k`` is warped along a displacement field the parametric
 CAD->SLAM model (thesis 3.2) draws for the plan from its own generator
-(:func:`~map2map.learn.drift.drift_rng` ``(seed, k)``): a route touring the plan, the
+(:func:`~map2map.learn.ab.drift.drift_rng` ``(seed, k)``): a route touring the plan, the
 LIDAR and odometry error fields ``d_L + d_O`` (additive method by default,
-``drift_method``), as :class:`~map2map.learn.drift.DriftParams` says (``drift_scale``
+``drift_method``), as :class:`~map2map.learn.ab.drift.DriftParams` says (``drift_scale``
 replaces its final factor). ``drift="rooms"`` (or a
-:class:`~map2map.learn.room_drift.RoomDriftParams`): one rigid transform per room of the
+:class:`~map2map.learn.ab.room_drift.RoomDriftParams`): one rigid transform per room of the
 plan, chained along a walk through its doors and blended across walls, plus the
-parametric field smoothed (:mod:`map2map.learn.room_drift`; the default of
+parametric field smoothed (:mod:`map2map.learn.ab.room_drift`; the default of
 :func:`synthesize`). ``drift="none"``: the
 network's map as rendered (the output before drift existed, bit for bit).
 
-Coverage (:mod:`map2map.learn.coverage`, beyond the thesis): the network maps every room;
+Coverage (:mod:`map2map.learn.ab.coverage`, beyond the thesis): the network maps every room;
 a 7-minute exploration does not. ``coverage="explore"`` lets the simulator's robot explore
 the plan (``oracle`` mapper, seeded per hypothesis by
-:func:`~map2map.learn.coverage.explore_rng` ``(seed, k)``) and turns unknown every pixel
+:func:`~map2map.learn.ab.coverage.explore_rng` ``(seed, k)``) and turns unknown every pixel
 of hypothesis ``k`` the exploration did not see (beyond a band of the rendered wall
 thickness); ``drift_route="explore"`` drives the drift along that exploration's true
 path instead of the roadmap tour. One exploration serves both; ``coverage="none"`` with
 ``drift_route="tour"`` is the output without them, bit for bit.
 
-LIDAR traces (:class:`~map2map.learn.slam_render.TraceParams`, ``traces="lidar"``): the
+LIDAR traces (:class:`~map2map.learn.ab.render.TraceParams`, ``traces="lidar"``): the
 walls drawn as a band of metric width with a ragged back edge, their faces moved one
 pixel into the network's wall cells, and stray hits off the walls (module doc of
-:mod:`map2map.learn.slam_render`); ``traces="none"``: the band of the training targets'
+:mod:`map2map.learn.ab.render`); ``traces="none"``: the band of the training targets'
 thickness, as before.
 
 Examples
@@ -84,13 +84,15 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from ..core.errors import InputError
-from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
-from ..maps.preprocess import square_resize, thicken
-from . import slam_render
-from .autocorrect import _square
+from ...core.errors import InputError
+from ...core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from ...maps.preprocess import square_resize, thicken
+from ..ba.autocorrect import _square
+from ..nets.networks import from_unit
+from ..nets.progressive import StochasticUNet
+from ..training.data import reduce_input
+from . import render as slam_render
 from .coverage import ExploreParams, coverage_options, explore_plan, explore_rng, hide_unseen
-from .data import reduce_input
 from .drift import (
     DEFAULT_SQUARE_RESOLUTION,
     DriftParams,
@@ -100,10 +102,7 @@ from .drift import (
     drift_params,
     drift_rng,
 )
-from .networks import from_unit
-from .progressive import StochasticUNet
-from .room_drift import RoomDriftParams
-from .slam_render import (
+from .render import (
     DEFAULT_WALL_PX,
     RENDERS,
     TraceParams,
@@ -113,6 +112,7 @@ from .slam_render import (
     trace_params,
     trace_rng,
 )
+from .room_drift import RoomDriftParams
 
 __all__ = ["ABModel", "SynthesisResult", "load_ab_model", "pretrained_ab_path",
            "synthesize", "synthesize_squares", "snap", "pairwise_disagreement", "export_ab_model",
@@ -124,7 +124,7 @@ FORMAT_AB = "map2map-model-ab"
 
 def pretrained_ab_path() -> Path:
     """The shipped weights (``map2map/learn/weights/model_ab.safetensors``)."""
-    from .checkpoint import shipped_weights
+    from ..training.checkpoint import shipped_weights
 
     return shipped_weights(PRETRAINED)
 
@@ -144,7 +144,7 @@ class ABModel:
     @property
     def wall_px(self) -> float:
         """The training targets' wall thickness (px of a ``data_size`` square; header
-        ``target_wall_px``, :data:`~map2map.learn.slam_render.DEFAULT_WALL_PX` if absent)."""
+        ``target_wall_px``, :data:`~map2map.learn.ab.render.DEFAULT_WALL_PX` if absent)."""
         return float(self.header.get("target_wall_px", DEFAULT_WALL_PX))
 
     @torch.no_grad()
@@ -181,7 +181,7 @@ def load_ab_model(model: str | os.PathLike | ABModel | None = "pretrained",
     ``model.safetensors``."""
     if isinstance(model, ABModel):
         return model
-    from .checkpoint import load_generator, read_model_file
+    from ..training.checkpoint import load_generator, read_model_file
 
     path, header, tensors = read_model_file(
         model, pretrained_ab_path(), FORMAT_AB, "Model_AB",
@@ -279,12 +279,12 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     device : str
     render : {"slam", "plain"}
         ``"slam"``: walls as a SLAM map draws them, the faces bordering free space with
-        the training targets' thickness (:func:`~map2map.learn.slam_render.render_slam`);
+        the training targets' thickness (:func:`~map2map.learn.ab.render.render_slam`);
         ``"plain"``: the previous output (snap, nearest-neighbour upsampling).
     drift : {"rooms", "parametric", "none"}, DriftParams or RoomDriftParams
         Warp each hypothesis along its own room-wise drift (``"rooms"``, the default,
-        :mod:`map2map.learn.room_drift`), along its own parametric drift field (module
-        doc; :class:`~map2map.learn.drift.DriftParams`, or the given ones), or not.
+        :mod:`map2map.learn.ab.room_drift`), along its own parametric drift field (module
+        doc; :class:`~map2map.learn.ab.drift.DriftParams`, or the given ones), or not.
     drift_method : {"additive", "ekf"}, optional
         Replaces the drift's odometry-to-map conversion (thesis eqs. 3.81-3.90 or
         3.54-3.80).
@@ -292,20 +292,20 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
         Replaces the drift's final factor on its field.
     coverage : {"explore", "none"}
         ``"explore"`` (default): unknown wherever hypothesis ``k``'s own exploration of
-        the plan did not see (module doc, :func:`~map2map.learn.coverage.hide_unseen`;
+        the plan did not see (module doc, :func:`~map2map.learn.ab.coverage.hide_unseen`;
         about 0.5 s a hypothesis on gen900's plans); ``"none"``: every room drawn.
     drift_route : {"tour", "explore"}
         The drift's path: the roadmap tour, or hypothesis ``k``'s exploration (no effect
         with ``drift="none"``).
     explore : ExploreParams, optional
-        The exploration's settings (default :class:`~map2map.learn.coverage.ExploreParams`:
+        The exploration's settings (default :class:`~map2map.learn.ab.coverage.ExploreParams`:
         275 s, 180 degree LIDAR, ``oracle``, band = rendered wall thickness).
     traces : {"lidar", "none"}, TraceParams or None
         ``"lidar"`` (the default, ``None``, with ``render="slam"``; ``None`` with
         ``render="plain"`` is ``"none"``): what a LIDAR + SLAM leaves beyond the faces
-        (:class:`~map2map.learn.slam_render.TraceParams`: a metric wall band with a ragged
+        (:class:`~map2map.learn.ab.render.TraceParams`: a metric wall band with a ragged
         back edge, stray hits; ``render="slam"`` only), seeded per hypothesis by
-        :func:`~map2map.learn.slam_render.trace_rng` ``(seed, k)``, drawn before the
+        :func:`~map2map.learn.ab.render.trace_rng` ``(seed, k)``, drawn before the
         coverage (band) and after it (stray hits), before the drift.
 
     Returns
@@ -408,7 +408,7 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
 
 
 def _traces(traces, render: str) -> TraceParams | None:
-    """:func:`~map2map.learn.slam_render.trace_params`, refused with ``render="plain"``
+    """:func:`~map2map.learn.ab.render.trace_params`, refused with ``render="plain"``
     (``None``: ``"lidar"`` with ``render="slam"``, ``"none"`` with ``"plain"``)."""
     if traces is None:
         traces = "lidar" if render == "slam" else "none"
@@ -440,25 +440,25 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
     ``render`` says (:func:`synthesize`): (N, S, S) uint8, the thesis's single output
     (dropout off), warped along a parametric drift field of its plan as ``drift`` says
     (:func:`synthesize`; plan ``i`` of the call draws from
-    :func:`~map2map.learn.drift.drift_rng` ``(seed, i)``). For evaluations on a dataset's
-    own pixels (:mod:`map2map.learn.realism`, :mod:`map2map.learn.fig514`).
+    :func:`~map2map.learn.ab.drift.drift_rng` ``(seed, i)``). For evaluations on a dataset's
+    own pixels (:mod:`map2map.experiments.realism.measure`, :mod:`map2map.experiments.fig514.measure`).
 
     ``resolution`` (metres per pixel of the squares: one float or one per plan) scales the
     metric drift model; the dataset's squares differ (``map2map.datasets.pair.
     window_resolution``); default
-    :data:`~map2map.learn.drift.DEFAULT_SQUARE_RESOLUTION`. A plan the drift model's
+    :data:`~map2map.learn.ab.drift.DEFAULT_SQUARE_RESOLUTION`. A plan the drift model's
     robot cannot drive keeps its undrifted map, with a warning.
 
     ``coverage``, ``drift_route`` and ``explore`` as :func:`synthesize`: plan ``i``'s
     square is explored at its metric resolution, seeded by
-    :func:`~map2map.learn.coverage.explore_rng` ``(seed, i)``. ``traces`` as
-    :func:`synthesize` (plan ``i`` draws from :func:`~map2map.learn.slam_render.trace_rng`
+    :func:`~map2map.learn.ab.coverage.explore_rng` ``(seed, i)``. ``traces`` as
+    :func:`synthesize` (plan ``i`` draws from :func:`~map2map.learn.ab.render.trace_rng`
     ``(seed, i)``, its band from its own ``resolution``).
 
     ``seen`` ((N, S, S) bool, optional; ``coverage="explore"`` with ``drift_route="tour"``
     only) replaces the exploration of each square by cells seen elsewhere, e.g. by an
     exploration of the plan at its own resolution mapped onto the square
-    (:func:`map2map.learn.realism.native_seen`, what :func:`synthesize` does for a plan).
+    (:func:`map2map.experiments.realism.measure.native_seen`, what :func:`synthesize` does for a plan).
     A 256 px square of a dataset pair is 0.04-0.12 m a pixel with walls thickened for the
     network, so the robot exploring it may not fit through doors it passes at 0.05 m.
 
@@ -545,7 +545,7 @@ def save_synthesis_figure(plan: OccupancyMap, result: SynthesisResult,
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from ..core._io import atomic_path
+    from ...core._io import atomic_path
 
     hyps = result.maps[:show]
     stack = np.stack([m.data for m in result.maps])
@@ -583,6 +583,6 @@ def export_ab_model(run: str | os.PathLike, dest: str | os.PathLike, *, note: st
                     ) -> Path:
     """A run's generator in float16 with its header (and ``note``) plus a readable
     ``.json`` beside it: how the shipped ``model_ab.safetensors`` is made."""
-    from .checkpoint import export_generator
+    from ..training.checkpoint import export_generator
 
     return export_generator(run, dest, lambda p: load_ab_model(p).header, note=note)

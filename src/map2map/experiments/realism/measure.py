@@ -13,7 +13,7 @@ per map, on the dataset's square (``N x N`` px, thesis 4.1 preprocessing):
 * ``free_mapped``  share of plan free pixels that are free in the map;
 * ``unknown``      unknown share of the plan's known pixels;
 * ``spurious``     occupied 8-connected fragments farther than 3 px from every plan wall;
-* ``thickness``    wall thickness (px), :func:`map2map.learn.postprocess.wall_thickness_px`;
+* ``thickness``    wall thickness (px), :func:`map2map.learn.ba.postprocess.wall_thickness_px`;
 * ``bend``         bent-wall curvature: along the map's wall centre lines (skeleton), the
   RMS distance (px) of the centre line within a disc of radius :data:`BEND_RADIUS` px to
   its own best-fitting line (the square root of the local scatter's smaller eigenvalue),
@@ -70,7 +70,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.stats import wasserstein_distance
 
-from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from ...core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 
 __all__ = ["STATS", "STAT_INFO", "TARGET_RATIO", "map_stats", "stats_of", "RealismRow",
            "realism_table", "format_realism_table", "NullRatios", "null_ratios",
@@ -111,7 +111,7 @@ def map_stats(m: np.ndarray, plan: np.ndarray) -> dict[str, float]:
         One float per name of :data:`STATS` (``wall_err`` is NaN for a map without
         occupied cells).
     """
-    from .postprocess import wall_thickness_px
+    from ...learn.ba.postprocess import wall_thickness_px
 
     m, plan = np.asarray(m), np.asarray(plan)
     if m.shape != plan.shape:
@@ -451,7 +451,7 @@ class References:
     resolution : (N,) float
         Metres per pixel of each square (:func:`~map2map.datasets.pair.window_resolution`
         of the pair's crop window), for the metric drift model of
-        :func:`~map2map.learn.synthesize.synthesize_squares`.
+        :func:`~map2map.learn.ab.synthesize.synthesize_squares`.
     """
 
     indices: np.ndarray
@@ -475,7 +475,7 @@ class References:
 
 def split_indices(ds: str | os.PathLike, split: str = "test") -> list[int]:
     """Indices of the simulated pairs of ``split`` in dataset ``ds``, sorted."""
-    from ..datasets.build import open_dataset
+    from ...datasets.build import open_dataset
 
     with open_dataset(ds) as man:
         rows = man.rows("done")
@@ -487,7 +487,7 @@ def _read_png(path: Path) -> np.ndarray:
 
     img = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
     if img is None:
-        from ..core.errors import InputError
+        from ...core.errors import InputError
 
         raise InputError(path, "unreadable pair picture")
     return img
@@ -523,10 +523,10 @@ def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int |
         from its start with that seed), with a warning naming them; the failures are
         cached too.
     """
-    from ..core._io import atomic_path
-    from ..core.errors import InputError
-    from ..datasets.build import pair_dir
-    from ..datasets.rerun import parametric_on_run, rerun_pair
+    from ...core._io import atomic_path
+    from ...core.errors import InputError
+    from ...datasets.build import pair_dir
+    from ...datasets.rerun import parametric_on_run, rerun_pair
 
     ds = Path(ds)
     idx = split_indices(ds, split)
@@ -622,7 +622,7 @@ def seen_on_square(plan: OccupancyMap, box, size: int, rng: np.random.Generator,
     size : int
         Side of the pair's squares.
     rng : numpy.random.Generator
-        Draws the exploration's seed (:func:`~map2map.learn.coverage.explore_rng`).
+        Draws the exploration's seed (:func:`~map2map.learn.ab.coverage.explore_rng`).
     params : ExploreParams, optional
 
     Returns
@@ -633,16 +633,16 @@ def seen_on_square(plan: OccupancyMap, box, size: int, rng: np.random.Generator,
     Examples
     --------
     >>> from map2map.maps.floorplan import generate_floorplan
-    >>> from map2map.learn.coverage import ExploreParams, explore_rng
+    >>> from map2map.learn.ab.coverage import ExploreParams, explore_rng
     >>> plan = generate_floorplan(3, size=(10, 8))
     >>> s = seen_on_square(plan, None, 64, explore_rng(0, 0), ExploreParams(duration=20.0))
     >>> s.shape, s.dtype.name, bool(0.0 < s.mean() < 1.0)
     ((64, 64), 'bool', True)
     """
-    from ..core.errors import InputError
-    from ..datasets.pair import preprocess_pair
-    from ..maps.preprocess import preprocess
-    from .coverage import explore_plan
+    from ...core.errors import InputError
+    from ...datasets.pair import preprocess_pair
+    from ...learn.ab.coverage import explore_plan
+    from ...maps.preprocess import preprocess
 
     try:
         ex = explore_plan(plan, rng, params)
@@ -658,13 +658,13 @@ def native_seen(ds: str | os.PathLike, indices, size: int, *, seed: int = 0,
                 params=None, progress: bool = True) -> np.ndarray:
     """Cells seen by an exploration of each pair's plan at its own resolution, on the
     pair's ``size`` px square: ``seen=`` of
-    :func:`~map2map.learn.synthesize.synthesize_squares`.
+    :func:`~map2map.learn.ab.synthesize.synthesize_squares`.
 
-    :func:`~map2map.learn.synthesize.synthesize` explores the plan it is given at the
+    :func:`~map2map.learn.ab.synthesize.synthesize` explores the plan it is given at the
     plan's resolution; exploring a dataset's preprocessed square instead (0.04-0.12 m a
     pixel, walls thickened by the build) blocks doors the dataset's 0.05 m robot passes.
     Pair ``indices[j]``'s plan (``A.yaml``) is explored with
-    :func:`~map2map.learn.coverage.explore_rng` ``(seed, j)`` (the stream
+    :func:`~map2map.learn.ab.coverage.explore_rng` ``(seed, j)`` (the stream
     ``synthesize_squares`` gives square ``j``) and its seen cells are put on the pair's
     square by :func:`seen_on_square` with the pair's window.
 
@@ -687,10 +687,10 @@ def native_seen(ds: str | os.PathLike, indices, size: int, *, seed: int = 0,
     """
     import warnings
 
-    from ..datasets.build import pair_dir
-    from ..datasets.pair import crop_box
-    from ..maps.formats import load_map
-    from .coverage import explore_rng
+    from ...datasets.build import pair_dir
+    from ...datasets.pair import crop_box
+    from ...learn.ab.coverage import explore_rng
+    from ...maps.formats import load_map
 
     out = np.ones((len(indices), int(size), int(size)), bool)
     it = enumerate(indices)
@@ -714,9 +714,9 @@ def pair_square_resolution(ds: str | os.PathLike, index: int, size: int) -> floa
     """Metres per pixel of pair ``index``'s ``size`` px squares (``A.png``, ``B.png``): its
     crop window (the union of the plan's and run 1's content, as the build and
     :func:`~map2map.datasets.rerun.rerun_pair` cut it) over ``size``."""
-    from ..datasets.build import pair_dir
-    from ..datasets.pair import crop_box, window_resolution
-    from ..maps.formats import load_map
+    from ...datasets.build import pair_dir
+    from ...datasets.pair import crop_box, window_resolution
+    from ...maps.formats import load_map
 
     folder = pair_dir(ds, index)
     a, b = load_map(folder / "A.yaml"), load_map(folder / "B.yaml")

@@ -21,7 +21,7 @@ after a stated number of batches.
 new blocks are blended with the previous stage's path: ``alpha * new + (1 - alpha) * old``
 where *old* feeds the area-averaged ``r`` map through the ``r`` blocks (generator input
 and discriminators) or upsamples the ``r`` output (generator output), see
-:class:`~map2map.learn.networks.UNetGenerator`. ``alpha = min(1, s / fade_steps)``, ``s``
+:class:`~map2map.learn.nets.networks.UNetGenerator`. ``alpha = min(1, s / fade_steps)``, ``s``
 the number of batches already done in the stage (:func:`fade_alpha`); it is a pure
 function of (epoch, batch), so a resumed run continues with the same alpha, and the
 trainer keeps it in one 0-d tensor updated in place (``fill_``): a compiled graph sees
@@ -58,7 +58,7 @@ import torch.nn.functional as F
 from torch import nn
 from torch.nn.utils.parametrizations import spectral_norm
 
-from .config import TrainConfig, batch_size
+from ..training.config import TrainConfig, batch_size
 from .networks import UNetGenerator
 
 __all__ = ["TABLE_5_2", "GROWTHS", "ABConfig", "parse_schedule", "stage_of", "fade_alpha",
@@ -124,7 +124,7 @@ class ABConfig(TrainConfig):
         Fade-in length in batches, the same for every stage.
     dropout : float
         Dropout on the three coarsest decoder levels (pix2pix's noise source), active in
-        training and, for :func:`~map2map.learn.synthesize.synthesize`, at test time: one
+        training and, for :func:`~map2map.learn.ab.synthesize.synthesize`, at test time: one
         plan, several SLAM-map hypotheses.
     growth : {"full", "decoder"}
         ``"full"`` (default, the thesis's reading): at stage ``r`` the generator reads
@@ -199,7 +199,7 @@ def fade_alpha(step: int, steps: int) -> float:
 
 
 class StochasticUNet(UNetGenerator):
-    """:class:`~map2map.learn.networks.UNetGenerator` with dropout on the outputs of its
+    """:class:`~map2map.learn.nets.networks.UNetGenerator` with dropout on the outputs of its
     three coarsest up blocks (pix2pix's noise, [48]). ``stochastic = True`` keeps the
     dropout on in ``eval()`` mode (test-time dropout: distinct hypotheses per seed). The
     state dict is the plain U-Net's (dropout has no weights).
@@ -266,7 +266,7 @@ class StochasticUNet(UNetGenerator):
 class ProgPatchDiscriminator(nn.Module):
     """A spectral-normalised PatchGAN that grows: a base at ``min_size`` (``n_layers``
     stride-2 4x4 convs then two 3x3, as
-    :class:`~map2map.learn.networks.PatchDiscriminator`) and, for every resolution ``r``
+    :class:`~map2map.learn.nets.networks.PatchDiscriminator`) and, for every resolution ``r``
     above it, a ``from_map`` (1x1) and a stride-2 4x4 block ``r -> r/2``.
 
     ``forward(x, alpha=None)`` runs at ``r = x.shape[-1]``; with ``alpha`` the ``r``
