@@ -23,7 +23,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
 from map2map.evaluate.wallmetrics import wall_metrics  # noqa: E402
-from map2map.learn.ba.autocorrect import autocorrect_many, load_model, save_segments_dxf  # noqa: E402
+from map2map.learn.ba.autocorrect import autocorrect_many, save_segments_dxf  # noqa: E402
+from map2map.learn.ba.model import load_model  # noqa: E402
 from map2map.learn.training.figures import save_before_after  # noqa: E402
 from map2map.maps.formats import load_map, save_map  # noqa: E402
 

@@ -29,10 +29,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
 import torch  # noqa: E402
 
-from map2map.learn.ab.train import gan_step  # noqa: E402
-from map2map.learn.nets.progressive import ABConfig, build_ab_networks  # noqa: E402
+from map2map.learn.ab.config import ABConfig  # noqa: E402
+from map2map.learn.ab.model import build_ab_networks  # noqa: E402
 from map2map.learn.training.loop import place_networks, step_autocast  # noqa: E402
 from map2map.learn.training.static_step import StaticStep, graph_autocast  # noqa: E402
+from map2map.learn.training.step import gan_step  # noqa: E402
 
 
 def stage_speed(cfg: ABConfig, r: int, dev: torch.device, steps: int, warm: int = 2,

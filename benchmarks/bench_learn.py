@@ -15,7 +15,7 @@
 instead of generated boxes (the maps ``autocorrect`` is for).
 
 ``--steps-at SIZE:BATCH,...`` measures instead the training step alone (the full eq. 3.2
-step of :func:`map2map.learn.training.loop.gan_step`, default widths, bf16 + channels_last on
+step of :func:`map2map.learn.training.step.gan_step`, default widths, bf16 + channels_last on
 CUDA) on random ternary maps resident on the device, for each resolution and batch,
 over ``--seconds`` after warm-up; ``--compile`` also times a ``torch.compile``d generator.
 ``--graph`` also times the same step as one CUDA graph replay
@@ -48,7 +48,8 @@ import torch  # noqa: E402
 
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap  # noqa: E402
 from map2map.datasets.packed import PackedPairs  # noqa: E402
-from map2map.learn.ba.autocorrect import autocorrect_many, load_model  # noqa: E402
+from map2map.learn.ba.autocorrect import autocorrect_many  # noqa: E402
+from map2map.learn.ba.model import load_model  # noqa: E402
 from map2map.learn.ba.train import train_ba  # noqa: E402
 from map2map.learn.training.config import TrainConfig  # noqa: E402
 
@@ -150,7 +151,7 @@ def _training(args) -> None:
 def _step_setup(size: int, batch: int, device: str, compiled: bool = False):
     """Networks, optimisers, autocast and a random ternary batch resident on ``device``
     (module doc), as the trainer sets them up."""
-    from map2map.learn.ba.train import build_networks
+    from map2map.learn.ba.model import build_networks
     from map2map.learn.training.loop import place_networks, step_autocast
 
     cfg = TrainConfig(size=size, batch=batch, device=device)
@@ -171,8 +172,8 @@ def _step_setup(size: int, batch: int, device: str, compiled: bool = False):
 def _step_fn(size: int, batch: int, device: str, compiled: bool, graph: bool):
     """``(step(i), mode)``: one eq. 3.2 training step; ``graph``: the
     :class:`~map2map.learn.training.static_step.StaticStep` with ``graph=True`` (eager on CPU)."""
-    from map2map.learn.training.loop import gan_step
     from map2map.learn.training.static_step import StaticStep, graph_autocast
+    from map2map.learn.training.step import gan_step
 
     cfg, dev, amp, nets, opts, x, y, autocast = _step_setup(size, batch, device, compiled)
     freeze = nets[1:]
@@ -235,8 +236,8 @@ def _check_graph(size: int, batch: int, device: str, steps: int = 8) -> None:
     A second eager run gives the baseline: on CUDA two eager runs differ too (cuDNN's
     algorithm choice, atomics), and the graph's differences mean something only beside
     those."""
-    from map2map.learn.training.loop import set_lr
     from map2map.learn.training.static_step import StaticStep, graph_autocast
+    from map2map.learn.training.step import set_lr
 
     gen = torch.Generator().manual_seed(1)
     data = [tuple(torch.randint(0, 3, (batch, 1, size, size), generator=gen).float() - 1

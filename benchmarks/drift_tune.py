@@ -46,8 +46,9 @@ def main(argv=None) -> int:
                     help="DriftParams fields as JSON objects ({}: the defaults)")
     args = ap.parse_args(argv)
     from map2map.learn.ab.drift import DriftParams, drift_maps
+    from map2map.learn.ab.model import load_ab_model
     from map2map.learn.ab.room_drift import RoomDriftParams
-    from map2map.learn.ab.synthesize import load_ab_model, synthesize_squares
+    from map2map.learn.ab.synthesize import synthesize_squares
 
     t0 = time.perf_counter()
     refs = simulated_references(args.data, split=args.split, n=args.plans, cache=args.cache)

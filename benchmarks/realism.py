@@ -186,9 +186,10 @@ def main(argv=None) -> int:
         import json
 
         from map2map.learn.ab.coverage import ExploreParams
+        from map2map.learn.ab.model import load_ab_model
         from map2map.learn.ab.render import TraceParams
         from map2map.learn.ab.room_drift import RoomDriftParams
-        from map2map.learn.ab.synthesize import load_ab_model, synthesize_squares
+        from map2map.learn.ab.synthesize import synthesize_squares
 
         ep = ExploreParams() if args.explore_seconds is None else \
             ExploreParams(duration=args.explore_seconds)

@@ -36,16 +36,18 @@ from map2map.core.geometry import apply  # noqa: E402
 from map2map.core.grid import OCCUPIED, OccupancyMap  # noqa: E402
 from map2map.evaluate.pipeline import EvaluateParams, evaluate_maps  # noqa: E402
 from map2map.experiments.table53.measure import heldout_pairs_from_dataset  # noqa: E402
+from map2map.learn.ba import anchor, faces, pieces  # noqa: E402
 from map2map.learn.ba import autocorrect as ac  # noqa: E402
 from map2map.learn.ba import postprocess as pp  # noqa: E402
+from map2map.learn.ba.squares import prepare  # noqa: E402
 from map2map.maps.segments import straight_segments  # noqa: E402
 
 
 def _faces(guide: np.ndarray, data_px: float):
     """The anchored step's faces before any move: (horiz, (K, 2) faces, lo, hi, slope)."""
-    guide = pp.drop_free_specks(guide, pp.ANCHOR_SPECK * data_px ** 2)
-    s = straight_segments(guide == OCCUPIED, pp.ANCHOR_CELL * data_px)
-    horiz, f, lo, hi, _, slope = pp._observed_faces(guide, s, pp.ANCHOR_BAND * data_px, 0.3,
+    guide = pieces.drop_free_specks(guide, anchor.ANCHOR.speck * data_px ** 2)
+    s = straight_segments(guide == OCCUPIED, anchor.ANCHOR.cell * data_px)
+    horiz, f, lo, hi, _, slope = anchor._observed_faces(guide, s, anchor.ANCHOR.band * data_px, 0.3,
                                                     True)
     return horiz, f, lo, hi, slope
 
@@ -83,8 +85,9 @@ def face_offsets(pairs, net) -> list[dict]:
     rows = []
     for i in range(len(pairs)):
         m = OccupancyMap(pairs.b[i], 0.05)
-        square, row0, col0, side, angle, pad, model_sq = ac._prepare(
-            m, net.data_size, True, ac.MIN_SKEW_ANCHORED_DEG)
+        prep = prepare(m, net.data_size, True, ac.MIN_SKEW_ANCHORED_DEG)
+        angle, model_sq = prep.angle, prep.model
+        row0, col0 = prep.square.row0, prep.square.col0
         if angle:
             continue
         n = model_sq.shape[0]
@@ -96,7 +99,7 @@ def face_offsets(pairs, net) -> list[dict]:
         th = math.atan2(T[1, 0], T[0, 0])
         back = np.array([[math.cos(th), math.sin(th)], [-math.sin(th), math.cos(th)]])
         near = [ndimage.distance_transform_edt(~mk, return_indices=True)[1]
-                for mk in pp._surface_masks(pairs.a[i])]
+                for mk in faces.surface_masks(pairs.a[i])]
         H, W = pairs.a[i].shape
         for k in range(len(horiz)):
             for sd in (0, 1):
@@ -147,7 +150,7 @@ def summary(rows: list[dict]) -> str:
     shift = np.zeros(len(rows), np.int64)
     for m in np.unique(mp):  # one map's faces at a time
         s = mp == m
-        shift[s] = pp.collinear_faces(horiz[s], side[s], col["face"][s], col["lo"][s],
+        shift[s] = faces.collinear_faces(horiz[s], side[s], col["face"][s], col["lo"][s],
                                       col["hi"][s], col["slope"][s], 3.0) - col["face"][s]
     lines.append(f"  collinear (3 px, mean line): {w(dp, every):.3f} -> "
                  f"{w(dp - shift, every):.3f} ({(shift != 0).sum()} faces moved)")
@@ -165,7 +168,7 @@ def summary(rows: list[dict]) -> str:
 
         out = []
         for width in (4, 5, 6):
-            g0, g1 = pp.thicken_two_sided(f0, f1, width)
+            g0, g1 = faces.thicken_two_sided(f0, f1, width)
             out.append(f"{width} px {both(dp[i0] - (g0 - f0), dp[i1] - (g1 - f1)):.3f}")
         lines.append(f"  two-sided walls ({len(two)}): {both(dp[i0], dp[i1]):.3f} -> "
                      + ", ".join(out))

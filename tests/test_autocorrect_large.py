@@ -10,17 +10,14 @@ import pytest
 pytest.importorskip("torch")
 
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap  # noqa: E402
-from map2map.learn.ba.autocorrect import (  # noqa: E402
-    LARGE_SHRINK,
-    TILE_SHRINK,
-    BAModel,
-    autocorrect_many,
-    drawn_wall_px,
-    stitch_tiles,
-    tile_grid,
+from map2map.learn.ba.autocorrect import LARGE_SHRINK, autocorrect_many, drawn_wall_px  # noqa: E402
+from map2map.learn.ba.model import BAModel  # noqa: E402
+from map2map.learn.ba.pieces import frontier_walls  # noqa: E402
+from map2map.learn.ba.squares import TILE_SHRINK, stitch_tiles, tile_grid  # noqa: E402
+from map2map.learn.training.data import (
+    downsample_target,  # noqa: E402
+    wall_thickness_px,  # noqa: E402
 )
-from map2map.learn.ba.postprocess import frontier_walls, wall_thickness_px  # noqa: E402
-from map2map.learn.training.data import downsample_target  # noqa: E402
 
 
 class _Identity(BAModel):

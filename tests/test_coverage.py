@@ -71,7 +71,7 @@ def drawer():
     pytest.importorskip("torch")
     import torch
 
-    from map2map.learn.ab.synthesize import ABModel
+    from map2map.learn.ab.model import ABModel
     from map2map.learn.nets.progressive import StochasticUNet
     from map2map.learn.training.data import reduce_input
 

@@ -18,9 +18,10 @@ pytest.importorskip("safetensors")
 from map2map.cli.main import main  # noqa: E402
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap  # noqa: E402
 from map2map.datasets.packed import PackedPairs, save_packed  # noqa: E402
-from map2map.learn.nets import losses as L  # noqa: E402
 from map2map.learn.ba import train as T  # noqa: E402
-from map2map.learn.ba.autocorrect import BAModel, autocorrect_many, load_model  # noqa: E402
+from map2map.learn.ba.autocorrect import autocorrect_many  # noqa: E402
+from map2map.learn.ba.model import BAModel, load_model  # noqa: E402
+from map2map.learn.nets import losses as L  # noqa: E402
 from map2map.learn.training.config import TrainConfig  # noqa: E402
 from map2map.learn.training.data import downsample_target  # noqa: E402
 
@@ -263,7 +264,7 @@ def test_pretrained_weights_load_and_run():
     model = load_model("pretrained")
     assert model.header["format"] == "map2map-model-ba"
     assert model.generator.to_map[str(model.size)].weight.dtype == torch.float32
-    from map2map.learn.ba.autocorrect import pretrained_path
+    from map2map.learn.ba.model import pretrained_path
 
     assert pretrained_path().stat().st_size <= 10 * 2**20
 
@@ -530,8 +531,8 @@ def test_exporters_write_fp16_with_header_and_refuse_the_other_model(tmp_path):
     from safetensors import safe_open
 
     from map2map.core.errors import InputError
-    from map2map.learn.ab.synthesize import export_ab_model
-    from map2map.learn.ba.autocorrect import export_model, pretrained_path
+    from map2map.learn.ab.model import export_ab_model
+    from map2map.learn.ba.model import export_model, pretrained_path
 
     run = tmp_path / "run"
     T.train_ba(_pairs(6), run, TrainConfig(**{**TINY, "epochs": 1, "samples": 0}),

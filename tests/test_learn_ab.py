@@ -20,17 +20,9 @@ from map2map.cli.main import main  # noqa: E402
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN  # noqa: E402
 from map2map.datasets.packed import PackedPairs, save_packed  # noqa: E402
 from map2map.learn.ab import train as TA  # noqa: E402
-from map2map.learn.nets.progressive import (  # noqa: E402
-    TABLE_5_2,
-    ABConfig,
-    ProgMultiScaleDiscriminator,
-    StochasticUNet,
-    build_ab_networks,
-    fade_alpha,
-    fade_steps,
-    parse_schedule,
-    stage_of,
-)
+from map2map.learn.ab.config import TABLE_5_2, ABConfig, fade_steps, parse_schedule, stage_of  # noqa: E402
+from map2map.learn.ab.model import build_ab_networks  # noqa: E402
+from map2map.learn.nets.progressive import ProgMultiScaleDiscriminator, StochasticUNet, fade_alpha  # noqa: E402
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
@@ -279,7 +271,8 @@ def _plan():
 
 @pytest.mark.filterwarnings("ignore::UserWarning")
 def test_synthesize_keeps_the_plan_frame_and_gives_seeded_distinct_hypotheses(tiny_run):
-    from map2map.learn.ab.synthesize import load_ab_model, synthesize
+    from map2map.learn.ab.model import load_ab_model
+    from map2map.learn.ab.synthesize import synthesize
 
     plan = _plan()
     with pytest.warns(UserWarning):
@@ -311,8 +304,9 @@ def test_synthesize_keeps_the_plan_frame_and_gives_seeded_distinct_hypotheses(ti
 @pytest.mark.filterwarnings("ignore::UserWarning")
 def test_synthesize_render_slam_draws_faces_and_plain_is_the_previous_output(tiny_run):
     from map2map.errors import InputError
+    from map2map.learn.ab.model import load_ab_model
     from map2map.learn.ab.render import render_plain, render_slam
-    from map2map.learn.ab.synthesize import load_ab_model, synthesize, synthesize_squares
+    from map2map.learn.ab.synthesize import synthesize, synthesize_squares
 
     net = load_ab_model(tiny_run)
     assert net.wall_px == pytest.approx(net.header["target_wall_px"])
@@ -337,16 +331,18 @@ def test_synthesize_render_slam_draws_faces_and_plain_is_the_previous_output(tin
 @pytest.mark.filterwarnings("ignore::UserWarning")
 def test_synthesize_drift_none_is_the_previous_output_and_parametric_drifts(tiny_run):
     from map2map.learn.ab.drift import DriftParams, apply_drift, drift_field, drift_rng
+    from map2map.learn.ab.model import load_ab_model
     from map2map.learn.ab.render import render
-    from map2map.learn.ab.synthesize import load_ab_model, pairwise_disagreement, synthesize
-    from map2map.learn.ba.autocorrect import _square
+    from map2map.learn.ab.synthesize import pairwise_disagreement, synthesize
+    from map2map.learn.training.data import content_square
 
     net = load_ab_model(tiny_run)
     plan = _plan()
     none = synthesize(plan, net, samples=3, seed=2, drift="none", **OLD)
     # the output before drift existed: rendered squares pasted into the plan's frame,
     # diversity over the square's known pixels
-    square, row0, col0, side = _square(plan, net.data_size)
+    sq = content_square(plan, net.data_size)
+    square, row0, col0, side = sq.data, sq.row0, sq.col0, sq.side
     grey = net.sample(thicken_input(square, net), 3, 2)
     squares = [render(g, side, "slam", net.wall_px * side / net.data_size) for g in grey]
     for k, m in enumerate(none.maps):
@@ -382,8 +378,9 @@ def test_synthesize_drift_none_is_the_previous_output_and_parametric_drifts(tiny
 @pytest.mark.filterwarnings("ignore::UserWarning")
 def test_synthesize_rooms_drift_is_seeded_and_leaves_the_other_choices_alone(tiny_run):
     from map2map.learn.ab.drift import apply_drift, drift_field, drift_rng
+    from map2map.learn.ab.model import load_ab_model
     from map2map.learn.ab.room_drift import RoomDriftParams
-    from map2map.learn.ab.synthesize import load_ab_model, synthesize, synthesize_squares
+    from map2map.learn.ab.synthesize import synthesize, synthesize_squares
 
     net = load_ab_model(tiny_run)
     net.sample_many = _plan_drawer(net)
@@ -405,8 +402,9 @@ def test_synthesize_rooms_drift_is_seeded_and_leaves_the_other_choices_alone(tin
 @pytest.mark.filterwarnings("ignore::UserWarning")
 def test_synthesize_lidar_traces_are_seeded_metric_and_leave_traces_none_alone(tiny_run):
     from map2map.core.errors import InputError
+    from map2map.learn.ab.model import load_ab_model
     from map2map.learn.ab.render import TraceParams, band_px
-    from map2map.learn.ab.synthesize import load_ab_model, synthesize, synthesize_squares
+    from map2map.learn.ab.synthesize import synthesize, synthesize_squares
 
     net = load_ab_model(tiny_run)
     net.sample_many = _plan_drawer(net)
@@ -432,7 +430,7 @@ def test_synthesize_lidar_traces_are_seeded_metric_and_leave_traces_none_alone(t
                                                  traces="lidar", resolution=[0.03, 0.12]))
     assert band_px(0.03, TraceParams()) > 1.5 * band_px(0.12, TraceParams())
     # no strays, no rough edge, no inset: the band alone, thicker on the finer square
-    from map2map.learn.ab.synthesize import ABModel
+    from map2map.learn.ab.model import ABModel
     from map2map.learn.nets.progressive import StochasticUNet
 
     sq = np.full((64, 64), UNKNOWN, np.uint8)
@@ -470,7 +468,8 @@ def thicken_input(square, net):
 @pytest.mark.filterwarnings("ignore::UserWarning")
 def test_synthesize_squares_drifts_each_plan_at_its_resolution(tiny_run):
     from map2map.learn.ab.drift import DriftParams, drift_maps
-    from map2map.learn.ab.synthesize import load_ab_model, synthesize_squares
+    from map2map.learn.ab.model import load_ab_model
+    from map2map.learn.ab.synthesize import synthesize_squares
 
     net = load_ab_model(tiny_run)
     net.sample_many = _plan_drawer(net)                 # draws the plan (tiny net: nothing)
@@ -492,8 +491,9 @@ def test_synthesize_at_two_px_per_cell_draws_target_walls_without_the_coarse_war
     cell is 2 px, the simulated walls' thickness) draws its walls ``target_wall_px`` thick
     and is not called coarse; at 4 px a cell (the 64 px models) the warning stays."""
     from map2map.core.grid import OccupancyMap
-    from map2map.learn.ab.synthesize import ABModel, synthesize
-    from map2map.learn.ba.postprocess import wall_thickness_px
+    from map2map.learn.ab.model import ABModel
+    from map2map.learn.ab.synthesize import synthesize
+    from map2map.learn.training.data import wall_thickness_px
 
     S = 64
     data = np.full((S, S), UNKNOWN, np.uint8)
@@ -571,7 +571,7 @@ def test_cli_synthesize_writes_maps_summary_and_figure(tiny_run, tmp_path, capsy
         ["plan_hyp00.png", "plan_hyp01.png", "plan_synthesize.json"]
     err = capsys.readouterr().err
     assert "mean pairwise disagreement" in err
-    from map2map.learn.ba.autocorrect import pretrained_path
+    from map2map.learn.ba.model import pretrained_path
 
     bad = [["--samples", "0"], ["--model", str(pretrained_path())],
            ["--model", str(tmp_path / "nope")], ["--drift-scale", "-1"]]
@@ -609,13 +609,14 @@ def test_ddp_two_processes_gloo(tmp_path):
                           "trained"))]
     assert out.returncode == 0, "\n".join(cause[:40]) + "\n...\n" + out.stderr[-1500:]
     assert out.stderr.count("trained 2 epochs") == 1
-    from map2map.learn.ab.synthesize import load_ab_model
+    from map2map.learn.ab.model import load_ab_model
 
     assert load_ab_model(tmp_path / "run").resolution == 16
 
 
 def test_pretrained_weights_load_and_synthesize():
-    from map2map.learn.ab.synthesize import load_ab_model, pretrained_ab_path, synthesize
+    from map2map.learn.ab.model import load_ab_model, pretrained_ab_path
+    from map2map.learn.ab.synthesize import synthesize
 
     path = pretrained_ab_path()
     assert path.is_file() and path.stat().st_size <= 10 * 2**20
@@ -675,7 +676,8 @@ def test_decoder_growth_trains_feeds_full_size_inputs_and_loads(monkeypatch, tmp
     # D_d's input and the target at the stage's size, the generator's input always 16 px
     assert inputs == [(8, 8, 16)] * 3 + [(16, 16, 16)] * 6
     assert [r["resolution"] for r in res.history] == [8, 16, 16]
-    from map2map.learn.ab.synthesize import load_ab_model, synthesize_squares
+    from map2map.learn.ab.model import load_ab_model
+    from map2map.learn.ab.synthesize import synthesize_squares
 
     net = load_ab_model(tmp_path / "run")
     assert net.generator.growth == "decoder" and net.resolution == 16
@@ -690,7 +692,8 @@ def test_synthesize_thickens_the_plan_as_the_training_dataset_did(header):
     the shipped weights' header. synthesize read only ``dataset.thicken`` and fed those
     models plans 1 px thinner a side than they were trained on (fixed session 14)."""
     from map2map.core.grid import OccupancyMap
-    from map2map.learn.ab.synthesize import ABModel, synthesize
+    from map2map.learn.ab.model import ABModel
+    from map2map.learn.ab.synthesize import synthesize
 
     S = 64
     data = np.full((S, S), UNKNOWN, np.uint8)

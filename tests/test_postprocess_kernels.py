@@ -4,15 +4,11 @@ import numpy as np
 import pytest
 
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN
-from map2map.learn.ba.postprocess import (
-    _faces_kernel,
-    _paint_walls,
-    _surface_masks,
-    anchored_walls,
-)
+from map2map.learn.ba.anchor import anchored_walls
+from map2map.learn.ba.faces import faces_kernel, paint_walls, surface_masks
 
 pytest.importorskip("torch")
-from map2map.learn.ba.autocorrect import dominant_angle  # noqa: E402
+from map2map.learn.ba.squares import dominant_angle  # noqa: E402
 
 
 def _face(mask, top, offset, min_cover):
@@ -39,7 +35,7 @@ def test_faces_kernel_matches_reference(seed):
     rng = np.random.default_rng(seed)
     g = _noisy_map(rng)
     H, W = g.shape
-    up, dn, lf, rt = _surface_masks(g)
+    up, dn, lf, rt = surface_masks(g)
     n = 200
     horiz = rng.random(n) < 0.5
     c = rng.integers(-3, H + 3, n).astype(float)
@@ -52,7 +48,7 @@ def test_faces_kernel_matches_reference(seed):
     ok = a <= b
     horiz, c, lo, hi, a, b = horiz[ok], c[ok], lo[ok], hi[ok], a[ok], b[ok]
     for cover in (0.0001, 0.3, 0.9):
-        got, _ = _faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, cover, np.zeros(len(a)))
+        got, _ = faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, cover, np.zeros(len(a)))
         for k in range(len(horiz)):
             span = slice(max(0, lo[k]), min(W if horiz[k] else H, hi[k] + 1))
             if horiz[k]:
@@ -75,7 +71,7 @@ def test_paint_walls_matches_slices():
     hi = lo + rng.integers(-2, 20, n)
     stop = rng.random(n) < 0.5
     got = np.zeros((40, 50), bool)
-    _paint_walls(got, free, horiz, r0, r1, lo, hi, stop, np.zeros(n))
+    paint_walls(got, free, horiz, r0, r1, lo, hi, stop, np.zeros(n))
     want = np.zeros((40, 50), bool)
     for k in range(n):
         across = slice(max(0, r0[k]), max(0, r1[k] + 1))
@@ -93,7 +89,7 @@ def _tilted_reference(g, horiz, a, b, lo, hi, slope):
     round(slope (j - m)); the median offset of the first/last face pixel (rounded half to
     even), and the slope of a straight line through them."""
     H, W = g.shape
-    up, dn, lf, rt = _surface_masks(g)
+    up, dn, lf, rt = surface_masks(g)
     mid = (lo + hi) / 2
     first, last = [], []
     for j in range(max(0, lo), min(W if horiz else H, hi + 1)):
@@ -121,8 +117,8 @@ def test_faces_kernel_tilted_matches_reference(seed):
     a = np.maximum(0, np.floor(c - band)).astype(np.int64)
     b = np.minimum(79, np.ceil(c + band)).astype(np.int64)
     slope = rng.uniform(-0.1, 0.1, n)
-    up, dn, lf, rt = _surface_masks(g)
-    got, fit = _faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, 0.0001, slope)
+    up, dn, lf, rt = surface_masks(g)
+    got, fit = faces_kernel(up, dn, lf, rt, horiz, a, b, lo, hi, 0.0001, slope)
     for k in range(n):
         first, last = _tilted_reference(g, horiz[k], a[k], b[k], lo[k], hi[k], slope[k])
         for side, pts in ((0, first), (1, last)):
@@ -132,7 +128,7 @@ def test_faces_kernel_tilted_matches_reference(seed):
 
 
 def test_line_fit_trims_outliers():
-    from map2map.learn.ba.postprocess import _line_fit
+    from map2map.learn.ba.faces import _line_fit
 
     x = np.arange(40, dtype=float)
     y = 0.05 * x + 3.0
@@ -145,7 +141,7 @@ def test_paint_walls_tilted():
     free = np.zeros((30, 60), bool)
     got = np.zeros((30, 60), bool)
     # one horizontal wall rows 10..11 rising 1 px per 10 px, one vertical wall
-    _paint_walls(got, free, np.array([True, False]), np.array([10, 40]), np.array([11, 40]),
+    paint_walls(got, free, np.array([True, False]), np.array([10, 40]), np.array([11, 40]),
                  np.array([0, 5]), np.array([59, 24]), np.array([False, False]),
                  np.array([0.1, -0.1]))
     for j in (0, 29, 30, 59):
@@ -162,7 +158,7 @@ def test_anchored_walls_follow_the_map_angle():
     and every straight wall gets the map's angle."""
     import cv2
 
-    from map2map.learn.ba.postprocess import straight_segments
+    from map2map.maps.segments import straight_segments
 
     img = np.full((200, 200), UNKNOWN, np.uint8)
     cv2.rectangle(img, (30, 40), (170, 160), FREE, -1)
@@ -180,7 +176,7 @@ def test_anchored_walls_follow_the_map_angle():
 
 
 def test_drop_free_specks():
-    from map2map.learn.ba.postprocess import drop_free_specks
+    from map2map.learn.ba.pieces import drop_free_specks
 
     g = np.full((30, 30), UNKNOWN, np.uint8)
     g[2:20, 2:28] = FREE
@@ -331,7 +327,7 @@ def test_collinear_faces_snap_pieces_of_one_line():
     """Pieces of one wall line displaced by drift go to their length-weighted mean line
     (the long piece dominates); a face farther than ``tol`` and a face of the other side
     stay; with ``gap`` a piece far along the line is its own group."""
-    from map2map.learn.ba.postprocess import collinear_faces
+    from map2map.learn.ba.faces import collinear_faces
 
     h = np.array([True, True, True, True, False])
     side = np.array([0, 0, 0, 1, 0])
@@ -345,7 +341,7 @@ def test_collinear_faces_snap_pieces_of_one_line():
 @pytest.mark.parametrize("seed", range(4))
 def test_collinear_faces_matches_the_loop(seed):
     """The vectorised grouping gives the plain loop's faces on random face sets."""
-    from map2map.learn.ba.postprocess import collinear_faces
+    from map2map.learn.ba.faces import collinear_faces
 
     rng = np.random.default_rng(seed)
     n = 60
@@ -372,7 +368,7 @@ def test_collinear_faces_follow_the_map_angle():
     """On a map turned by its heading error the faces of one line differ by the slope
     times their distance along it: they are compared where their line crosses the axis,
     so collinear tilted pieces stay where they are and a displaced one joins them."""
-    from map2map.learn.ba.postprocess import collinear_faces
+    from map2map.learn.ba.faces import collinear_faces
 
     q = 0.05
     lo, hi = np.array([0, 100, 200]), np.array([59, 159, 259])
@@ -439,7 +435,11 @@ def test_anchored_output_has_no_unknown_pocket_where_the_input_is_free(monkeypat
     low[3:13, 3:13] = 255.0
     low[7:9, 7:9] = 127.0                      # the network's unknown pocket mid-room
     out, _ = pp.postprocess(low, (64, 64), guide, wall_px=2.0, data_px=1.0)
-    monkeypatch.setattr(pp, "ANCHOR_FILL_POCKETS", False)
+    from dataclasses import replace
+
+    from map2map.learn.ba import anchor
+
+    monkeypatch.setattr(pp, "ANCHOR", replace(anchor.ANCHOR, fill_pockets=False))
     old, _ = pp.postprocess(low, (64, 64), guide, wall_px=2.0, data_px=1.0)
     assert (old[28:36, 28:36] == UNKNOWN).any()  # what the streak rule alone leaves
     assert (out[10:55, 10:55] == FREE).all()

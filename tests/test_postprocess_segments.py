@@ -4,6 +4,8 @@ a segment."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import cv2
 import numpy as np
 import pytest
@@ -109,7 +111,7 @@ def test_imagined_wall_across_a_room_seen_free_has_no_segment():
 
 
 def test_drawn_pieces_cut_at_gaps():
-    from map2map.learn.ba.postprocess import drawn_pieces
+    from map2map.learn.ba.pieces import drawn_pieces
 
     occ = np.zeros((10, 40), bool)
     occ[4, 2:10] = occ[4, 20:28] = True
@@ -132,7 +134,7 @@ def test_drawn_pieces_cut_at_gaps():
 def test_network_band_behind_an_input_wall_does_not_double_it():
     """The demo's doubled outer walls: the input sees the outer walls from inside only;
     the network draws them as bands two cells thick lying beyond them (the plans' outer
-    walls are thick). The band's centre line is farther than ``ANCHOR_NEW`` from the
+    walls are thick). The band's centre line is farther than ``ANCHOR.new`` from the
     input's wall, so it was drawn as a second wall with a gap between the two; its band
     reaches the input's wall: it is that wall's body, drawn with it as one wall."""
     n = 128
@@ -195,7 +197,7 @@ def _drawn_pieces_numpy(segs, occ):
 def test_drawn_pieces_kernel_equals_the_numpy_reference():
     """Bit for bit, on random and axis-aligned segments (integer and half-pixel ends,
     segments leaving the grid, points) over random walls."""
-    from map2map.learn.ba.postprocess import drawn_pieces
+    from map2map.learn.ba.pieces import drawn_pieces
 
     rng = np.random.default_rng(3)
     for trial in range(30):
@@ -255,7 +257,7 @@ def test_anchored_walls_join_a_wall_hough_cut_at_a_t_junction(monkeypatch):
         data, _ = P._anchored(np.zeros((0, 4)), guide, 2.0, 1.0)
         return data[34:49, 20:22]
 
-    assert P.ANCHOR_JOIN > 0                                # on by default (session 13)
+    assert P.ANCHOR.join > 0                                # on by default
     assert np.all(drawn() == OCCUPIED)                     # drawn through the cut
-    monkeypatch.setattr(P, "ANCHOR_JOIN", 0.0)
+    monkeypatch.setattr(P, "ANCHOR", replace(P.ANCHOR, join=0.0))
     assert np.any(drawn() == FREE)                         # without: a hole at the cut

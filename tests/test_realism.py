@@ -135,7 +135,7 @@ def test_simulated_references_are_cached(tiny_dataset, tmp_path, monkeypatch):
 
 def _untrained(size):
     torch = pytest.importorskip("torch")
-    from map2map.learn.ab.synthesize import ABModel
+    from map2map.learn.ab.model import ABModel
     from map2map.learn.nets.progressive import StochasticUNet
 
     torch.manual_seed(0)

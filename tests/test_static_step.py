@@ -15,13 +15,16 @@ pytest.importorskip("safetensors")
 
 from test_learn_ab import _pairs  # noqa: E402  (boxes with walls, shifted speckled copies)
 
+from map2map.learn.ab.config import ABConfig  # noqa: E402
+from map2map.learn.ab.model import build_ab_networks  # noqa: E402
 from map2map.learn.ab.train import train_ab  # noqa: E402
-from map2map.learn.ba.train import build_networks, train_ba  # noqa: E402
-from map2map.learn.nets.progressive import ABConfig, build_ab_networks  # noqa: E402
+from map2map.learn.ba.model import build_networks  # noqa: E402
+from map2map.learn.ba.train import train_ba  # noqa: E402
 from map2map.learn.training.checkpoint import load_checkpoint  # noqa: E402
 from map2map.learn.training.config import TrainConfig  # noqa: E402
-from map2map.learn.training.loop import gan_step, place_networks, step_autocast  # noqa: E402
+from map2map.learn.training.loop import place_networks, step_autocast  # noqa: E402
 from map2map.learn.training.static_step import StaticStep, count_ops  # noqa: E402
+from map2map.learn.training.step import gan_step  # noqa: E402
 
 CPU = torch.device("cpu")
 

@@ -18,7 +18,8 @@ from map2map.experiments.table53.measure import (  # noqa: E402
     merge_pairs,
     run_table53,
 )
-from map2map.learn.ba.postprocess import anchored_walls, postprocess  # noqa: E402
+from map2map.learn.ba.anchor import anchored_walls  # noqa: E402
+from map2map.learn.ba.postprocess import postprocess  # noqa: E402
 
 
 def _plan(n=96, seed=0) -> np.ndarray:

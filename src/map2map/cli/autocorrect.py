@@ -56,7 +56,8 @@ def run(args: argparse.Namespace) -> int:
     from ..maps.formats import check_output_path, save_map
 
     try:
-        from ..learn.ba.autocorrect import autocorrect_many, load_model, save_segments_dxf
+        from ..learn.ba.autocorrect import autocorrect_many, save_segments_dxf
+        from ..learn.ba.model import load_model
         from ..learn.training.figures import save_before_after
     except ImportError as exc:
         raise InputError("autocorrect", f"needs PyTorch: pip install 'map2map[learn]' ({exc})"

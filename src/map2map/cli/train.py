@@ -110,8 +110,8 @@ def run_ab(args: argparse.Namespace) -> int:
     from ..core.errors import InputError
 
     try:
+        from ..learn.ab.config import ABConfig, parse_schedule
         from ..learn.ab.train import train_ab
-        from ..learn.nets.progressive import ABConfig, parse_schedule
     except ImportError as exc:
         raise InputError("train", f"needs PyTorch: pip install 'map2map[learn]' ({exc})") from None
     for name in ("epochs", "batch", "fade_batches", "save_every"):

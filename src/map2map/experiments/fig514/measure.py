@@ -323,7 +323,8 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
     Fig514
         ``.rows``, ``.summary``, ``.figure()``, ``.table()``.
     """
-    from ...learn.ab.synthesize import load_ab_model, synthesize_squares
+    from ...learn.ab.model import load_ab_model
+    from ...learn.ab.synthesize import synthesize_squares
 
     if isinstance(source, str | os.PathLike):
         made = _from_dataset(Path(source), int(n), int(seed), split, progress)

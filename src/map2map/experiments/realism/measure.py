@@ -111,7 +111,7 @@ def map_stats(m: np.ndarray, plan: np.ndarray) -> dict[str, float]:
         One float per name of :data:`STATS` (``wall_err`` is NaN for a map without
         occupied cells).
     """
-    from ...learn.ba.postprocess import wall_thickness_px
+    from ...learn.training.data import wall_thickness_px
 
     m, plan = np.asarray(m), np.asarray(plan)
     if m.shape != plan.shape:

@@ -410,7 +410,8 @@ def run_table53(pairs: PackedPairs, model="pretrained", *, seed: int = 0,
             gen = np.stack(model.correct(list(b))) if len(b) else b.copy()
             name = model.source
         else:
-            from ...learn.ba.autocorrect import autocorrect_many, load_model
+            from ...learn.ba.autocorrect import autocorrect_many
+            from ...learn.ba.model import load_model
 
             net = load_model(model)
             name = net.source

@@ -163,7 +163,7 @@ def real_pair_row(name: str, sensor: OccupancyMap, corrected: OccupancyMap,
     from ...evaluate.nonrigid import warp_image
     from ...evaluate.transforms import decompose_similarity
     from ...evaluate.wallmetrics import wall_metrics
-    from ...learn.ba.postprocess import wall_thickness_px
+    from ...learn.training.data import wall_thickness_px
     from ...maps.halmstad import robust_similarity
 
     t0 = time.perf_counter()
@@ -514,7 +514,7 @@ def run_table53_real(root: str | os.PathLike, names: list[str] | None = None,
     """
     from tqdm import tqdm
 
-    from ...learn.ba.autocorrect import _square
+    from ...learn.training.data import content_square
     from ...maps.halmstad import (
         halmstad_pairs,
         load_association,
@@ -540,7 +540,8 @@ def run_table53_real(root: str | os.PathLike, names: list[str] | None = None,
             name = model.source
             data_size = 256
         else:
-            from ...learn.ba.autocorrect import autocorrect_many, load_model
+            from ...learn.ba.autocorrect import autocorrect_many
+            from ...learn.ba.model import load_model
 
             net = load_model(model)
             name = net.source + ("" if anchor else " (anchor off)")
@@ -560,8 +561,8 @@ def run_table53_real(root: str | os.PathLike, names: list[str] | None = None,
         ks = load_keypoints(root, s, src.height)[assoc[:, 0]]
         kt = load_keypoints(root, t, lay.height)[assoc[:, 1]]
         row = real_pair_row(s, src, out, lay, ks, kt, seed=seed)
-        sq = _square(src, data_size)
-        row = {"map": s, "shrink": sq[3] / data_size if sq is not None else float("nan"),
+        sq = content_square(src, data_size)
+        row = {"map": s, "shrink": sq.side / data_size if sq is not None else float("nan"),
                **ex, **{k: v for k, v in row.items() if k != "map"}}
         rows.append(row)
         gts[s] = robust_similarity(ks, kt)[0]

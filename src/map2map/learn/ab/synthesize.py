@@ -62,6 +62,8 @@ Examples
 --------
 An untrained generator (``"pretrained"`` or a run folder in practice):
 
+>>> import torch
+>>> from map2map.learn.nets.progressive import StochasticUNet
 >>> from map2map.maps.floorplan import generate_floorplan
 >>> _ = torch.manual_seed(0)
 >>> net = ABModel(StochasticUNet(size=32, channels=8, min_size=16), resolution=32, alpha=1.0,
@@ -78,19 +80,15 @@ from __future__ import annotations
 
 import os
 import warnings
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
-import torch
 
 from ...core.errors import InputError
 from ...core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from ...maps.preprocess import square_resize, thicken
-from ..ba.autocorrect import _square
-from ..nets.networks import from_unit
-from ..nets.progressive import StochasticUNet
-from ..training.data import reduce_input
+from ..training.data import content_square
 from . import render as slam_render
 from .coverage import ExploreParams, coverage_options, explore_plan, explore_rng, hide_unseen
 from .drift import (
@@ -102,8 +100,8 @@ from .drift import (
     drift_params,
     drift_rng,
 )
+from .model import ABModel, load_ab_model
 from .render import (
-    DEFAULT_WALL_PX,
     RENDERS,
     TraceParams,
     band_px,
@@ -114,90 +112,9 @@ from .render import (
 )
 from .room_drift import RoomDriftParams
 
-__all__ = ["ABModel", "SynthesisResult", "load_ab_model", "pretrained_ab_path",
-           "synthesize", "synthesize_squares", "snap", "pairwise_disagreement", "export_ab_model",
-           "save_synthesis_figure", "dataset_thicken"]
+__all__ = ["SynthesisResult", "synthesize", "synthesize_squares", "snap",
+           "pairwise_disagreement", "save_synthesis_figure", "dataset_thicken"]
 
-PRETRAINED = "model_ab.safetensors"
-FORMAT_AB = "map2map-model-ab"
-
-
-def pretrained_ab_path() -> Path:
-    """The shipped weights (``map2map/learn/weights/model_ab.safetensors``)."""
-    from ..training.checkpoint import shipped_weights
-
-    return shipped_weights(PRETRAINED)
-
-
-@dataclass
-class ABModel:
-    """A loaded Model_AB generator: the resolution it reached and its fade-in alpha."""
-
-    generator: StochasticUNet
-    resolution: int
-    alpha: float
-    data_size: int
-    header: dict
-    source: str
-    device: torch.device = field(default_factory=lambda: torch.device("cpu"))
-
-    @property
-    def wall_px(self) -> float:
-        """The training targets' wall thickness (px of a ``data_size`` square; header
-        ``target_wall_px``, :data:`~map2map.learn.ab.render.DEFAULT_WALL_PX` if absent)."""
-        return float(self.header.get("target_wall_px", DEFAULT_WALL_PX))
-
-    @torch.no_grad()
-    def sample(self, inputs: np.ndarray, samples: int, seed: int = 0) -> np.ndarray:
-        """(data_size, data_size) uint8 plan -> (samples, r, r) float32 grey SLAM maps."""
-        return self.sample_many(inputs[None], samples, seed)[0]
-
-    @torch.no_grad()
-    def sample_many(self, inputs: np.ndarray, samples: int = 1, seed: int = 0) -> np.ndarray:
-        """(N, data_size, data_size) uint8 plans -> (N, samples, r, r) float32 grey maps,
-        one batch (dropout masks drawn from ``seed``; ``samples == 1``: dropout off)."""
-        how = self.header.get("train", {}).get("input_reduce", "area")
-        g = self.generator
-        decoder = getattr(g, "growth", "full") == "decoder"
-        size = g.size if decoder else self.resolution
-        g.out_size = self.resolution
-        n = len(inputs)
-        x = torch.from_numpy(reduce_input(np.asarray(inputs, np.uint8), size, how))[:, None]
-        x = (x.float() / 127.5 - 1.0).to(self.device)
-        x = x[:, None].expand(-1, samples, -1, -1, -1).reshape(n * samples, 1, size, size)
-        alpha = torch.tensor(self.alpha, device=self.device) if self.alpha < 1.0 else None
-        g.stochastic = samples > 1
-        with torch.random.fork_rng(devices=[self.device] if self.device.type == "cuda" else []):
-            torch.manual_seed(seed)
-            y = g(x.contiguous(), alpha)
-        g.stochastic = False
-        out = from_unit(y[:, 0])
-        return out.reshape(n, samples, *out.shape[-2:])
-
-
-def load_ab_model(model: str | os.PathLike | ABModel | None = "pretrained",
-                  device: str | torch.device = "cpu") -> ABModel:
-    """Model_AB from ``"pretrained"``, a ``map2map train ab`` run folder or its
-    ``model.safetensors``."""
-    if isinstance(model, ABModel):
-        return model
-    from ..training.checkpoint import load_generator, read_model_file
-
-    path, header, tensors = read_model_file(
-        model, pretrained_ab_path(), FORMAT_AB, "Model_AB",
-        no_pretrained="no pretrained Model_AB weights in this installation",
-        missing="no Model_AB weights here (expected a 'map2map train ab' "
-                "run folder holding model.safetensors, or that file)",
-        wrong="not a Model_AB weights file (no map2map-model-ab header; "
-              "Model_BA weights go to 'map2map autocorrect')",
-    )  # fmt: skip
-    if "resolution" not in header:
-        raise InputError(path, "the run has not finished an epoch yet (no resolution)")
-    g = StochasticUNet(**{k: v for k, v in header["generator"].items() if k != "dropout"},
-                       dropout=header["generator"].get("dropout", 0.5))
-    dev = load_generator(g, tensors, path, device)
-    return ABModel(g, int(header["resolution"]), float(header.get("alpha", 1.0)),
-                   int(header.get("data_size", 256)), header, str(path), dev)
 
 
 def pairwise_disagreement(maps: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
@@ -322,10 +239,10 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     along = along and dp is not None
     ep = explore or ExploreParams()
     net = load_ab_model(model, device)
-    sq = _square(plan, net.data_size)
+    sq = content_square(plan, net.data_size)
     if sq is None:
         raise InputError(None, "the plan holds no known cells; nothing to synthesize")
-    square, row0, col0, side = sq
+    square, row0, col0, side = sq.data, sq.row0, sq.col0, sq.side
     k_thick = dataset_thicken(net.header)
     inp = thicken(square_resize(square, net.data_size), k_thick)
     grey = net.sample(inp, samples, seed)
@@ -464,6 +381,7 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
 
     Examples
     --------
+    >>> from map2map.learn.nets.progressive import StochasticUNet
     >>> net = ABModel(StochasticUNet(size=16, channels=8), resolution=16, alpha=1.0,
     ...               data_size=32, header={}, source="untrained")
     >>> synthesize_squares(net, np.full((3, 32, 32), 255, np.uint8)).shape
@@ -531,6 +449,7 @@ def save_synthesis_figure(plan: OccupancyMap, result: SynthesisResult,
     Examples
     --------
     >>> import tempfile, pathlib
+    >>> from map2map.learn.nets.progressive import StochasticUNet
     >>> from map2map.maps.floorplan import generate_floorplan
     >>> plan = generate_floorplan(3, size=(10, 8))
     >>> net = ABModel(StochasticUNet(size=16, channels=8), resolution=16, alpha=1.0,
@@ -579,10 +498,3 @@ def save_synthesis_figure(plan: OccupancyMap, result: SynthesisResult,
     plt.close(fig)
 
 
-def export_ab_model(run: str | os.PathLike, dest: str | os.PathLike, *, note: str = ""
-                    ) -> Path:
-    """A run's generator in float16 with its header (and ``note``) plus a readable
-    ``.json`` beside it: how the shipped ``model_ab.safetensors`` is made."""
-    from ..training.checkpoint import export_generator
-
-    return export_generator(run, dest, lambda p: load_ab_model(p).header, note=note)

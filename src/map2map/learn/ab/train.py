@@ -47,22 +47,16 @@ import torch
 
 from ...core.errors import InputError
 from ...datasets.packed import PackedPairs
-from ..nets.progressive import ABConfig, build_ab_networks, fade_alpha, fade_steps, stage_of
+from ..nets.progressive import fade_alpha
 from ..training.data import ResidentPairs
 from ..training.figures import save_loss_curves
-from ..training.loop import (
-    EpochPlan,
-    GANRun,
-    RunStart,
-    TrainResult,
-    batches_per_epoch,
-    gan_step,
-    open_run,
-)
+from ..training.loop import EpochPlan, GANRun, RunStart, TrainResult, batches_per_epoch, open_run
+from ..training.step import gan_step
+from .config import ABConfig, fade_steps, stage_of
+from .model import FORMAT_AB, build_ab_networks, model_header_ab
 
-__all__ = ["train_ab", "gan_step", "save_prog_loss_curves", "FORMAT_AB", "schedule_table"]
+__all__ = ["train_ab", "save_prog_loss_curves", "schedule_table"]
 
-FORMAT_AB = "map2map-model-ab"
 
 
 def schedule_table(cfg: ABConfig, n_train: int) -> list[dict]:
@@ -103,16 +97,6 @@ def save_prog_loss_curves(history: list[dict], path: str | os.PathLike,
     True
     """
     save_loss_curves(history, path, title, figure="5.1")
-
-
-def model_header_ab(cfg: ABConfig, meta: dict, extra: dict) -> dict:
-    """The JSON stored with the generator: what :func:`~map2map.learn.ab.synthesize.synthesize`
-    needs and where it came from."""
-    return {"format": FORMAT_AB,
-            "generator": dict(size=cfg.size, channels=cfg.g_channels,
-                              max_channels=cfg.g_max_channels, bottleneck=cfg.bottleneck,
-                              min_size=cfg.min_size, dropout=cfg.dropout, growth=cfg.growth),
-            "train": cfg.to_dict(), "dataset": meta, **extra}
 
 
 def train_ab(data: str | os.PathLike | PackedPairs, out: str | os.PathLike,

@@ -65,33 +65,37 @@ Examples
 
 from __future__ import annotations
 
-import math
 import os
 import warnings
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import nullcontext
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import torch
-from numba import njit
 
 from ...core.grid import OCCUPIED, UNKNOWN, OccupancyMap
 from ...maps.preprocess import square_resize
-from ..nets.networks import UNetGenerator, from_unit
-from ..training.data import reduce_input
-from .postprocess import drawn_pieces, postprocess
+from .model import BAModel, load_model, pretrained_path
+from .pieces import drawn_pieces
+from .postprocess import postprocess
+from .squares import (
+    MIN_SKEW_DEG,
+    Prepared,
+    cut_tiles,
+    dominant_angle,
+    prepare,
+    rotate_square,
+    stitch_tiles,
+    tile_grid,
+    unrotate_segments,
+)
 
-__all__ = ["BAModel", "load_model", "autocorrect", "autocorrect_many", "Correction",
-           "pretrained_path", "save_segments_dxf", "export_model", "dominant_angle",
-           "drawn_wall_px", "tile_grid", "stitch_tiles"]
+__all__ = ["autocorrect", "autocorrect_many", "Correction", "save_segments_dxf",
+           "dominant_angle", "drawn_wall_px", "tile_grid", "stitch_tiles"]
 
-PRETRAINED = "model_ba.safetensors"
-MARGIN_PX = 4  # dataset crop margin at the dataset's size (learn.synthetic, dataset build)
-MIN_SKEW_DEG = 3.0  # smaller rotations are left alone
 #: With anchored walls (``anchor=True``) the faces follow the map's own angle up to
-#: ``postprocess.ANCHOR_TILT_MAX_DEG``, so only larger rotations are deskewed: the
+#: ``ANCHOR.tilt_max_deg`` (:mod:`~map2map.learn.ba.anchor`), so only larger rotations are deskewed: the
 #: nearest-neighbour rotation there and back moves wall pixels (docs/learn.md, "Why 43 %
 #: of the maps were not improved": 28 -> 31 of 38 val maps improved).
 MIN_SKEW_ANCHORED_DEG = 6.0
@@ -106,7 +110,6 @@ REAL_MAPS_ANCHORED = ("walls anchored on the input lowered the appendix-metric e
                       "against the part of the plan the robot saw, the output's walls are "
                       "no closer than the input's (boundary F1 equal, Chamfer 6.8 px "
                       "against 6.4) and drawn 2-3 times as thick as the plan's")
-CPU_CHUNK = 16  # maps per forward pass on the CPU (BAModel.predict)
 #: Median wall thickness (occupied area / centre-line length) of the training SLAM maps at
 #: the dataset's 256 px (200 train maps of gen1500: 2.07 px, 5-95 % 1.84-2.93; their
 #: plans' walls 5.61): how thick the dataset's SLAM maps draw a wall (``thickness="input"``).
@@ -125,68 +128,6 @@ LARGE = "tile"
 #: Shrink (content side / dataset size) beyond which ``large`` applies: the training
 #: plans reach 2.39 (docs/learn.md, "Table 5.3 on real maps").
 LARGE_SHRINK = 2.5
-#: ``large="tile"``: the tiles' shrink is at most this (the training plans: 0.57-2.3,
-#: median 1.1, 5-95 %).
-TILE_SHRINK = 2.0
-
-
-def pretrained_path() -> Path:
-    """The weights shipped in the package (``map2map/learn/weights/model_ba.safetensors``)."""
-    from ..training.checkpoint import shipped_weights
-
-    return shipped_weights(PRETRAINED)
-
-
-@dataclass
-class BAModel:
-    """A loaded Model_BA generator and what inference needs to know about its training."""
-
-    generator: UNetGenerator
-    size: int
-    data_size: int
-    target_wall_px: float
-    header: dict
-    source: str
-    device: torch.device = field(default_factory=lambda: torch.device("cpu"))
-
-    def predict(self, inputs: np.ndarray, batch: int = 256) -> np.ndarray:
-        """(N, data_size, data_size) uint8 maps -> (N, size, size) float32 grey outputs.
-
-        On the CPU the network runs on chunks of at most :data:`CPU_CHUNK` maps whatever
-        ``batch`` says: a small chunk's activations stay in the cache (measured about 1.5x
-        faster than one batch of 256 on 2 cores); the outputs do not depend on it."""
-        how = self.header.get("train", {}).get("input_reduce", "area")
-        small = reduce_input(inputs, self.size, how)
-        if self.device.type == "cpu":
-            batch = min(batch, CPU_CHUNK)
-        out = []
-        with torch.inference_mode():
-            for i in range(0, len(small), batch):
-                x = torch.from_numpy(small[i:i + batch])[:, None].to(self.device)
-                y = self.generator(x.float() / 127.5 - 1.0)
-                out.append(from_unit(y[:, 0]))
-        return np.concatenate(out) if out else np.zeros((0, self.size, self.size), np.float32)
-
-
-def load_model(model: str | os.PathLike | BAModel | None = "pretrained",
-               device: str | torch.device = "cpu") -> BAModel:
-    """Load Model_BA from ``"pretrained"`` (the shipped weights), a training run folder
-    (its ``model.safetensors``) or a ``.safetensors`` file written by the trainer."""
-    if isinstance(model, BAModel):
-        return model
-    from ..training.checkpoint import load_generator, read_model_file
-
-    path, header, tensors = read_model_file(
-        model, pretrained_path(), "map2map-model-ba", "Model_BA",
-        no_pretrained="no pretrained weights in this installation",
-        missing="no Model_BA weights here (expected a training run "
-                "folder holding model.safetensors, or that file)",
-        wrong="not a Model_BA weights file (no map2map-model-ba header)",
-    )  # fmt: skip
-    g = UNetGenerator(**header["generator"])
-    dev = load_generator(g, tensors, path, device)
-    return BAModel(g, int(header["generator"]["size"]), int(header.get("data_size", 256)),
-                   float(header.get("target_wall_px", 2.0)), header, str(path), dev)
 
 
 def _weights_caveat(net: BAModel, anchor: bool) -> list[str]:
@@ -223,7 +164,7 @@ def drawn_wall_px(net: BAModel, m: OccupancyMap, shrink: float, thickness: str |
                   square: np.ndarray | None = None) -> float:
     """Thickness (pixels of the input) of the walls :func:`autocorrect` draws where the
     input saw a wall from one side only (two-sided walls are grown to
-    ``postprocess.ANCHOR_MIN_THICK`` scaled by the same factor).
+    ``ANCHOR.min_thick`` scaled by the same factor).
 
     ``thickness`` is one of:
 
@@ -259,7 +200,7 @@ def drawn_wall_px(net: BAModel, m: OccupancyMap, shrink: float, thickness: str |
         ident = net.header.get("dataset", {}).get("identity", {})
         return t * float(ident.get("resolution") or 0.05) / float(m.resolution)
     if thickness == "input":
-        from .postprocess import wall_thickness_px
+        from ..training.data import wall_thickness_px
 
         if shrink <= 1.0:  # the bound: no need to measure the input's walls (2 ms a map)
             return t * shrink
@@ -269,162 +210,6 @@ def drawn_wall_px(net: BAModel, m: OccupancyMap, shrink: float, thickness: str |
         raise ValueError(f"thickness: 'shrink', 'resolution', 'input' or pixels, "
                          f"not {thickness!r}")
     return float(thickness)
-
-
-def _square(m: OccupancyMap, data_size: int):
-    """(square uint8 array, row0, col0 of the square in the input grid, side)."""
-    bbox = m.content_bbox()
-    if bbox is None:
-        return None
-    r0, r1, c0, c1 = bbox
-    side = max(r1 - r0, c1 - c0)
-    margin = math.ceil(MARGIN_PX * side / max(1, data_size - 2 * MARGIN_PX))
-    side += 2 * margin
-    row0 = r0 - (side - (r1 - r0)) // 2
-    col0 = c0 - (side - (c1 - c0)) // 2
-    sq = np.full((side, side), UNKNOWN, np.uint8)
-    H, W = m.shape
-    rs, re = max(0, row0), min(H, row0 + side)
-    cs, ce = max(0, col0), min(W, col0 + side)
-    sq[rs - row0:re - row0, cs - col0:ce - col0] = m.data[rs:re, cs:ce]
-    return sq, row0, col0, side
-
-
-def dominant_angle(data: np.ndarray) -> tuple[float, float]:
-    """Dominant wall direction (degrees in (-45, 45], image coordinates) and its coherence
-    (0: no preferred direction, 1: all walls parallel or perpendicular): the circular mean
-    of four times the gradient angle of the blurred wall mask, weighted by magnitude.
-
-    Examples
-    --------
-    >>> import cv2
-    >>> img = np.full((200, 200), 255, np.uint8)
-    >>> _ = cv2.rectangle(img, (50, 60), (150, 140), 0, 1)
-    >>> rot = cv2.warpAffine(img, cv2.getRotationMatrix2D((100, 100), 20, 1), (200, 200),
-    ...                      flags=cv2.INTER_NEAREST, borderValue=255)
-    >>> a, coherence = dominant_angle(rot)
-    >>> round(a), coherence > 0.5
-    (-20, True)
-    """
-    import cv2
-
-    occ = cv2.GaussianBlur((np.asarray(data) == OCCUPIED).astype(np.float32), (0, 0), 2.0)
-    gx = cv2.Sobel(occ, cv2.CV_32F, 1, 0, ksize=3)
-    gy = cv2.Sobel(occ, cv2.CV_32F, 0, 1, ksize=3)
-    zr, zi, total = _quadrupled_gradient_sum(gx, gy)
-    if total <= 0:
-        return 0.0, 0.0
-    return float(np.degrees(np.arctan2(zi, zr) / 4)), float(np.hypot(zr, zi) / total)
-
-
-@njit(cache=True, nogil=True)
-def _quadrupled_gradient_sum(gx: np.ndarray, gy: np.ndarray) -> tuple[float, float, float]:
-    """sum(|g| exp(4i angle(g))) as (real, imaginary) and sum(|g|), in float64, without
-    trigonometry: with g = |g| (c + i s), exp(4i angle) = (c + i s)^4."""
-    zr = zi = total = 0.0
-    for i in range(gx.shape[0]):
-        for j in range(gx.shape[1]):
-            x, y = float(gx[i, j]), float(gy[i, j])
-            m2 = x * x + y * y
-            if m2 == 0.0:
-                continue
-            m = np.sqrt(m2)
-            c2 = (x * x - y * y) / m2  # cos 2a, sin 2a
-            s2 = 2.0 * x * y / m2
-            zr += m * (c2 * c2 - s2 * s2)  # cos 4a = cos^2 2a - sin^2 2a
-            zi += m * (2.0 * c2 * s2)
-            total += m
-    return zr, zi, total
-
-
-def _rotate(data: np.ndarray, angle: float) -> np.ndarray:
-    import cv2
-
-    n = data.shape[0]
-    rot = cv2.getRotationMatrix2D(((n - 1) / 2, (n - 1) / 2), angle, 1.0)
-    return cv2.warpAffine(data, rot, (n, n), flags=cv2.INTER_NEAREST, borderValue=UNKNOWN)
-
-
-def _prepare(m: OccupancyMap, data_size: int, deskew: bool, min_skew: float = MIN_SKEW_DEG):
-    """Square of the content, and its deskewed version: (square, row0, col0, side,
-    angle, pad, model-frame square) or None for a map without known cells."""
-    sq = _square(m, data_size)
-    if sq is None:
-        return None
-    square, row0, col0, side = sq
-    angle, coherence = dominant_angle(square) if deskew else (0.0, 0.0)
-    if abs(angle) < min_skew or coherence < 0.3:
-        return square, row0, col0, side, 0.0, 0, square
-    t = math.radians(abs(angle))
-    pad = math.ceil(side * (math.cos(t) + math.sin(t) - 1) / 2)
-    big = np.pad(square, pad, constant_values=UNKNOWN)
-    return square, row0, col0, side, angle, pad, _rotate(big, angle)
-
-
-def _unrotate_segments(segs: np.ndarray, angle: float, n: int) -> np.ndarray:
-    import cv2
-
-    if not len(segs):
-        return segs
-    inv = cv2.getRotationMatrix2D(((n - 1) / 2, (n - 1) / 2), -angle, 1.0)
-    pts = segs.reshape(-1, 2)
-    back = pts @ inv[:, :2].T + inv[:, 2]
-    return back.reshape(-1, 4)
-
-
-def tile_grid(n: int, data_size: int, max_shrink: float = TILE_SHRINK) -> tuple[int, int]:
-    """``(count, stride)`` of the tiles that cover a square of ``n`` pixels: ``count``
-    tiles per axis, each ``2 * stride`` pixels, one every ``stride`` (half-overlapping),
-    so they cover ``(count + 1) * stride >= n``; the fewest with tiles of at most
-    ``max_shrink`` times ``data_size``.
-
-    Examples
-    --------
-    >>> tile_grid(1600, 256)            # a 6.25x map: 6 x 6 tiles of 458 px (1.8x)
-    (6, 229)
-    >>> tile_grid(300, 256)             # small enough: one tile
-    (1, 150)
-    """
-    half = max_shrink * data_size / 2
-    count = max(1, math.ceil(n / half) - 1)
-    return count, math.ceil(n / (count + 1))
-
-
-def _tiles(model_sq: np.ndarray, count: int, stride: int) -> list[np.ndarray]:
-    """The ``count x count`` tiles of :func:`tile_grid` (row by row), the square padded
-    with unknown to ``(count + 1) * stride``."""
-    L = (count + 1) * stride
-    big = np.full((L, L), UNKNOWN, np.uint8)
-    n = model_sq.shape[0]
-    big[:n, :n] = model_sq
-    return [big[i * stride:(i + 2) * stride, j * stride:(j + 2) * stride]
-            for i in range(count) for j in range(count)]
-
-
-def stitch_tiles(outputs: np.ndarray, count: int) -> np.ndarray:
-    """The network's outputs of :func:`_tiles` (``count**2`` maps of ``s x s``) as one
-    output of ``(count + 1) * s / 2`` cells: of each tile its centre half across each
-    axis (and the border out to the edge at the first and last tiles), where a tile's
-    network saw context on all sides.
-
-    Examples
-    --------
-    >>> o = np.stack([np.full((4, 4), k, np.float32) for k in range(4)])
-    >>> stitch_tiles(o, 2).astype(int)[::2, ::2].tolist()   # every other cell
-    [[0, 0, 1], [0, 0, 1], [2, 2, 3]]
-    """
-    s = outputs.shape[-1]
-    h, q = s // 2, s // 4
-    out = np.empty(((count + 1) * h, (count + 1) * h), np.float32)
-    for i in range(count):
-        r0 = 0 if i == 0 else i * h + q          # rows of the stitched grid kept ...
-        r1 = (count + 1) * h if i == count - 1 else i * h + q + h
-        for j in range(count):
-            c0 = 0 if j == 0 else j * h + q
-            c1 = (count + 1) * h if j == count - 1 else j * h + q + h
-            out[r0:r1, c0:c1] = outputs[i * count + j][r0 - i * h:r1 - i * h,
-                                                       c0 - j * h:c1 - j * h]
-    return out
 
 
 def autocorrect_many(maps: list[OccupancyMap], model: str | os.PathLike | BAModel | None =
@@ -452,15 +237,15 @@ def autocorrect_many(maps: list[OccupancyMap], model: str | os.PathLike | BAMode
     with ThreadPoolExecutor(n_workers) if n_workers > 1 else nullcontext() as pool:
         run = pool.map if pool is not None else map
         min_skew = MIN_SKEW_ANCHORED_DEG if anchor and straighten else MIN_SKEW_DEG
-        squares = list(run(lambda m: _prepare(m, net.data_size, deskew, min_skew), maps))
+        squares = list(run(lambda m: prepare(m, net.data_size, deskew, min_skew), maps))
         big = {i for i, s in enumerate(squares)
-               if s is not None and s[3] > LARGE_SHRINK * net.data_size}
+               if s is not None and s.side > LARGE_SHRINK * net.data_size}
         todo = [i for i, s in enumerate(squares) if s is not None
                 and not (large == "refuse" and i in big)]
         # what goes through the network: per map its square, or its tiles
-        pieces = {i: (_tiles(squares[i][-1], *tile_grid(squares[i][-1].shape[0],
-                                                          net.data_size))
-                      if large == "tile" and i in big else [squares[i][-1]]) for i in todo}
+        pieces = {i: (cut_tiles(squares[i].model, *tile_grid(squares[i].model.shape[0],
+                                                           net.data_size))
+                      if large == "tile" and i in big else [squares[i].model]) for i in todo}
         flat = [(i, t) for i in todo for t in pieces[i]]
         inputs = np.stack(list(run(lambda it: square_resize(it[1], net.data_size), flat))) \
             if flat else np.zeros((0, net.data_size, net.data_size), np.uint8)
@@ -469,7 +254,7 @@ def autocorrect_many(maps: list[OccupancyMap], model: str | os.PathLike | BAMode
         for i in todo:
             got = outputs[k:k + len(pieces[i])]
             k += len(pieces[i])
-            out_of[i] = (stitch_tiles(got, tile_grid(squares[i][-1].shape[0],
+            out_of[i] = (stitch_tiles(got, tile_grid(squares[i].model.shape[0],
                                                      net.data_size)[0])
                          if large == "tile" and i in big else got[0])
         results = list(run(lambda i: _finish(maps[i], squares[i], out_of.get(i), net,
@@ -494,7 +279,7 @@ def _open(open_frontiers: bool | None, tiled: bool) -> bool:
     return True if tiled else OPEN_FRONTIERS
 
 
-def _finish(m: OccupancyMap, sq, output: np.ndarray | None, net: BAModel, straighten: bool,
+def _finish(m: OccupancyMap, sq: Prepared | None, output: np.ndarray | None, net: BAModel, straighten: bool,
             anchor: bool, thickness: str | float = "shrink",
             open_frontiers: bool = False, refused: bool = False,
             tiled: bool = False) -> Correction:
@@ -503,14 +288,15 @@ def _finish(m: OccupancyMap, sq, output: np.ndarray | None, net: BAModel, straig
     With ``tiled``, ``output`` is the tiles' stitched one (``large="tile"``)."""
     if sq is None or refused:
         msg = "the map holds no known cells; nothing to correct" if sq is None else (
-            f"the map is {sq[3] / net.data_size:.1f}x larger than the maps the model "
+            f"the map is {sq.side / net.data_size:.1f}x larger than the maps the model "
             f"learnt on ({net.data_size} px; at most {LARGE_SHRINK}x is corrected with "
             "large='refuse'): returned as it is, not corrected")
         out = m.copy()
         out.meta["autocorrect"] = {"warnings": [msg], "segments_px": [], "support": None,
                                    "model": net.source, "refused": sq is not None}
         return Correction(out, np.zeros((0, 4)), [msg])
-    square, row0, col0, side, angle, pad, model_sq = sq
+    square, row0, col0, side = sq.square.data, sq.square.row0, sq.square.col0, sq.side
+    angle, pad, model_sq = sq.angle, sq.pad, sq.model
     n = model_sq.shape[0]
     scale = n / net.data_size
     wall_px = max(1.0, drawn_wall_px(net, m, scale, thickness, square))
@@ -528,8 +314,8 @@ def _finish(m: OccupancyMap, sq, output: np.ndarray | None, net: BAModel, straig
                                 open_frontiers=open_frontiers)
     data_sq = data_sq[:n, :n]
     if angle:  # back from the deskewed frame
-        data_sq = _rotate(data_sq, -angle)[pad:pad + side, pad:pad + side]
-        segs = _unrotate_segments(segs, angle, n) - pad
+        data_sq = rotate_square(data_sq, -angle)[pad:pad + side, pad:pad + side]
+        segs = unrotate_segments(segs, angle, n) - pad
     H, W = m.shape
     data = np.full((H, W), UNKNOWN, np.uint8)
     rs, re = max(0, row0), min(H, row0 + side)
@@ -665,19 +451,3 @@ def save_segments_dxf(segments: np.ndarray, path: str | os.PathLike, *, layer: s
         doc.saveas(tmp)
 
 
-def export_model(run: str | os.PathLike, dest: str | os.PathLike, *, note: str = "") -> Path:
-    """Copy a run's generator to ``dest`` in float16 with its header (and ``note``), plus a
-    readable ``.json`` beside it: how the shipped ``model_ba.safetensors`` is made
-    (:func:`~map2map.learn.training.checkpoint.export_generator` with :func:`load_model`).
-
-    Examples
-    --------
-    >>> import tempfile, pathlib
-    >>> d = pathlib.Path(tempfile.mkdtemp())
-    >>> p = export_model(pretrained_path(), d / "m.safetensors", note="copy")
-    >>> load_model(p).header["note"]
-    'copy'
-    """
-    from ..training.checkpoint import export_generator
-
-    return export_generator(run, dest, lambda p: load_model(p).header, note=note)

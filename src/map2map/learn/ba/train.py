@@ -34,7 +34,7 @@ Examples
 >>> rng = np.random.default_rng(0)
 >>> a = rng.choice(np.array([0, 127, 255], np.uint8), size=(4, 32, 32))
 >>> pairs = PackedPairs(a, a[:, :, ::-1], np.arange(4).astype(str), np.array(["train"] * 4))
->>> cfg = TrainConfig(size=16, epochs=1, batch=2, g_channels=8, d_channels=8, d_layers=2)
+>>> cfg = BAConfig(size=16, epochs=1, batch=2, g_channels=8, d_channels=8, d_layers=2)
 >>> run = pathlib.Path(tempfile.mkdtemp()) / "run"
 >>> result = train_ba(pairs, run, cfg, progress=False, figures=False)
 >>> result.epochs_done, sorted(p.name for p in run.iterdir())
@@ -45,50 +45,15 @@ from __future__ import annotations
 
 import os
 
-import torch
-
 from ...core.errors import InputError
 from ...datasets.packed import PackedPairs
-from ..nets.networks import MultiScaleDiscriminator, UNetGenerator
-from ..training.config import TrainConfig
 from ..training.data import ResidentPairs
-from ..training.loop import (
-    CHECKPOINT_FILE,
-    MODEL_FILE,
-    EpochPlan,
-    GANRun,
-    RunStart,
-    TrainResult,
-    batches_per_epoch,
-    false_targets,
-    gan_step,
-    open_run,
-    resolve_device,
-)
+from ..training.loop import EpochPlan, GANRun, RunStart, TrainResult, batches_per_epoch, open_run
+from ..training.step import gan_step
+from .config import BAConfig
+from .model import FORMAT, build_networks, model_header
 
-__all__ = ["TrainResult", "build_networks", "train_ba", "resolve_device", "MODEL_FILE",
-           "CHECKPOINT_FILE", "false_targets"]
-
-FORMAT = "map2map-model-ba"
-
-
-def build_networks(cfg: TrainConfig) -> tuple[UNetGenerator, MultiScaleDiscriminator,
-                                              MultiScaleDiscriminator]:
-    """``G``, ``D_d`` (2 channels: input and output) and ``D_r`` (1 channel) of ``cfg``,
-    initialised from ``cfg.seed``."""
-    torch.manual_seed(cfg.seed)
-    g = UNetGenerator(cfg.size, cfg.g_channels, cfg.g_max_channels, cfg.bottleneck)
-    dd = MultiScaleDiscriminator(2, cfg.d_channels, cfg.d_layers, cfg.d_scales)
-    dr = MultiScaleDiscriminator(1, cfg.d_channels, cfg.d_layers, cfg.d_scales)
-    return g, dd, dr
-
-
-def model_header(cfg: TrainConfig, meta: dict, extra: dict) -> dict:
-    """The JSON stored with the generator: what inference needs and where it came from."""
-    return {"format": FORMAT, "generator": dict(size=cfg.size, channels=cfg.g_channels,
-                                                max_channels=cfg.g_max_channels,
-                                                bottleneck=cfg.bottleneck),
-            "train": cfg.to_dict(), "dataset": meta, **extra}
+__all__ = ["train_ba"]
 
 
 class _BARun(GANRun):
@@ -117,7 +82,7 @@ class _BARun(GANRun):
 
 
 def train_ba(data: str | os.PathLike | PackedPairs, out: str | os.PathLike,
-             config: TrainConfig | None = None, *, resume: bool = False,
+             config: BAConfig | None = None, *, resume: bool = False,
              epochs: int | None = None, progress: bool = True, figures: bool = True
              ) -> TrainResult:
     """Train Model_BA (input: SLAM map ``b``, target: plan ``a``) on the ``train`` split.
@@ -128,8 +93,8 @@ def train_ba(data: str | os.PathLike | PackedPairs, out: str | os.PathLike,
         A dataset folder (``packed.npz`` inside), a packed ``.npz``, or pairs in memory.
     out : path
         Run folder (created).
-    config : TrainConfig
-        Settings (defaults: see :class:`TrainConfig`); ignored when resuming, except
+    config : BAConfig
+        Settings (defaults: see :class:`BAConfig`); ignored when resuming, except
         ``epochs`` (which may extend a run).
     resume : bool
         Continue the run in ``out`` exactly where its last checkpoint stopped.
@@ -142,7 +107,7 @@ def train_ba(data: str | os.PathLike | PackedPairs, out: str | os.PathLike,
     -------
     TrainResult
     """
-    start = open_run(data, out, config, config_type=TrainConfig, fmt=FORMAT,
+    start = open_run(data, out, config, config_type=BAConfig, fmt=FORMAT,
                      model="Model_BA", resume=resume, epochs=epochs)
     cfg, pairs, train, dist = start.cfg, start.pairs, start.train, start.dist
     smallest = cfg.size // 2 ** (cfg.d_scales - 1)

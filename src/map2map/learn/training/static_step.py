@@ -1,6 +1,6 @@
 """The eq. 3.2 training step with static buffers, ready to run as one CUDA graph replay.
 
-A Model_32 :func:`~map2map.learn.training.loop.gan_step` costs ~62-68 ms on an H200 from batch 32
+A Model_32 :func:`~map2map.learn.training.step.gan_step` costs ~62-68 ms on an H200 from batch 32
 to 256 because it is bound by host overhead (``docs/learn.md``, "Trained on a GPU": about
 2,200 top-level operator calls a step, ~900 of them the spectral norms' power
 iterations). A CUDA graph records every kernel of a step once and replays them with one
@@ -11,7 +11,7 @@ call. :class:`StaticStep` is that step:
   false-target permutation as an int64 **index tensor** (``y.index_select(0, perm)``:
   the same values as ``torch.roll(y, shift)``, without a Python int in the step);
   each call copies its batch in and runs the same eq. 3.2 step, the very code of
-  :func:`~map2map.learn.training.loop.gan_step`;
+  :func:`~map2map.learn.training.step.gan_step`;
 * with ``graph=True`` on CUDA, a new shape runs ``warmup`` eager steps on a side stream
   (real training steps: every call is exactly one step), then the next call **captures**
   D step + G step (two forward/backward passes, two Adam steps) in one
@@ -29,7 +29,7 @@ What capture needs, and how it is met (PyTorch's "CUDA Graphs" notes):
 
 * Adam with ``capturable=True`` (its ``step`` counters on the device) and the learning
   rate as a 0-d device tensor, so the per-epoch linear decay (thesis 4.2) is a ``fill_``
-  the graph sees (:func:`make_capturable`, :func:`~map2map.learn.training.loop.set_lr`); torch's
+  the graph sees (:func:`make_capturable`, :func:`~map2map.learn.training.step.set_lr`); torch's
   own LR schedulers also ``fill_`` a tensor lr (since 2.4, pytorch#123753), but the
   trainer sets it itself;
 * gradients: set to None before each backward *inside* the capture, so the backward
@@ -44,7 +44,7 @@ What capture needs, and how it is met (PyTorch's "CUDA Graphs" notes):
   step; single process (under DDP the trainer runs eagerly).
 
 On CPU (or ``graph=False``) it runs eagerly and gives bit-identical weights and losses to
-:func:`~map2map.learn.training.loop.gan_step` (``tests/test_static_step.py``).
+:func:`~map2map.learn.training.step.gan_step` (``tests/test_static_step.py``).
 
 :func:`count_ops` counts the top-level operator calls of a callable with
 ``torch.profiler`` (the host-overhead measure of ``bench_learn.py --count-ops``).
@@ -75,7 +75,7 @@ from dataclasses import dataclass, field
 
 import torch
 
-from .loop import gan_step, set_lr
+from .step import gan_step, set_lr
 
 __all__ = ["StaticStep", "make_capturable", "set_lr", "graph_autocast", "count_ops",
            "OpCount"]
@@ -137,7 +137,7 @@ class StaticStep:
     autocast : context manager
         The step's autocast (:func:`graph_autocast` when capturing).
     freeze : tuple of modules
-        The discriminators (single process), as for :func:`~map2map.learn.training.loop.gan_step`.
+        The discriminators (single process), as for :func:`~map2map.learn.training.step.gan_step`.
     graph : bool
         Capture and replay a CUDA graph (CUDA only; elsewhere it runs eagerly).
     warmup : int

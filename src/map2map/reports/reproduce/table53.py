@@ -150,7 +150,7 @@ def spread_sentence(median: float, p: float) -> str:
 def _provisional() -> bool:
     """The shipped Model_BA's note says PROVISIONAL."""
     try:
-        from map2map.learn.ba.autocorrect import load_model
+        from map2map.learn.ba.model import load_model
 
         return "PROVISIONAL" in str(load_model("pretrained").header.get("note", ""))
     except Exception:  # no header or unreadable: say nothing
