@@ -1,6 +1,7 @@
 """Where a training step's device time goes: ``torch.profiler`` over a few steps, the
 kernels (or, on a CPU, the operators) sorted by their own time. Shared by
-``bench_learn.py --profile`` and ``bench_ab.py --profile``.
+``bench_learn --profile`` and ``bench_ab --profile`` (import it as
+``from benchmarks._profile import print_top`` when they run as ``python3 -m benchmarks.X``).
 
 Session 12 found this way that one kernel (PyTorch's NCHW bilinear upsampling) took 75 %
 of a Model_32 step on an H200 (docs/learn.md, "Measured on a GPU: the graph, and the

@@ -1,34 +1,21 @@
-"""Plans for the simulator benchmarks: procedural apartments and HouseExpo (shared data)."""
+"""Plans for the simulator benchmarks: procedural apartments and HouseExpo (shared data).
+
+Imported by the ``bench_sim*``/``bench_slam`` benchmarks as ``benchmarks._sim_plans``
+(run them from the repository root: ``python3 -m benchmarks.bench_sim``).
+"""
 
 from __future__ import annotations
 
 import os
-import sys
 from pathlib import Path
 
-import numpy as np
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
-
-from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap  # noqa: E402
+from map2map.core.grid import OccupancyMap
+from map2map.datasets.plans import reduce_resolution
 
 SHARED = Path(
     os.environ.get("MAP2MAP_SHARED_DATA", Path(__file__).resolve().parents[2] / "shared" / "data")
 )
 HOUSEEXPO = SHARED / "houseexpo"
-
-
-def block_reduce(m: OccupancyMap, f: int) -> OccupancyMap:
-    """Coarsen by ``f`` keeping thin walls: a block is occupied if any pixel is,
-    else free if most pixels are free, else unknown."""
-    h, w = (m.height // f) * f, (m.width // f) * f
-    d = m.data[m.height - h :, :w].reshape(h // f, f, w // f, f)
-    occ = (d == OCCUPIED).any(axis=(1, 3))
-    free = (d == FREE).mean(axis=(1, 3)) > 0.5
-    out = np.full(occ.shape, UNKNOWN, np.uint8)
-    out[free] = FREE
-    out[occ] = OCCUPIED
-    return OccupancyMap(out, m.resolution * f, m.origin)
 
 
 def houseexpo_json() -> list[tuple[str, OccupancyMap]]:
@@ -38,7 +25,8 @@ def houseexpo_json() -> list[tuple[str, OccupancyMap]]:
 
 
 def houseexpo_renders(n: int) -> list[tuple[str, OccupancyMap]]:
-    """The first ``n`` renders (1 cm/px), cropped and reduced to 0.05 m/px."""
+    """The first ``n`` renders (1 cm/px), cropped and reduced to 0.05 m/px
+    (:func:`map2map.datasets.plans.reduce_resolution`: thin walls kept)."""
     from map2map.maps.formats import load_map
 
     out = []
@@ -46,7 +34,7 @@ def houseexpo_renders(n: int) -> list[tuple[str, OccupancyMap]]:
         m = load_map(p, resolution=0.01)
         r0, r1, c0, c1 = m.content_bbox()
         m = m.crop(r0 - 10, r1 + 10, c0 - 10, c1 + 10)
-        out.append((p.stem[:8], block_reduce(m, 5)))
+        out.append((p.stem[:8], reduce_resolution(m, 0.05)))
     return out
 
 

@@ -8,10 +8,10 @@ labels.
 
 Usage::
 
-    python3 benchmarks/bench_dataset.py                  # 8 pairs per configuration
-    python3 benchmarks/bench_dataset.py --pairs 16       # steadier
-    python3 benchmarks/bench_dataset.py --ds DS          # + the cleaner on a built dataset
-    python3 benchmarks/bench_dataset.py --pairs 16 --repeat 2 --only-2   # Dask vs pool
+    python3 -m benchmarks.bench_dataset                  # 8 pairs per configuration
+    python3 -m benchmarks.bench_dataset --pairs 16       # steadier
+    python3 -m benchmarks.bench_dataset --ds DS          # + the cleaner on a built dataset
+    python3 -m benchmarks.bench_dataset --pairs 16 --repeat 2 --only-2   # Dask vs pool
 
 Every configuration builds the same pairs (generated plans, seed 0: the default
 HouseExpo-like mix of sizes) into a fresh folder. Wall-clock pairs/hour is what a user
@@ -41,10 +41,8 @@ import tempfile
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
-
-from map2map.datasets.build import build_dataset, open_dataset  # noqa: E402
-from map2map.datasets.pair import BuildParams  # noqa: E402
+from map2map.datasets.build import build_dataset, open_dataset
+from map2map.datasets.pair import BuildParams
 
 MIB = 2**20
 

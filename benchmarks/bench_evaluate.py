@@ -2,7 +2,7 @@
 
 Usage::
 
-    python3 benchmarks/bench_evaluate.py [--data ../shared/data] [--pairs 6] [--no-large]
+    python3 -m benchmarks.bench_evaluate [--data ../shared/data] [--pairs 6] [--no-large]
 
 Runs the full evaluation, figures included, exactly as the command does, on
 Halmstad sensor-map / layout pairs (1585 x 1585) and on one pair upscaled to
@@ -25,10 +25,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "src"))
+from map2map.jobs.evaluate import run_evaluate
 
-from map2map.jobs.evaluate import run_evaluate  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def _timed(src: Path, tgt: Path, out: Path) -> tuple[float, float, dict]:

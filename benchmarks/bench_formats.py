@@ -1,6 +1,6 @@
 """Map formats: speed of every reader/writer and the HouseExpo thin-wall accuracy.
 
-Run: ``python3 benchmarks/bench_formats.py``. Uses ``../shared/data`` (or
+Run: ``python3 -m benchmarks.bench_formats``. Uses ``../shared/data`` (or
 ``$MAP2MAP_SHARED_DATA``) when present for the real-data parts; the synthetic parts
 run anywhere. Prints one line per figure.
 """
@@ -9,23 +9,19 @@ from __future__ import annotations
 
 import json
 import os
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
+from scipy import ndimage as ndi
+from skimage.graph import MCP_Geometric
+
+from map2map.core.grid import OccupancyMap
+from map2map.maps.formats import load_map, save_map
+from map2map.maps.houseexpo import load_houseexpo
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "src"))
-
-from scipy import ndimage as ndi  # noqa: E402
-from skimage.graph import MCP_Geometric  # noqa: E402
-
-from map2map.core.grid import OccupancyMap  # noqa: E402
-from map2map.maps.formats import load_map, save_map  # noqa: E402
-from map2map.maps.houseexpo import load_houseexpo  # noqa: E402
-
 SHARED = Path(os.environ.get("MAP2MAP_SHARED_DATA", HERE.parent.parent / "shared" / "data"))
 
 

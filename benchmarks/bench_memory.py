@@ -6,9 +6,9 @@ This script measures what each command needs per pixel, the figures from which
 
 Usage::
 
-    python3 benchmarks/bench_memory.py                       # sides 500 1000 2000 4000
-    python3 benchmarks/bench_memory.py --sides 500 1000 --commands evaluate deform
-    python3 benchmarks/bench_memory.py --timeout 300 --json mem.json
+    python3 -m benchmarks.bench_memory                       # sides 500 1000 2000 4000
+    python3 -m benchmarks.bench_memory --sides 500 1000 --commands evaluate deform
+    python3 -m benchmarks.bench_memory --timeout 300 --json mem.json
 
 The map: one generated apartment (``map2map plan --seed 7 --size 25 25``, 500 px at
 0.05 m/px) upsampled by nearest neighbour to each side, its resolution scaled so the
@@ -46,9 +46,9 @@ COMMANDS = ["convert", "prep", "show", "align", "evaluate", "deform", "simulate"
 
 
 def _env() -> dict:
-    env = dict(os.environ)
-    env["PYTHONPATH"] = str(ROOT / "src") + os.pathsep + env.get("PYTHONPATH", "")
-    return env
+    """The children's environment: this process's, so they run the map2map it imports (the
+    installed package, or the tree ``PYTHONPATH`` names)."""
+    return dict(os.environ)
 
 
 _LAUNCH = (
@@ -98,7 +98,6 @@ def run_measured(argv: list[str], timeout: float) -> tuple[int, float, float]:
 
 def make_maps(tmp: Path, sides: list[int]) -> dict[int, tuple[Path, Path]]:
     """The plan at every side and its copy turned 90 degrees (ROS yaml + pgm)."""
-    sys.path.insert(0, str(ROOT / "src"))
     from map2map.core.grid import OccupancyMap
     from map2map.maps.floorplan import generate_floorplan
     from map2map.maps.formats import save_map

@@ -14,7 +14,7 @@ figure. Also printed: the EKF and additive field sizes on the same plan and traj
 and, when ``../shared/data`` is present, a run on a real HouseExpo plan with its
 recorded trajectory.
 
-Run: ``python3 benchmarks/bench_parametric.py``.
+Run: ``python3 -m benchmarks.bench_parametric``.
 """
 
 from __future__ import annotations
@@ -33,11 +33,10 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "src"))
-
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap  # noqa: E402
 from map2map.parametric import ParametricParams, deform, make_trajectory  # noqa: E402
+
+HERE = Path(__file__).resolve().parent
 
 SIZE_M = 12.8
 WAYPOINTS = np.array([[1.5, 11.0], [11.0, 11.0], [11.0, 2.0], [8.0, 2.0], [6.0, 5.0], [2.0, 2.0]])

@@ -3,23 +3,20 @@
 Targets: ``generate_floorplan`` under 0.2 s for a 30 x 20 m plan at 0.05 m/px;
 every plan one connected, fully reachable free space for a 0.2 m robot.
 
-Run: ``python3 benchmarks/bench_plans.py`` (prints a table; numbers depend on
+Run: ``python3 -m benchmarks.bench_plans`` (prints a table; numbers depend on
 machine load).
 """
 
 from __future__ import annotations
 
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
-
-from map2map.core.grid import OccupancyMap  # noqa: E402
-from map2map.maps.floorplan import connectivity, generate_floorplan  # noqa: E402
-from map2map.maps.preprocess import harmonise, preprocess  # noqa: E402
+from map2map.core.grid import OccupancyMap
+from map2map.maps.floorplan import connectivity, generate_floorplan
+from map2map.maps.preprocess import harmonise, preprocess
 
 RENDERS = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "houseexpo" / "renders"
 

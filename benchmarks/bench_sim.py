@@ -8,7 +8,7 @@ simulated second is printed too, and the time a full 420 s would take. CPU time
 (``time.process_time``) is printed beside wall time: on a machine shared with
 other work it is the fair "one core" figure.
 
-Run: ``python3 benchmarks/bench_sim.py`` (numbers depend on machine load).
+Run: ``python3 -m benchmarks.bench_sim`` (numbers depend on machine load).
 """
 
 from __future__ import annotations
@@ -16,8 +16,8 @@ from __future__ import annotations
 import time
 
 import numpy as np
-from _sim_plans import HOUSEEXPO, apartments, houseexpo_json, houseexpo_renders
 
+from benchmarks._sim_plans import HOUSEEXPO, apartments, houseexpo_json, houseexpo_renders
 from map2map.sim.lidar import Scene
 from map2map.sim.raycast import cast_rays_many
 from map2map.sim.runner import simulate

@@ -7,7 +7,7 @@ reach); "strict" counts every cell the body could touch, squeezing through any
 gap at all and including the cells right next to walls. Prints one line per plan and the
 distribution (min, quartiles, mean, share of plans reaching 90 %).
 
-Run: ``python3 benchmarks/bench_sim_coverage.py [--apartments 12] [--renders 10]
+Run: ``python3 -m benchmarks.bench_sim_coverage [--apartments 12] [--renders 10]
 [--fov 360] [--duration 420]`` (about 2-5 s per plan).
 """
 
@@ -17,8 +17,8 @@ import argparse
 import time
 
 import numpy as np
-from _sim_plans import HOUSEEXPO, apartments, houseexpo_json, houseexpo_renders
 
+from benchmarks._sim_plans import HOUSEEXPO, apartments, houseexpo_json, houseexpo_renders
 from map2map.sim.runner import simulate
 
 

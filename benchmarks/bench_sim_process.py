@@ -9,9 +9,9 @@ process counted whole -- interpreter start-up, imports, numba cache loading, the
 
 Usage::
 
-    python3 benchmarks/bench_sim_process.py               # 8 runs, 2 at a time
-    python3 benchmarks/bench_sim_process.py --runs 16 --jobs 2
-    python3 benchmarks/bench_sim_process.py --mapper oracle
+    python3 -m benchmarks.bench_sim_process               # 8 runs, 2 at a time
+    python3 -m benchmarks.bench_sim_process --runs 16 --jobs 2
+    python3 -m benchmarks.bench_sim_process --mapper oracle
 
 Plans: the two HouseExpo JSON plans and the HouseExpo renders (reduced to
 0.05 m/px, ``benchmarks/_sim_plans.py``) from the shared data, cycled; procedural
@@ -39,7 +39,8 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
-from _sim_plans import HOUSEEXPO, apartments, houseexpo_renders
+
+from benchmarks._sim_plans import HOUSEEXPO, apartments, houseexpo_renders
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -6,8 +6,8 @@ one process per core, i.e. <= 7.2 s per map per core, simulation included.
 
 Usage::
 
-    python3 benchmarks/bench_slam.py            # 2 plans per configuration
-    python3 benchmarks/bench_slam.py --plans 4  # more plans, steadier figures
+    python3 -m benchmarks.bench_slam            # 2 plans per configuration
+    python3 -m benchmarks.bench_slam --plans 4  # more plans, steadier figures
 
 For each configuration the script simulates procedural apartments (about 8 x 13 m at
 0.05 m/px, the size of HouseExpo plans) for 420 simulated seconds and prints wall and CPU
@@ -29,7 +29,7 @@ import os
 import time
 from concurrent.futures import ProcessPoolExecutor
 
-from _sim_plans import HOUSEEXPO, houseexpo_json, houseexpo_renders
+from benchmarks._sim_plans import HOUSEEXPO, houseexpo_json, houseexpo_renders
 
 CONFIGS = [
     ("oracle", {}),

@@ -5,9 +5,9 @@ compares: every output must be byte-identical for the same seeds.
 
 Usage::
 
-    python3 benchmarks/digests.py OUT                 # run with ./src, write OUT/digests.json
-    python3 benchmarks/digests.py OUT --src OLD/src   # the same with another source tree
-    python3 benchmarks/digests.py --compare A.json B.json
+    python3 -m benchmarks.digests OUT                 # run with ./src, write OUT/digests.json
+    python3 -m benchmarks.digests OUT --src OLD/src   # the same with another source tree
+    python3 -m benchmarks.digests --compare A.json B.json
 
 Commands run on a generated plan (``map2map plan --seed 3``), a small HouseExpo
 JSON and a DXF drawing in millimetres that this script writes, with fixed seeds.

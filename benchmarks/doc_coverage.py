@@ -10,8 +10,8 @@ only when their ``__init__`` takes arguments they do not document as ``Attribute
 
 Usage::
 
-    python3 benchmarks/doc_coverage.py                  # ./src
-    python3 benchmarks/doc_coverage.py --src OLD/src    # another source tree
+    python3 -m benchmarks.doc_coverage                  # ./src
+    python3 -m benchmarks.doc_coverage --src OLD/src    # another source tree
 """
 
 from __future__ import annotations

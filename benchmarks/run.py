@@ -2,12 +2,13 @@
 
 Usage::
 
-    python3 benchmarks/run.py              # all benchmarks/bench_*.py
-    python3 benchmarks/run.py sim slam     # bench_sim.py and bench_slam.py
+    python3 -m benchmarks.run              # all benchmarks/bench_*.py
+    python3 -m benchmarks.run sim slam     # bench_sim.py and bench_slam.py
 
-Each benchmark is a standalone script that prints its own figures; this runner
-only runs them one after another in fresh interpreters (so numba warm-up and
-memory figures are not shared between them) and reports failures.
+Each benchmark is a module of this package that prints its own figures; this runner
+only runs them one after another (``python3 -m benchmarks.bench_X`` from the
+repository root) in fresh interpreters (so numba warm-up and memory figures are not
+shared between them) and reports failures.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
 
 
 def main(argv: list[str]) -> int:
@@ -33,7 +35,7 @@ def main(argv: list[str]) -> int:
     for script in scripts:
         print(f"\n=== {script.name}", flush=True)
         t0 = time.perf_counter()
-        rc = subprocess.call([sys.executable, str(script)])
+        rc = subprocess.call([sys.executable, "-m", f"benchmarks.{script.stem}"], cwd=ROOT)
         print(f"--- {script.name}: exit {rc}, {time.perf_counter() - t0:.1f} s", flush=True)
         if rc:
             failed.append(script.name)

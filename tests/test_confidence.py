@@ -1,7 +1,7 @@
 """Warnings are earned: a good alignment of a cluttered map does not warn, a bad one does.
 
 The thresholds of :mod:`map2map.evaluate.confidence` were recalibrated on the
-Halmstad keypoints (``benchmarks/halmstad_accuracy.py``); these tests pin both sides.
+Halmstad keypoints (``map2map.experiments.halmstad_accuracy``); these tests pin both sides.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from map2map.evaluate.pipeline import evaluate_maps
 from map2map.maps.irregular import irregular_plan
 from map2map.maps.synthetic import draw_walls, office_walls
 
-# figures measured on Halmstad pairs (benchmarks/halmstad_accuracy.py)
+# figures measured on Halmstad pairs (map2map.experiments.halmstad_accuracy)
 E5_01_GOOD = {"fitness": 0.41, "free_agreement": 0.96, "runner_up_ratio": 0.65,
               "agreement_sigma_px": 6.4, "scale": 0.83, "metric_scale": None}  # fmt: skip
 E5_01_ON_HIH = {"fitness": 0.05, "free_agreement": 0.50, "runner_up_ratio": 0.96,

@@ -40,11 +40,12 @@ Notes (:func:`alignment_notes`, :func:`evaluation_notes`): a fitness below
 the SLAM map's wall points matching no plan wall (the wall statistics describe the
 rest).
 
-Calibration (``benchmarks/halmstad_accuracy.py``: 36 Halmstad sensor map <-> layout
+Calibration (``map2map.experiments.halmstad_accuracy``: 36 Halmstad sensor map <-> layout
 pairs scored by annotated keypoints, 35 good (similarity within 1.5 x the keypoint
 floor), 1 bad (E5_layout -> E5_01, 1.96 x), plus 4 sensor maps against the other
 building's layout; the synthetic cases of ``tests/test_trust.py`` and
-``tests/test_confidence.py``; the known-similarity sweep ``benchmarks/align_sweep.py``):
+``tests/test_confidence.py``; the known-similarity sweep
+``map2map.experiments.align_sweep``):
 
 * fitness does not separate right from wrong on real maps: good Halmstad pairs
   score 0.21-0.58 (their sensor walls are clouds, the rooms hold furniture), wrong

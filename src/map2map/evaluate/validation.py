@@ -10,7 +10,7 @@ alignment. :func:`known_error_case` evaluates a deformed map against its plan an
 the metric's mean and max beside the true ones, for both chains (each chain over the
 points it counts). :func:`table2_cases` builds the appendix Table 2 set.
 
-Used by ``benchmarks/metric_accuracy.py`` and ``map2map reproduce``.
+Used by ``map2map.experiments.metric_accuracy`` and ``map2map reproduce``.
 
 Examples
 --------

@@ -1,0 +1,27 @@
+"""Experiments: the accuracy measurements behind the documented figures, one folder each.
+
+Every experiment is a package ``map2map.experiments.<name>`` holding its script
+(``__main__.py``, run as ``python -m map2map.experiments.<name> ...``) and a short
+write-up of its current result (``README.md``: what it measures, the command, the
+latest figures with their date and machine). Real data are read from
+``$MAP2MAP_SHARED_DATA`` or ``../shared/data`` beside the working folder
+(:func:`map2map.experiments._data.shared_data`); an experiment that needs them says so
+when they are absent. Performance benchmarks (speed, memory) stay in the repository's
+``benchmarks/`` (``python -m benchmarks.bench_sim``).
+
+Experiments
+-----------
+halmstad_accuracy
+    The alignment on the annotated Halmstad maps: keypoint residuals against their
+    floor, and which confidence warnings fire on good, bad and wrong-map pairs.
+metric_accuracy
+    The error metric (Algorithm 1) on maps with known wall errors: reported mean and
+    max against the true ones.
+align_sweep
+    ``evaluate`` on plans against rotated and scaled copies of themselves: recovered,
+    flagged and silently wrong alignments.
+slam_accuracy
+    The SLAM backends' trajectory and map error: on the two real CARMEN logs against
+    their corrected poses (``slam_accuracy.carmen``) and on simulated explorations
+    against the plan (``slam_accuracy.simulated``).
+"""

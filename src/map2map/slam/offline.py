@@ -125,7 +125,8 @@ def default_usable_range(sensor_max: float) -> float:
     TurtleBot3 uses 3.0 m with its 3.5 m LDS-01 (86 %); a long-range scanner keeps
     80 % of its range up to 10 m. On the Radish logs (50 m SICK, scans about 1 m
     apart) the TurtleBot3 value of 3 m left the matcher too little to match and
-    the map fell apart (``benchmarks/carmen_real.py``: 2.8 m mean error on aces).
+    the map fell apart (``map2map.experiments.slam_accuracy.carmen``: 2.8 m mean error
+    on aces).
 
     Parameters
     ----------

@@ -32,7 +32,8 @@ anywhere: the filter sees only :class:`OdometryReading` and :class:`LaserScan`.
 Defaults are TurtleBot3's ``turtlebot3_slam/config/gmapping_params.yaml`` except
 ``particles`` (5 instead of 100) and ``lskip`` (1 instead of 0: every second beam
 of the 360-beam LDS-01), both for speed; ``benchmarks/bench_slam.py`` and
-``benchmarks/slam_quality.py`` measure their effect -- see :class:`GMappingParams`.
+``map2map.experiments.slam_accuracy.simulated`` measure their effect -- see
+:class:`GMappingParams`.
 
 Examples
 --------
@@ -92,7 +93,7 @@ class GMappingParams:
     explorations (procedural apartments and offices, 7 minutes, realistic odometry):
     mean map error 7.1 cm with 5 particles, 6.4 cm with 10, 6.7 cm with 30 -- within
     run-to-run spread -- while time grows linearly (about 6, 8 and 22 CPU seconds per run); see
-    ``benchmarks/bench_slam.py`` and ``benchmarks/slam_quality.py``.
+    ``benchmarks/bench_slam.py`` and ``map2map.experiments.slam_accuracy.simulated``.
 
     Three switches that are not GMapping parameters. ``sigma_is_std`` (default True)
     reads ``sigma`` and ``lsigma`` as the standard deviations the ROS documentation
@@ -102,9 +103,9 @@ class GMappingParams:
     standard deviation: flat within the 3x3 kernel, so the hill climber wanders
     inside a cell at every update and the map random-walks (measured: 38 cm drift in
     two simulated minutes with perfect odometry and no motion noise, 10 cm with
-    True; see ``benchmarks/slam_quality.py``). ``sample_proposal`` draws each
-    particle's new pose from the Gaussian fitted around its scan match (Grisetti
-    2007, eq. 12; GMapping's code keeps the matched pose itself, ``False``), and
+    True; see ``map2map.experiments.slam_accuracy.simulated``). ``sample_proposal``
+    draws each particle's new pose from the Gaussian fitted around its scan match
+    (Grisetti 2007, eq. 12; GMapping's code keeps the matched pose itself, ``False``), and
     ``no_return_free`` clears free space along beams without a return up to
     ``max_urange`` (GMapping's documented set-up for drivers reporting no-returns at
     the maximum range; the simulator's LDS-01 reports ``inf``).
@@ -122,8 +123,9 @@ class GMappingParams:
     Without it the match slides along corridors where the score is flat, and the
     filter drifts even with perfect odometry (offices 13 / 17 of the quality set,
     perfect odometry: ATE 18 / 17 cm without, 19 / 8 cm with ``motion_prior`` 1).
-    On the 20 plans of ``benchmarks/slam_quality.py``, motion_prior 0 / 1 / 4: ATE mean
-    13.4 / 9.5 / 5.1 cm, map error mean 10.3 / 8.9 / 7.2 cm, coverage 0.75 / 0.71 / 0.76.
+    On the 20 plans of ``map2map.experiments.slam_accuracy.simulated``, motion_prior
+    0 / 1 / 4: ATE mean 13.4 / 9.5 / 5.1 cm, map error mean 10.3 / 8.9 / 7.2 cm,
+    coverage 0.75 / 0.71 / 0.76.
     """
 
     particles: int = 5

@@ -2,8 +2,8 @@
 
 Usage::
 
-    python3 benchmarks/halmstad_accuracy.py [--data ../shared/data] [--pairs E5_01,HIH_02]
-                                            [--json OUT.json] [--no-wrong]
+    python3 -m map2map.experiments.halmstad_accuracy [--data ../shared/data]
+        [--pairs E5_01,HIH_02] [--json OUT.json] [--no-wrong]
 
 For each sensor map and its layout, in both directions (36 pairs), the source's
 associated keypoints are mapped through the similarity and through the nonrigid
@@ -42,11 +42,9 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "src"))
-
-from map2map.evaluate.pipeline import evaluate_maps  # noqa: E402
-from map2map.maps.halmstad import halmstad_pairs, keypoint_residuals, load_halmstad  # noqa: E402
+from map2map.evaluate.pipeline import evaluate_maps
+from map2map.experiments._data import shared_data
+from map2map.maps.halmstad import halmstad_pairs, keypoint_residuals, load_halmstad
 
 #: warning text -> the check that raised it (confidence.py, align.py)
 CHECKS = (
@@ -175,8 +173,12 @@ def summary(rows: list[dict]) -> str:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--data", default=str(ROOT.parent / "shared" / "data"))
+    ap = argparse.ArgumentParser(
+        prog="python3 -m map2map.experiments.halmstad_accuracy",
+        description=__doc__.splitlines()[0],
+    )
+    ap.add_argument("--data", default=str(shared_data()),
+                    help="real-data folder (default: $MAP2MAP_SHARED_DATA or ../shared/data)")
     ap.add_argument("--pairs", default="", help="comma-separated sensor map names (default: all)")
     ap.add_argument("--one-way", action="store_true", help="only sensor -> layout")
     ap.add_argument("--no-wrong", action="store_true", help="skip the wrong-map pairs")
@@ -184,7 +186,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     data = Path(args.data) / "halmstad"
     if not data.is_dir():
-        print(f"no Halmstad data at {data}")
+        print(f"no Halmstad data at {data} (--data, or $MAP2MAP_SHARED_DATA)")
         return 0
     wanted = {w for w in args.pairs.split(",") if w}
     jobs = []

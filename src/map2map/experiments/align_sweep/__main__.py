@@ -2,7 +2,8 @@
 
 Usage::
 
-    python3 benchmarks/align_sweep.py [--quick] [--data ../shared/data] [--plans N] [--jobs J]
+    python3 -m map2map.experiments.align_sweep [--quick] [--data ../shared/data] [--plans N]
+        [--jobs J]
 
 Every plan is evaluated against copies of itself rotated (0, 23, 90, -37 deg) and
 scaled (pixel scale 0.8-1.3); the copy's resolution is set so that the metric scale
@@ -36,13 +37,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "src"))
-
-from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap  # noqa: E402
-from map2map.evaluate.pipeline import EvaluateParams, evaluate_maps  # noqa: E402
-from map2map.evaluate.transforms import decompose_similarity, similarity_matrix  # noqa: E402
-from map2map.maps.irregular import irregular_plan  # noqa: E402
+from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from map2map.evaluate.pipeline import EvaluateParams, evaluate_maps
+from map2map.evaluate.transforms import decompose_similarity, similarity_matrix
+from map2map.experiments._data import shared_data
+from map2map.maps.irregular import irregular_plan
 
 ROTATIONS = (0.0, 23.0, 90.0, -37.0)
 SCALES = (0.8, 1.05, 1.3)
@@ -162,8 +161,12 @@ def _q(q: dict) -> str:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--data", default=str(ROOT.parent / "shared" / "data"))
+    ap = argparse.ArgumentParser(
+        prog="python3 -m map2map.experiments.align_sweep",
+        description=__doc__.splitlines()[0],
+    )
+    ap.add_argument("--data", default=str(shared_data()),
+                    help="real-data folder (default: $MAP2MAP_SHARED_DATA or ../shared/data)")
     ap.add_argument("--plans", type=int, default=4, help="plans of each kind (default 4)")
     ap.add_argument("--quick", action="store_true", help="1 plan of each kind, 2 x 2 cases")
     ap.add_argument("--jobs", type=int, default=2, help="processes (default 2)")

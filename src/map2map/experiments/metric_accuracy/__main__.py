@@ -2,7 +2,7 @@
 
 Usage::
 
-    python3 benchmarks/metric_accuracy.py
+    python3 -m map2map.experiments.metric_accuracy
 
 Generated office plans are rebuilt with walls out of place by known amounts, or bent
 by smooth known displacement fields (and, when :mod:`map2map.parametric` is
@@ -15,17 +15,13 @@ are compared with the true ones (target: within 5%).
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 import cv2
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "src"))
-
-from map2map.core.grid import OccupancyMap  # noqa: E402
-from map2map.evaluate.validation import known_error_case  # noqa: E402
-from map2map.maps.synthetic import (  # noqa: E402
+from map2map.core.grid import OccupancyMap
+from map2map.evaluate.validation import known_error_case
+from map2map.maps.synthetic import (
     deform,
     draw_walls,
     gaussian_field,

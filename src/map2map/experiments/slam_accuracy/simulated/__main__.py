@@ -2,9 +2,10 @@
 
 Usage::
 
-    python3 benchmarks/slam_quality.py                   # 20 plans, rbpf and graph
-    python3 benchmarks/slam_quality.py --plans 30 --backends rbpf --particles 5,10,30
-    python3 benchmarks/slam_quality.py --figure docs/slam_quality_examples.png
+    python3 -m map2map.experiments.slam_accuracy.simulated      # 20 plans, rbpf and graph
+    python3 -m map2map.experiments.slam_accuracy.simulated --plans 30 --backends rbpf \
+        --particles 5,10,30
+    python3 -m map2map.experiments.slam_accuracy.simulated --figure docs/slam_quality_examples.png
 
 Each plan is a procedural apartment or office (``map2map.maps.floorplan``, alternating,
 HouseExpo-size) explored for 7 simulated minutes with the simulator's default,
@@ -90,8 +91,11 @@ def _figure(rows, path):
     save_figure(fig, path)
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(
+        prog="python3 -m map2map.experiments.slam_accuracy.simulated",
+        description=__doc__.splitlines()[0],
+    )
     ap.add_argument("--plans", type=int, default=20)
     ap.add_argument("--backends", default="oracle,rbpf,graph")
     ap.add_argument("--particles", default="", help="comma-separated rbpf particle counts")
@@ -101,7 +105,7 @@ def main() -> None:
     ap.add_argument("--seeds", default="", help="comma-separated plan seeds (default 0..plans-1)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--figure", default="", help="save example maps (PNG) here")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     extra = {}
     for kv in filter(None, args.options.split(",")):
         k, v = kv.split("=")

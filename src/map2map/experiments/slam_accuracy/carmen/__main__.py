@@ -2,9 +2,12 @@
 
 Usage::
 
-    python3 benchmarks/carmen_real.py                   # both logs: oracle, rbpf, rbpf:30, graph
-    python3 benchmarks/carmen_real.py --backends rbpf --logs aces
-    python3 benchmarks/carmen_real.py --figure docs/carmen_real.png
+    python3 -m map2map.experiments.slam_accuracy.carmen  # both logs: oracle, rbpf, rbpf:30, graph
+    python3 -m map2map.experiments.slam_accuracy.carmen --backends rbpf --logs aces
+    python3 -m map2map.experiments.slam_accuracy.carmen --figure docs/carmen_real.png
+
+The logs are read from ``$MAP2MAP_SHARED_DATA/carmen`` or ``../shared/data/carmen``
+(beside the working folder).
 
 The logs (Radish ``aces-corrected``, ``fhw-corrected``) are "corrected": the pose of
 each ``FLASER`` line is a SLAM-corrected pose, and the ``ODOM`` stream is re-anchored
@@ -42,8 +45,9 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-DATA = ROOT.parent / "shared" / "data" / "carmen"
+from map2map.experiments._data import shared_data
+
+DATA = shared_data() / "carmen"
 
 
 def relative_to_first(poses: np.ndarray) -> np.ndarray:
@@ -140,7 +144,10 @@ def figure(results, path: Path) -> None:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(
+        prog="python3 -m map2map.experiments.slam_accuracy.carmen",
+        description=__doc__.splitlines()[0],
+    )
     ap.add_argument("--logs", default="aces,fhw")
     ap.add_argument("--backends", default="oracle,rbpf,rbpf:30,graph", help="rbpf:N = N particles")
     ap.add_argument("--particles", type=int, default=None)
@@ -148,7 +155,7 @@ def main(argv=None) -> int:
     ap.add_argument("--figure", type=Path, help="PNG of the maps over the references")
     args = ap.parse_args(argv)
     if not DATA.is_dir():
-        print(f"no CARMEN data at {DATA}", file=sys.stderr)
+        print(f"no CARMEN data at {DATA} (set $MAP2MAP_SHARED_DATA)", file=sys.stderr)
         return 1
     print(
         f"{'log':<5} {'backend':<7} {'mean':>6} {'median':>6} {'p90':>6} {'placed':>7} "
