@@ -7,7 +7,7 @@ during the fade-in (alpha a tensor), after warm-up steps; images/s. Then the tim
 whole Table 5.2 schedule would take on ``--pairs`` pairs (4,224: the issue's dataset).
 Issue #15's target: >= 700 img/s at 256 px on one H100 (bf16 + channels_last there).
 
-    python3 benchmarks/bench_ab.py [--quick] [--device cpu|cuda] [--steps 10]
+    python3 -m benchmarks.bench_ab [--quick] [--device cpu|cuda] [--steps 10]
         [--growth full|decoder] [--threads N] [--graph | --compile] [--nchw] [--profile]
         [--only 256]
 
@@ -23,17 +23,14 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+import torch
 
-import torch  # noqa: E402
-
-from map2map.learn.ab.config import ABConfig  # noqa: E402
-from map2map.learn.ab.model import build_ab_networks  # noqa: E402
-from map2map.learn.training.loop import place_networks, step_autocast  # noqa: E402
-from map2map.learn.training.static_step import StaticStep, graph_autocast  # noqa: E402
-from map2map.learn.training.step import gan_step  # noqa: E402
+from map2map.learn.ab.config import ABConfig
+from map2map.learn.ab.model import build_ab_networks
+from map2map.learn.training.loop import place_networks, step_autocast
+from map2map.learn.training.static_step import StaticStep, graph_autocast
+from map2map.learn.training.step import gan_step
 
 
 def stage_speed(cfg: ABConfig, r: int, dev: torch.device, steps: int, warm: int = 2,
@@ -94,7 +91,7 @@ def stage_speed(cfg: ABConfig, r: int, dev: torch.device, steps: int, warm: int 
         torch.cuda.synchronize()
     ips = steps * B / (time.perf_counter() - t0)
     if profile:
-        from _profile import print_top
+        from benchmarks._profile import print_top
 
         print_top(one, min(steps, 5), dev, title=f"Model_prog stage {r}, batch {B}")
     return ips, (static.mode if static is not None else

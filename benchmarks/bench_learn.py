@@ -8,7 +8,7 @@
   Target: >= 50 maps/s on CPU. Besides wall-clock rates it prints maps per CPU-second
   (process time), which a machine shared with other jobs disturbs much less.
 
-    python3 benchmarks/bench_learn.py [--maps 200] [--device cpu|cuda] [--threads T]
+    python3 -m benchmarks.bench_learn [--maps 200] [--device cpu|cuda] [--threads T]
         [--data DS] [--inference-only] [--repeat R]
 
 ``--data`` takes the simulated SLAM maps (``B``) of a ``map2map dataset build`` folder
@@ -27,8 +27,8 @@ stops the graphed weights. ``--count-ops`` counts instead the top-level operator
 one step (``torch.profiler``; today's ``gan_step`` and the static step). Issue #14's target:
 Model_32 >= 10,000 img/s on one H100.
 
-    python3 benchmarks/bench_learn.py --steps-at 32:32,32:256,64:16 --device cuda --graph
-    python3 benchmarks/bench_learn.py --steps-at 32:32 --device cpu --count-ops
+    python3 -m benchmarks.bench_learn --steps-at 32:32,32:256,64:16 --device cuda --graph
+    python3 -m benchmarks.bench_learn --steps-at 32:32 --device cpu --count-ops
 """
 
 from __future__ import annotations
@@ -41,17 +41,14 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+import torch
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
-
-import torch  # noqa: E402
-
-from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap  # noqa: E402
-from map2map.datasets.packed import PackedPairs  # noqa: E402
-from map2map.learn.ba.autocorrect import autocorrect_many  # noqa: E402
-from map2map.learn.ba.model import load_model  # noqa: E402
-from map2map.learn.ba.train import train_ba  # noqa: E402
-from map2map.learn.training.config import TrainConfig  # noqa: E402
+from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from map2map.datasets.packed import PackedPairs
+from map2map.learn.ba.autocorrect import autocorrect_many
+from map2map.learn.ba.model import load_model
+from map2map.learn.ba.train import train_ba
+from map2map.learn.training.config import TrainConfig
 
 
 def _maps(n: int, size: int = 256, seed: int = 0) -> np.ndarray:
@@ -109,7 +106,7 @@ def main(argv=None) -> int:
                       f"{ips:.0f} img/s ({n} steps, {1e3 * batch / ips:.2f} ms a step)",
                       flush=True)
             if args.profile:
-                from _profile import print_top
+                from benchmarks._profile import print_top
 
                 fn, _ = _step_fn(size, batch, args.device, False, False)
                 for i in range(3):

@@ -26,7 +26,7 @@ each part is capped by a wall-clock budget:
 Every training run is stopped by SIGINT at its budget plus a margin (the trainer then
 writes its checkpoint), so a slower machine gives fewer epochs, never a lost call.
 
-    python3 benchmarks/gpu_session.py --data packed.npz --out OUTDIR [--device cuda]
+    python3 -m benchmarks.gpu_session --data packed.npz --out OUTDIR [--device cuda]
         [--ba-seconds 150] [--ab-seconds 200] [--deadline 560] [--quick]
         [--skip graph,bench,ba,ab,infer] [--parts abprof] [--ba-graph auto|yes|no]
 
@@ -35,7 +35,7 @@ Session 12 ran ``--skip bench,ab,infer --ba-batch 256 --ba-seconds 300 --deadlin
 graph, and the kernel that held the step"). The next call (the thesis's 534 epochs fit
 since the upsampling fix; run it on an H100 too):
 
-    python3 benchmarks/gpu_session.py --data .gpu/packed.npz --out $OUT/s13
+    python3 -m benchmarks.gpu_session --data .gpu/packed.npz --out $OUT/s13
         --skip bench,ab,infer --ba-batch 256 --ba-seconds 330 --deadline 470
 
 ``--quick``: tiny budgets and networks, for checking the script on a CPU.
@@ -45,6 +45,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import re
 import subprocess
 import sys
@@ -58,8 +59,9 @@ ROOT = Path(__file__).resolve().parents[1]
 THESIS_BA_EPOCHS = 534  # the epoch the thesis chose for Model_BA
 # `map2map train` alone: the full CLI also registers the map commands, which import
 # shapely/ezdxf, absent on the GPU machine
-# (this checkout's src/ first: the code under test, whatever else is installed)
-CLI_TRAIN = (f"import argparse, sys; sys.path.insert(0, {str(ROOT / 'src')!r}); "
+# (this checkout's src/ first on PYTHONPATH, set by _run: the code under test, whatever
+# else is installed)
+CLI_TRAIN = ("import argparse, sys; "
              "from map2map.cli import train as t; "
              "p = argparse.ArgumentParser(); t.register(p.add_subparsers()); "
              "a = p.parse_args(sys.argv[1:]); sys.exit(a.func(a))")
@@ -71,7 +73,9 @@ def _run(cmd: list[str], limit: float, log, signal: str = "TERM") -> tuple[int, 
     full = ["timeout", "-s", signal, "-k", "30", str(int(limit))] + cmd
     print("$ " + " ".join(cmd), file=log, flush=True)
     t0 = time.perf_counter()
-    p = subprocess.run(full, capture_output=True, text=True, cwd=ROOT)
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        [str(ROOT / "src"), *filter(None, [os.environ.get("PYTHONPATH")])]))
+    p = subprocess.run(full, capture_output=True, text=True, cwd=ROOT, env=env)
     out = p.stdout + p.stderr
     print(out[-6000:], file=log, flush=True)
     print(f"[rc {p.returncode}, {time.perf_counter() - t0:.0f} s]", file=log, flush=True)
@@ -156,7 +160,7 @@ def main(argv=None) -> int:
     graph_rates, graph_ok = {}, False
     if "graph" not in skip:
         at = "32:32,32:256,32:1024,64:16,64:256" if not args.quick else "32:8,64:8"
-        _, txt = _run([py, "benchmarks/bench_learn.py", "--device", args.device, "--steps-at",
+        _, txt = _run([py, "-m", "benchmarks.bench_learn", "--device", args.device, "--steps-at",
                        at, "--graph", "--check-graph", "--seconds",
                        "2" if not args.quick else "0.5"], 240, log)
         res["graph_checks"] = re.findall(r"^graph check, (.*)$", txt, re.M)
@@ -177,15 +181,15 @@ def main(argv=None) -> int:
     ba_rates, ab_rates = {}, {}
     if "bench" not in skip:
         at = "32:32,32:256,32:1024,64:16,64:64,64:256" if not args.quick else "32:8,64:8"
-        _, txt = _run([py, "benchmarks/bench_learn.py", "--device", args.device, "--steps-at",
+        _, txt = _run([py, "-m", "benchmarks.bench_learn", "--device", args.device, "--steps-at",
                        at, "--seconds", "2" if not args.quick else "0.5"], 100, log)
         ba_rates = _rates(txt, r"Model_(\d+) default widths, batch (\d+): (\d+) img/s")
         q = ["--quick"] if args.quick else []
-        _run([py, "benchmarks/bench_ab.py", "--device", args.device, "--steps", "6",
+        _run([py, "-m", "benchmarks.bench_ab", "--device", args.device, "--steps", "6",
               *q], 90, log)
         g = ["--graph"] if args.ab_graph == "yes" or (args.ab_graph == "auto" and graph_ok) \
             else []
-        _, t2 = _run([py, "benchmarks/bench_ab.py", "--device", args.device, "--steps", "6",
+        _, t2 = _run([py, "-m", "benchmarks.bench_ab", "--device", args.device, "--steps", "6",
                       "--batch-rate", str(args.ab_batch_rate), "--g-channels", "16",
                       "--g-max-channels", "128", *g, *q], 120, log)
         ab_rates = {k[0]: v for k, v in
@@ -258,7 +262,7 @@ def main(argv=None) -> int:
 
     # 4b. where Model_prog's 256 px step goes
     if "abprof" in set(filter(None, args.parts.split(","))):
-        base = [py, "benchmarks/bench_ab.py", "--device", args.device, "--only",
+        base = [py, "-m", "benchmarks.bench_ab", "--device", args.device, "--only",
                 "32" if args.quick else "256", "--batch", "8" if args.quick else "64",
                 "--g-channels", "16", "--g-max-channels", "128", "--steps",
                 "2" if args.quick else "10", "--profile"]
@@ -272,7 +276,7 @@ def main(argv=None) -> int:
 
     # 4. inference at 256 px
     if "infer" not in skip:
-        _run([py, "benchmarks/bench_learn.py", "--device", args.device, "--inference-only",
+        _run([py, "-m", "benchmarks.bench_learn", "--device", args.device, "--inference-only",
               "--maps", "64" if args.quick else "512", "--repeat", "2"], 120, log)
     res["seconds"] = time.perf_counter() - t_all
     (args.out / "result.json").write_text(json.dumps(res, indent=1))

@@ -12,32 +12,12 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-import pytest
-
 REPO = Path(__file__).resolve().parents[1]
 BENCHMARKS = REPO / "benchmarks"
 EXPERIMENTS = REPO / "src" / "map2map" / "experiments"
 
 #: ``sys.path.insert(...)``, ``.append``, ``.extend``, ``sys.path += ...``, ``sys.path = ...``
 SYS_PATH_EDIT = re.compile(r"\bsys\.path\s*(\.\s*(insert|append|extend)\s*\(|\+=|=(?!=))")
-
-#: Scripts still to be moved or fixed by the learn/experiments restructuring (the learned
-#: models' benchmarks); remove each name as it lands, and this set with the last one.
-PENDING = {
-    "autocorrect_real.py",
-    "bench_ab.py",
-    "bench_learn.py",
-    "drift_tune.py",
-    "fig514.py",
-    "gpu_session.py",
-    "realism.py",
-    "room_offsets.py",
-    "table53.py",
-    "table53_error_sources.py",
-    "table53_face_offsets.py",
-    "table53_real.py",
-}
-
 
 def _scripts() -> list[Path]:
     files = sorted(BENCHMARKS.rglob("*.py")) + sorted(EXPERIMENTS.rglob("*.py"))
@@ -53,16 +33,8 @@ def _edits(paths: list[Path]) -> list[str]:
     return out
 
 
-@pytest.mark.xfail(strict=False, reason="learn benchmarks pending")
 def test_no_script_edits_sys_path():
     bad = _edits(_scripts())
-    assert not bad, "run as a module instead of editing sys.path:\n" + "\n".join(bad)
-
-
-def test_no_script_edits_sys_path_but_the_pending_ones():
-    """The same check, binding now, on everything but :data:`PENDING`."""
-    scripts = [p for p in _scripts() if p.parent != BENCHMARKS or p.name not in PENDING]
-    bad = _edits(scripts)
     assert not bad, "run as a module instead of editing sys.path:\n" + "\n".join(bad)
 
 

@@ -306,19 +306,15 @@ def test_null_ratios_are_a_perfect_generators_scatter_and_flag_a_shifted_one():
 
 
 def test_benchmark_third_run_is_measured_as_a_generator(tiny_dataset, tmp_path, capsys):
-    """benchmarks/realism.py --third-run: a third simulation of every plan, measured like a
+    """map2map.experiments.realism --third-run: a third simulation of every plan, measured like a
     generator (the benchmark's noise floor), cached in its own file."""
-    import importlib.util
-    from pathlib import Path
+    import importlib
 
     from map2map.datasets.build import open_dataset
 
     with open_dataset(tiny_dataset) as man:
         split = man.rows("done")[0]["split"]
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "realism.py"
-    spec = importlib.util.spec_from_file_location("bench_realism", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
+    mod = importlib.import_module("map2map.experiments.realism.__main__")
     c2, c3 = tmp_path / "refs2.npz", tmp_path / "refs3.npz"
     assert mod.main(["--data", str(tiny_dataset), "--split", split, "--plans", "1",
                      "--cache", str(c2), "--third-run", str(c3), "--model"]) == 0

@@ -19,7 +19,7 @@ Held-out pairs come from a dataset built by ``map2map dataset build``
 (:func:`heldout_pairs_from_dataset`: a split of its plans, never trained on; a running
 build is read without writing to it) or from generated plans
 (:func:`generated_heldout_pairs`, the parametric model of :mod:`map2map.learn.training.synthetic`).
-``benchmarks/table53.py`` is the command line.
+``map2map.experiments.table53`` is the command line.
 
 Examples
 --------
@@ -52,7 +52,7 @@ from ...core.grid import OccupancyMap
 from ...datasets.packed import PackedPairs
 
 __all__ = ["Table53", "run_table53", "heldout_pairs_from_dataset", "generated_heldout_pairs",
-           "merge_pairs", "HELD_OUT_SEED", "GUARDS"]
+           "merge_pairs", "HELD_OUT_SEED", "GUARDS", "ac_options"]
 
 #: Generated plans 100000.. are never used by ``benchmarks/train_ba.sh``.
 HELD_OUT_SEED = 100_000
@@ -466,3 +466,26 @@ def run_table53(pairs: PackedPairs, model="pretrained", *, seed: int = 0,
 def _nanmedian(v) -> float:
     v = np.asarray(v, float)
     return float(np.nanmedian(v)) if np.isfinite(v).any() else float("nan")
+
+
+def ac_options(items: list[str]) -> dict:
+    """``KEY=VALUE`` strings -> keyword arguments of ``autocorrect_many`` (true/false,
+    numbers, else strings): the scripts' ``--ac`` option.
+
+    Examples
+    --------
+    >>> ac_options(["anchor=false", "thickness=3", "large=tile"])
+    {'anchor': False, 'thickness': 3.0, 'large': 'tile'}
+    """
+    out = {}
+    for item in items:
+        k, _, v = item.partition("=")
+        low = v.strip().lower()
+        if low in ("true", "false"):
+            out[k.strip()] = low == "true"
+            continue
+        try:
+            out[k.strip()] = float(v)
+        except ValueError:
+            out[k.strip()] = v.strip()
+    return out

@@ -44,7 +44,7 @@ correspondences (:mod:`map2map.maps.halmstad`). Per map:
 
 The summary counts improved / worse maps among those counted, the one-sided sign test
 (:func:`scipy.stats.binomtest`, ties left out) and the medians, as
-:func:`~map2map.experiments.table53.measure.run_table53` does. ``benchmarks/table53_real.py`` is the
+:func:`~map2map.experiments.table53.measure.run_table53` does. ``map2map.experiments.table53_real`` is the
 command line.
 
 Resolution: the data give none; maps are read at 0.05 m/px

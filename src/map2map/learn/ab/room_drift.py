@@ -34,7 +34,7 @@ pixels across the walls between them so that the warped walls stay continuous:
    inversion, wall pixels splatted).
 
 The magnitudes are fitted to the per-room offsets measured on the simulated maps of
-``gen900``'s val plans (``benchmarks/room_offsets.py``), not taken from eqs. 3.81-3.82's
+``gen900``'s val plans (``map2map.experiments.realism.room_offsets``), not taken from eqs. 3.81-3.82's
 coefficients, which describe raw odometry and not what the particle filter leaves of it.
 
 The rooms' field moves free space and walls without making or erasing them (gen900 val:

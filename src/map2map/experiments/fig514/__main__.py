@@ -4,7 +4,7 @@ its appendix-metric error and wall recall. :func:`map2map.experiments.fig514.mea
 the work; this script writes ``fig514.png`` and ``fig514.csv`` into ``--out`` and prints
 the table.
 
-    python3 benchmarks/fig514.py --data DS --n 6 --out DIR [--model pretrained|RUN] [--seed 0]
+    python3 -m map2map.experiments.fig514 --data DS --n 6 --out DIR [--model pretrained|RUN] [--seed 0]
         [--render slam|plain] [--drift parametric|none] [--drift-method additive|ekf]
         [--drift-scale F] [--coverage none|explore] [--drift-route tour|explore]
         [--traces none|lidar] [--explore-at square|native] [--as-synthesize]
@@ -22,9 +22,7 @@ import json
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
-
-from map2map.experiments.fig514.measure import run_fig514  # noqa: E402
+from map2map.experiments.fig514.measure import run_fig514
 
 
 def main(argv=None) -> int:

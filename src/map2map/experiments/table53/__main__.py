@@ -2,11 +2,11 @@
 their plans? A thin caller of :mod:`map2map.experiments.table53.measure` (the metric, the guards and
 the sign test are documented there).
 
-    python3 benchmarks/table53.py                        # 100 generated held-out pairs
-    python3 benchmarks/table53.py --quick                # 12 pairs
-    python3 benchmarks/table53.py --data DS --model RUN  # a dataset's test split, a run
-    python3 benchmarks/table53.py --data DS --ac open_frontiers=true   # an autocorrect option
-    python3 benchmarks/table53.py --data DS1 --data DS2 --split test val \\
+    python3 -m map2map.experiments.table53                        # 100 generated held-out pairs
+    python3 -m map2map.experiments.table53 --quick                # 12 pairs
+    python3 -m map2map.experiments.table53 --data DS --model RUN  # a dataset's test split, a run
+    python3 -m map2map.experiments.table53 --data DS --ac open_frontiers=true   # an autocorrect option
+    python3 -m map2map.experiments.table53 --data DS1 --data DS2 --split test val \\
         --cleaner DS1/cleaner.skops                      # several builds, merged by plan
 
 ``--data`` takes a dataset folder (read-only, even while its build runs; cleaned pairs
@@ -23,32 +23,14 @@ import argparse
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
-
-from map2map.datasets.packed import save_packed  # noqa: E402
-from map2map.experiments.table53.measure import (  # noqa: E402
+from map2map.datasets.packed import save_packed
+from map2map.experiments.table53.measure import (
+    ac_options,
     generated_heldout_pairs,
     heldout_pairs_from_dataset,
     merge_pairs,
     run_table53,
 )
-
-
-def ac_options(items: list[str]) -> dict:
-    """``KEY=VALUE`` strings -> keyword arguments of ``autocorrect_many`` (true/false,
-    numbers, else strings)."""
-    out = {}
-    for item in items:
-        k, _, v = item.partition("=")
-        low = v.strip().lower()
-        if low in ("true", "false"):
-            out[k.strip()] = low == "true"
-            continue
-        try:
-            out[k.strip()] = float(v)
-        except ValueError:
-            out[k.strip()] = v.strip()
-    return out
 
 
 def main(argv=None) -> int:

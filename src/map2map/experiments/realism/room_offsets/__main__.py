@@ -16,7 +16,7 @@ Maps: ``sim1`` (the dataset's ``B.png``), and with ``--model``: Model_AB without
 per-map wall error before and after the per-room fit, and the share of rooms off by
 more than 1 deg / 2 px; ``--npz`` keeps every room's row.
 
-    python3 benchmarks/room_offsets.py --data DS --split val [--plans N] [--model pretrained]
+    python3 -m map2map.experiments.realism.room_offsets --data DS --split val [--plans N] [--model pretrained]
         [--rooms '{"rot_deg": 1}' ...] [--npz out.npz]
 """
 
@@ -27,14 +27,11 @@ import json
 import sys
 import time
 import warnings
-from pathlib import Path
 
 import numpy as np
 from scipy import ndimage
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
-
-from map2map.learn.ab.room_drift import segment_rooms  # noqa: E402
+from map2map.learn.ab.room_drift import segment_rooms
 
 
 def fit_room(pts: np.ndarray, dist: np.ndarray, centre, max_deg=8.0, max_px=14.0, cap=3.0):

@@ -3,7 +3,7 @@ floor plans? (issue #14; library: :mod:`map2map.experiments.table53_real.measure
 
 Usage::
 
-    OMP_NUM_THREADS=1 python3 benchmarks/table53_real.py --out OUT [--data ../shared/data]
+    OMP_NUM_THREADS=1 python3 -m map2map.experiments.table53_real --out OUT [--data ../shared/data]
         [--maps E5_01,HIH_01] [--model pretrained] [--no-anchor] [--seed 0]
         [--figures docs/] [--ac thickness=input --ac large=tile ...]
 
@@ -24,18 +24,14 @@ on real maps".
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+from map2map.experiments._data import shared_data
+from map2map.experiments.table53.measure import ac_options
+from map2map.experiments.table53_real.measure import run_table53_real
 
-from table53 import ac_options  # noqa: E402  (the same --ac parsing, benchmarks/table53.py)
-
-from map2map.experiments.table53_real.measure import run_table53_real  # noqa: E402
-
-SHARED = Path(os.environ.get("MAP2MAP_SHARED_DATA",
-                             Path(__file__).resolve().parents[2] / "shared" / "data"))
+SHARED = shared_data()
 
 
 def main(argv=None) -> int:

@@ -17,7 +17,7 @@ along, 5 px across). Printed, length-weighted mean absolute offsets (px):
 * ``two-sided``: faces of walls seen from both sides, grown to 4 / 5 / 6 px
   (:func:`~map2map.learn.ba.postprocess.thicken_two_sided`).
 
-    python3 benchmarks/table53_face_offsets.py --data /work/datasets/gen6300 --split val
+    python3 -m map2map.experiments.table53.face_offsets --data /work/datasets/gen6300 --split val
 """
 
 from __future__ import annotations
@@ -26,21 +26,18 @@ import argparse
 import math
 import sys
 import warnings
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
-
-from map2map.core.geometry import apply  # noqa: E402
-from map2map.core.grid import OCCUPIED, OccupancyMap  # noqa: E402
-from map2map.evaluate.pipeline import EvaluateParams, evaluate_maps  # noqa: E402
-from map2map.experiments.table53.measure import heldout_pairs_from_dataset  # noqa: E402
-from map2map.learn.ba import anchor, faces, pieces  # noqa: E402
-from map2map.learn.ba import autocorrect as ac  # noqa: E402
-from map2map.learn.ba import postprocess as pp  # noqa: E402
-from map2map.learn.ba.squares import prepare  # noqa: E402
-from map2map.maps.segments import straight_segments  # noqa: E402
+from map2map.core.geometry import apply
+from map2map.core.grid import OCCUPIED, OccupancyMap
+from map2map.evaluate.pipeline import EvaluateParams, evaluate_maps
+from map2map.experiments.table53.measure import heldout_pairs_from_dataset
+from map2map.learn.ba import anchor, faces, pieces
+from map2map.learn.ba import autocorrect as ac
+from map2map.learn.ba import postprocess as pp
+from map2map.learn.ba.squares import prepare
+from map2map.maps.segments import straight_segments
 
 
 def _faces(guide: np.ndarray, data_px: float):

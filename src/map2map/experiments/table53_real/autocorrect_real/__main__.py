@@ -8,28 +8,25 @@ line: size, wall support (share of output wall pixels near an input wall), warni
 wall recall of the output against the input's walls (2 px; how much of what the robot
 saw survives).
 
-    python3 benchmarks/autocorrect_real.py --out real_out [--model RUN]
+    python3 -m map2map.experiments.table53_real.autocorrect_real --out real_out [--model RUN]
 """
 
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import time
 import warnings
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+from map2map.evaluate.wallmetrics import wall_metrics
+from map2map.experiments._data import shared_data
+from map2map.learn.ba.autocorrect import autocorrect_many, save_segments_dxf
+from map2map.learn.ba.model import load_model
+from map2map.learn.training.figures import save_before_after
+from map2map.maps.formats import load_map, save_map
 
-from map2map.evaluate.wallmetrics import wall_metrics  # noqa: E402
-from map2map.learn.ba.autocorrect import autocorrect_many, save_segments_dxf  # noqa: E402
-from map2map.learn.ba.model import load_model  # noqa: E402
-from map2map.learn.training.figures import save_before_after  # noqa: E402
-from map2map.maps.formats import load_map, save_map  # noqa: E402
-
-SHARED = Path(os.environ.get("MAP2MAP_SHARED_DATA",
-                             Path(__file__).resolve().parents[2] / "shared" / "data"))
+SHARED = shared_data()
 
 
 def main(argv=None) -> int:

@@ -10,7 +10,7 @@ simulation + SLAM of the same plan from the same start with another seed
 parametric model (``deform`` additive along run 2's trajectory), as a baseline. Per
 statistic: W(generated, run 1) / W(run 2, run 1); target every ratio <= 1.5.
 
-    python3 benchmarks/realism.py --data DS [--model pretrained RUN ...] [--plans N]
+    python3 -m map2map.experiments.realism --data DS [--model pretrained RUN ...] [--plans N]
         [--cache refs.npz] [--csv out.csv] [--render slam plain] [--measures]
         [--drift parametric none] [--drift-method additive] [--drift-scale 1 ...]
         [--diversity K] [--coverage none explore] [--drift-route tour explore]
@@ -86,9 +86,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
-
-from map2map.experiments.realism.measure import (  # noqa: E402
+from map2map.experiments.realism.measure import (
     format_null,
     format_realism_table,
     null_ratios,

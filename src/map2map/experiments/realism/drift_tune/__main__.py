@@ -1,10 +1,10 @@
 """Tune Model_AB's parametric drift (:mod:`map2map.learn.ab.drift`) against simulated SLAM
 maps: the realism ratios (:mod:`map2map.experiments.realism.measure`) of the shipped Model_AB's maps
 warped along drift fields of each ``--variant`` (``DriftParams`` fields as JSON), on the
-plans of ``--split`` (tune on ``val``; report on ``test`` with ``benchmarks/realism.py``).
+plans of ``--split`` (tune on ``val``; report on ``test`` with ``map2map.experiments.realism``).
 The network runs once; each variant only redraws the drift.
 
-    python3 benchmarks/drift_tune.py --data DS --cache refs_val.npz [--split val]
+    python3 -m map2map.experiments.realism.drift_tune --data DS --cache refs_val.npz [--split val]
         [--plans N] [--model pretrained] --variant '{}' '{"scale": 2, "smooth_m": 0.3}' ...
 
 A variant with ``"rooms": true`` is a room-wise drift (:mod:`map2map.learn.ab.room_drift`;
@@ -20,13 +20,10 @@ import json
 import sys
 import time
 import warnings
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
-
-from map2map.experiments.realism.measure import (  # noqa: E402
+from map2map.experiments.realism.measure import (
     STATS,
     realism_table,
     simulated_references,

@@ -9,7 +9,7 @@ gaps > 10 px); ``floor`` is the mean over points of the absolute mean signed off
 their wall -- what a correction that keeps every wall where the SLAM map has it and only
 straightens its faces cannot remove.
 
-    python3 benchmarks/table53_error_sources.py table53_out/heldout.npz [--n 104]
+    python3 -m map2map.experiments.table53.error_sources table53_out/heldout.npz [--n 104]
 """
 
 from __future__ import annotations
@@ -17,15 +17,12 @@ from __future__ import annotations
 import argparse
 import sys
 import warnings
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
-
-from map2map.core.grid import OccupancyMap  # noqa: E402
-from map2map.datasets.packed import load_packed  # noqa: E402
-from map2map.evaluate.pipeline import EvaluateParams, evaluate_maps  # noqa: E402
+from map2map.core.grid import OccupancyMap
+from map2map.datasets.packed import load_packed
+from map2map.evaluate.pipeline import EvaluateParams, evaluate_maps
 
 
 def per_wall_floor(slam: np.ndarray, plan: np.ndarray, seed: int = 0) -> tuple[float, float]:
