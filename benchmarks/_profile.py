@@ -4,7 +4,7 @@ kernels (or, on a CPU, the operators) sorted by their own time. Shared by
 ``from benchmarks._profile import print_top`` when they run as ``python3 -m benchmarks.X``).
 
 Session 12 found this way that one kernel (PyTorch's NCHW bilinear upsampling) took 75 %
-of a Model_32 step on an H200 (docs/learn.md, "Measured on a GPU: the graph, and the
+of a Model_32 step on an H200 (docs/autocorrect.md, "Measured on a GPU: the graph, and the
 kernel that held the step").
 """
 

@@ -37,7 +37,8 @@ def stage_speed(cfg: ABConfig, r: int, dev: torch.device, steps: int, warm: int 
                 graph: bool = False, profile: bool = False,
                 compiled: bool = False, nchw: bool = False) -> tuple[float, str]:
     """Images/s of ``steps`` training steps at stage ``r`` (fading in), and which step ran
-    (``graph``: the :class:`~map2map.learn.training.static_step.StaticStep` replayed as a CUDA graph,
+    (``graph``: the :class:`~map2map.learn.training.static_step.StaticStep` replayed as a CUDA
+    graph,
     eager elsewhere); ``profile``: then print where the device time goes; ``compiled``:
     G through ``torch.compile`` (as ``train ab --compile``; not with ``graph``); ``nchw``:
     networks and data kept in NCHW under bf16 (the trainer uses channels-last; GroupNorm

@@ -31,7 +31,7 @@ writes its checkpoint), so a slower machine gives fewer epochs, never a lost cal
         [--skip graph,bench,ba,ab,infer] [--parts abprof] [--ba-graph auto|yes|no]
 
 Session 12 ran ``--skip bench,ab,infer --ba-batch 256 --ba-seconds 300 --deadline 460``
-(H200: graphs captured, 283 BA epochs in 282 s; docs/learn.md, "Measured on a GPU: the
+(H200: graphs captured, 283 BA epochs in 282 s; docs/autocorrect.md, "Measured on a GPU: the
 graph, and the kernel that held the step"). The next call (the thesis's 534 epochs fit
 since the upsampling fix; run it on an H100 too):
 

@@ -57,9 +57,9 @@ def test_hide_unseen_keeps_a_band_and_checks_shapes():
     with pytest.raises(ValueError):
         hide_unseen(m, seen[:, :3], 1)
     assert ExploreParams().margin(2.06) == 3 and ExploreParams(margin_px=0).margin(2.0) == 0
-    with pytest.raises(InputError, match="--coverage"):
+    with pytest.raises(InputError, match="coverage"):
         coverage_options("some", "tour")
-    with pytest.raises(InputError, match="--drift-route"):
+    with pytest.raises(InputError, match="drift_route"):
         coverage_options("none", "roadmap")
     with pytest.raises(InputError):
         ExploreParams(duration=0.0)
@@ -122,7 +122,7 @@ def test_synthesize_coverage_hides_the_unseen_room_and_route_is_separable(drawer
     along = drift_field(plan, drift_rng(4, 0), trajectory=ex.trajectory)
     assert np.array_equal(route.maps[0].data, apply_drift(base.maps[0].data, along))
     assert not np.array_equal(route.maps[0].data, drift.maps[0].data)
-    with pytest.raises(InputError, match="--coverage"):
+    with pytest.raises(InputError, match="coverage"):
         synthesize(plan, drawer, coverage="all")
 
 

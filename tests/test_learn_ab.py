@@ -371,7 +371,7 @@ def test_synthesize_drift_none_is_the_previous_output_and_parametric_drifts(tiny
     assert ekf.maps[0].meta["synthesize"]["drift_params"]["method"] == "ekf"
     from map2map.errors import InputError
 
-    with pytest.raises(InputError, match="--drift"):
+    with pytest.raises(InputError, match="drift"):
         synthesize(plan, net, drift="rigid")
 
 

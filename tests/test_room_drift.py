@@ -123,11 +123,11 @@ def test_drift_params_rooms_and_parametric_sum():
     assert drift_params("rooms", "additive", 0.5) == RoomDriftParams(scale=0.5)
     assert drift_params(RoomDriftParams(), "ekf").method == "ekf"
     assert drift_params(RoomDriftParams(parametric=False), "ekf").method == "additive"
-    with pytest.raises(InputError, match="--drift-method"):
+    with pytest.raises(InputError, match="drift_method"):
         drift_params("rooms", "rigid")
     with pytest.raises(InputError):
         RoomDriftParams(blend_px=0.0)
-    with pytest.raises(InputError, match="--drift"):
+    with pytest.raises(InputError, match="drift"):
         drift_params("wobble")
     # parametric=True adds the default parametric field, drawn first from the same stream
     data = _three_rooms()

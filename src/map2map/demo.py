@@ -359,8 +359,9 @@ def stage_autocorrect(ctx: DemoContext) -> None:
         ctx.say("autocorrect: no SLAM map in this demo run; skipped")
         return
     try:
-        from .learn.ba.autocorrect import autocorrect_many, save_segments_dxf
+        from .learn.ba.autocorrect import autocorrect_many
         from .learn.training.figures import save_before_after
+        from .maps.dxf import save_segments_dxf
     except ImportError:
         ctx.say("autocorrect: PyTorch not installed (pip install -e '.[learn]'); skipped")
         return

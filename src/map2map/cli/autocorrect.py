@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
-from ._mapargs import add_input_options, load_from_args
+from ._mapargs import add_input_options, read_options_from_args, say_how_read
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -33,77 +32,34 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="thickness of the walls drawn behind a face seen from one side: "
                         "'shrink' (the training plans' walls scaled with the map's size), "
                         "'resolution' (their metres at the map's resolution), 'input' (from "
-                        "the input's own walls) or a number of pixels (default: the "
-                        "library's, learn.autocorrect.THICKNESS)")
+                        "the input's own walls) or a number of pixels (default: "
+                        "map2map.learn.ba.autocorrect.THICKNESS)")
     p.add_argument("--open-frontiers", action=argparse.BooleanOptionalAction, default=None,
                    help="leave out the network's walls at the edge of the known area or "
-                        "beyond it (partial maps; default: learn.autocorrect.OPEN_FRONTIERS, "
-                        "on for a map corrected in tiles)")
+                        "beyond it (partial maps; default: "
+                        "map2map.learn.ba.autocorrect.OPEN_FRONTIERS, on for a map "
+                        "corrected in tiles)")
     p.add_argument("--large", choices=("resize", "tile", "refuse"), default=None,
                    help="maps more than 2.5x the training maps' size: resized whole, "
                         "corrected in overlapping tiles at the training scale, or returned "
-                        "uncorrected (default: learn.autocorrect.LARGE)")
+                        "uncorrected (default: map2map.learn.ba.autocorrect.LARGE)")
     p.add_argument("--device", default="cpu", help="torch device (default cpu)")
     add_input_options(p)
     p.set_defaults(func=run)
 
 
-MAP_SUFFIXES = (".yaml", ".yml", ".png", ".pgm", ".jpg", ".jpeg", ".tif", ".tiff", ".json")
-
-
 def run(args: argparse.Namespace) -> int:
-    from ..core.errors import InputError
-    from ..maps.formats import check_output_path, save_map
+    from ..jobs.autocorrect import AutocorrectSpec, autocorrect
 
-    try:
-        from ..learn.ba.autocorrect import autocorrect_many, save_segments_dxf
-        from ..learn.ba.model import load_model
-        from ..learn.training.figures import save_before_after
-    except ImportError as exc:
-        raise InputError("autocorrect", f"needs PyTorch: pip install 'map2map[learn]' ({exc})"
-                         ) from None
-    src = Path(args.input)
-    if src.is_dir():
-        files = sorted(f for f in src.iterdir() if f.suffix.lower() in MAP_SUFFIXES)
-        if not files:
-            raise InputError(src, "no maps in this folder")
-        out_dir = Path(args.out)
-        outs = [out_dir / f.name for f in files]
-        dxfs = [Path(args.dxf) / (f.stem + ".dxf") for f in files] if args.dxf else None
-        figs = [Path(args.figure) / (f.stem + ".png") for f in files] if args.figure else None
-    else:
-        if not src.exists():
-            raise InputError(src, "file not found")
-        files, outs = [src], [Path(args.out)]
-        dxfs = [Path(args.dxf)] if args.dxf else None
-        figs = [Path(args.figure)] if args.figure else None
-    for o in outs:
-        check_output_path(o)
-    maps = [load_from_args(argparse.Namespace(**{**vars(args), "input": f})) for f in files]
-    model = load_model(args.model, args.device)
-    import warnings
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        thickness = args.thickness
-        if thickness is not None and thickness not in ("shrink", "resolution", "input"):
-            try:
-                thickness = float(thickness)
-            except ValueError:
-                raise InputError("--thickness", "'shrink', 'resolution', 'input' or a "
-                                 f"number of pixels, not {thickness!r}") from None
-        results = autocorrect_many(maps, model, straighten=not args.no_straighten,
-                                   anchor=not args.no_anchor, device=args.device,
-                                   thickness=thickness, open_frontiers=args.open_frontiers,
-                                   large=args.large)
-    for i, (f, r) in enumerate(zip(files, results, strict=True)):
-        save_map(r.map, outs[i])
-        if dxfs:
-            save_segments_dxf(r.segments, dxfs[i])
-        if figs:
-            save_before_after(maps[i], r.map, figs[i], r.map.meta["autocorrect"]["segments_px"],
-                              title=f"{f.name} -> {outs[i].name} ({Path(model.source).name})")
+    run = autocorrect(AutocorrectSpec(
+        args.input, args.out, model=args.model, dxf=args.dxf, figure=args.figure,
+        straighten=not args.no_straighten, anchor=not args.no_anchor,
+        thickness=args.thickness, open_frontiers=args.open_frontiers, large=args.large,
+        device=args.device, read_options=read_options_from_args(args)))
+    for f, m in zip(run.sources, run.inputs, strict=True):
+        say_how_read(f, m)
+    for f, r in zip(run.sources, run.corrections, strict=True):
         for w in r.warnings:
             print(f"map2map: warning: {f}: {w}", file=sys.stderr)
-    print(f"auto-corrected {len(results)} map(s) with {model.source}", file=sys.stderr)
+    print(f"auto-corrected {len(run.corrections)} map(s) with {run.model}", file=sys.stderr)
     return 0

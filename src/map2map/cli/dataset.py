@@ -167,29 +167,16 @@ def run_status(args: argparse.Namespace) -> int:
 
 
 def run_clean(args: argparse.Namespace) -> int:
-    from ..datasets.clean import COVERAGE_COMPLETE, apply_cleaner, clean_dataset
+    from ..jobs.dataset import CleanSpec, clean
 
+    run = clean(CleanSpec(args.ds, labels=args.labels,
+                          coverage_threshold=args.coverage_threshold, model=args.model,
+                          out=args.out))
     if args.model:
-        rows = apply_cleaner(args.model, args.ds)
-        if args.out:
-            from ..core._io import atomic_path
-
-            with atomic_path(args.out) as tmp:
-                tmp.write_text(
-                    "name,p_complete,decision\n"
-                    + "".join(f"{r['name']},{r['p_complete']:.4f},{r['decision']}\n" for r in rows)
-                )
-        counts: dict[str, int] = {}
-        for r in rows:
-            counts[r["decision"]] = counts.get(r["decision"], 0) + 1
-        print(
-            f"{args.ds}: {len(rows)} pairs: "
-            + ", ".join(f"{k} {v}" for k, v in sorted(counts.items()))
-        )
+        print(f"{args.ds}: {len(run.rows)} pairs: "
+              + ", ".join(f"{k} {v}" for k, v in sorted(run.counts.items())))
         return 0
-    thr = COVERAGE_COMPLETE if args.coverage_threshold is None else args.coverage_threshold
-    report = clean_dataset(args.ds, args.labels, coverage_threshold=thr)
-    print("\n".join(report.lines()))
+    print("\n".join(run.report.lines()))
     return 0
 
 

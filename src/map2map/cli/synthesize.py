@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
-from ._mapargs import add_input_options, load_from_args
+from ._mapargs import add_input_options, read_options_from_args, say_how_read
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -43,7 +42,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "3.81-3.90, default; ekf: 3.54-3.80)")
     p.add_argument("--drift-scale", type=float, default=None,
                    help="factor on the drift field (default 1: the parametric model's "
-                   "own error magnitudes; docs/learn_ab.md)")
+                   "own error magnitudes; docs/synthesize.md)")
     p.add_argument("--coverage", choices=("explore", "none"), default="explore",
                    help="explore (default): the simulator's robot explores the plan for each "
                    "hypothesis (oracle mapper, 275 s, 180 degree LIDAR, seeded; about 0.5 s "
@@ -65,54 +64,19 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..core._io import atomic_path, ensure_output_dir
-    from ..core.errors import InputError
-    from ..maps.formats import check_output_path, save_map
+    from ..jobs.synthesize import SynthesizeSpec, synthesize
 
-    try:
-        from ..learn.ab.synthesize import save_synthesis_figure, synthesize
-    except ImportError as exc:
-        raise InputError("synthesize", f"needs PyTorch: pip install 'map2map[learn]' ({exc})"
-                         ) from None
-    if args.samples < 1:
-        raise InputError("--samples", f"must be >= 1, got {args.samples}")
-    src = Path(args.input)
-    if not src.exists():
-        raise InputError(src, "file not found")
-    out = Path(args.out)
-    suffix = ".yaml" if args.format == "ros" else ".png"
-    names = [out / f"{src.stem}_hyp{k:02d}{suffix}" for k in range(args.samples)]
-    for path in names:
-        check_output_path(path)
-    plan = load_from_args(args)
-    import warnings
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        res = synthesize(plan, args.model, samples=args.samples, seed=args.seed,
-                         device=args.device, render=args.render, drift=args.drift,
-                         drift_method=args.drift_method, drift_scale=args.drift_scale,
-                         coverage=args.coverage, drift_route=args.drift_route,
-                         traces=args.traces)
-    ensure_output_dir(out)
-    for path, m in zip(names, res.maps, strict=True):
-        save_map(m, path)
-    summary = {"plan": str(src), "seed": args.seed, "render": args.render,
-               "drift": args.drift,
-               **({"coverage": args.coverage, "drift_route": args.drift_route}
-                  if (args.coverage, args.drift_route) != ("none", "tour") else {}),
-               "drift_params": res.maps[0].meta["synthesize"].get("drift_params"),
-               **({"traces": res.maps[0].meta["synthesize"]["traces"]}
-                  if "traces" in res.maps[0].meta["synthesize"] else {}),
-               "files": [p.name for p in names], **res.summary()}
-    with atomic_path(out / f"{src.stem}_synthesize.json") as tmp:
-        tmp.write_text(json.dumps(summary, indent=2))
-    if not args.no_figure:
-        save_synthesis_figure(plan, res, out / f"{src.stem}_synthesize.png",
-                              title=f"{src.name}: {args.samples} Model_AB hypotheses "
-                              f"(seed {args.seed})")
+    run = synthesize(SynthesizeSpec(
+        args.input, args.out, samples=args.samples, model=args.model, seed=args.seed,
+        format=args.format, render=args.render, drift=args.drift,
+        drift_method=args.drift_method, drift_scale=args.drift_scale, coverage=args.coverage,
+        drift_route=args.drift_route, traces=args.traces, device=args.device,
+        figure=not args.no_figure, read_options=read_options_from_args(args)))
+    say_how_read(args.input, run.plan)
+    src, res = Path(args.input), run.result
     for w in res.warnings:
         print(f"map2map: warning: {src}: {w}", file=sys.stderr)
-    print(f"{args.samples} hypotheses of {src.name} in {out} (mean pairwise disagreement "
+    print(f"{args.samples} hypotheses of {src.name} in {Path(args.out)} (mean pairwise "
+          f"disagreement "
           f"{res.diversity:.2%}; model {res.model})", file=sys.stderr)
     return 0

@@ -1,9 +1,19 @@
-"""``map2map train ba``: train Model_BA, the learned SLAM -> CAD auto-correct."""
+"""``map2map train ba`` / ``train ab``: train Model_BA (SLAM -> CAD) or Model_AB (CAD ->
+SLAM). Parsing only: :func:`map2map.jobs.train.train` does the work; every default is the
+model's config dataclass's (:class:`~map2map.learn.ba.config.BAConfig`,
+:class:`~map2map.learn.ab.config.ABConfig`), read here, not written again."""
 
 from __future__ import annotations
 
 import argparse
 import sys
+
+from ..learn.ab.config import GROWTHS, ABConfig
+from ..learn.ba.config import BAConfig
+
+#: settings both models take from their own options of the same name
+_COMMON = ("epochs", "batch", "device", "seed", "lambda_l1", "g_channels", "g_max_channels",
+           "d_channels", "d_layers", "save_every")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -15,39 +25,35 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     tsub = p.add_subparsers(dest="model", metavar="MODEL")
     tsub.required = True
-    b = tsub.add_parser(
-        "ba",
-        help="Model_BA: SLAM map -> CAD plan (64 px by default; --size 32 = Model_32)",
-        description="Train Model_BA (eq. 3.2) on the train split of DATA; write config.json, "
-        "model.safetensors, last.safetensors (resumable), log.csv, losses.png and "
-        "samples/epoch_NNNN.png under --out. Ctrl-C saves a checkpoint; --resume continues.",
-    )
-    b.add_argument("--data", required=True, help="dataset folder (packed.npz inside) or .npz")
-    b.add_argument("--out", required=True, help="run folder")
-    b.add_argument("--epochs", type=int, help="number of epochs (default 200; with --resume: "
-                   "extend the run to this many)")
-    b.add_argument("--resume", action="store_true", help="continue the run in --out exactly")
-    b.add_argument("--size", type=int, default=64, help="training resolution (default 64, "
-                   "measured better than the thesis's Model_32: --size 32; the dataset's size "
-                   "for the full-resolution variant)")
-    b.add_argument("--batch", type=int, help="batch size (default: Table 5.1 x batch_rate 0.5)")
-    b.add_argument("--device", default="auto", help="auto (CUDA when present), cpu, cuda, ...")
-    b.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    b.add_argument("--lambda-l1", type=float, default=100.0, help="weight of eq. 3.7 (100)")
-    b.add_argument("--g-channels", type=int, default=32, help="generator width (32)")
-    b.add_argument("--g-max-channels", type=int, default=128, help="generator cap (128)")
-    b.add_argument("--d-channels", type=int, default=32, help="discriminator width (32)")
-    b.add_argument("--d-layers", type=int, default=3,
-                   help="stride-2 layers per patch discriminator (3)")
-    b.add_argument("--input-reduce", choices=("area", "classes"), default="area",
-                   help="how the SLAM map is reduced to --size: area average (default) or "
-                   "per class, walls kept")
-    _step_options(b)
-    b.set_defaults(func=run)
+    register_ba(tsub)
     register_ab(tsub)
 
 
-def _step_options(b: argparse.ArgumentParser) -> None:
+def _data_options(b: argparse.ArgumentParser, epochs_help: str) -> None:
+    b.add_argument("--data", required=True, help="dataset folder (packed.npz inside) or .npz")
+    b.add_argument("--out", required=True, help="run folder")
+    b.add_argument("--epochs", type=int, help=epochs_help)
+    b.add_argument("--resume", action="store_true", help="continue the run in --out exactly")
+
+
+def _width_options(b: argparse.ArgumentParser, cfg, g_help: str, d_layers_help: str) -> None:
+    b.add_argument("--device", default=cfg.device,
+                   help=f"auto (CUDA when present), cpu, cuda, ... (default {cfg.device})")
+    b.add_argument("--seed", type=int, default=cfg.seed,
+                   help=f"random seed (default {cfg.seed})")
+    b.add_argument("--lambda-l1", type=float, default=cfg.lambda_l1,
+                   help=f"weight of eq. 3.7 ({cfg.lambda_l1:g})")
+    b.add_argument("--g-channels", type=int, default=cfg.g_channels,
+                   help=f"{g_help} ({cfg.g_channels})")
+    b.add_argument("--g-max-channels", type=int, default=cfg.g_max_channels,
+                   help=f"generator cap ({cfg.g_max_channels})")
+    b.add_argument("--d-channels", type=int, default=cfg.d_channels,
+                   help=f"discriminator width ({cfg.d_channels})")
+    b.add_argument("--d-layers", type=int, default=cfg.d_layers,
+                   help=f"{d_layers_help} ({cfg.d_layers})")
+
+
+def _step_options(b: argparse.ArgumentParser, cfg) -> None:
     """The options ``train ba`` and ``train ab`` share after their own: the step, the
     checkpoints, the progress bar."""
     b.add_argument("--no-false-targets", action="store_true",
@@ -57,14 +63,42 @@ def _step_options(b: argparse.ArgumentParser) -> None:
     b.add_argument("--cuda-graph", action="store_true",
                    help="run each training step as one CUDA graph replay (single process; "
                    "falls back to eager steps if capture fails; on CPU: eager, same result)")
-    b.add_argument("--save-every", type=int, default=1, metavar="N",
-                   help="checkpoint, sample grid and logs every N epochs (default 1; also "
-                   "after the last and on Ctrl-C)")
+    b.add_argument("--save-every", type=int, default=cfg.save_every, metavar="N",
+                   help=f"checkpoint, sample grid and logs every N epochs (default "
+                   f"{cfg.save_every}; also after the last and on Ctrl-C)")
     b.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def register_ba(tsub) -> None:
+    """``map2map train ba``: Model_BA (SLAM -> CAD)."""
+    cfg = BAConfig()
+    b = tsub.add_parser(
+        "ba",
+        help=f"Model_BA: SLAM map -> CAD plan ({cfg.size} px by default; --size 32 = "
+        "Model_32)",
+        description="Train Model_BA (eq. 3.2) on the train split of DATA; write config.json, "
+        "model.safetensors, last.safetensors (resumable), log.csv, losses.png and "
+        "samples/epoch_NNNN.png under --out. Ctrl-C saves a checkpoint; --resume continues.",
+    )
+    _data_options(b, f"number of epochs (default {cfg.epochs}; with --resume: extend the run "
+                  "to this many)")
+    b.add_argument("--size", type=int, default=cfg.size,
+                   help=f"training resolution (default {cfg.size}, measured better than the "
+                   "thesis's Model_32: --size 32; the dataset's size for the full-resolution "
+                   "variant)")
+    b.add_argument("--batch", type=int, help="batch size (default: Table 5.1 x batch_rate "
+                   f"{cfg.batch_rate:g})")
+    _width_options(b, cfg, "generator width", "stride-2 layers per patch discriminator")
+    b.add_argument("--input-reduce", choices=("area", "classes"), default=cfg.input_reduce,
+                   help="how the SLAM map is reduced to --size: area average or per class, "
+                   f"walls kept (default {cfg.input_reduce})")
+    _step_options(b, cfg)
+    b.set_defaults(func=run)
 
 
 def register_ab(tsub) -> None:
     """``map2map train ab``: Model_AB (CAD -> SLAM), grown progressively (Model_prog)."""
+    cfg = ABConfig()
     b = tsub.add_parser(
         "ab",
         help="Model_AB: CAD plan -> SLAM map, grown coarse to fine (Model_prog)",
@@ -73,110 +107,53 @@ def register_ab(tsub) -> None:
         "resolution (thesis 3.1; Table 5.2's schedule, Table 5.1's batches x batch_rate 1). "
         "Writes what 'train ba' writes; losses.png marks the resolution switches (Fig. 5.1).",
     )
-    b.add_argument("--data", required=True, help="dataset folder (packed.npz inside) or .npz")
-    b.add_argument("--out", required=True, help="run folder")
-    b.add_argument("--schedule", default="32:15,64:30,128:60,256:100",
-                   help="RES:EPOCHS per stage, coarse to fine (default Table 5.2)")
-    b.add_argument("--epochs", type=int, help="total epochs (default: the schedule's sum; "
-                   "beyond it the last resolution continues; with --resume: extend)")
-    b.add_argument("--resume", action="store_true", help="continue the run in --out exactly")
+    _data_options(b, "total epochs (default: the schedule's sum; beyond it the last "
+                  "resolution continues; with --resume: extend)")
+    schedule = ",".join(f"{r}:{e}" for r, e in cfg.schedule)
+    b.add_argument("--schedule", default=schedule,
+                   help=f"RES:EPOCHS per stage, coarse to fine (default Table 5.2: {schedule})")
     b.add_argument("--batch", type=int, help="one batch size for every stage (default: "
                    "Table 5.1 x --batch-rate)")
-    b.add_argument("--batch-rate", type=float, default=1.0, help="Table 5.1 multiplier (1)")
-    b.add_argument("--fade-share", type=float, default=0.5,
-                   help="fade-in length as a share of each new stage's batches (0.5)")
+    b.add_argument("--batch-rate", type=float, default=cfg.batch_rate,
+                   help=f"Table 5.1 multiplier ({cfg.batch_rate:g})")
+    b.add_argument("--fade-share", type=float, default=cfg.fade_share,
+                   help=f"fade-in length as a share of each new stage's batches "
+                   f"({cfg.fade_share:g})")
     b.add_argument("--fade-batches", type=int, help="fade-in length in batches (overrides "
                    "--fade-share)")
-    b.add_argument("--dropout", type=float, default=0.5,
-                   help="decoder dropout, the hypotheses' noise source (0.5)")
-    b.add_argument("--growth", choices=("full", "decoder"), default="full",
+    b.add_argument("--dropout", type=float, default=cfg.dropout,
+                   help=f"decoder dropout, the hypotheses' noise source ({cfg.dropout:g})")
+    b.add_argument("--growth", choices=GROWTHS, default=cfg.growth,
                    help="full: generator and discriminators at each stage's resolution "
-                   "(the thesis's reading, default); decoder: the generator always reads "
-                   "the last stage's size and its decoder exits early (anime2clothing's)")
-    b.add_argument("--device", default="auto", help="auto (CUDA when present), cpu, cuda, ...")
-    b.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    b.add_argument("--lambda-l1", type=float, default=100.0, help="weight of eq. 3.7 (100)")
-    b.add_argument("--g-channels", type=int, default=32, help="generator width at the "
-                   "finest resolution (32)")
-    b.add_argument("--g-max-channels", type=int, default=256, help="generator cap (256)")
-    b.add_argument("--d-channels", type=int, default=32, help="discriminator width (32)")
-    b.add_argument("--d-layers", type=int, default=3,
-                   help="stride-2 layers of the first stage's patch discriminators (3)")
-    _step_options(b)
+                   "(the thesis's reading); decoder: the generator always reads the last "
+                   f"stage's size and its decoder exits early (anime2clothing's); default "
+                   f"{cfg.growth}")
+    _width_options(b, cfg, "generator width at the finest resolution",
+                   "stride-2 layers of the first stage's patch discriminators")
+    _step_options(b, cfg)
     b.set_defaults(func=run_ab)
 
 
-def run_ab(args: argparse.Namespace) -> int:
-    from ..core.errors import InputError
+def _settings(args: argparse.Namespace, own: tuple[str, ...]) -> dict:
+    return {**{k: getattr(args, k) for k in (*_COMMON, *own)},
+            "false_targets": not args.no_false_targets, "amp": not args.no_amp,
+            "compile": args.compile, "cuda_graph": args.cuda_graph}
 
-    try:
-        from ..learn.ab.config import ABConfig, parse_schedule
-        from ..learn.ab.train import train_ab
-    except ImportError as exc:
-        raise InputError("train", f"needs PyTorch: pip install 'map2map[learn]' ({exc})") from None
-    for name in ("epochs", "batch", "fade_batches", "save_every"):
-        v = getattr(args, name)
-        if v is not None and v < (0 if name == "fade_batches" else 1):
-            raise InputError(f"--{name.replace('_', '-')}", f"must be positive, got {v}")
-    try:
-        cfg = ABConfig(
-            schedule=parse_schedule(args.schedule), epochs=args.epochs or 0, batch=args.batch,
-            batch_rate=args.batch_rate, fade_share=args.fade_share,
-            fade_batches=args.fade_batches, dropout=args.dropout, device=args.device,
-            seed=args.seed, lambda_l1=args.lambda_l1, g_channels=args.g_channels,
-            g_max_channels=args.g_max_channels, d_channels=args.d_channels,
-            d_layers=args.d_layers, false_targets=not args.no_false_targets,
-            amp=not args.no_amp, compile=args.compile, cuda_graph=args.cuda_graph,
-            growth=args.growth,
-            save_every=args.save_every)
-    except ValueError as exc:
-        raise InputError("--schedule", str(exc)) from None
-    res = train_ab(args.data, args.out, cfg, resume=args.resume,
-                   epochs=args.epochs if args.resume else None, progress=not args.quiet)
-    import os
 
-    if int(os.environ.get("RANK", "0")) != 0:
-        return 0
-    last = res.history[-1] if res.history else {}
-    steps = f" ({last['step']} steps)" if "step" in last else ""
-    print(f"trained {res.epochs_done} epochs (now {last.get('resolution', '?')} px, alpha "
-          f"{last.get('alpha', float('nan')):.2f}) at {res.images_per_s:.0f} img/s{steps}; "
-          f"loss G {last.get('loss_G', float('nan')):.4f} D {last.get('loss_D', float('nan')):.4f}"
-          f"; run in {res.run}", file=sys.stderr)
+def _train(args: argparse.Namespace, model: str, own: tuple[str, ...]) -> int:
+    from ..jobs.train import TrainSpec, train
+
+    run = train(TrainSpec(model, args.data, args.out, _settings(args, own),
+                          resume=args.resume, progress=not args.quiet))
+    if run.main:
+        print(run.summary(), file=sys.stderr)
     return 0
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..core.errors import InputError
+    return _train(args, "ba", ("size", "input_reduce"))
 
-    try:
-        from ..learn.ba.train import train_ba
-        from ..learn.training.config import TrainConfig
-    except ImportError as exc:
-        raise InputError("train", f"needs PyTorch: pip install 'map2map[learn]' ({exc})") from None
-    for name in ("epochs", "batch", "save_every"):
-        v = getattr(args, name)
-        if v is not None and v < 1:
-            raise InputError(f"--{name}", f"must be >= 1, got {v}")
-    if args.size < 4 or args.size & (args.size - 1):
-        raise InputError("--size", f"must be a power of two >= 4, got {args.size}")
-    cfg = TrainConfig(
-        size=args.size, epochs=args.epochs or 200, batch=args.batch, device=args.device,
-        seed=args.seed, lambda_l1=args.lambda_l1, g_channels=args.g_channels,
-        g_max_channels=args.g_max_channels, d_channels=args.d_channels, d_layers=args.d_layers,
-        input_reduce=args.input_reduce,
-        false_targets=not args.no_false_targets, amp=not args.no_amp, compile=args.compile,
-        cuda_graph=args.cuda_graph, save_every=args.save_every,
-    )
-    res = train_ba(args.data, args.out, cfg, resume=args.resume,
-                   epochs=args.epochs if args.resume else None, progress=not args.quiet)
-    import os
 
-    if int(os.environ.get("RANK", "0")) != 0:  # torchrun: one report, from rank 0
-        return 0
-    last = res.history[-1] if res.history else {}
-    steps = f" ({last['step']} steps)" if "step" in last else ""
-    print(f"trained {res.epochs_done} epochs at {res.images_per_s:.0f} img/s{steps}; "
-          f"loss G {last.get('loss_G', float('nan')):.4f} D {last.get('loss_D', float('nan')):.4f}"
-          f"; run in {res.run}", file=sys.stderr)
-    return 0
+def run_ab(args: argparse.Namespace) -> int:
+    return _train(args, "ab", ("schedule", "batch_rate", "fade_share", "fade_batches",
+                               "dropout", "growth"))

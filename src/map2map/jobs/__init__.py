@@ -15,7 +15,14 @@ deform                      :func:`map2map.jobs.deform.deform`  ``DeformResult``
 simulate                    :func:`map2map.jobs.simulate.simulate`  ``SimResult``
 slam                        :func:`map2map.jobs.slam.slam`   ``SlamResult``
 align, evaluate             :mod:`map2map.jobs.evaluate`     ``Alignment`` / ``Evaluation``
+autocorrect                 :mod:`map2map.jobs.autocorrect`  ``Correction`` per map
+synthesize                  :mod:`map2map.jobs.synthesize`   ``SynthesisResult``
+train ba, train ab          :mod:`map2map.jobs.train`        ``TrainResult``
+dataset clean               :mod:`map2map.jobs.dataset`      the cleaner's report
 ==========================  ===============================  =============================
+
+Jobs sit above the domain packages, the datasets and the learned models, so every
+command goes through one.
 
 A job that writes a folder writes it into a temporary sibling renamed whole at the end
 (:func:`map2map.core._io.atomic_dir`): it exists complete or not at all, and an existing

@@ -70,6 +70,7 @@ from .formats import UNITS
 from .rasterize import fill_exact, thin_parts, trace
 
 __all__ = [
+    "save_segments_dxf",
     "UNITS",
     "DEFAULT_RESOLUTION",
     "DEFAULT_WALL_THICKNESS",
@@ -621,28 +622,67 @@ def save_dxf(m: OccupancyMap, path: str | os.PathLike, *, layer: str = "WALLS") 
     >>> back.crop(*back.content_bbox()) == m
     True
     """
-    import ezdxf
-
-    from ..core._io import atomic_path
-
     region = shapely.buffer(occupied_polygons(m), -0.01, join_style="mitre")
-    doc = ezdxf.new(units=6)  # metres
-    doc.header["$INSUNITS"] = 6
-    ox, oy, yaw = m.origin
-    doc.header.custom_vars.append(_FRAME_VAR, f"{m.resolution!r} {ox!r} {oy!r} {yaw!r}")
-    if layer not in doc.layers:
-        doc.layers.add(layer)
     loops = []
     for ring in _polygon_rings(region):
         uv = np.asarray(ring.coords)[:-1]
         # continuous pixel coordinates (u, v) -> fractional cell indices -> world
         x, y = m.pixel_to_world(uv[:, 1] - 0.5, uv[:, 0] - 0.5)
         loops.append(np.stack([x, y], axis=1))
-    if loops:
-        hatch = doc.modelspace().add_hatch(color=7, dxfattribs={"layer": layer})
+    ox, oy, yaw = m.origin
+    _write_drawing(path, layer, frame=f"{m.resolution!r} {ox!r} {oy!r} {yaw!r}",
+                   loops=loops)
+
+
+def save_segments_dxf(segments: np.ndarray, path: str | os.PathLike, *, layer: str = "WALLS",
+                      width: float | None = None) -> None:
+    """Write wall segments (world metres: x0, y0, x1, y1) as DXF ``LINE`` entities (what
+    ``map2map autocorrect --dxf`` writes).
+
+    The drawing is in metres (``$INSUNITS`` 6); ``width`` (metres, optional) is stored as
+    each line's constant width through a ``LWPOLYLINE`` instead, so CAD shows the wall
+    thickness.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib, ezdxf
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "walls.dxf"
+    >>> save_segments_dxf(np.array([[0.0, 0.0, 4.0, 0.0], [4.0, 0.0, 4.0, 3.0]]), p)
+    >>> len(ezdxf.readfile(p).modelspace().query("LINE"))
+    2
+    """
+    _write_drawing(path, layer, segments=np.asarray(segments, float).reshape(-1, 4),
+                   width=width)
+
+
+def _write_drawing(path: str | os.PathLike, layer: str, *, frame: str | None = None,
+                   loops: list[np.ndarray] = (), segments: np.ndarray | None = None,
+                   width: float | None = None) -> None:
+    """The one DXF writer: a drawing in metres with ``layer``, the map frame stored when
+    given, closed ``loops`` as one solid hatch, ``segments`` as lines (polylines of
+    constant ``width`` when given); written atomically."""
+    import ezdxf
+
+    from ..core._io import atomic_path
+
+    doc = ezdxf.new(units=6)  # metres
+    doc.header["$INSUNITS"] = 6
+    if frame is not None:
+        doc.header.custom_vars.append(_FRAME_VAR, frame)
+    if layer not in doc.layers:
+        doc.layers.add(layer)
+    msp = doc.modelspace()
+    if len(loops):
+        hatch = msp.add_hatch(color=7, dxfattribs={"layer": layer})
         hatch.set_solid_fill(color=7)
         for loop in loops:
             hatch.paths.add_polyline_path(loop.tolist(), is_closed=True)
+    for x0, y0, x1, y1 in () if segments is None else segments:
+        if width:
+            msp.add_lwpolyline([(x0, y0), (x1, y1)], dxfattribs={"layer": layer,
+                                                                 "const_width": width})
+        else:
+            msp.add_line((x0, y0), (x1, y1), dxfattribs={"layer": layer})
     with atomic_path(path) as tmp:
         doc.saveas(tmp)
 

@@ -1,10 +1,12 @@
 """Thesis Fig. 5.14 reproduced (issue #15): for N held-out plans, the simulated SLAM map,
 the parametric model (deform, additive) on the same trajectory, and Model_AB, each with
-its appendix-metric error and wall recall. :func:`map2map.experiments.fig514.measure.run_fig514` does
+its appendix-metric error and wall recall. :func:`map2map.experiments.fig514.measure.run_fig514`
+does
 the work; this script writes ``fig514.png`` and ``fig514.csv`` into ``--out`` and prints
 the table.
 
-    python3 -m map2map.experiments.fig514 --data DS --n 6 --out DIR [--model pretrained|RUN] [--seed 0]
+    python3 -m map2map.experiments.fig514 --data DS --n 6 --out DIR \
+        [--model pretrained|RUN] [--seed 0]
         [--render slam|plain] [--drift parametric|none] [--drift-method additive|ekf]
         [--drift-scale F] [--coverage none|explore] [--drift-route tour|explore]
         [--traces none|lidar] [--explore-at square|native] [--as-synthesize]

@@ -27,7 +27,8 @@ run 3) as one more generator: W(run 3, run 1) / W(run 2, run 1) is what a genera
 good as the simulator itself scores on these plans, so a ratio above 1.5 there says how
 far the 1.5 target is below this benchmark's noise at this many plans. With three runs
 a plan, the benchmark also draws what a perfect generator scores
-(:func:`map2map.experiments.realism.measure.null_ratios`, session 15: per plan, the three runs' roles --
+(:func:`map2map.experiments.realism.measure.null_ratios`, session 15: per plan, the three runs'
+roles --
 generated, run 1, run 2 -- shuffled, ``--null-draws`` times): each ratio's quantiles and
 the chance that every ratio is <= 1.5. With a Model_AB generator, a last table sets each
 of its ratios beside run 3's, with the share of perfect-generator draws that score
@@ -39,15 +40,17 @@ Each ratio comes with the same ratio on the even- and on the odd-numbered plans 
 ``--render`` measures each model with each resolution raising
 (:mod:`map2map.learn.ab.render`: ``slam``, SLAM-like walls, the default of ``map2map
 synthesize``; ``plain``, the previous snap + nearest upsampling). ``--measures`` adds Fig.
-5.14's measures on every plan (:func:`map2map.experiments.fig514.measure.measure`: appendix-metric error
+5.14's measures on every plan (:func:`map2map.experiments.fig514.measure.measure`: appendix-metric
+error
 after alignment, wall recall and precision at 2 px) for the simulated runs, the parametric
 model and every generator: mean (median) error, plans not aligned, mean recall, mean
 precision.
 
 ``--drift`` measures each model with and without the parametric drift of
 :mod:`map2map.learn.ab.drift` (default ``parametric``, ``map2map synthesize``'s default before
-session 11, kept here so that the commands of docs/learn_ab.md reproduce; each square
-at its own metric resolution, :func:`map2map.experiments.realism.measure.pair_square_resolution`) and
+session 11, kept here so that the commands of docs/synthesize.md reproduce; each square
+at its own metric resolution, :func:`map2map.experiments.realism.measure.pair_square_resolution`)
+and
 with the room-wise rigid drift of :mod:`map2map.learn.ab.room_drift` (``rooms``),
 ``--drift-scale`` with each factor on the drift field (for tuning: tune on ``--split
 val``, report on ``test``). ``--diversity K`` adds, per generator, the mean pairwise
@@ -293,7 +296,8 @@ def main(argv=None) -> int:
 
 def _against_floor(rows: list, null=None) -> None:
     """Every generator's ratio beside the third simulated run's (the floor), per statistic;
-    with ``null`` (:class:`~map2map.experiments.realism.measure.NullRatios`), each ratio's rank among a
+    with ``null`` (:class:`~map2map.experiments.realism.measure.NullRatios`), each ratio's rank
+    among a
     perfect generator's draws in brackets."""
     gens = list(dict.fromkeys(r["generator"] for r in rows))
     ratio = {(r["generator"], r["statistic"]): r["ratio"] for r in rows}

@@ -5,7 +5,7 @@ the sign test are documented there).
     python3 -m map2map.experiments.table53                        # 100 generated held-out pairs
     python3 -m map2map.experiments.table53 --quick                # 12 pairs
     python3 -m map2map.experiments.table53 --data DS --model RUN  # a dataset's test split, a run
-    python3 -m map2map.experiments.table53 --data DS --ac open_frontiers=true   # an autocorrect option
+    python3 -m map2map.experiments.table53 --data DS --ac open_frontiers=true  # autocorrect option
     python3 -m map2map.experiments.table53 --data DS1 --data DS2 --split test val \\
         --cleaner DS1/cleaner.skops                      # several builds, merged by plan
 

@@ -17,7 +17,7 @@ worse among the maps whose alignments are good, sign test). Writes ``OUT/table53
 
 Run time: 5 min for the 18 maps (293-331 s over two runs; auto-correct 14-15 s, the rest
 the metric run four times per map), 1.1 GB peak memory, one process, OMP_NUM_THREADS=1,
-on the shared 2-core machine under load (2026-11-25). Results: docs/learn.md, "Table 5.3
+on the shared 2-core machine under load (2026-11-25). Results: docs/autocorrect.md, "Table 5.3
 on real maps".
 """
 

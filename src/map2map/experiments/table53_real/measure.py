@@ -44,7 +44,8 @@ correspondences (:mod:`map2map.maps.halmstad`). Per map:
 
 The summary counts improved / worse maps among those counted, the one-sided sign test
 (:func:`scipy.stats.binomtest`, ties left out) and the medians, as
-:func:`~map2map.experiments.table53.measure.run_table53` does. ``map2map.experiments.table53_real`` is the
+:func:`~map2map.experiments.table53.measure.run_table53` does.
+``map2map.experiments.table53_real`` is the
 command line.
 
 Resolution: the data give none; maps are read at 0.05 m/px
@@ -109,7 +110,8 @@ KP_FLOOR_MIN_PX = 2.0
 
 
 def _metric(src: OccupancyMap, plan: OccupancyMap, seed: int, scale: float | None = None):
-    """(error px, evaluation or None): the metric of :func:`map2map.experiments.table53.measure._error`
+    """(error px, evaluation or None): the metric of
+    :func:`map2map.experiments.table53.measure._error`
     (``scale=None``: both maps at one resolution), or with the metric scale ratio known
     (``rigid_scale=scale``), the evaluation kept for the alignment check."""
     from ...evaluate.pipeline import EvaluateParams, evaluate_maps

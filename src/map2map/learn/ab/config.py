@@ -15,10 +15,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..nets.progressive import GROWTHS
 from ..training.config import TrainConfig, batch_size
 
-__all__ = ["ABConfig", "TABLE_5_2", "parse_schedule", "stage_of", "fade_steps"]
+__all__ = ["ABConfig", "TABLE_5_2", "GROWTHS", "parse_schedule", "stage_of", "fade_steps"]
+
+#: Generator growths: the thesis's reading (everything at the stage's resolution) and
+#: anime2clothing's (full-size input, the decoder exits early).
+GROWTHS = ("full", "decoder")
 
 
 #: Table 5.2: (current resolution, epochs at it).

@@ -76,7 +76,7 @@ class ExploreParams:
         robot plans on a perfect map, the build's on its own rbpf SLAM map, which errs,
         and it maps the same share in less time. 275 s gave the simulated runs' free
         mapped and unknown shares on gen900's val plans explored at their own resolution
-        (session 13, docs/learn_ab.md; 420 s: ratios 5.02 unknown, 3.55 free mapped).
+        (session 13, docs/synthesize.md; 420 s: ratios 5.02 unknown, 3.55 free mapped).
     fov : float
         LIDAR field of view [deg] (the dataset build's 180).
     mapper : str
@@ -248,11 +248,11 @@ def coverage_options(coverage: str, drift_route: str) -> tuple[bool, bool]:
     ...     coverage_options("all", "tour")
     ... except InputError as exc:
     ...     print(exc)
-    --coverage: must be one of none, explore, got 'all'
+    coverage: must be one of none, explore, got 'all'
     """
     if coverage not in COVERAGES:
-        raise InputError("--coverage", f"must be one of {', '.join(COVERAGES)}, got {coverage!r}")
+        raise InputError("coverage", f"must be one of {', '.join(COVERAGES)}, got {coverage!r}")
     if drift_route not in DRIFT_ROUTES:
-        raise InputError("--drift-route",
+        raise InputError("drift_route",
                          f"must be one of {', '.join(DRIFT_ROUTES)}, got {drift_route!r}")
     return coverage == "explore", drift_route == "explore"

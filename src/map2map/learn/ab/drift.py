@@ -29,7 +29,7 @@ For one plan and one random generator (:func:`drift_field`, settings
 ``drift="rooms"`` (:class:`~map2map.learn.ab.room_drift.RoomDriftParams`) draws instead one
 rigid transform per room of the plan, chained along a walk through the doors and blended
 across the walls (:mod:`map2map.learn.ab.room_drift`), plus by default this module's field
-smoothed 0.2 m: the simulated maps' wall error without torn walls (opt-in; docs/learn_ab.md,
+smoothed 0.2 m: the simulated maps' wall error without torn walls (opt-in; docs/synthesize.md,
 "Room-wise drift").
 
 :func:`apply_drift` then moves the generated map's content at ``p`` to ``p + d(p)`` with
@@ -38,7 +38,7 @@ pixel splatted so walls stay closed). By default (``coverage="map"``) the genera
 keeps its own unknown cells: the drift moves what the network mapped, it does not decide
 what was seen; ``coverage="route"`` also hides what the route did not see.
 
-Measured (docs/learn_ab.md, "Drift"): on the 61 held-out test plans of gen6300 the
+Measured (docs/synthesize.md, "Drift"): on the 61 held-out test plans of gen6300 the
 defaults bring the shipped Model_AB's worst realism ratio from 16.6 to 5.4;
 :data:`TUNED_ON_VAL` (tuned on the val plans) reaches 6.3 there.
 
@@ -157,10 +157,10 @@ class DriftParams:
 
     def __post_init__(self):
         if self.method not in DRIFT_METHODS:
-            raise InputError("--drift-method",
+            raise InputError("drift_method",
                              f"must be one of {', '.join(DRIFT_METHODS)}, got {self.method!r}")
         if not (math.isfinite(self.scale) and self.scale >= 0):
-            raise InputError("--drift-scale", f"must be >= 0, got {self.scale}")
+            raise InputError("drift_scale", f"must be >= 0, got {self.scale}")
         if self.coverage not in COVERAGES:
             raise InputError("coverage", f"must be one of {', '.join(COVERAGES)}, "
                                          f"got {self.coverage!r}")
@@ -193,7 +193,7 @@ class DriftParams:
 #: The variant tuned on the validation plans of gen6300 (lowest worst realism ratio of the
 #: 19 variants tried on its 66 val plans: 3.62 against 6.74 for the defaults); on the 61 test plans
 #: its worst ratio is 6.27 against the defaults' 5.43, so it is not the default
-#: (docs/learn_ab.md, "Drift").
+#: (docs/synthesize.md, "Drift").
 TUNED_ON_VAL = DriftParams(scale=1.75, duration=420.0, smooth_m=0.2, coverage="route",
                            margin_px=2)
 
@@ -218,7 +218,7 @@ def drift_params(drift: str | DriftParams | RoomDriftParams, method: str | None 
     ...     drift_params("wobble")
     ... except InputError as exc:
     ...     print(exc)
-    --drift: must be one of parametric, rooms, none, got 'wobble'
+    drift: must be one of parametric, rooms, none, got 'wobble'
     """
     if isinstance(drift, RoomDriftParams) or drift == "rooms":
         if method is not None and method not in DRIFT_METHODS:
@@ -236,7 +236,7 @@ def drift_params(drift: str | DriftParams | RoomDriftParams, method: str | None 
             DriftParams(method=method)                   # the error names the choice
         return None
     else:
-        raise InputError("--drift", f"must be one of {', '.join(DRIFTS)}, got {drift!r}")
+        raise InputError("drift", f"must be one of {', '.join(DRIFTS)}, got {drift!r}")
     if method is not None:
         p = replace(p, method=method)
     if scale is not None:

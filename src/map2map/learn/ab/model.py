@@ -57,10 +57,10 @@ PRETRAINED = "model_ab.safetensors"
 
 
 def pretrained_ab_path() -> Path:
-    """The shipped weights (``map2map/learn/weights/model_ab.safetensors``)."""
+    """The shipped weights (``map2map/learn/ab/weights/model_ab.safetensors``)."""
     from ..training.checkpoint import shipped_weights
 
-    return shipped_weights(PRETRAINED)
+    return shipped_weights(__package__, PRETRAINED)
 
 
 @dataclass

@@ -8,7 +8,7 @@ walls). Model_AB's targets are SLAM maps, and a SLAM map's walls are what the la
 the faces of the walls that border mapped free space, about two pixels thick (the
 simulated maps of the datasets: 2.1 px at 256 px), with unknown space behind a face where
 no ray reached. A 64 px output upsampled to 256 px cannot draw that: one output cell is 4
-plan pixels, so its walls are 4-6 px thick blocks (docs/learn_ab.md: 5.8 px against the
+plan pixels, so its walls are 4-6 px thick blocks (docs/synthesize.md: 5.8 px against the
 simulated 2.1 px, the realism table's worst ratio). :func:`render_slam` does, in this order:
 
 1. **Class memberships** of the grey output ``g`` (occupied 0, unknown 127, free 255), the
@@ -38,7 +38,7 @@ Free and unknown space are those of step 2. :func:`render_plain` is the previous
 
 **LIDAR traces** (:class:`TraceParams`, ``synthesize(..., traces="lidar")``, the default
 of :func:`~map2map.learn.ab.synthesize.synthesize` since session 11; :func:`render_slam`
-alone draws none of them unless asked; issue #15, docs/learn_ab.md "Rendering what a
+alone draws none of them unless asked; issue #15, docs/synthesize.md "Rendering what a
 LIDAR leaves", where the defaults were tuned on gen900 val): what a LIDAR + SLAM run
 leaves on a grid map beyond the wall faces, measured on the simulated maps of the
 datasets and drawn here, seeded (:func:`trace_rng`):
@@ -109,7 +109,7 @@ class TraceParams:
         weights while the room drift's parametric field squeezed walls by ~15 %; with
         :class:`~map2map.learn.ab.room_drift.RoomDriftParams` ``conserve=True`` 0.85 draws
         the simulated thickness (session 12); 1.05 for the weights shipped in session
-        13, whose network walls are ~0.15 px thicker (docs/learn_ab.md).
+        13, whose network walls are ~0.15 px thicker (docs/synthesize.md).
     wall_m : float
         Metric part of the band [m]: ``floor_px + wall_m / resolution`` px.
     rough_px : float

@@ -3,7 +3,7 @@
 The simulated (``rbpf``) SLAM maps of the datasets place their walls 1.5-1.6 px from the
 plan's on average, with a heavy tail: whole rooms, or every room mapped after some moment
 of the run, are rotated or shifted against the plan by a pose error the particle filter
-kept (docs/learn_ab.md, "Room-wise drift"). The parametric field of
+kept (docs/synthesize.md, "Room-wise drift"). The parametric field of
 :mod:`map2map.learn.ab.drift` is a per-pixel field; scaled up to that size it tears the
 network's walls into dots. This module draws the error the way the simulated maps show
 it, as one small rigid transform per room, chained along the order in which a robot
@@ -34,7 +34,8 @@ pixels across the walls between them so that the warped walls stay continuous:
    inversion, wall pixels splatted).
 
 The magnitudes are fitted to the per-room offsets measured on the simulated maps of
-``gen900``'s val plans (``map2map.experiments.realism.room_offsets``), not taken from eqs. 3.81-3.82's
+``gen900``'s val plans (``map2map.experiments.realism.room_offsets``), not taken from eqs.
+3.81-3.82's
 coefficients, which describe raw odometry and not what the particle filter leaves of it.
 
 The rooms' field moves free space and walls without making or erasing them (gen900 val:
@@ -44,7 +45,7 @@ pose sees away from it (thesis eq. 3.83's range error is positive), so summed ov
 poses it grows the rooms (+12 % free pixels) and squeezes walls (-15 %).
 ``conserve=True`` adds only its divergence-free part (:func:`solenoidal`), which keeps
 both (-0.5 % free, +1 % walls); not the default, because the session 11 traces were
-tuned on the squeezed walls and the retuned setting lost on test (docs/learn_ab.md,
+tuned on the squeezed walls and the retuned setting lost on test (docs/synthesize.md,
 "Drift that keeps walls and free space", session 12).
 
 Examples
@@ -106,7 +107,7 @@ class RoomDriftParams:
     scale : float
         Final factor on the drawn rotations and shifts, and on the added parametric field
         (0: no drift). Session 12's val choice with ``conserve=True``: 0.7 (not the
-        default: worse on test, docs/learn_ab.md).
+        default: worse on test, docs/synthesize.md).
     parametric : bool
         Also add the default parametric field of :mod:`map2map.learn.ab.drift` (drawn first,
         from the same generator; :func:`map2map.learn.ab.drift.drift_field`).
@@ -122,7 +123,7 @@ class RoomDriftParams:
         pixel a pose sees away from that pose, and summed over the poses (thesis eqs.
         3.89-3.90) the field expands the rooms (about +12 % free pixels a map on gen900
         val) and, smoothed across the edge of what the model's LIDAR saw, squeezes walls
-        (about -15 % wall pixels; docs/learn_ab.md, "Drift that keeps walls and free
+        (about -15 % wall pixels; docs/synthesize.md, "Drift that keeps walls and free
         space", session 12). ``False`` (the default): the field as drawn, which the
         session 11 traces were tuned with; with ``True`` use ``scale=0.7`` and
         ``TraceParams(floor_px=0.85)`` (session 12's val choice; not the default since
@@ -146,7 +147,7 @@ class RoomDriftParams:
         if not (math.isfinite(self.blend_px) and self.blend_px > 0):
             bad.append("blend_px")
         if self.method not in ("additive", "ekf"):
-            raise InputError("--drift-method",
+            raise InputError("drift_method",
                              f"must be one of additive, ekf, got {self.method!r}")
         if bad:
             raise InputError(bad[0], f"out of range: {getattr(self, bad[0])!r}")

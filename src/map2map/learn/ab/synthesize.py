@@ -22,7 +22,7 @@ nearest neighbour) and pasted into a map of the plan's shape, resolution and ori
 unknown outside.
 
 **Defaults** (session 11, issue #15's realism rule on the gen900 validation plans:
-docs/learn_ab.md, "Rendering what a LIDAR leaves"): :func:`synthesize` draws the
+docs/synthesize.md, "Rendering what a LIDAR leaves"): :func:`synthesize` draws the
 room-wise drift (``drift="rooms"``), hides what each hypothesis's own exploration did not
 see (``coverage="explore"``) and draws the LIDAR traces (``traces="lidar"`` with
 ``render="slam"``). The previous defaults are ``drift="parametric", coverage="none",
@@ -230,9 +230,9 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     SynthesisResult
     """
     if samples < 1:
-        raise InputError("--samples", f"must be >= 1, got {samples}")
+        raise InputError("samples", f"must be >= 1, got {samples}")
     if render not in RENDERS:
-        raise InputError("--render", f"must be one of {', '.join(RENDERS)}, got {render!r}")
+        raise InputError("render", f"must be one of {', '.join(RENDERS)}, got {render!r}")
     dp = drift_params(drift, drift_method, drift_scale)
     tp = _traces(traces, render)
     hide, along = coverage_options(coverage, drift_route)
@@ -301,7 +301,7 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     if "PROVISIONAL" in str(net.header.get("note", "")):
         warns.append("provisional weights (reduced CPU training, see their note): the "
                      "hypotheses show the method; they do not meet the realism target "
-                     "against simulated SLAM maps (docs/learn_ab.md)")
+                     "against simulated SLAM maps (docs/synthesize.md)")
     for w in warns:
         warnings.warn(w, stacklevel=2)
     for m in maps:
@@ -332,9 +332,9 @@ def _traces(traces, render: str) -> TraceParams | None:
     try:
         tp = trace_params(traces)
     except ValueError as exc:
-        raise InputError("--traces", str(exc)) from None
+        raise InputError("traces", str(exc)) from None
     if tp is not None and render != "slam":
-        raise InputError("--traces", "LIDAR traces need render='slam'")
+        raise InputError("traces", "LIDAR traces need render='slam'")
     return tp
 
 
@@ -358,7 +358,8 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
     (dropout off), warped along a parametric drift field of its plan as ``drift`` says
     (:func:`synthesize`; plan ``i`` of the call draws from
     :func:`~map2map.learn.ab.drift.drift_rng` ``(seed, i)``). For evaluations on a dataset's
-    own pixels (:mod:`map2map.experiments.realism.measure`, :mod:`map2map.experiments.fig514.measure`).
+    own pixels (:mod:`map2map.experiments.realism.measure`,
+    :mod:`map2map.experiments.fig514.measure`).
 
     ``resolution`` (metres per pixel of the squares: one float or one per plan) scales the
     metric drift model; the dataset's squares differ (``map2map.datasets.pair.
@@ -375,7 +376,8 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
     ``seen`` ((N, S, S) bool, optional; ``coverage="explore"`` with ``drift_route="tour"``
     only) replaces the exploration of each square by cells seen elsewhere, e.g. by an
     exploration of the plan at its own resolution mapped onto the square
-    (:func:`map2map.experiments.realism.measure.native_seen`, what :func:`synthesize` does for a plan).
+    (:func:`map2map.experiments.realism.measure.native_seen`, what :func:`synthesize` does for a
+    plan).
     A 256 px square of a dataset pair is 0.04-0.12 m a pixel with walls thickened for the
     network, so the robot exploring it may not fit through doors it passes at 0.05 m.
 

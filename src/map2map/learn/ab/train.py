@@ -137,7 +137,7 @@ def train_ab(data: str | os.PathLike | PackedPairs, out: str | os.PathLike,
     try:
         nets = build_ab_networks(cfg)
     except ValueError as exc:
-        raise InputError("--schedule", str(exc)) from None
+        raise InputError("schedule", str(exc)) from None
     for r, _ in cfg.schedule:
         if batches_per_epoch(len(train), cfg.stage_batch(r), start.dist.world) == 0:
             raise InputError(src, f"{len(train)} training pairs are fewer than one batch of "

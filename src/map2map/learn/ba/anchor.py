@@ -196,7 +196,7 @@ def anchored_walls(guide: np.ndarray, segs: np.ndarray, *, band: float, wall_px:
     other (pieces of one wall line cut by doors, bent apart by drift) are put on one
     line, their length-weighted median. ``grow`` moves every observed face that many
     pixels out into the free space it faces (a plan drawn with thicker walls than the
-    laser sees). Both were measured worse (docs/learn.md) and are off by default.
+    laser sees). Both were measured worse (docs/autocorrect.md) and are off by default.
 
     With ``collinear > 0``, observed faces whose lines lie within ``collinear`` pixels of
     each other go to their length-weighted mean line (:func:`collinear_faces`); with

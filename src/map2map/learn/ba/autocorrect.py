@@ -39,7 +39,7 @@ uncorrected with a warning. The walls seen from one side are drawn as thick as t
 training plans' walls scaled by the input's own walls (``thickness="input"``, default
 since 2026-11-26: at most the shrink, see :func:`drawn_wall_px`), not by the shrink
 alone, which made the walls of a real office map 15-24 px thick against the plan's 3.
-Measured on the 18 real Halmstad maps and the gen1500 val split in docs/learn.md,
+Measured on the 18 real Halmstad maps and the gen1500 val split in docs/autocorrect.md,
 "Real maps beyond the training scale". A result the model is unsure of carries a
 warning in ``meta["autocorrect"]["warnings"]`` (and on the command line): content
 more than 4x the dataset's size corrected whole (a building much larger than those the
@@ -91,16 +91,17 @@ from .squares import (
     unrotate_segments,
 )
 
-__all__ = ["autocorrect", "autocorrect_many", "Correction", "save_segments_dxf",
+__all__ = ["autocorrect", "autocorrect_many", "Correction",
            "dominant_angle", "drawn_wall_px", "tile_grid", "stitch_tiles"]
 
 #: With anchored walls (``anchor=True``) the faces follow the map's own angle up to
-#: ``ANCHOR.tilt_max_deg`` (:mod:`~map2map.learn.ba.anchor`), so only larger rotations are deskewed: the
-#: nearest-neighbour rotation there and back moves wall pixels (docs/learn.md, "Why 43 %
+#: ``ANCHOR.tilt_max_deg`` (:mod:`~map2map.learn.ba.anchor`), so only larger rotations are
+#: deskewed: the
+#: nearest-neighbour rotation there and back moves wall pixels (docs/autocorrect.md, "Why 43 %
 #: of the maps were not improved": 28 -> 31 of 38 val maps improved).
 MIN_SKEW_ANCHORED_DEG = 6.0
 MAX_SHRINK = 4.0  # content squares more than 4x the dataset's size get a warning
-#: what the shipped weights measured (docs/learn.md, "Trained on a GPU", "Table 5.3 on real
+#: what the shipped weights measured (docs/autocorrect.md, "Trained on a GPU", "Table 5.3 on real
 #: maps"), said with every correction they make
 REAL_MAPS_ANCHORED = ("walls anchored on the input lowered the appendix-metric error on 192 "
                       "of 200 held-out simulated maps; on 18 real Halmstad maps against "
@@ -114,7 +115,7 @@ REAL_MAPS_ANCHORED = ("walls anchored on the input lowered the appendix-metric e
 #: the dataset's 256 px (200 train maps of gen1500: 2.07 px, 5-95 % 1.84-2.93; their
 #: plans' walls 5.61): how thick the dataset's SLAM maps draw a wall (``thickness="input"``).
 SLAM_WALL_PX = 2.07
-#: Default of :func:`autocorrect`'s ``thickness`` (docs/learn.md, "Real maps beyond the
+#: Default of :func:`autocorrect`'s ``thickness`` (docs/autocorrect.md, "Real maps beyond the
 #: training scale": on the 18 real Halmstad maps the output's alignment failed on 1
 #: instead of 6, observed-part Chamfer 8.5 px instead of 10.2; gen1500 val unchanged).
 THICKNESS = "input"
@@ -126,7 +127,7 @@ OPEN_FRONTIERS = False
 #: more than :data:`LARGE_SHRINK` times the dataset's size.
 LARGE = "tile"
 #: Shrink (content side / dataset size) beyond which ``large`` applies: the training
-#: plans reach 2.39 (docs/learn.md, "Table 5.3 on real maps").
+#: plans reach 2.39 (docs/autocorrect.md, "Table 5.3 on real maps").
 LARGE_SHRINK = 2.5
 
 
@@ -148,7 +149,7 @@ def _weights_caveat(net: BAModel, anchor: bool) -> list[str]:
     what = ("provisional Model_BA weights (small CPU training run)" if provisional else
             "Model_BA weights trained on simulated SLAM maps only")
     return [f"{what}: walls the input does not show are placed only to within a few "
-            f"pixels; {measured} (docs/learn.md)"]
+            f"pixels; {measured} (docs/autocorrect.md)"]
 
 
 @dataclass
@@ -271,7 +272,7 @@ def autocorrect_many(maps: list[OccupancyMap], model: str | os.PathLike | BAMode
 
 def _open(open_frontiers: bool | None, tiled: bool) -> bool:
     """``open_frontiers`` for one map: as given, else on for a map corrected in tiles
-    and :data:`OPEN_FRONTIERS` for one corrected whole (docs/learn.md, "Real maps beyond
+    and :data:`OPEN_FRONTIERS` for one corrected whole (docs/autocorrect.md, "Real maps beyond
     the training scale": tiles without it invent walls in the unknown space around the
     building, 25-28 px observed Chamfer on the real maps against 6.4 for the input)."""
     if open_frontiers is not None:
@@ -279,8 +280,8 @@ def _open(open_frontiers: bool | None, tiled: bool) -> bool:
     return True if tiled else OPEN_FRONTIERS
 
 
-def _finish(m: OccupancyMap, sq: Prepared | None, output: np.ndarray | None, net: BAModel, straighten: bool,
-            anchor: bool, thickness: str | float = "shrink",
+def _finish(m: OccupancyMap, sq: Prepared | None, output: np.ndarray | None, net: BAModel,
+            straighten: bool, anchor: bool, thickness: str | float = "shrink",
             open_frontiers: bool = False, refused: bool = False,
             tiled: bool = False) -> Correction:
     """One map of :func:`autocorrect_many` after the network: post-processing, back to
@@ -414,40 +415,5 @@ def autocorrect(m: OccupancyMap, model: str | os.PathLike | BAModel | None = "pr
     for w in res.warnings:
         warnings.warn(w, stacklevel=2)
     return res.map
-
-
-def save_segments_dxf(segments: np.ndarray, path: str | os.PathLike, *, layer: str = "WALLS",
-                      width: float | None = None) -> None:
-    """Write wall segments (world metres: x0, y0, x1, y1) as DXF ``LINE`` entities.
-
-    The drawing is in metres (``$INSUNITS`` 6); ``width`` (metres, optional) is stored as
-    each line's constant width through a ``LWPOLYLINE`` instead, so CAD shows the wall
-    thickness.
-
-    Examples
-    --------
-    >>> import tempfile, pathlib, ezdxf
-    >>> p = pathlib.Path(tempfile.mkdtemp()) / "walls.dxf"
-    >>> save_segments_dxf(np.array([[0.0, 0.0, 4.0, 0.0], [4.0, 0.0, 4.0, 3.0]]), p)
-    >>> len(ezdxf.readfile(p).modelspace().query("LINE"))
-    2
-    """
-    import ezdxf
-
-    from ...core._io import atomic_path
-
-    doc = ezdxf.new(units=6)
-    doc.header["$INSUNITS"] = 6
-    if layer not in doc.layers:
-        doc.layers.add(layer)
-    msp = doc.modelspace()
-    for x0, y0, x1, y1 in np.asarray(segments, float).reshape(-1, 4):
-        if width:
-            msp.add_lwpolyline([(x0, y0), (x1, y1)], dxfattribs={"layer": layer,
-                                                                 "const_width": width})
-        else:
-            msp.add_line((x0, y0), (x1, y1), dxfattribs={"layer": layer})
-    with atomic_path(path) as tmp:
-        doc.saveas(tmp)
 
 

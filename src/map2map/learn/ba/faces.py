@@ -260,7 +260,7 @@ def collinear_faces(horiz: np.ndarray, side: np.ndarray, face: np.ndarray,
     the line. Every face of a group moves to the group's line, weighted by its length
     ``hi - lo + 1`` (long pieces dominate), rounded to whole pixels. The mean, not the
     median: the pieces' drift scatters them about the plan's line; measured on the
-    gen6300 val split (docs/learn.md, "Moving drifted walls"), the mean line is closer
+    gen6300 val split (docs/autocorrect.md, "Moving drifted walls"), the mean line is closer
     to the plan's (median: no closer than the pieces themselves).
 
     Parameters
@@ -318,7 +318,7 @@ def thicken_two_sided(first: np.ndarray, last: np.ndarray, width: int) -> tuple[
     ``ANCHOR.min_thick``).
 
     A wall seen from two rooms has both faces in the map, but an occupancy grid traces
-    it thinner than it is: measured on the gen6300 val split (docs/learn.md, "Moving
+    it thinner than it is: measured on the gen6300 val split (docs/autocorrect.md, "Moving
     drifted walls"), the plan's faces of such walls lie 0.63 px (median) further out
     than the map's on each side -- the plan's walls are 4-6 px thick where the map's
     are 2-4. A wall ``d = width - (last - first + 1)`` pixels too thin gets

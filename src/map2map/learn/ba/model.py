@@ -50,10 +50,10 @@ CPU_CHUNK = 16  # maps per forward pass on the CPU (BAModel.predict)
 
 
 def pretrained_path() -> Path:
-    """The weights shipped in the package (``map2map/learn/weights/model_ba.safetensors``)."""
+    """The weights shipped in the package (``map2map/learn/ba/weights/model_ba.safetensors``)."""
     from ..training.checkpoint import shipped_weights
 
-    return shipped_weights(PRETRAINED)
+    return shipped_weights(__package__, PRETRAINED)
 
 
 @dataclass

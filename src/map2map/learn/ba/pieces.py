@@ -22,7 +22,7 @@ def drop_free_specks(data: np.ndarray, min_area: float) -> np.ndarray:
     apart from it are rays that slipped through a wall or past its end (most lie
     beyond the outer walls). Kept, each gives the wall beside it a face towards space
     the plan does not have (free on the far side of an outer wall) and the anchored
-    walls of step 4b a second, spurious face. Measured on Table 5.3 (docs/learn.md).
+    walls of step 4b a second, spurious face. Measured on Table 5.3 (docs/autocorrect.md).
 
     Examples
     --------
@@ -122,7 +122,8 @@ def _drawn_pieces(s: np.ndarray, near: np.ndarray) -> np.ndarray:
 def frontier_walls(segs: np.ndarray, guide: np.ndarray, tol: float,
                    share: float | None = None) -> np.ndarray:
     """Which segments (x0, y0, x1, y1) have no seen space on one of their sides: at more
-    than ``share`` (default ``ANCHOR.frontier_share``) of 32 points along each, the ``guide`` is unknown (or outside it) at
+    than ``share`` (default ``ANCHOR.frontier_share``) of 32 points along each, the ``guide`` is
+    unknown (or outside it) at
     all of ``tol``, ``2 tol`` and ``3 tol`` pixels across the segment on one side.
 
     A wall the input does not show is drawn only over its unknown pixels (step 4b stops
@@ -131,7 +132,7 @@ def frontier_walls(segs: np.ndarray, guide: np.ndarray, tol: float,
     (seen space on one side, unknown beyond) or out in unknown space it closes an open
     frontier: on a partial map (a robot that drove the corridors and looked into some
     rooms) the edge of what it saw is not a wall, and the model, which learnt whole
-    buildings, closes it (docs/learn.md, "Real maps beyond the training scale"). Step
+    buildings, closes it (docs/autocorrect.md, "Real maps beyond the training scale"). Step
     4b with ``open_frontiers`` leaves those out.
 
     Examples

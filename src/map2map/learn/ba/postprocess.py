@@ -31,7 +31,7 @@ needs 8x (or more) upsampling, and plain upsampling gives grey, blurred walls.
 4b. **Anchored walls** (``anchor=True``, the default when a ``guide`` is given; replaces
    steps 4-5): a SLAM map's wall faces are already where the laser hit them, within a
    pixel or so of the plan's, and a 64 px network cannot place a wall better than a few
-   pixels of a 256 map (docs/learn.md measures it). So the walls are the input's own,
+   pixels of a 256 map (docs/autocorrect.md measures it). So the walls are the input's own,
    straightened at full resolution: its wall pixels are cut into straight segments
    (step 3 on the input, ``ANCHOR.cell`` = 4 dataset pixels), and each wall is drawn
    with its faces at the **median** position of the input's faces along it
@@ -52,7 +52,7 @@ needs 8x (or more) upsampling, and plain upsampling gives grey, blurred walls.
    their nearest non-wall pixel. Free and unknown space come from the input, except
    free space the network calls unknown more than two model cells from any wall (laser
    streaks through windows and open doors), which becomes unknown. Two more rules,
-   measured on Table 5.3 (docs/learn.md, "Why 43 % of the maps were not improved"):
+   measured on Table 5.3 (docs/autocorrect.md, "Why 43 % of the maps were not improved"):
    free islands of the input smaller than ``ANCHOR.speck`` (30 dataset pixels squared)
    become unknown first (:func:`drop_free_specks`: rays that slipped through or past
    a wall, mostly beyond the outer walls; kept, they gave the anchored walls faces
@@ -60,7 +60,7 @@ needs 8x (or more) upsampling, and plain upsampling gives grey, blurred walls.
    angle, not along the pixel grid (``tilt``, :func:`anchored_walls`: a SLAM map is
    turned against its plan by its heading error, and a face made exactly horizontal on
    a wall turned by 2 degrees leaves it up to 1.7 px off across 100 px). Two more, for
-   the walls that SLAM drift displaced (docs/learn.md, "Moving drifted walls"): faces
+   the walls that SLAM drift displaced (docs/autocorrect.md, "Moving drifted walls"): faces
    of one orientation and side whose lines lie within ``ANCHOR.collinear`` (3 dataset
    pixels) of each other go to their length-weighted mean line
    (:func:`collinear_faces`: the pieces of one wall line, which the plan draws

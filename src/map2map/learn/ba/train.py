@@ -112,7 +112,7 @@ def train_ba(data: str | os.PathLike | PackedPairs, out: str | os.PathLike,
     cfg, pairs, train, dist = start.cfg, start.pairs, start.train, start.dist
     smallest = cfg.size // 2 ** (cfg.d_scales - 1)
     if smallest < 2**cfg.d_layers:
-        raise InputError("--size", f"at {cfg.size} px the coarsest discriminator scale is "
+        raise InputError("size", f"at {cfg.size} px the coarsest discriminator scale is "
                                    f"{smallest} px, too small for {cfg.d_layers} stride-2 "
                                    "layers (use a larger size or fewer --d-layers)")
     if pairs.a.shape[-1] < cfg.size:

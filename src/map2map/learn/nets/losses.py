@@ -6,7 +6,8 @@ Eq. 3.2::
                         + sum_k L_FM_domain(G, D_d_k) + sum_k L_input_real/fake(G, D_r_k)
                         + lambda L_L1(G)
 
-``k = 1..3`` runs over the scales of a :class:`~map2map.learn.nets.networks.MultiScaleDiscriminator`;
+``k = 1..3`` runs over the scales of a
+:class:`~map2map.learn.nets.networks.MultiScaleDiscriminator`;
 every function below takes the discriminator's output (one feature list per scale, the
 last entry of each list being the patch logits) and already sums over ``k``.
 

@@ -31,7 +31,8 @@ the same tensor at every step and is not rebuilt.
 the thesis's "total epochs" column, 37 / 67 / 127 / 227, also counts 22 earlier epochs at
 lower resolutions whose split it does not give -- add them with e.g. ``8:7,16:15,32:15``).
 The schedule and its batch sizes are Model_AB's settings
-(:mod:`~map2map.learn.ab.config`). Batch size per stage: Table 5.1 times ``batch_rate`` (1 for Model_AB): 64 at 32, 32 at
+(:mod:`~map2map.learn.ab.config`). Batch size per stage: Table 5.1 times ``batch_rate`` (1 for
+Model_AB): 64 at 32, 32 at
 64, 16 at 128, 4 at 256. Epochs beyond the schedule's sum stay at its last resolution.
 
 Examples
@@ -53,14 +54,12 @@ import torch.nn.functional as F
 from torch import nn
 from torch.nn.utils.parametrizations import spectral_norm
 
+from ..ab.config import GROWTHS
 from .networks import UNetGenerator
 
-__all__ = ["GROWTHS", "fade_alpha", "StochasticUNet", "ProgPatchDiscriminator",
+__all__ = ["fade_alpha", "StochasticUNet", "ProgPatchDiscriminator",
            "ProgMultiScaleDiscriminator"]
 
-#: Generator growths: the thesis's reading (everything at the stage's resolution) and
-#: anime2clothing's (full-size input, the decoder exits early).
-GROWTHS = ("full", "decoder")
 
 
 def fade_alpha(step: int, steps: int) -> float:

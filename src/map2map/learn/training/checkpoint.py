@@ -44,17 +44,17 @@ __all__ = ["read_model_file", "save_checkpoint", "load_checkpoint", "module_tens
 _META_KEY = "map2map"
 
 
-def shipped_weights(name: str) -> Path:
-    """Path of a weights file shipped in the package (``map2map/learn/weights/NAME``).
+def shipped_weights(package: str, name: str) -> Path:
+    """Path of a weights file shipped in a model's package (``<package>/weights/NAME``).
 
     Examples
     --------
-    >>> shipped_weights("model_ba.safetensors").name
+    >>> shipped_weights("map2map.learn.ba", "model_ba.safetensors").name
     'model_ba.safetensors'
     """
     from importlib import resources
 
-    return Path(str(resources.files("map2map.learn") / "weights" / name))
+    return Path(str(resources.files(package) / "weights" / name))
 
 
 def save_checkpoint(path: str | os.PathLike, tensors: dict[str, torch.Tensor],
@@ -154,7 +154,7 @@ def read_model_file(model, pretrained: Path, fmt: str, name: str, *, no_pretrain
     if model is None or str(model) == "pretrained":
         path = pretrained
         if not path.is_file():
-            raise InputError("--model", no_pretrained)
+            raise InputError("model", no_pretrained)
     else:
         path = Path(model)
         if path.is_dir():

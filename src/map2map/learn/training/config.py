@@ -47,7 +47,7 @@ class TrainConfig:
     size : int
         Training resolution, up to the dataset's. 32 is the thesis's Model_BA (Model_32);
         the default is 64, which beat Model_32 on the same held-out maps and the same
-        training time (``docs/learn.md``).
+        training time (``docs/autocorrect.md``).
     epochs : int
         Number of epochs.
     batch : int or None

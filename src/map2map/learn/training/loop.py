@@ -94,7 +94,7 @@ def resolve_device(name: str = "auto") -> torch.device:
         return torch.device("cuda" if torch.cuda.is_available() else "cpu")
     dev = torch.device(name)
     if dev.type == "cuda" and not torch.cuda.is_available():
-        raise InputError("--device", "CUDA requested but not available")
+        raise InputError("device", "CUDA requested but not available")
     return dev
 
 

@@ -1,7 +1,7 @@
 """The eq. 3.2 training step with static buffers, ready to run as one CUDA graph replay.
 
 A Model_32 :func:`~map2map.learn.training.step.gan_step` costs ~62-68 ms on an H200 from batch 32
-to 256 because it is bound by host overhead (``docs/learn.md``, "Trained on a GPU": about
+to 256 because it is bound by host overhead (``docs/autocorrect.md``, "Trained on a GPU": about
 2,200 top-level operator calls a step, ~900 of them the spectral norms' power
 iterations). A CUDA graph records every kernel of a step once and replays them with one
 call. :class:`StaticStep` is that step:

@@ -5,7 +5,8 @@ and, on the same plans and the same trajectory, the parametric model's map and a
 simulated SLAM map (Fig. 5.14): "both methods give very realistic results", the
 parametric one closer to the simulation of the same trajectory, Model_AB better at
 removed walls and room shrinkage, the parametric one better at doors. Here:
-:func:`map2map.experiments.fig514.measure.run_fig514` on generated plans never used in training: each
+:func:`map2map.experiments.fig514.measure.run_fig514` on generated plans never used in training:
+each
 plan simulated (TurtleBot3, 7 minutes, 180 degrees, ``rbpf``, as ``map2map dataset
 build``), the parametric model (additive) driven along the simulation's own trajectory,
 Model_AB's single output (pretrained weights) warped along a parametric drift field
@@ -80,7 +81,7 @@ def run(ctx: Context, out: Output) -> None:
                 "one in the appendix error"
                 + (", as in the thesis." if closer == "parametric" else
                    ", unlike the thesis (its parametric map was the closer).")
-                + " Model_AB's shipped weights are provisional (docs/learn_ab.md).")
+                + " Model_AB's shipped weights are provisional (docs/synthesize.md).")
     out.comparison_table()
     fig = f.figure()
     out.figure(png_of(fig), "Fig. 5.14: plan | simulated SLAM map | parametric model on the "

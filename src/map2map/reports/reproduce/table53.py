@@ -9,7 +9,8 @@ Here: held-out simulated pairs made for the run (:func:`map2map.datasets.build.b
 with ``map2map dataset build``'s defaults -- TurtleBot3, 7 minutes, 180 degrees, ``rbpf``,
 256 px -- on generated plans of a dataset seed never trained on), the maps whose
 exploration finished (coverage of the reachable free space >= 0.8, the cleaner's label:
-the thesis cleaned its data too), and :func:`map2map.experiments.table53.measure.run_table53` with the
+the thesis cleaned its data too), and :func:`map2map.experiments.table53.measure.run_table53` with
+the
 pretrained Model_BA: the same metric (chosen chain's mean, px), the one-sided sign test,
 and the wall guards (recall, boundary F1) against outputs that score low by losing walls.
 
@@ -100,8 +101,9 @@ def run(ctx: Context, out: Output) -> None:
                             "them, not the thesis's model")  # fmt: skip
     share = improved / n if n else float("nan")
     why = ("as often as the thesis's model" if share >= 0.75 else
-           "less often than the thesis's 75 %: the shipped Model_BA weights are provisional "
-           "(CPU-trained on 250 pairs, docs/learn.md) against the thesis's 4,224 Gazebo pairs")
+           "less often than the thesis's 75 %: the shipped Model_BA weights were trained on "
+           "3,358 simulated rbpf pairs (docs/autocorrect.md) against the thesis's 4,224 "
+           "Gazebo pairs")
     out.compare("share improved (Table 5.3)", "15/20 = 75 %",
                 f"{improved}/{n} = {fmt(100 * share, 0)} % (p = {s['sign_test_p']:.2g})",
                 f"improved {why}; our held-out maps are rbpf SLAM maps of a 2D simulator, "

@@ -1,1 +1,2 @@
-"""drift tune: the script is ``__main__`` (``python3 -m map2map.experiments.realism.drift_tune --help``)."""
+"""drift tune: the script is ``__main__`` (``python3 -m
+map2map.experiments.realism.drift_tune --help``)."""

@@ -1,1 +1,2 @@
-"""room offsets: the script is ``__main__`` (``python3 -m map2map.experiments.realism.room_offsets --help``)."""
+"""room offsets: the script is ``__main__`` (``python3 -m
+map2map.experiments.realism.room_offsets --help``)."""

@@ -16,7 +16,8 @@ Maps: ``sim1`` (the dataset's ``B.png``), and with ``--model``: Model_AB without
 per-map wall error before and after the per-room fit, and the share of rooms off by
 more than 1 deg / 2 px; ``--npz`` keeps every room's row.
 
-    python3 -m map2map.experiments.realism.room_offsets --data DS --split val [--plans N] [--model pretrained]
+    python3 -m map2map.experiments.realism.room_offsets --data DS --split val [--plans N] \
+        [--model pretrained]
         [--rooms '{"rot_deg": 1}' ...] [--npz out.npz]
 """
 

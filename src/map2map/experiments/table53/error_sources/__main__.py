@@ -1,9 +1,10 @@
 """Where a SLAM map's appendix-metric error comes from: whole walls displaced, or scatter
-of the wall faces about their wall's position? (docs/learn.md, "Table 5.3 on 104
+of the wall faces about their wall's position? (docs/autocorrect.md, "Table 5.3 on 104
 held-out builder maps".)
 
 For each held-out pair, Error(sim) (the chosen chain's mean local error, px, as in
-:mod:`map2map.experiments.table53.measure`) is split: the metric's points are grouped by the plan wall
+:mod:`map2map.experiments.table53.measure`) is split: the metric's points are grouped by the plan
+wall
 they match (orientation, the plan face's coordinate across the wall, runs along it cut at
 gaps > 10 px); ``floor`` is the mean over points of the absolute mean signed offset of
 their wall -- what a correction that keeps every wall where the SLAM map has it and only

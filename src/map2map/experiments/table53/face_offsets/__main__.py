@@ -1,5 +1,5 @@
 """Per observed wall face of Model_BA's anchored walls: how far is the plan's face, the
-network's, and the face a post-processing rule would draw? (docs/learn.md, "Moving
+network's, and the face a post-processing rule would draw? (docs/autocorrect.md, "Moving
 drifted walls".)
 
 For every held-out pair whose map is not deskewed, the anchored step's faces

@@ -21,9 +21,10 @@ from pathlib import Path
 
 from map2map.evaluate.wallmetrics import wall_metrics
 from map2map.experiments._data import shared_data
-from map2map.learn.ba.autocorrect import autocorrect_many, save_segments_dxf
+from map2map.learn.ba.autocorrect import autocorrect_many
 from map2map.learn.ba.model import load_model
 from map2map.learn.training.figures import save_before_after
+from map2map.maps.dxf import save_segments_dxf
 from map2map.maps.formats import load_map, save_map
 
 SHARED = shared_data()
@@ -46,12 +47,11 @@ def main(argv=None) -> int:
             maps[f"halmstad_{env}_01"] = load_map(p, resolution=0.05)
     exp2 = SHARED / "breezyslam" / "exp2.dat"
     if exp2.is_file():
-        from map2map.cli.main import main as cli
+        from map2map.jobs.slam import SlamSpec, slam
 
         slam_out = out / "exp2_slam"
         if not (slam_out / "map.yaml").is_file():
-            cli(["slam", str(exp2), "--out", str(slam_out), "--backend", "graph",
-                 "--max-range", "5"])
+            slam(SlamSpec(exp2, slam_out, backend="graph", max_range=5.0))
         maps["breezyslam_exp2"] = load_map(slam_out / "map.yaml")
     model = load_model(args.model)
     t0 = time.perf_counter()

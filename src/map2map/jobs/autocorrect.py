@@ -1,0 +1,172 @@
+"""``map2map autocorrect`` as a job: SLAM maps in, CAD-like plans (and DXF walls, figures)
+out, with Model_BA (:mod:`map2map.learn.ba.autocorrect`).
+
+The model is loaded once for all the maps; every output path is checked before any map
+is read; each file is written atomically. A folder input corrects every map in it into
+the output folder (same names).
+
+Examples
+--------
+>>> import tempfile, pathlib
+>>> from map2map.jobs.maps import PlanSpec, plan
+>>> d = pathlib.Path(tempfile.mkdtemp())
+>>> _ = plan(PlanSpec(d / "apt.yaml", seed=3))
+>>> run = autocorrect(AutocorrectSpec(d / "apt.yaml", d / "cad.yaml", dxf=d / "walls.dxf"))
+>>> sorted(run.written), run.corrections[0].map.shape == run.inputs[0].shape
+(['dxf', 'map', 'map_pgm'], True)
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ..core.errors import InputError
+
+__all__ = ["AutocorrectSpec", "AutocorrectRun", "autocorrect", "MAP_SUFFIXES",
+           "parse_thickness"]
+
+#: Files of a folder input that are read as maps.
+MAP_SUFFIXES = (".yaml", ".yml", ".png", ".pgm", ".jpg", ".jpeg", ".tif", ".tiff", ".json")
+
+
+@dataclass
+class AutocorrectSpec:
+    """What ``map2map autocorrect`` is asked to do.
+
+    Parameters
+    ----------
+    input : path-like
+        A SLAM map (any format :func:`~map2map.maps.formats.load_map` reads) or a folder
+        of them.
+    out : path-like
+        The output map, or folder (folder input).
+    model : str or path-like
+        ``"pretrained"`` (shipped weights), a training run folder or a weights file.
+    dxf, figure : path-like or None
+        Also write the walls as DXF line segments / a before-after figure (folder input:
+        folders).
+    straighten, anchor : bool
+        :func:`~map2map.learn.ba.autocorrect.autocorrect`'s options.
+    thickness : str, float or None
+        ``"shrink"``, ``"resolution"``, ``"input"``, a number of pixels (or its text);
+        None: the library's default.
+    open_frontiers : bool or None
+        None: the library's default (on for a map corrected in tiles).
+    large : {"resize", "tile", "refuse"} or None
+        None: the library's default.
+    device : str
+        Torch device.
+    read_options : MapReadOptions or None
+        How the input maps are read.
+    """
+
+    input: str | os.PathLike
+    out: str | os.PathLike
+    model: str | os.PathLike = "pretrained"
+    dxf: str | os.PathLike | None = None
+    figure: str | os.PathLike | None = None
+    straighten: bool = True
+    anchor: bool = True
+    thickness: str | float | None = None
+    open_frontiers: bool | None = None
+    large: str | None = None
+    device: str = "cpu"
+    read_options: Any = None
+
+
+@dataclass
+class AutocorrectRun:
+    """What :func:`autocorrect` did: the files (``written``: the last map's; ``files``:
+    per input, name -> path), the input maps, the corrections (map, world segments,
+    warnings) and the model's source."""
+
+    inputs: list
+    corrections: list
+    sources: list[Path]
+    model: str
+    files: list[dict[str, Path]] = field(default_factory=list)
+
+    @property
+    def written(self) -> dict[str, Path]:
+        return self.files[-1] if self.files else {}
+
+
+def parse_thickness(value: str | float | None) -> str | float | None:
+    """``thickness`` as the library takes it: a rule name, a number of pixels or None.
+
+    >>> parse_thickness("input"), parse_thickness("2.5"), parse_thickness(None)
+    ('input', 2.5, None)
+    """
+    if value is None or value in ("shrink", "resolution", "input"):
+        return value
+    try:
+        return float(value)
+    except ValueError:
+        raise InputError("thickness", "'shrink', 'resolution', 'input' or a number of "
+                         f"pixels, not {value!r}") from None
+
+
+def _plan_paths(spec: AutocorrectSpec) -> tuple[list[Path], list[dict[str, Path]]]:
+    src = Path(spec.input)
+    if src.is_dir():
+        files = sorted(f for f in src.iterdir() if f.suffix.lower() in MAP_SUFFIXES)
+        if not files:
+            raise InputError(src, "no maps in this folder")
+        out = [{"map": Path(spec.out) / f.name} for f in files]
+        for f, o in zip(files, out, strict=True):
+            if spec.dxf:
+                o["dxf"] = Path(spec.dxf) / (f.stem + ".dxf")
+            if spec.figure:
+                o["figure"] = Path(spec.figure) / (f.stem + ".png")
+        return files, out
+    if not src.exists():
+        raise InputError(src, "file not found")
+    o = {"map": Path(spec.out)}
+    if spec.dxf:
+        o["dxf"] = Path(spec.dxf)
+    if spec.figure:
+        o["figure"] = Path(spec.figure)
+    return [src], [o]
+
+
+def autocorrect(spec: AutocorrectSpec) -> AutocorrectRun:
+    """Run ``map2map autocorrect`` (module docstring); the warnings of each correction are
+    in ``run.corrections[i].warnings`` (not issued)."""
+    from ..maps.dxf import save_segments_dxf
+    from ..maps.formats import check_output_path, load_map, save_map
+
+    try:
+        from ..learn.ba.autocorrect import autocorrect_many
+        from ..learn.ba.model import load_model
+        from ..learn.training.figures import save_before_after
+    except ImportError as exc:
+        raise InputError("autocorrect", f"needs PyTorch: pip install 'map2map[learn]' ({exc})"
+                         ) from None
+    thickness = parse_thickness(spec.thickness)
+    files, outs = _plan_paths(spec)
+    for o in outs:
+        check_output_path(o["map"])
+    maps = [load_map(f, spec.read_options) for f in files]
+    model = load_model(spec.model, spec.device)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        results = autocorrect_many(maps, model, straighten=spec.straighten, anchor=spec.anchor,
+                                   device=spec.device, thickness=thickness,
+                                   open_frontiers=spec.open_frontiers, large=spec.large)
+    written = []
+    for f, m, r, o in zip(files, maps, results, outs, strict=True):
+        w = dict(o)
+        save_map(r.map, o["map"])
+        if o["map"].suffix.lower() in (".yaml", ".yml"):
+            w["map_pgm"] = o["map"].with_suffix(".pgm")
+        if "dxf" in o:
+            save_segments_dxf(r.segments, o["dxf"])
+        if "figure" in o:
+            save_before_after(m, r.map, o["figure"], r.map.meta["autocorrect"]["segments_px"],
+                              title=f"{f.name} -> {o['map'].name} ({Path(model.source).name})")
+        written.append(w)
+    return AutocorrectRun(maps, results, files, model.source, written)

@@ -1,0 +1,140 @@
+"""``map2map train ba`` and ``map2map train ab`` as jobs: a packed dataset in, a training
+run folder out (:func:`map2map.learn.ba.train.train_ba`,
+:func:`map2map.learn.ab.train.train_ab`).
+
+The settings are the fields of the model's config dataclass
+(:class:`~map2map.learn.ba.config.BAConfig`, :class:`~map2map.learn.ab.config.ABConfig`);
+a setting left ``None`` takes the dataclass's default, so the defaults are written once.
+The run folder is resumable exactly (``resume=True``).
+
+Examples
+--------
+>>> import tempfile, pathlib, numpy as np
+>>> from map2map.datasets.packed import PackedPairs
+>>> a = np.random.default_rng(0).choice(np.array([0, 127, 255], np.uint8), (4, 32, 32))
+>>> pairs = PackedPairs(a, a[:, :, ::-1], np.arange(4).astype(str), np.array(["train"] * 4))
+>>> out = pathlib.Path(tempfile.mkdtemp()) / "run"
+>>> run = train(TrainSpec("ba", pairs, out, {"size": 16, "epochs": 1, "batch": 2,
+...     "g_channels": 8, "d_channels": 8, "d_layers": 2}, progress=False))
+>>> run.result.epochs_done, run.summary().startswith("trained 1 epochs at")
+(1, True)
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import Any
+
+from ..core.errors import InputError
+
+__all__ = ["TrainSpec", "TrainRun", "train", "MODELS"]
+
+#: The trainable models: name -> what it learns.
+MODELS = {"ba": "Model_BA: SLAM map -> CAD plan", "ab": "Model_AB: CAD plan -> SLAM map"}
+
+
+@dataclass
+class TrainSpec:
+    """What ``map2map train MODEL`` is asked to do.
+
+    Parameters
+    ----------
+    model : {"ba", "ab"}
+        Which model.
+    data : path-like or PackedPairs
+        A dataset folder (``packed.npz`` inside), a packed ``.npz`` or the pairs.
+    out : path-like
+        The run folder.
+    settings : dict
+        Fields of the model's config dataclass; ``None`` values take its defaults. For
+        ``ab``, ``schedule`` may be the text ``"RES:EPOCHS,..."``.
+    resume : bool
+        Continue the run in ``out`` exactly; ``settings["epochs"]`` (if given) extends it.
+    progress : bool
+        Progress bar.
+    """
+
+    model: str
+    data: Any
+    out: str | os.PathLike
+    settings: dict = field(default_factory=dict)
+    resume: bool = False
+    progress: bool = True
+
+
+@dataclass
+class TrainRun:
+    """The run folder and :class:`~map2map.learn.training.loop.TrainResult`; ``main`` is
+    False on the other ranks of a distributed run (they report nothing)."""
+
+    out: Path
+    result: Any
+    model: str
+    main: bool = True
+
+    def summary(self) -> str:
+        """The one line the command prints."""
+        res = self.result
+        last = res.history[-1] if res.history else {}
+        steps = f" ({last['step']} steps)" if "step" in last else ""
+        stage = (f" (now {last.get('resolution', '?')} px, alpha "
+                 f"{last.get('alpha', float('nan')):.2f})" if self.model == "ab" else "")
+        return (f"trained {res.epochs_done} epochs{stage} at {res.images_per_s:.0f} img/s"
+                f"{steps}; loss G {last.get('loss_G', float('nan')):.4f} D "
+                f"{last.get('loss_D', float('nan')):.4f}; run in {res.run}")
+
+
+def _config(spec: TrainSpec):
+    """The model's config from ``spec.settings`` (checked; parameter names in errors)."""
+    given = {k: v for k, v in spec.settings.items() if v is not None}
+    for name in ("epochs", "batch", "save_every"):
+        if name in given and given[name] < 1:
+            raise InputError(name, f"must be >= 1, got {given[name]}")
+    if spec.model == "ba":
+        from ..learn.ba.config import BAConfig
+
+        cls = BAConfig
+        size = given.get("size", BAConfig.size)
+        if size < 4 or size & (size - 1):
+            raise InputError("size", f"must be a power of two >= 4, got {size}")
+    else:
+        from ..learn.ab.config import ABConfig, parse_schedule
+
+        cls = ABConfig
+        if given.get("fade_batches", 0) < 0:
+            raise InputError("fade_batches", f"must be positive, got {given['fade_batches']}")
+        if isinstance(given.get("schedule"), str):
+            try:
+                given["schedule"] = parse_schedule(given["schedule"])
+            except ValueError as exc:
+                raise InputError("schedule", str(exc)) from None
+    names = {f.name for f in fields(cls)}
+    unknown = sorted(set(given) - names)
+    if unknown:
+        raise InputError(None, f"not a setting of {cls.__name__}: {', '.join(unknown)}")
+    try:
+        return cls(**given)
+    except ValueError as exc:
+        raise InputError("schedule" if spec.model == "ab" else None, str(exc)) from None
+
+
+def train(spec: TrainSpec) -> TrainRun:
+    """Train (or resume) the model of ``spec`` (module docstring)."""
+    if spec.model not in MODELS:
+        raise InputError("model", f"one of {', '.join(MODELS)}, not {spec.model!r}")
+    try:
+        if spec.model == "ba":
+            from ..learn.ba.train import train_ba as fit
+        else:
+            from ..learn.ab.train import train_ab as fit
+    except ImportError as exc:
+        raise InputError("train", f"needs PyTorch: pip install 'map2map[learn]' ({exc})"
+                         ) from None
+    cfg = _config(spec)
+    epochs = spec.settings.get("epochs")
+    res = fit(spec.data, spec.out, cfg, resume=spec.resume,
+              epochs=epochs if spec.resume else None, progress=spec.progress)
+    main = int(os.environ.get("RANK", "0")) == 0  # torchrun: one report, from rank 0
+    return TrainRun(Path(spec.out), res, spec.model, main)
