@@ -34,16 +34,22 @@ HERE = Path(__file__).resolve().parent
 
 #: What is blanked before hashing, and why: measured times and ezdxf's header stamps.
 VOLATILE = {
-    ".json": "keys wall_seconds, seconds, timings_s (measured times)",
+    ".json": "keys wall_seconds, seconds, timings_s, epoch_s, img_per_s, images_per_s, "
+    "pairs_per_hour (measured times and rates)",
     "pairs.csv": "column seconds (measured time)",
     "log.csv": "columns epoch_s, img_per_s (a training log's measured times)",
     "paths": "the run's own work folder in JSON files and stdout, the source tree in stdout",
+    ".html": "the report footer's 'Written <date> UTC'",
+    "containers": ".npz, .safetensors, .sqlite and .skops are hashed by content (arrays, "
+    "tensors and JSON header, table rows with worker and finish times blanked, zip members "
+    "without their timestamps)",
     ".dxf": "header $TDCREATE $TDUCREATE $TDUPDATE $TDUUPDATE $TDINDWG $TDUSRTIMER "
     "$FINGERPRINTGUID $VERSIONGUID and the '<version> @ <date>' XRECORD (ezdxf stamps); "
     "commands run with PYTHONHASHSEED=0 "
     "(ezdxf orders the CLASSES section by a set)",
 }
-_JSON_TIMES = {"wall_seconds", "seconds", "timings_s"}
+_JSON_TIMES = {"wall_seconds", "seconds", "timings_s", "epoch_s", "img_per_s", "images_per_s",
+               "pairs_per_hour"}
 _CSV_TIMES = {"pairs.csv": {"seconds"}, "log.csv": {"epoch_s", "img_per_s"}}
 _DXF_STAMPS = {
     "$TDCREATE", "$TDUCREATE", "$TDUPDATE", "$TDUUPDATE", "$TDINDWG", "$TDUSRTIMER",
@@ -192,12 +198,107 @@ def _strip_times(o):
     return o
 
 
+def _subst(text: str, paths: dict[str, str]) -> str:
+    for k, v in paths.items():
+        text = text.replace(k, v)
+    return text
+
+
+def _json_canon(text: str, paths: dict[str, str]) -> bytes:
+    try:
+        o = json.loads(_subst(text, paths))
+    except ValueError:
+        return _subst(text, paths).encode()
+    return json.dumps(_strip_times(o), sort_keys=True).encode()
+
+
+def _npz(path: Path, paths: dict[str, str]) -> str:
+    """Every array's bytes; string arrays (a packed dataset's JSON meta) canonicalised."""
+    import numpy as np
+
+    h = hashlib.sha256()
+    with np.load(path, allow_pickle=False) as z:
+        for k in sorted(z.files):
+            a = z[k]
+            h.update(k.encode())
+            if a.dtype.kind == "U":
+                for item in a.ravel().tolist():
+                    h.update(_json_canon(item, paths))
+            else:
+                h.update(str(a.dtype).encode() + str(a.shape).encode() + a.tobytes())
+    return h.hexdigest()
+
+
+def _safetensors(path: Path, paths: dict[str, str]) -> str:
+    """The tensors' bytes and the JSON header (paths replaced, measured times blanked)."""
+    import struct
+
+    data = path.read_bytes()
+    n = struct.unpack("<Q", data[:8])[0]
+    head = json.loads(data[8:8 + n])
+    meta = head.pop("__metadata__", {})
+    h = hashlib.sha256()
+    h.update(json.dumps({k: _json_canon(v, paths).decode() for k, v in meta.items()},
+                        sort_keys=True).encode())
+    h.update(json.dumps(head, sort_keys=True).encode())
+    h.update(data[8 + n:])
+    return h.hexdigest()
+
+
+def _sqlite(path: Path, paths: dict[str, str]) -> str:
+    """Every table's rows in key order, times blanked (a dataset's manifest)."""
+    import sqlite3
+
+    con = sqlite3.connect(f"file:{path}?mode=ro", uri=True)
+    h = hashlib.sha256()
+    try:
+        tables = [r[0] for r in con.execute(
+            "select name from sqlite_master where type='table' order by name")]
+        for t in tables:
+            cols = [r[1] for r in con.execute(f"pragma table_info({t})")]
+            for row in con.execute(f"select * from {t} order by 1"):
+                vals = []
+                for c, v in zip(cols, row, strict=True):
+                    if c in _JSON_TIMES or c in ("finished", "worker"):
+                        v = "<t>"
+                    elif isinstance(v, str):
+                        v = _json_canon(v, paths).decode()
+                    vals.append(repr(v))
+                h.update(f"{t}:{','.join(vals)}\n".encode())
+    finally:
+        con.close()
+    return h.hexdigest()
+
+
+def _zip(path: Path, paths: dict[str, str]) -> str:
+    """The members' contents, not their timestamps or names (a saved skops model names its
+    arrays by object id): the sorted member hashes and the schema with ids blanked."""
+    import zipfile
+
+    parts = []
+    with zipfile.ZipFile(path) as z:
+        for name in z.namelist():
+            data = z.read(name)
+            if name.endswith(".json"):
+                data = re.sub(rb"\d{9,}", b"<id>", data)
+            parts.append(hashlib.sha256(data).hexdigest())
+    return hashlib.sha256("".join(sorted(parts)).encode()).hexdigest()
+
+
+_CONTAINERS = {".npz": _npz, ".safetensors": _safetensors, ".sqlite": _sqlite,
+               ".skops": _zip}
+
+
 def digest(path: Path, paths: dict[str, str] | None = None) -> str:
     """sha256 of a file, with the fields listed in :data:`VOLATILE` blanked.
 
     ``paths`` maps absolute folder names (the run's work folder) to placeholders in
     JSON files, which record where their inputs were read."""
     data = path.read_bytes()
+    if path.suffix in _CONTAINERS:
+        return _CONTAINERS[path.suffix](path, paths or {})
+    if path.suffix == ".html":
+        data = re.sub(rb"Written \d{4}-\d\d-\d\d \d\d:\d\d UTC", b"Written <date>", data)
     if path.suffix == ".json":
         for k, v in (paths or {}).items():
             data = data.replace(k.encode(), v.encode())
