@@ -166,13 +166,13 @@ def run_all(out: Path, src: Path, demo: bool = True) -> dict:
         key = " ".join(cmd)
         stdout = p.stdout.replace(str(src), "<src>").replace(str(work), "<work>")
         stdout = re.sub(r"\d+\.\d+ s\b", "<s>", stdout)  # printed times
-        stdout = re.sub(r"at \d+ img/s", "at <n> img/s", stdout)
+        stdout = _rates(stdout)
         stdout = re.sub(r"in \d+\.\d s:", "in <s>:", stdout)
         log[key] = {
             "rc": p.returncode,
             "seconds": round(time.perf_counter() - t0, 1),
             "stdout": hashlib.sha256(stdout.encode()).hexdigest()[:16],
-            "stderr_last": p.stderr.strip().splitlines()[-1] if p.stderr.strip() else "",
+            "stderr_last": _rates(p.stderr.strip().splitlines()[-1]) if p.stderr.strip() else "",
         }
         print(f"{p.returncode} {log[key]['seconds']:6.1f} s  map2map {key}", flush=True)
         if p.returncode not in (0, 2):
@@ -188,6 +188,14 @@ def run_all(out: Path, src: Path, demo: bool = True) -> dict:
     (out / "digests.json").write_text(json.dumps(doc, indent=1) + "\n")
     print(f"{len(files)} files digested -> {out / 'digests.json'}")
     return doc
+
+
+def _rates(text: str) -> str:
+    """Printed rates and durations blanked: "12 img/s", "(11123 pairs/h)", "in 3 s",
+    tqdm's "[00:01<00:00, 2897.48pair/s]"."""
+    text = re.sub(r"\d+(\.\d+)? ?(img/s|pairs?/h|pair/s|it/s|maps/s)", "<rate>", text)
+    text = re.sub(r"\[\d\d:\d\d<\d\d:\d\d, [^\]]*\]", "[<t>]", text)
+    return re.sub(r"\bin \d+ s\b", "in <t> s", text)
 
 
 def _strip_times(o):
