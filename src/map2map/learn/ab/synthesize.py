@@ -233,11 +233,8 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
         raise InputError("samples", f"must be >= 1, got {samples}")
     if render not in RENDERS:
         raise InputError("render", f"must be one of {', '.join(RENDERS)}, got {render!r}")
-    dp = drift_params(drift, drift_method, drift_scale)
-    tp = _traces(traces, render)
-    hide, along = coverage_options(coverage, drift_route)
-    along = along and dp is not None
-    ep = explore or ExploreParams()
+    dp, tp, hide, along, ep = _options(drift, drift_method, drift_scale, traces, render,
+                                       coverage, drift_route, explore)
     net = load_ab_model(model, device)
     sq = content_square(plan, net.data_size)
     if sq is None:
@@ -324,6 +321,16 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     return SynthesisResult(maps, div, pw, warns, net.source)
 
 
+def _options(drift, drift_method, drift_scale, traces, render, coverage, drift_route,
+             explore):
+    """The drift, LIDAR traces, hiding, drift route and exploration settings of
+    :func:`synthesize` and :func:`synthesize_squares`, checked."""
+    dp = drift_params(drift, drift_method, drift_scale)
+    tp = _traces(traces, render)
+    hide, along = coverage_options(coverage, drift_route)
+    return dp, tp, hide, along and dp is not None, explore or ExploreParams()
+
+
 def _traces(traces, render: str) -> TraceParams | None:
     """:func:`~map2map.learn.ab.render.trace_params`, refused with ``render="plain"``
     (``None``: ``"lidar"`` with ``render="slam"``, ``"none"`` with ``"plain"``)."""
@@ -391,11 +398,8 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
     """
     if render not in RENDERS:
         raise ValueError(f"render must be one of {RENDERS}, got {render!r}")
-    dp = drift_params(drift, drift_method, drift_scale)
-    tp = _traces(traces, render)
-    hide, along = coverage_options(coverage, drift_route)
-    along = along and dp is not None
-    ep = explore or ExploreParams()
+    dp, tp, hide, along, ep = _options(drift, drift_method, drift_scale, traces, render,
+                                       coverage, drift_route, explore)
     net = load_ab_model(model, device)
     plans = np.asarray(plans, np.uint8)
     S = plans.shape[-1]

@@ -27,9 +27,9 @@ marked) and ``samples/epoch_NNNN.png`` (plan | generated | simulated SLAM map).
 Examples
 --------
 >>> import tempfile, pathlib, numpy as np
->>> rng = np.random.default_rng(0)
->>> a = rng.choice(np.array([0, 127, 255], np.uint8), size=(4, 32, 32))
->>> pairs = PackedPairs(a, a[:, :, ::-1], np.arange(4).astype(str), np.array(["train"] * 4))
+>>> plans = np.random.default_rng(0).choice(np.array([0, 127, 255], np.uint8), (4, 32, 32))
+>>> pairs = PackedPairs(plans, plans.transpose(0, 2, 1).copy(), np.array(list("abcd")),
+...                     np.full(4, "train"))
 >>> cfg = ABConfig(schedule=((16, 1), (32, 1)), batch=2, g_channels=8, g_max_channels=16,
 ...                d_channels=8, d_layers=1, d_scales=2, fade_batches=4)
 >>> run = pathlib.Path(tempfile.mkdtemp()) / "run"
@@ -101,16 +101,17 @@ def save_prog_loss_curves(history: list[dict], path: str | os.PathLike,
 
 def train_ab(data: str | os.PathLike | PackedPairs, out: str | os.PathLike,
              config: ABConfig | None = None, *, resume: bool = False,
-             epochs: int | None = None, progress: bool = True, figures: bool = True
-             ) -> TrainResult:
-    """Train Model_AB (input: CAD plan ``a``, target: SLAM map ``b``) progressively.
+             epochs: int | None = None, progress: bool = True,
+             figures: bool = True) -> TrainResult:
+    """Train Model_AB (input: CAD plan ``a``, target: SLAM map ``b``) progressively, the
+    networks grown stage by stage with a fade-in (:mod:`~map2map.learn.nets.progressive`).
 
     Parameters
     ----------
-    data : path or PackedPairs
-        A dataset folder (``packed.npz`` inside), a packed ``.npz``, or pairs in memory.
-    out : path
-        Run folder (created).
+    data, out : path or PackedPairs, path
+        The pairs (:func:`~map2map.learn.training.loop.open_run`: their plans are the
+        inputs, their SLAM maps the targets) and the run folder, created (or, with
+        ``resume``, continued).
     config : ABConfig
         Settings (default: Table 5.2's schedule, Table 5.1's batches with batch_rate 1);
         ignored when resuming, except ``epochs``.

@@ -118,36 +118,24 @@ FREE_FROM = 191
 def _refine(segs: np.ndarray, guide_occ: np.ndarray, shift: float) -> np.ndarray:
     """Move axis-aligned segments across onto the mean of the guide's walls (step 4)."""
     out = segs.copy()
-    H, W = guide_occ.shape
     d = int(np.ceil(shift))
     for s in out:
         horiz, vert = s[1] == s[3], s[0] == s[2]
         if horiz == vert:
             continue
-        if horiz:
-            c = s[1]
-            lo, hi = int(max(0, min(s[0], s[2]))), int(min(W, max(s[0], s[2]) + 1))
-            r0, r1 = int(max(0, np.floor(c) - d)), int(min(H, np.ceil(c) + d + 1))
-            band = guide_occ[r0:r1, lo:hi]
-            offs = np.arange(r0, r1)
-            counts = band.sum(axis=1)
-        else:
-            c = s[0]
-            lo, hi = int(max(0, min(s[1], s[3]))), int(min(H, max(s[1], s[3]) + 1))
-            r0, r1 = int(max(0, np.floor(c) - d)), int(min(W, np.ceil(c) + d + 1))
-            band = guide_occ[lo:hi, r0:r1]
-            offs = np.arange(r0, r1)
-            counts = band.sum(axis=0)
-        length = max(1, hi - lo)
-        covered = band.any(axis=0 if horiz else 1).sum() if band.size else 0
-        if covered < 0.3 * length or counts.sum() == 0:
+        # a vertical segment is a horizontal one of the transposed guide
+        occ, (a, b, c) = (guide_occ, s[[0, 2, 1]]) if horiz else (guide_occ.T, s[[1, 3, 0]])
+        H, W = occ.shape
+        lo, hi = int(max(0, min(a, b))), int(min(W, max(a, b) + 1))
+        r0, r1 = int(max(0, np.floor(c) - d)), int(min(H, np.ceil(c) + d + 1))
+        band = occ[r0:r1, lo:hi]
+        counts = band.sum(axis=1)
+        covered = band.any(axis=0).sum() if band.size else 0
+        if covered < 0.3 * max(1, hi - lo) or counts.sum() == 0:
             continue
-        new = float(np.sum(offs * counts) / counts.sum())
+        new = float(np.sum(np.arange(r0, r1) * counts) / counts.sum())
         if abs(new - c) <= shift:
-            if horiz:
-                s[1] = s[3] = new
-            else:
-                s[0] = s[2] = new
+            s[[1, 3] if horiz else [0, 2]] = new
     return out
 
 
