@@ -183,7 +183,8 @@ def run_all(out: Path, src: Path, demo: bool = True) -> dict:
         if path.parent == work / "in" and path.name in inputs:
             continue
         if path.is_file() and path.name != "digests.json":
-            files[str(path.relative_to(out))] = digest(path, {str(work): "<work>"})
+            files[str(path.relative_to(out))] = digest(path, {str(work): "<work>",
+                                                               str(src): "<src>"})
     doc = {"src": str(src), "commands": log, "files": files, "volatile": VOLATILE}
     (out / "digests.json").write_text(json.dumps(doc, indent=1) + "\n")
     print(f"{len(files)} files digested -> {out / 'digests.json'}")
