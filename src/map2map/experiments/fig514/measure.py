@@ -223,17 +223,17 @@ class Fig514:
 
 
 def _from_dataset(ds, n, seed, split, progress):
-    from ...datasets.build import pair_dir
     from ...datasets.pair import read_pair_meta, window_resolution
+    from ...datasets.pairfolder import SLAM_PNG, pair_dir, read_picture
     from ...datasets.rerun import parametric_on_run, rerun_pair
-    from ..realism.measure import _read_png, split_indices
+    from ..realism.measure import split_indices
 
     idx = split_indices(ds, split)[:n]
     out = []
     for i in _bar(idx, progress, "simulate + parametric"):
         meta = read_pair_meta(pair_dir(ds, i))
         rr = rerun_pair(ds, i, sim_seed=int(meta["sim_seed"]))
-        b_file = _read_png(pair_dir(ds, i) / "B.png")
+        b_file = read_picture(pair_dir(ds, i) / SLAM_PNG)
         same = bool(np.array_equal(rr.b_n, b_file))
         info = {k: rr.meta.get(k) for k in ("coverage", "ate_rmse_m", "path_length_m",
                                              "stop_reason", "sim_seed")}

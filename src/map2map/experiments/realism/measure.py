@@ -482,17 +482,6 @@ def split_indices(ds: str | os.PathLike, split: str = "test") -> list[int]:
     return sorted(int(r["idx"]) for r in rows if r["split"] == split and r["kind"] == "simulate")
 
 
-def _read_png(path: Path) -> np.ndarray:
-    import cv2
-
-    img = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
-    if img is None:
-        from ...core.errors import InputError
-
-        raise InputError(path, "unreadable pair picture")
-    return img
-
-
 def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int | None = None,
                          run: int = 2, cache: str | os.PathLike | None = None,
                          progress: bool = True) -> References:
@@ -525,7 +514,7 @@ def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int |
     """
     from ...core._io import atomic_path
     from ...core.errors import InputError
-    from ...datasets.build import pair_dir
+    from ...datasets.pairfolder import pair_dir, read_pair
     from ...datasets.rerun import parametric_on_run, rerun_pair
 
     ds = Path(ds)
@@ -597,8 +586,8 @@ def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int |
         idx = [i for i in idx if i not in failed]
     if not idx:
         raise InputError(ds, f"no {split!r} plan has a simulated run {run}")
-    a = np.stack([_read_png(pair_dir(ds, i) / "A.png") for i in idx])
-    sim1 = np.stack([_read_png(pair_dir(ds, i) / "B.png") for i in idx])
+    a, sim1 = (np.stack(m) for m in zip(*(read_pair(pair_dir(ds, i)) for i in idx),
+                                          strict=True))
     return References(np.array(idx, int), [have[i]["meta"]["plan_id"] for i in idx], a, sim1,
                       np.stack([have[i]["sim2"] for i in idx]),
                       np.stack([have[i]["parametric"] for i in idx]),
@@ -687,8 +676,8 @@ def native_seen(ds: str | os.PathLike, indices, size: int, *, seed: int = 0,
     """
     import warnings
 
-    from ...datasets.build import pair_dir
     from ...datasets.pair import crop_box
+    from ...datasets.pairfolder import pair_dir
     from ...learn.ab.coverage import explore_rng
     from ...maps.formats import load_map
 
@@ -714,8 +703,8 @@ def pair_square_resolution(ds: str | os.PathLike, index: int, size: int) -> floa
     """Metres per pixel of pair ``index``'s ``size`` px squares (``A.png``, ``B.png``): its
     crop window (the union of the plan's and run 1's content, as the build and
     :func:`~map2map.datasets.rerun.rerun_pair` cut it) over ``size``."""
-    from ...datasets.build import pair_dir
     from ...datasets.pair import crop_box, window_resolution
+    from ...datasets.pairfolder import pair_dir
     from ...maps.formats import load_map
 
     folder = pair_dir(ds, index)

@@ -99,15 +99,6 @@ def merge_pairs(*sources: PackedPairs) -> PackedPairs:
     return PackedPairs(np.stack(keep_a), np.stack(keep_b), ids, splits, {"sources": metas})
 
 
-def _read_gray(path: Path) -> np.ndarray:
-    import cv2
-
-    img = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
-    if img is None:
-        raise InputError(path, "missing or unreadable pair picture")
-    return img
-
-
 def heldout_pairs_from_dataset(ds: str | os.PathLike, split: str | tuple[str, ...] = "test",
                                n: int | None = None, *, keep: tuple[str, ...] = ("complete",),
                                cleaner: str | os.PathLike | None = None) -> PackedPairs:
@@ -166,7 +157,7 @@ def heldout_pairs_from_dataset(ds: str | os.PathLike, split: str | tuple[str, ..
 
 
 def _from_manifest(ds: Path, splits, keep, cleaner) -> PackedPairs:
-    from ...datasets.build import pair_dir
+    from ...datasets.pairfolder import pair_dir, read_pair
 
     try:
         db = sqlite3.connect(f"file:{ds / 'manifest.sqlite'}?mode=ro", uri=True, timeout=30)
@@ -193,14 +184,14 @@ def _from_manifest(ds: Path, splits, keep, cleaner) -> PackedPairs:
         else:
             how = f"cleaned: {', '.join(keep)}"
         rows = [r for r in rows if r["clean"] in keep]
-    a = [_read_gray(pair_dir(ds, r["idx"]) / "A.png") for r in rows]
-    b = [_read_gray(pair_dir(ds, r["idx"]) / "B.png") for r in rows]
+    maps = [read_pair(pair_dir(ds, r["idx"])) for r in rows]
     meta = {"heldout": {"source": str(ds), "splits": list(splits), "selection": how,
                         "indices": [int(r["idx"]) for r in rows]}}
     if not rows:
         return PackedPairs(np.zeros((0, 0, 0), np.uint8), np.zeros((0, 0, 0), np.uint8),
                            [], [], meta)
-    return PackedPairs(np.stack(a), np.stack(b), [r["plan_id"] for r in rows],
+    return PackedPairs(np.stack([a for a, _ in maps]), np.stack([b for _, b in maps]),
+                       [r["plan_id"] for r in rows],
                        [r["split"] for r in rows], meta)
 
 

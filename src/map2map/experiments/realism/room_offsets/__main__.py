@@ -130,15 +130,14 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--npz", help="write every room row here")
     args = ap.parse_args(argv)
-    import cv2
 
-    from map2map.datasets.build import pair_dir
+    from map2map.datasets.pairfolder import pair_dir, read_pair
     from map2map.experiments.realism.measure import pair_square_resolution, split_indices
 
     t0 = time.perf_counter()
     idx = split_indices(args.data, args.split)[:args.plans]
-    a = np.stack([cv2.imread(str(pair_dir(args.data, i) / "A.png"), 0) for i in idx])
-    b = np.stack([cv2.imread(str(pair_dir(args.data, i) / "B.png"), 0) for i in idx])
+    a, b = (np.stack(m) for m in zip(*(read_pair(pair_dir(args.data, i)) for i in idx),
+                                     strict=True))
     kinds = {"sim1": b}
     if args.model:
         from map2map.learn.ab.room_drift import RoomDriftParams
