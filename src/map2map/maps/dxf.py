@@ -66,8 +66,8 @@ from shapely.geometry import LineString, Point, Polygon
 from ..core.errors import InputError
 from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from ..core.limits import check_map_size
-from .formats import UNITS
 from .rasterize import fill_exact, thin_parts, trace
+from .units import UNITS
 
 __all__ = [
     "UNITS",

@@ -38,11 +38,6 @@ from ..core.errors import InputError
 from ..core.grid import OccupancyMap
 from .raster import IMAGE_SUFFIXES
 
-#: DXF drawing unit names accepted by ``units`` and their size in metres (here, not in
-#: :mod:`map2map.maps.dxf`, so that the command line can offer them without importing
-#: shapely and ezdxf).
-UNITS = {"mm": 0.001, "cm": 0.01, "m": 1.0, "in": 0.0254, "ft": 0.3048}
-
 __all__ = [
     "MapReadOptions",
     "check_plausible",
@@ -51,7 +46,6 @@ __all__ = [
     "map_kind",
     "READ_SUFFIXES",
     "WRITE_SUFFIXES",
-    "UNITS",
 ]
 
 _KINDS = {".yaml": "ros", ".yml": "ros", ".json": "houseexpo", ".dxf": "dxf"}
