@@ -27,6 +27,7 @@ import numpy as np
 from scipy import ndimage
 
 from ..core.errors import InputError
+from ..core.geometry import wrap_angle
 from ..core.grid import FREE, OCCUPIED, OccupancyMap
 from ..trajectory.prm import (
     Roadmap,
@@ -35,7 +36,7 @@ from ..trajectory.prm import (
     random_start_goal,
     random_tour,
 )
-from ..trajectory.timing import Trajectory, time_waypoints, wrap_angle
+from ..trajectory.timing import Trajectory, time_waypoints
 from .additive import additive_field
 from .ekf import ekf_field
 from .field import DisplacementField, warp_map
@@ -112,7 +113,7 @@ def keyframe_indices(
         j = keep[-1]
         if (
             math.hypot(x[i] - x[j], y[i] - y[j]) >= distance
-            or abs(float(wrap_angle(th[i] - th[j]))) >= angle
+            or abs(float(wrap_angle(th[i] - th[j], keep_in_range=True))) >= angle
         ):
             keep.append(i)
     if keep[-1] != len(traj) - 1:
@@ -136,7 +137,7 @@ def trajectory_to_pixels(plan: OccupancyMap, x, y, theta) -> np.ndarray:
     (N, 3) float array
     """
     rows, cols = plan.world_to_pixel_float(x, y)
-    ang = wrap_angle(-(np.asarray(theta, float) - plan.origin[2]))
+    ang = wrap_angle(-(np.asarray(theta, float) - plan.origin[2]), keep_in_range=True)
     return np.stack([cols, rows, ang], 1)
 
 
@@ -390,6 +391,6 @@ def _geometry_range_angle(vis: Visibility, poses_px: np.ndarray, res: float, ran
     dx = cols - poses_px[k, 0]
     dy = rows - poses_px[k, 1]
     D[rows, cols] = np.maximum(np.hypot(dx, dy) * res, 1e-3)
-    alpha[rows, cols] = wrap_angle(np.arctan2(dy, dx) - poses_px[k, 2])
+    alpha[rows, cols] = wrap_angle(np.arctan2(dy, dx) - poses_px[k, 2], keep_in_range=True)
     heading[rows, cols] = poses_px[k, 2]
     return D, alpha, heading
