@@ -191,7 +191,7 @@ def check_map(data: np.ndarray, name: str | None) -> tuple[int, int, int, int]:
         raise InputError(
             name,
             "map has no occupied pixels (no walls to align; if its walls are grey, "
-            "read them with --occupied-thresh or --negate)",
+            "read them with `occupied_thresh` or `negate`)",
         )
     known = data != UNKNOWN
     rows = np.flatnonzero(known.any(axis=1))

@@ -471,7 +471,7 @@ def _grid_frame(d: _Drawing, scale, resolution, margin, wall_thickness, frame, p
             p,
             f"the map would be {w} x {h} pixels at {resolution:g} m/px (drawing "
             f"{(hi[0] - lo[0]) / scale:.4g} x {(hi[1] - lo[1]) / scale:.4g} units of "
-            f"{scale:g} m); give the right --units or a coarser --resolution",
+            f"{scale:g} m); give the right `units` or a coarser `resolution`",
         )
     check_map_size((h, w), p)  # the running command's budget (core.limits)
     return ox, oy, w, h

@@ -346,7 +346,7 @@ def check_plausible(m: OccupancyMap, source=None) -> list[str]:
     ...     warnings.simplefilter("ignore")
     ...     check_plausible(OccupancyMap(np.zeros((20, 20), np.uint8), 0.05), "d.dxf")
     ['map is 20 x 20 px (1 x 1 m) with no free space: implausible for a floor plan \
-(wrong --units or --resolution, or thresholds?)']
+(wrong `units` or `resolution`, or thresholds?)']
     """
     import warnings
 
@@ -369,7 +369,7 @@ def check_plausible(m: OccupancyMap, source=None) -> list[str]:
         return []
     msg = (
         f"map is {w} x {h} px ({wm:.3g} x {hm:.3g} m) {', '.join(problems)}: implausible "
-        "for a floor plan (wrong --units or --resolution, or thresholds?)"
+        "for a floor plan (wrong `units` or `resolution`, or thresholds?)"
     )
     warnings.warn(f"{source}: {msg}" if source is not None else msg, MapWarning, stacklevel=3)
     return [msg]

@@ -166,11 +166,11 @@ def check_point(plan: OccupancyMap, x: float, y: float, what: str) -> np.ndarray
     name = f"{what} ({x:g}, {y:g}) m"
     if not plan.contains(r, c)[0]:
         w, h = plan.size_m
-        raise InputError(f"--{what}", f"{name} is outside the map ({w:g} x {h:g} m)")
+        raise InputError(what, f"{name} is outside the map ({w:g} x {h:g} m)")
     v = int(plan.data[r[0], c[0]])
     if v != FREE:
         kind = "in a wall" if v == OCCUPIED else "in unknown space"
-        raise InputError(f"--{what}", f"{name} is {kind}, not in free space")
+        raise InputError(what, f"{name} is {kind}, not in free space")
     rr, cc = plan.world_to_pixel_float([x], [y])
     return np.array([cc[0], rr[0]])
 
@@ -215,7 +215,7 @@ def make_trajectory(
     if not plan.free.any():
         raise InputError(None, "the plan has no free space")
     if waypoints is None and (start is None) != (goal is None):
-        raise InputError(None, "give both --start and --goal, or neither")
+        raise InputError(None, "give both `start` and `goal`, or neither")
     pts = None
     names = None
     if waypoints is not None:
