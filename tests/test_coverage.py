@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from map2map.core.errors import InputError
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
-from map2map.errors import InputError
 from map2map.learn.ab.coverage import (
     ExploreParams,
     coverage_options,

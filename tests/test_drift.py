@@ -4,8 +4,8 @@ the parametric model's field, generated maps' own unknown cells kept. No torch n
 import numpy as np
 import pytest
 
+from map2map.core.errors import InputError
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
-from map2map.errors import InputError
 from map2map.learn.ab.drift import (
     DriftParams,
     apply_drift,

@@ -197,7 +197,7 @@ def test_bad_files_and_parameters(tmp_path):
     doc = ezdxf.new()
     doc.header["$INSUNITS"] = 0
     room(doc.modelspace(), 0, 0, 40000, 30000)  # millimetres without units: 40 km wide
-    with pytest.raises(InputError, match="give the right --units"):
+    with pytest.raises(InputError, match="give the right `units` or a coarser `resolution`"):
         load_dxf(save(doc, tmp_path, "huge.dxf"))
     with pytest.raises(InputError, match="resolution must be > 0"):
         load_dxf(tmp_path / "huge.dxf", resolution=0)

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from map2map.cli.main import main
+from map2map.core.geometry import apply, decompose_similarity, similarity_matrix
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from map2map.evaluate.align import AlignParams, align_maps, maximise_fitness
 from map2map.evaluate.anchors import Anchors, anchor, auto_anchors
@@ -21,7 +22,6 @@ from map2map.evaluate.icp import icp
 from map2map.evaluate.metric import choose_chain, local_errors
 from map2map.evaluate.nonrigid import PiecewiseAffine, SideFields, coherent_motion, warp_image
 from map2map.evaluate.pipeline import evaluate_maps, register
-from map2map.evaluate.transforms import apply, decompose_similarity, similarity_matrix
 from map2map.maps.synthetic import (
     deform,
     draw_walls,

@@ -181,7 +181,7 @@ def test_resume_continues_exactly(tmp_path):
     assert len(log) == 3 and log[0].startswith("epoch,lr,")
     assert (tmp_path / "two" / "samples" / "epoch_0002.png").is_file()
     # a finished run refuses to be overwritten; a wrong dataset refuses to resume
-    from map2map.errors import InputError
+    from map2map.core.errors import InputError
 
     with pytest.raises(InputError, match="already holds a checkpoint"):
         T.train_ba(data, tmp_path / "two", cfg, progress=False)

@@ -294,8 +294,8 @@ def test_synthesize_keeps_the_plan_frame_and_gives_seeded_distinct_hypotheses(ti
     one = synthesize(plan, tiny_run, samples=1)
     assert one.diversity == 0.0 and len(one.maps) == 1
     assert any("16 px" in w for w in res.warnings)        # coarse model says so
+    from map2map.core.errors import InputError
     from map2map.core.grid import OccupancyMap
-    from map2map.errors import InputError
 
     with pytest.raises(InputError, match="no known cells"):
         synthesize(OccupancyMap(np.full((9, 9), UNKNOWN, np.uint8), 0.05), tiny_run)
@@ -303,7 +303,7 @@ def test_synthesize_keeps_the_plan_frame_and_gives_seeded_distinct_hypotheses(ti
 
 @pytest.mark.filterwarnings("ignore::UserWarning")
 def test_synthesize_render_slam_draws_faces_and_plain_is_the_previous_output(tiny_run):
-    from map2map.errors import InputError
+    from map2map.core.errors import InputError
     from map2map.learn.ab.model import load_ab_model
     from map2map.learn.ab.render import render_plain, render_slam
     from map2map.learn.ab.synthesize import synthesize, synthesize_squares
@@ -369,7 +369,7 @@ def test_synthesize_drift_none_is_the_previous_output_and_parametric_drifts(tiny
     ekf = synthesize(plan, net, samples=1, seed=2, drift="parametric", drift_method="ekf",
                      **OLD)
     assert ekf.maps[0].meta["synthesize"]["drift_params"]["method"] == "ekf"
-    from map2map.errors import InputError
+    from map2map.core.errors import InputError
 
     with pytest.raises(InputError, match="drift"):
         synthesize(plan, net, drift="rigid")

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
+from map2map.core.errors import InputError
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
-from map2map.errors import InputError
 from map2map.learn.ab.drift import DriftParams, apply_drift, drift_field, drift_params, drift_rng
 from map2map.learn.ab.room_drift import (
     RoomDriftParams,

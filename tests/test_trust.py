@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 
 from map2map.cli.main import main
+from map2map.core.geometry import decompose_similarity, similarity_matrix
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from map2map.evaluate.align import AlignParams, align_maps
 from map2map.evaluate.metric import local_errors, summary_lines
 from map2map.evaluate.nonrigid import SideFields
 from map2map.evaluate.pipeline import evaluate_maps
-from map2map.evaluate.transforms import decompose_similarity, similarity_matrix
 from map2map.maps.irregular import irregular_plan
 from map2map.maps.synthetic import draw_walls, office_walls
 

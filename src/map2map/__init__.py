@@ -34,6 +34,7 @@ from .maps import (
     ternarize,
     thicken,
 )
+from .robotlog.mappers import register_mapper as _register_mapper
 
 #: Stage entry points loaded on first use: name -> module.
 _LAZY = {
@@ -69,6 +70,35 @@ __all__ = [
     "preprocess",
     *_LAZY,
 ]
+
+
+# The mapping backends by name (robotlog.mappers holds only the registry; sim and slam,
+# above it, must not import each other, so the root wires them). Each factory imports its
+# backend (numba kernels) on first use.
+def _oracle(**kw):
+    """The simulator's oracle mapper (:class:`map2map.sim.mapping.OracleMapper`)."""
+    from .sim.mapping import OracleMapper
+
+    return OracleMapper(**kw)
+
+
+def _rbpf(**kw):
+    """The GMapping-style particle filter (:func:`map2map.slam.rbpf.make_rbpf`)."""
+    from .slam.rbpf import make_rbpf
+
+    return make_rbpf(**kw)
+
+
+def _graph(**kw):
+    """Karto-style graph SLAM (:func:`map2map.slam.graph.make_graph`)."""
+    from .slam.graph import make_graph
+
+    return make_graph(**kw)
+
+
+_register_mapper("oracle", _oracle)
+_register_mapper("rbpf", _rbpf)
+_register_mapper("graph", _graph)
 
 
 def __getattr__(name: str):

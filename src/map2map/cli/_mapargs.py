@@ -11,8 +11,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..maps.formats import UNITS
 from ..maps.ros import MODES
+from ..maps.units import UNITS
 
 
 def add_input_options(

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import re
 import sys
 import warnings
 
@@ -54,16 +55,38 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: Library parameters whose command-line option has another name.
+_OPTION_OF = {"everything": "--all"}
+
+#: A parameter named in a library message: `name` or `name=value` (:mod:`map2map.core.errors`).
+_PARAMETER = re.compile(r"`([a-z][a-z0-9_]*)(?:=([^`\s]+))?`")
+
+
+def _as_options(text: str) -> str:
+    """A library message as the command line says it: `name` -> --name, `name=v` -> --name v.
+
+    >>> _as_options("pass `max_pixels=9` or a coarser `resolution`; `everything`")
+    'pass --max-pixels 9 or a coarser --resolution; --all'
+    """
+
+    def option(m: re.Match) -> str:
+        flag = _OPTION_OF.get(m[1], "--" + m[1].replace("_", "-"))
+        return flag if m[2] is None else f"{flag} {m[2]}"
+
+    return _PARAMETER.sub(option, text)
+
+
 def _as_flags(exc: InputError, args: argparse.Namespace) -> str:
     """The error as the command line says it: a library parameter name becomes its flag.
 
     The library names parameters (``max_range``); when the command has an option of
-    that name, the message names the option (``--max-range``).
+    that name, the message names the option (``--max-range``). Parameters named in the
+    problem (`` `resolution` ``) become options too (:func:`_as_options`).
     """
-    name = exc.source
+    name, problem = exc.source, _as_options(exc.problem)
     if name and name.isidentifier() and name in vars(args) and name != "func":
-        return f"--{name.replace('_', '-')}: {exc.problem}"
-    return str(exc)
+        return f"--{name.replace('_', '-')}: {problem}"
+    return problem if name is None else f"{name}: {problem}"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -78,7 +101,7 @@ def main(argv: list[str] | None = None) -> int:
 
             def show(message, category, *rest, **kw):  # our warnings: one plain line
                 if issubclass(category, MapWarning):
-                    print(f"map2map: warning: {message}", file=sys.stderr)
+                    print(f"map2map: warning: {_as_options(str(message))}", file=sys.stderr)
                 else:
                     shown(message, category, *rest, **kw)
 

@@ -4,6 +4,10 @@ Library functions raise :class:`InputError` for bad input (a file that is missin
 corrupt or inconsistent, a parameter out of range). The command line prints
 ``map2map: error: <file>: <problem>`` and exits with status 2, without a traceback
 (``--debug`` shows it).
+
+Messages name the library's parameters, not command-line options: a parameter is
+written in backquotes, `` `resolution` ``, or with a value, `` `max_pixels=4000000` ``;
+the command line prints it as its option (``--resolution``, ``--max-pixels 4000000``).
 """
 
 from __future__ import annotations

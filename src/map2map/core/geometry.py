@@ -70,7 +70,7 @@ def wrap_angle(a, *, keep_in_range: bool = False):
         Angle(s) in radians.
     keep_in_range : bool
         Return values already in ``[-pi, pi)`` unchanged, bit for bit (``(a + pi) % 2 pi
-        - pi`` may change their last bits). The trajectory module uses it.
+        - pi`` may change their last bits). Trajectories and the parametric model use it.
 
     Returns
     -------

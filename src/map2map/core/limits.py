@@ -200,7 +200,7 @@ def check_map_size(
     ------
     InputError
         One line: the file, its size, the command's estimated memory and budget,
-        and the way out (``map2map prep IN OUT --size N`` or ``--max-pixels``).
+        and the way out (``map2map prep IN OUT --size N`` or ``max_pixels``).
     """
     h, w = int(shape[0]), int(shape[1])
     pixels = h * w
@@ -231,13 +231,13 @@ def check_map_size(
     if command in MODELS:
         need = f"{command} would need about {_gb(estimate_bytes(command, pixels))}, "
         budget = (
-            f"over the --max-pixels {limit} given"
+            f"over the `max_pixels={limit}` given"
             if override is not None
             else f"over its {_gb(DEFAULT_BUDGET_BYTES)} budget (up to {limit / 1e6:.1f} MP)"
         )
     else:
-        need, budget = "", f"over the --max-pixels {limit} given"
+        need, budget = "", f"over the `max_pixels={limit}` given"
     raise InputError(
         source,
-        f"{size}: {need}{budget}; {way_out} or pass --max-pixels {pixels} to try anyway",
+        f"{size}: {need}{budget}; {way_out} or pass `max_pixels={pixels}` to try anyway",
     )

@@ -3,7 +3,7 @@
 Importing matplotlib costs about 0.4 CPU seconds per process and drawing a
 three-panel figure another 0.2; a command that runs thousands of times
 (``map2map simulate`` building a data set) draws its figure here instead, in a few
-hundredths of a second. The conventions are those of :mod:`map2map.viz`: a panel
+hundredths of a second. The conventions are those of :mod:`map2map.core.viz`: a panel
 shows an image (a map) in its pixel coordinates (x = column, y = row, pixel
 centres at integers, as ``imshow`` draws), maps in the colours of
 :data:`MAP_COLOURS`, with a metric scale bar. Lines are anti-aliased

@@ -268,7 +268,7 @@ def build_dataset(
     if ds.exists() and not ds.is_dir():
         raise InputError(ds, "output exists and is not a folder")
     if ds.is_dir() and any(ds.iterdir()) and not (ds / "manifest.sqlite").is_file():
-        raise InputError(ds, "folder is not empty and holds no dataset; choose a new --out")
+        raise InputError(ds, "folder is not empty and holds no dataset; choose a new `out`")
     ds.mkdir(parents=True, exist_ok=True)
     (ds / "pairs").mkdir(exist_ok=True)
     ident = _identity(src, seed, params)
@@ -282,7 +282,7 @@ def build_dataset(
             raise InputError(
                 ds,
                 f"holds a dataset built with other settings ({_describe_diff(old, ident)}); "
-                "rerun with its original arguments or choose a new --out",
+                "rerun with its original arguments or choose a new `out`",
             )
         old_count = man.get_info("count")
         if old_count is not None and old_count != count:

@@ -138,7 +138,7 @@ def run_dask(
         from distributed import Client, KilledWorker, LocalCluster, wait
     except ImportError:
         raise InputError(
-            "--scheduler", "dask.distributed is not installed (pip install 'map2map[dask]')"
+            "scheduler", "dask.distributed is not installed (pip install 'map2map[dask]')"
         ) from None
     queue = deque(tasks)
     if not queue:
@@ -159,7 +159,7 @@ def run_dask(
             try:
                 client = Client(scheduler, timeout=f"{connect_timeout}s")
             except (OSError, TimeoutError) as exc:
-                raise InputError("--scheduler", f"cannot reach {scheduler} ({exc})") from None
+                raise InputError("scheduler", f"cannot reach {scheduler} ({exc})") from None
         try:
             if cluster is None:
                 _check_workers(client)
@@ -232,7 +232,7 @@ def _run(
             seen = now
         elif now - seen > no_worker_s:
             if local:
-                raise InputError("--scheduler", f"the LocalCluster has had no worker for "
+                raise InputError("scheduler", f"the LocalCluster has had no worker for "
                                  f"{now - seen:.0f} s (they died and were not restarted); "
                                  "run the same command again to continue")  # fmt: skip
             if "empty" not in warned:
@@ -297,4 +297,4 @@ def _probe(address: str, timeout: float = 5.0) -> None:
         with socket.create_connection((u.hostname, u.port or 8786), timeout=timeout):
             pass
     except OSError as exc:
-        raise InputError("--scheduler", f"cannot reach {address} ({exc})") from None
+        raise InputError("scheduler", f"cannot reach {address} ({exc})") from None

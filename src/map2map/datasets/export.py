@@ -66,7 +66,7 @@ def select_rows(man, *, everything: bool = False, include_review: bool = False) 
         raise InputError(
             man.path.parent,
             "the dataset has not been cleaned: run 'map2map dataset clean' first, "
-            "or export every pair with --all",
+            "or export every pair with `everything`",
         )
     keep = {"complete", "review"} if include_review else {"complete"}
     return [r for r in rows if r["clean"] in keep]

@@ -61,7 +61,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import __version__
+from .._version import __version__
 from ..core.errors import InputError
 from ..core.grid import OccupancyMap
 from .plans import PlanSource, load_plan

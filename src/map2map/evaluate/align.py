@@ -28,7 +28,7 @@ resolution: then it is kept with a low-confidence warning.
 Examples
 --------
 >>> import numpy as np, cv2
->>> from map2map.evaluate.transforms import similarity_matrix, decompose_similarity
+>>> from map2map.core.geometry import similarity_matrix, decompose_similarity
 >>> plan = np.full((300, 300), 127, np.uint8)
 >>> _ = cv2.rectangle(plan, (40, 40), (250, 200), 255, -1)
 >>> _ = cv2.rectangle(plan, (40, 40), (250, 200), 0, 3)
@@ -54,6 +54,14 @@ import numpy as np
 from scipy import ndimage, optimize
 
 from ..core.errors import InputError
+from ..core.geometry import (
+    apply,
+    decompose_similarity,
+    fit_affine,
+    fit_similarity,
+    similarity_matrix,
+    transform_normals,
+)
 from ..core.grid import FREE, OCCUPIED, UNKNOWN
 from .anchors import Anchors, anchor, auto_anchors
 from .confidence import ConfidenceParams, alignment_notes, alignment_warnings
@@ -70,14 +78,6 @@ from .fitness import distance_map, fitness, lookup
 from .hypotheses import Hypothesis, dense_hypotheses, face_hypotheses, suppress_duplicates
 from .nonrigid import SideFields, to_plane
 from .orientation import dominant_orientation
-from .transforms import (
-    apply,
-    decompose_similarity,
-    fit_affine,
-    fit_similarity,
-    similarity_matrix,
-    transform_normals,
-)
 
 __all__ = [
     "AlignParams",
@@ -191,7 +191,7 @@ def check_map(data: np.ndarray, name: str | None) -> tuple[int, int, int, int]:
         raise InputError(
             name,
             "map has no occupied pixels (no walls to align; if its walls are grey, "
-            "read them with --occupied-thresh or --negate)",
+            "read them with `occupied_thresh` or `negate`)",
         )
     known = data != UNKNOWN
     rows = np.flatnonzero(known.any(axis=1))

@@ -33,8 +33,8 @@ import cv2
 import numpy as np
 
 from ..core.errors import InputError
+from ..core.geometry import apply, fit_rigid
 from ..core.grid import OCCUPIED
-from .transforms import apply, fit_rigid
 
 __all__ = ["Anchors", "anchor", "read_anchors", "validate_anchors", "auto_anchors"]
 

@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from .transforms import apply
+from ..core.geometry import apply
 
 __all__ = ["distance_map", "fitness_map", "fitness", "transformed_fitness", "lookup"]
 

@@ -23,7 +23,7 @@ Examples
 >>> hyps, stats = face_hypotheses(fs, 0.0, ft, 0.0)
 >>> stats
 {'face_pairs': 1, 'proposed': 4, 'rejected': 2}
->>> from map2map.evaluate.transforms import apply
+>>> from map2map.core.geometry import apply
 >>> apply(hyps[0].T, [[10.0, 10.0]]).round(6).tolist()   # centre onto centre, scale 2
 [[50.0, 40.0]]
 """
@@ -36,9 +36,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import fft as sfft
 
-from ..core.geometry import wrap_angle
+from ..core.geometry import apply, decompose_similarity, similarity_matrix, wrap_angle
 from .decomposition import Face
-from .transforms import apply, decompose_similarity, similarity_matrix
 
 __all__ = ["Hypothesis", "face_hypotheses", "dense_hypotheses", "suppress_duplicates"]
 

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .transforms import apply, fit_similarity
+from ..core.geometry import apply, fit_similarity
 
 __all__ = ["ICPResult", "icp"]
 

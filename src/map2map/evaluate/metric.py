@@ -38,8 +38,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.geometry import affine_distortion, decompose_similarity
 from .nonrigid import SideFields, to_plane
-from .transforms import affine_distortion, decompose_similarity
 
 __all__ = ["ChainErrors", "EXCLUDED_RULE", "local_errors", "summary_lines", "choose_chain", "iou"]
 

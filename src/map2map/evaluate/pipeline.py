@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..core.geometry import apply, decompose_similarity, transform_normals
 from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from .align import Alignment, AlignParams, align_maps, check_map
 from .anchors import Anchors
@@ -38,7 +39,6 @@ from .icp import icp
 from .metric import ChainErrors, choose_chain, iou, local_errors
 from .nonrigid import PiecewiseAffine, SideFields, control_points, optimise, warp_image
 from .orientation import dominant_orientation
-from .transforms import apply, decompose_similarity, transform_normals
 
 __all__ = ["EvaluateParams", "Registration", "Evaluation", "register", "evaluate_maps"]
 

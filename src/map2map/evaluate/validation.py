@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..core.geometry import decompose_similarity
 from ..core.grid import OccupancyMap
 from ..maps.synthetic import (
     affine_field,
@@ -40,7 +41,6 @@ from ..maps.synthetic import (
     true_errors,
 )
 from .pipeline import EvaluateParams, Evaluation, evaluate_maps
-from .transforms import decompose_similarity
 
 __all__ = ["KnownErrorCase", "known_error_case", "Table2Spec", "TABLE2", "table2_cases"]
 

@@ -332,8 +332,8 @@ def _metres_resolution(tgt: MapInput, units: str) -> float | None:
     if not tgt.resolution_known:
         raise InputError(
             tgt.path,
-            "resolution unknown, so errors cannot be given in metres: pass --resolution R "
-            "(metres per pixel), use a ROS yaml map, or --units px",
+            "resolution unknown, so errors cannot be given in metres: pass `resolution=R` "
+            "(metres per pixel), use a ROS yaml map, or `units=px`",
         )
     return tgt.map.resolution
 

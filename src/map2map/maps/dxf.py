@@ -66,8 +66,8 @@ from shapely.geometry import LineString, Point, Polygon
 from ..core.errors import InputError
 from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from ..core.limits import check_map_size
-from .formats import UNITS
 from .rasterize import fill_exact, thin_parts, trace
+from .units import UNITS
 
 __all__ = [
     "save_segments_dxf",
@@ -472,7 +472,7 @@ def _grid_frame(d: _Drawing, scale, resolution, margin, wall_thickness, frame, p
             p,
             f"the map would be {w} x {h} pixels at {resolution:g} m/px (drawing "
             f"{(hi[0] - lo[0]) / scale:.4g} x {(hi[1] - lo[1]) / scale:.4g} units of "
-            f"{scale:g} m); give the right --units or a coarser --resolution",
+            f"{scale:g} m); give the right `units` or a coarser `resolution`",
         )
     check_map_size((h, w), p)  # the running command's budget (core.limits)
     return ox, oy, w, h

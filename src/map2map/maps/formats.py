@@ -38,11 +38,6 @@ from ..core.errors import InputError
 from ..core.grid import OccupancyMap
 from .raster import IMAGE_SUFFIXES
 
-#: DXF drawing unit names accepted by ``units`` and their size in metres (here, not in
-#: :mod:`map2map.maps.dxf`, so that the command line can offer them without importing
-#: shapely and ezdxf).
-UNITS = {"mm": 0.001, "cm": 0.01, "m": 1.0, "in": 0.0254, "ft": 0.3048}
-
 __all__ = [
     "MapReadOptions",
     "check_plausible",
@@ -51,7 +46,6 @@ __all__ = [
     "map_kind",
     "READ_SUFFIXES",
     "WRITE_SUFFIXES",
-    "UNITS",
 ]
 
 _KINDS = {".yaml": "ros", ".yml": "ros", ".json": "houseexpo", ".dxf": "dxf"}
@@ -352,7 +346,7 @@ def check_plausible(m: OccupancyMap, source=None) -> list[str]:
     ...     warnings.simplefilter("ignore")
     ...     check_plausible(OccupancyMap(np.zeros((20, 20), np.uint8), 0.05), "d.dxf")
     ['map is 20 x 20 px (1 x 1 m) with no free space: implausible for a floor plan \
-(wrong --units or --resolution, or thresholds?)']
+(wrong `units` or `resolution`, or thresholds?)']
     """
     import warnings
 
@@ -375,7 +369,7 @@ def check_plausible(m: OccupancyMap, source=None) -> list[str]:
         return []
     msg = (
         f"map is {w} x {h} px ({wm:.3g} x {hm:.3g} m) {', '.join(problems)}: implausible "
-        "for a floor plan (wrong --units or --resolution, or thresholds?)"
+        "for a floor plan (wrong `units` or `resolution`, or thresholds?)"
     )
     warnings.warn(f"{source}: {msg}" if source is not None else msg, MapWarning, stacklevel=3)
     return [msg]

@@ -241,7 +241,7 @@ def load_houseexpo(
         raise InputError(p, f"not valid JSON (line {exc.lineno}: {exc.msg})") from None
     if isinstance(doc, dict) and "verts" not in doc and "regenerate" in doc:
         # the layout that ``map2map plan --meta`` writes: rebuild that plan
-        from .floorplan import plan_from_document
+        from .plans.documents import plan_from_document
 
         return plan_from_document(doc, resolution=resolution, source=p)
     if resolution is None:

@@ -58,7 +58,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import LinearNDInterpolator, NearestNDInterpolator
 
-from ..trajectory.timing import wrap_angle
+from ..core.geometry import wrap_angle
 from .lidar import LidarCoefficients, angle_error, measured, polar_displacement, range_error
 from .odometry import OdometryErrors
 from .params import ParametricParams
@@ -525,7 +525,7 @@ def ekf_field(
             # the error model's actual - nominal difference (thesis eqs. 3.40-3.50)
             th = X[2]
             step = truth[k] - truth[k - 1]
-            dth = heading_change(wrap_angle(step[2]) - sigma["t"][k - 1])
+            dth = heading_change(wrap_angle(step[2], keep_in_range=True) - sigma["t"][k - 1])
             rot = th - truth[k - 1, 2]
             c, s = np.cos(rot), np.sin(rot)
             ex, ey = -sigma["x"][k - 1], -sigma["y"][k - 1]
@@ -535,10 +535,10 @@ def ekf_field(
             jx, jy = jacobian_terms(dthrust, th + dth / 2)
             X[0] += ddx
             X[1] += ddy
-            X[2] = wrap_angle(th + dth)
+            X[2] = wrap_angle(th + dth, keep_in_range=True)
             predict_covariance(P, n, motion_jacobian(jx, jy), Qs[k - 1])
         robot_error[k] = X[:3] - truth[k]
-        robot_error[k, 2] = wrap_angle(robot_error[k, 2])
+        robot_error[k, 2] = wrap_angle(robot_error[k, 2], keep_in_range=True)
         ids = lm_id[vis.seen_from(k)]
         ids = ids[ids >= 0]
         if ids.size == 0:
@@ -546,9 +546,9 @@ def ekf_field(
         # LIDAR measurements from the true pose (thesis eqs. 3.64-3.66)
         rel = lm_true[ids] - truth[k, :2]
         r_true = np.hypot(rel[:, 0], rel[:, 1])
-        b_true = wrap_angle(np.arctan2(rel[:, 1], rel[:, 0]) - truth[k, 2])
+        b_true = wrap_angle(np.arctan2(rel[:, 1], rel[:, 0]) - truth[k, 2], keep_in_range=True)
         z_r, z_b = measurement(r_true, b_true, coeffs)
-        z_b = wrap_angle(z_b)
+        z_b = wrap_angle(z_b, keep_in_range=True)
         rdiag = measurement_noise(
             z_r, z_b, coeffs.a1, coeffs.b[0], p.ekf_range_var_min, p.ekf_bearing_var_min
         )
@@ -558,11 +558,11 @@ def ekf_field(
             lx, ly = X[cols], X[cols + 1]
             x, y, th = X[0], X[1], X[2]
             h_r = np.hypot(lx - x, ly - y)
-            h_b = wrap_angle(np.arctan2(ly - y, lx - x) - th)
+            h_b = wrap_angle(np.arctan2(ly - y, lx - x) - th, keep_in_range=True)
             hr, hl = measurement_jacobian(x, y, lx, ly)
-            innov = np.stack([z_r[old] - h_r, wrap_angle(z_b[old] - h_b)], 1)
+            innov = np.stack([z_r[old] - h_r, wrap_angle(z_b[old] - h_b, keep_in_range=True)], 1)
             kalman_update(X, P, n, cols, hr, hl, innov, rdiag[old])
-            X[2] = wrap_angle(X[2])
+            X[2] = wrap_angle(X[2], keep_in_range=True)
         new = ~old
         if new.any():
             ang = X[2] + z_b[new]

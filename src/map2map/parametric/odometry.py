@@ -33,7 +33,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..trajectory.timing import Trajectory, wrap_angle
+from ..core.geometry import wrap_angle
+from ..trajectory.timing import Trajectory
 from .params import ParametricParams
 
 __all__ = [
@@ -335,7 +336,7 @@ def straight_run_length(traj: Trajectory, min_length: float = 0.5) -> float:
         Metres.
     """
     step = np.hypot(np.diff(traj.x), np.diff(traj.y))
-    turn = np.abs(wrap_angle(np.diff(traj.theta)))
+    turn = np.abs(wrap_angle(np.diff(traj.theta), keep_in_range=True))
     straight = (step > 1e-6) & (turn < 1e-4)
     if not straight.any():
         return 4.0
@@ -392,7 +393,7 @@ def odometry_errors(
     # nominal motion between key poses: forward distance and heading change
     delta = np.diff(poses[:, :2], axis=0)
     th_prev = poses[:-1, 2]
-    dth_n = wrap_angle(np.diff(poses[:, 2]))
+    dth_n = wrap_angle(np.diff(poses[:, 2]), keep_in_range=True)
     dd_n = delta[:, 0] * np.cos(th_prev + dth_n / 2) + delta[:, 1] * np.sin(th_prev + dth_n / 2)
     # wheel rotations that produce it with the nominal geometry (Delta d = gamma D)
     gamma_r = (dd_n + b_nom * dth_n / 2.0) / d_nom

@@ -27,6 +27,7 @@ import numpy as np
 from scipy import ndimage
 
 from ..core.errors import InputError
+from ..core.geometry import wrap_angle
 from ..core.grid import FREE, OCCUPIED, OccupancyMap
 from ..trajectory.prm import (
     Roadmap,
@@ -35,7 +36,7 @@ from ..trajectory.prm import (
     random_start_goal,
     random_tour,
 )
-from ..trajectory.timing import Trajectory, time_waypoints, wrap_angle
+from ..trajectory.timing import Trajectory, time_waypoints
 from .additive import additive_field
 from .ekf import ekf_field
 from .field import DisplacementField, warp_map
@@ -112,7 +113,7 @@ def keyframe_indices(
         j = keep[-1]
         if (
             math.hypot(x[i] - x[j], y[i] - y[j]) >= distance
-            or abs(float(wrap_angle(th[i] - th[j]))) >= angle
+            or abs(float(wrap_angle(th[i] - th[j], keep_in_range=True))) >= angle
         ):
             keep.append(i)
     if keep[-1] != len(traj) - 1:
@@ -136,7 +137,7 @@ def trajectory_to_pixels(plan: OccupancyMap, x, y, theta) -> np.ndarray:
     (N, 3) float array
     """
     rows, cols = plan.world_to_pixel_float(x, y)
-    ang = wrap_angle(-(np.asarray(theta, float) - plan.origin[2]))
+    ang = wrap_angle(-(np.asarray(theta, float) - plan.origin[2]), keep_in_range=True)
     return np.stack([cols, rows, ang], 1)
 
 
@@ -165,11 +166,11 @@ def check_point(plan: OccupancyMap, x: float, y: float, what: str) -> np.ndarray
     name = f"{what} ({x:g}, {y:g}) m"
     if not plan.contains(r, c)[0]:
         w, h = plan.size_m
-        raise InputError(f"--{what}", f"{name} is outside the map ({w:g} x {h:g} m)")
+        raise InputError(what, f"{name} is outside the map ({w:g} x {h:g} m)")
     v = int(plan.data[r[0], c[0]])
     if v != FREE:
         kind = "in a wall" if v == OCCUPIED else "in unknown space"
-        raise InputError(f"--{what}", f"{name} is {kind}, not in free space")
+        raise InputError(what, f"{name} is {kind}, not in free space")
     rr, cc = plan.world_to_pixel_float([x], [y])
     return np.array([cc[0], rr[0]])
 
@@ -214,7 +215,7 @@ def make_trajectory(
     if not plan.free.any():
         raise InputError(None, "the plan has no free space")
     if waypoints is None and (start is None) != (goal is None):
-        raise InputError(None, "give both --start and --goal, or neither")
+        raise InputError(None, "give both `start` and `goal`, or neither")
     pts = None
     names = None
     if waypoints is not None:
@@ -390,6 +391,6 @@ def _geometry_range_angle(vis: Visibility, poses_px: np.ndarray, res: float, ran
     dx = cols - poses_px[k, 0]
     dy = rows - poses_px[k, 1]
     D[rows, cols] = np.maximum(np.hypot(dx, dy) * res, 1e-3)
-    alpha[rows, cols] = wrap_angle(np.arctan2(dy, dx) - poses_px[k, 2])
+    alpha[rows, cols] = wrap_angle(np.arctan2(dy, dx) - poses_px[k, 2], keep_in_range=True)
     heading[rows, cols] = poses_px[k, 2]
     return D, alpha, heading

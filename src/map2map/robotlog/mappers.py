@@ -1,10 +1,13 @@
 """Registry of mapping backends selectable by name (``map2map simulate --mapper NAME``).
 
-Each entry maps a name to ``"module:attribute"``, a factory called as
-``factory(resolution=..., seed=..., **options)`` that returns an object
-implementing :class:`map2map.robotlog.base.Mapper`. Modules are imported only when
-the mapper is used. A backend adds itself with one line in :data:`MAPPERS` (or at
-run time with :func:`register_mapper`).
+Each entry maps a name to a factory called as ``factory(resolution=..., seed=...,
+**options)`` that returns an object implementing :class:`map2map.robotlog.base.Mapper`.
+This module holds only the registry: it imports no backend. The backends live above it
+(the oracle in :mod:`map2map.sim`, the particle filter and graph SLAM in
+:mod:`map2map.slam`), so they are registered from above, by the package root
+(``map2map/__init__.py``, which Python runs before any of its modules), with factories
+that import their backend only when the mapper is made. Other backends add themselves
+with :func:`register_mapper`.
 
 Examples
 --------
@@ -17,7 +20,6 @@ True
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Callable
 
 from ..core.errors import InputError
@@ -25,32 +27,35 @@ from .base import Mapper
 
 __all__ = ["MAPPERS", "make_mapper", "register_mapper", "available_mappers"]
 
-#: name -> "module:factory": the oracle, the GMapping-style particle filter, graph SLAM.
-MAPPERS: dict[str, str | Callable[..., Mapper]] = {
-    "oracle": "map2map.sim.mapping:OracleMapper",
-    "rbpf": "map2map.slam.rbpf:make_rbpf",
-    "graph": "map2map.slam.graph:make_graph",
-}
+#: name -> factory; the package root registers the oracle, the GMapping-style particle
+#: filter and graph SLAM (``oracle``, ``rbpf``, ``graph``).
+MAPPERS: dict[str, Callable[..., Mapper]] = {}
 
 
-def register_mapper(name: str, factory: str | Callable[..., Mapper]) -> None:
-    """Add or replace a backend (a ``"module:attr"`` string or a callable).
+def register_mapper(name: str, factory: Callable[..., Mapper]) -> None:
+    """Add or replace a backend.
 
     Parameters
     ----------
     name : str
         Name given to :func:`make_mapper` (and ``--mapper``).
-    factory : str or callable
-        ``"module:attr"`` imported on first use, or a callable taking
-        ``resolution=``, ``seed=`` and the backend's options and returning a Mapper.
+    factory : callable
+        Called with ``resolution=``, ``seed=`` and the backend's options; returns a Mapper.
+
+    Raises
+    ------
+    TypeError
+        ``factory`` is not callable (a backend is no longer named by a string).
 
     Examples
     --------
-    >>> register_mapper("oracle2", "map2map.sim.mapping:OracleMapper")
+    >>> register_mapper("oracle2", MAPPERS["oracle"])
     >>> "oracle2" in available_mappers()
     True
     >>> del MAPPERS["oracle2"]
     """
+    if not callable(factory):
+        raise TypeError(f"mapper factory for {name!r} must be callable, got {factory!r}")
     MAPPERS[name] = factory
 
 
@@ -100,8 +105,4 @@ def make_mapper(name: str, *, resolution: float = 0.05, seed: int = 0, **options
     if name not in MAPPERS:
         choices = ", ".join(available_mappers())
         raise InputError("mapper", f"unknown mapper '{name}' (choose from {choices})")
-    factory = MAPPERS[name]
-    if isinstance(factory, str):
-        module, _, attr = factory.partition(":")
-        factory = getattr(importlib.import_module(module), attr)
-    return factory(resolution=resolution, seed=seed, **options)
+    return MAPPERS[name](resolution=resolution, seed=seed, **options)

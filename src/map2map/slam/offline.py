@@ -274,7 +274,7 @@ def run_slam(
         map_shape_estimate(log, resolution, float(reach)),
         source if source is not None else "log",
         "slam",
-        way_out="give a coarser --resolution",
+        way_out="give a coarser `resolution`",
     )
     mapper = make_mapper(backend, resolution=resolution, seed=seed, **options)
     for odo, scan in tqdm(

@@ -36,7 +36,7 @@ import numpy as np
 
 from ..core._io import atomic_path
 from ..core.errors import InputError
-from ..core.geometry import wrap_angle as _wrap_angle
+from ..core.geometry import wrap_angle
 
 __all__ = [
     "Trajectory",
@@ -45,31 +45,7 @@ __all__ = [
     "trajectory_from_poses",
     "read_trajectory",
     "read_waypoints",
-    "wrap_angle",
 ]
-
-
-def wrap_angle(a):
-    """Wrap angles to ``[-pi, pi)``; angles already in range are returned bit for bit.
-
-    :func:`map2map.core.geometry.wrap_angle` with ``keep_in_range=True``.
-
-    Parameters
-    ----------
-    a : float or array-like
-        Angles in radians.
-
-    Returns
-    -------
-    ndarray
-        Wrapped angles, same shape.
-
-    Examples
-    --------
-    >>> wrap_angle([0.25, 7.0]).round(6).tolist()
-    [0.25, 0.716815]
-    """
-    return _wrap_angle(a, keep_in_range=True)
 
 
 @dataclass
@@ -247,7 +223,7 @@ def time_waypoints(
     t = 0.0
     arrivals = [0.0]
     for i in range(seg.shape[0]):
-        turn = float(wrap_angle(headings[i] - heading))
+        turn = float(wrap_angle(headings[i] - heading, keep_in_range=True))
         if abs(turn) > 1e-9:
             T = trapezoid(np.zeros(1), turn, omega_max, acc_ang)[2]
             prims.append(("turn", t, T, wp[i, 0], wp[i, 1], heading, turn))
@@ -274,7 +250,7 @@ def time_waypoints(
         tau = times[sel] - t0
         if kind == "turn":
             s, rate, _ = trapezoid(tau, amount, omega_max, acc_ang)
-            x[sel], y[sel], th[sel], om[sel] = x0, y0, wrap_angle(th0 + s), rate
+            x[sel], y[sel], th[sel], om[sel] = x0, y0, wrap_angle(th0 + s, keep_in_range=True), rate
         else:
             s, speed, _ = trapezoid(tau, amount, v_max, acc_lin)
             x[sel] = x0 + s * math.cos(th0)
@@ -313,7 +289,7 @@ def trajectory_from_poses(
     """
     x, y, theta = (np.asarray(a, float) for a in (x, y, theta))
     dist = np.hypot(np.diff(x), np.diff(y))
-    dth = wrap_angle(np.diff(theta))
+    dth = wrap_angle(np.diff(theta), keep_in_range=True)
     if t is None:
         dts = np.maximum(np.maximum(dist / v_max, np.abs(dth) / omega_max), 1e-3)
         t = np.concatenate([[0.0], np.cumsum(dts)])
@@ -322,7 +298,7 @@ def trajectory_from_poses(
     fwd = np.diff(x) * np.cos(theta[:-1]) + np.diff(y) * np.sin(theta[:-1])
     v = np.concatenate([fwd / dt, [0.0]]) if t.size > 1 else np.zeros(1)
     om = np.concatenate([dth / dt, [0.0]]) if t.size > 1 else np.zeros(1)
-    return Trajectory(t, x, y, wrap_angle(theta), v, om)
+    return Trajectory(t, x, y, wrap_angle(theta, keep_in_range=True), v, om)
 
 
 def _read_table(path: str | os.PathLike, what: str) -> tuple[list[str] | None, np.ndarray]:

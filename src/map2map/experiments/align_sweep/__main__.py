@@ -37,9 +37,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from map2map.core.geometry import decompose_similarity, similarity_matrix
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from map2map.evaluate.pipeline import EvaluateParams, evaluate_maps
-from map2map.evaluate.transforms import decompose_similarity, similarity_matrix
 from map2map.experiments._data import shared_data
 from map2map.maps.irregular import irregular_plan
 

@@ -161,9 +161,8 @@ def real_pair_row(name: str, sensor: OccupancyMap, corrected: OccupancyMap,
     """
     from scipy import ndimage
 
-    from ...core.geometry import apply
+    from ...core.geometry import apply, decompose_similarity
     from ...evaluate.nonrigid import warp_image
-    from ...evaluate.transforms import decompose_similarity
     from ...evaluate.wallmetrics import wall_metrics
     from ...learn.training.data import wall_thickness_px
     from ...maps.halmstad import robust_similarity

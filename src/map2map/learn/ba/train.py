@@ -114,7 +114,7 @@ def train_ba(data: str | os.PathLike | PackedPairs, out: str | os.PathLike,
     if smallest < 2**cfg.d_layers:
         raise InputError("size", f"at {cfg.size} px the coarsest discriminator scale is "
                                    f"{smallest} px, too small for {cfg.d_layers} stride-2 "
-                                   "layers (use a larger size or fewer d_layers)")
+                                   "layers (use a larger `size` or fewer `d_layers`)")
     if pairs.a.shape[-1] < cfg.size:
         raise InputError(None, f"dataset maps are {pairs.a.shape[-1]} px; cannot train at "
                                f"{cfg.size}")

@@ -262,7 +262,7 @@ def open_run(data, out, config: TrainConfig | None, *, config_type: type, fmt: s
         cfg = config or config_type()
         if ck_path.exists():
             raise InputError(out, "the run folder already holds a checkpoint; "
-                                  "use --resume to continue it or another --out")
+                                  "use `resume` to continue it or another `out`")
     if epochs is not None:
         cfg.epochs = int(epochs)
     dist = Dist(cfg, find_unused=find_unused)
@@ -377,7 +377,7 @@ class GANRun:
         if self.dist.world > 1 or cfg.compile:
             import warnings
 
-            warnings.warn("--cuda-graph is single-process and not combined with --compile: "
+            warnings.warn("`cuda_graph` is single-process and not combined with `compile`: "
                           "training eagerly", RuntimeWarning, stacklevel=2)
             return None
         from .static_step import StaticStep, graph_autocast

@@ -169,11 +169,11 @@ def reproduce(
     keys = list(SECTIONS) if not sections else list(sections)
     bad = [k for k in keys if k not in SECTIONS]
     if bad:
-        raise InputError("--only", f"unknown section {', '.join(bad)}; "
+        raise InputError("only", f"unknown section {', '.join(bad)}; "
                          f"known: {', '.join(SECTIONS)}")  # fmt: skip
     keys = [k for k in SECTIONS if k in keys]
     if data is not None and not Path(data).is_dir():
-        raise InputError(data, "the real data folder (--data) does not exist")
+        raise InputError(data, "the real data folder (`data`) does not exist")
     out = Path(out)
     try:
         out.mkdir(parents=True, exist_ok=True)
