@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
-from map2map.datasets.build import build_dataset, pair_dir
+from map2map.datasets.build import build_dataset
 from map2map.datasets.pair import BuildParams, read_pair_meta
+from map2map.datasets.pairfolder import pair_dir
 from map2map.datasets.rerun import rerun_pair
 from map2map.experiments.realism.measure import (
     STATS,

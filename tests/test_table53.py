@@ -10,9 +10,9 @@ pytest.importorskip("torch")
 
 from map2map.core.errors import InputError  # noqa: E402
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN  # noqa: E402
-from map2map.datasets.build import pair_dir  # noqa: E402
 from map2map.datasets.manifest import Manifest  # noqa: E402
 from map2map.datasets.packed import PackedPairs  # noqa: E402
+from map2map.datasets.pairfolder import pair_dir  # noqa: E402
 from map2map.experiments.table53.measure import (  # noqa: E402
     heldout_pairs_from_dataset,
     merge_pairs,

@@ -39,6 +39,7 @@ from typing import Any
 from ..core.errors import InputError
 from .manifest import Manifest
 from .pair import BuildParams, PairResult, PairSpec, pair_layout, run_pair, write_pair
+from .pairfolder import pair_dir
 from .plans import PlanSource, source_digest
 
 __all__ = [
@@ -49,7 +50,6 @@ __all__ = [
     "split_for_plan",
     "open_dataset",
     "dataset_status",
-    "pair_dir",
 ]
 
 FORMAT = "map2map-dataset"
@@ -70,11 +70,6 @@ def split_for_plan(plan_id: str, fractions=SPLIT_FRACTIONS) -> str:
     if u < fractions[0]:
         return "train"
     return "val" if u < fractions[0] + fractions[1] else "test"
-
-
-def pair_dir(ds: str | os.PathLike, index: int) -> Path:
-    """Folder of pair ``index`` in dataset ``ds``."""
-    return Path(ds) / "pairs" / f"{int(index):06d}"
 
 
 @dataclass

@@ -48,6 +48,7 @@ import numpy as np
 
 from ..core.errors import InputError
 from .features import FEATURE_NAMES, pair_features
+from .pairfolder import PLAN_PNG, SLAM_PNG, is_pair_folder, pair_dir, pictures, read_picture
 
 __all__ = [
     "COVERAGE_COMPLETE",
@@ -131,24 +132,19 @@ def read_labels(path: str | os.PathLike) -> dict[str, int]:
 
 
 def _read_png(path: Path) -> np.ndarray:
-    import cv2
-
-    img = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
-    if img is None:
-        raise InputError(path, "missing or unreadable map picture")
+    """A pair picture, harmonised to the three map values (a folder of pairs from
+    elsewhere may hold grey levels)."""
     from ..maps.preprocess import harmonise
 
-    return harmonise(img)
+    return harmonise(read_picture(path))
 
 
 def dataset_features(ds: str | os.PathLike, rows) -> np.ndarray:
     """Features (rows x 16) of the done pairs ``rows`` of dataset ``ds``."""
-    from .build import pair_dir
-
     out = np.zeros((len(rows), len(FEATURE_NAMES)))
     for k, r in enumerate(rows):
-        folder = pair_dir(ds, r["idx"])
-        out[k] = pair_features(_read_png(folder / "A.png"), _read_png(folder / "B.png"))
+        a, b = pictures(pair_dir(ds, r["idx"]))
+        out[k] = pair_features(_read_png(a), _read_png(b))
     return out
 
 
@@ -166,11 +162,11 @@ def folder_pairs(folder: str | os.PathLike) -> list[tuple[str, Path, Path]]:
                 out.append((str(rel.with_suffix("")), a, b))
     else:
         for sub in sorted(p for p in folder.iterdir() if p.is_dir()):
-            if (sub / "A.png").is_file() and (sub / "B.png").is_file():
-                out.append((sub.name, sub / "A.png", sub / "B.png"))
+            if is_pair_folder(sub):
+                out.append((sub.name, *pictures(sub)))
     if not out:
         raise InputError(folder, "no pairs found (expected A/ and B/ with matching names, "
-                                 "or sub-folders holding A.png and B.png)")  # fmt: skip
+                                 f"or sub-folders holding {PLAN_PNG} and {SLAM_PNG})")
     return out
 
 

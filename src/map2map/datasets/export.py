@@ -73,18 +73,9 @@ def select_rows(man, *, everything: bool = False, include_review: bool = False) 
 
 
 def _load(ds: Path, idx: int) -> tuple[np.ndarray, np.ndarray]:
-    import cv2
+    from .pairfolder import pair_dir, read_pair
 
-    from .build import pair_dir
-
-    folder = pair_dir(ds, idx)
-    out = []
-    for name in ("A.png", "B.png"):
-        img = cv2.imread(str(folder / name), cv2.IMREAD_GRAYSCALE)
-        if img is None:
-            raise InputError(folder / name, "missing or unreadable pair picture")
-        out.append(img)
-    return out[0], out[1]
+    return read_pair(pair_dir(ds, idx))
 
 
 def _png(path: Path, img: np.ndarray) -> None:

@@ -19,6 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .pairfolder import pair_dir, pictures
+
 __all__ = ["contact_sheet", "histograms", "cleaner_figure"]
 
 
@@ -54,9 +56,8 @@ def contact_sheet(ds: str | os.PathLike, rows, path: str | os.PathLike, n: int =
     for ax in axes.ravel():
         ax.axis("off")
     for k, r in enumerate(pick):
-        folder = Path(ds) / "pairs" / f"{r['idx']:06d}"
-        for j, name in enumerate(("A.png", "B.png")):
-            img = cv2.imread(str(folder / name), cv2.IMREAD_GRAYSCALE)
+        for j, picture in enumerate(pictures(pair_dir(ds, r["idx"]))):
+            img = cv2.imread(str(picture), cv2.IMREAD_GRAYSCALE)
             ax = axes[k // 2, (k % 2) * 2 + j]
             if img is not None:
                 ax.imshow(img, cmap="gray", vmin=0, vmax=255, interpolation="nearest")

@@ -64,6 +64,7 @@ import numpy as np
 from .._version import __version__
 from ..core.errors import InputError
 from ..core.grid import OccupancyMap
+from .pairfolder import DISPLACEMENT, META, PLAN_YAML, SLAM_YAML, write_pictures
 from .plans import PlanSource, load_plan
 
 __all__ = [
@@ -493,7 +494,6 @@ def write_pair(res: PairResult, folder: str | os.PathLike) -> Path:
     pixels of A: A's content at ``p`` appears in B at ``p + d(p)``). An existing
     ``folder`` is replaced. The same result always gives the same bytes.
     """
-    import cv2
 
     from ..maps.ros import save_ros_map
 
@@ -505,18 +505,14 @@ def write_pair(res: PairResult, folder: str | os.PathLike) -> Path:
         shutil.rmtree(tmp)
     tmp.mkdir(parents=True)
     try:
-        save_ros_map(res.a, tmp / "A.yaml")
-        save_ros_map(res.b, tmp / "B.yaml")
-        for name, arr in (("A.png", res.a_n), ("B.png", res.b_n)):
-            ok, buf = cv2.imencode(".png", arr, [cv2.IMWRITE_PNG_COMPRESSION, 6])
-            if not ok:
-                raise OSError(f"PNG encoding of {name} failed")
-            (tmp / name).write_bytes(buf.tobytes())
+        save_ros_map(res.a, tmp / PLAN_YAML)
+        save_ros_map(res.b, tmp / SLAM_YAML)
+        write_pictures(tmp, res.a_n, res.b_n)
         if res.displacement is not None:
-            _write_npz(tmp / "displacement.npz", dx=res.displacement.dx.astype(np.float32),
+            _write_npz(tmp / DISPLACEMENT, dx=res.displacement.dx.astype(np.float32),
                        dy=res.displacement.dy.astype(np.float32))  # fmt: skip
         text = json.dumps(res.meta, indent=1, sort_keys=True, default=_json_default)
-        (tmp / "meta.json").write_text(text + "\n")
+        (tmp / META).write_text(text + "\n")
         for p in tmp.iterdir():
             with open(p, "rb") as fh:
                 os.fsync(fh.fileno())
@@ -542,7 +538,7 @@ def _json_default(o):
 
 def read_pair_meta(folder: str | os.PathLike) -> dict:
     """The ``meta.json`` of a pair folder (:class:`InputError` naming it if unreadable)."""
-    path = Path(folder) / "meta.json"
+    path = Path(folder) / META
     try:
         return json.loads(path.read_text())
     except FileNotFoundError:

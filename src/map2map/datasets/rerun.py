@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
@@ -73,15 +72,6 @@ class RerunResult:
     sim: object = None
 
 
-def _read_png(path: Path) -> np.ndarray:
-    import cv2
-
-    img = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
-    if img is None:
-        raise InputError(path, "unreadable pair picture")
-    return img
-
-
 def rerun_pair(ds: str | os.PathLike, index: int, run: int = 2, *,
                sim_seed: int | None = None) -> RerunResult:
     """Simulate pair ``index`` of dataset ``ds`` again with seed ``rerun_seed(sim_seed, run)``.
@@ -108,7 +98,8 @@ def rerun_pair(ds: str | os.PathLike, index: int, run: int = 2, *,
         Not a dataset, the pair is missing, parametric, or has no ``sim_seed``.
     """
     from ..maps.formats import load_map
-    from .build import open_dataset, pair_dir
+    from .build import open_dataset
+    from .pairfolder import PLAN_PNG, SLAM_YAML, pair_dir, read_picture
 
     if run < 2 and sim_seed is None:
         raise InputError("run", f"must be >= 2 (run 1 is the dataset's map), got {run}")
@@ -132,10 +123,10 @@ def rerun_pair(ds: str | os.PathLike, index: int, run: int = 2, *,
     start = None if seed == int(meta["sim_seed"]) else tuple(meta["start_pose"])
     b2, _, info = _simulate(spec, plan, pair_seed(spec.seed, spec.index), sim_seed=seed,
                             start=start, keep=keep)
-    b1 = load_map(folder / "B.yaml")
+    b1 = load_map(folder / SLAM_YAML)
     box = crop_box(plan, b1)
     a_n, b_n = preprocess_pair(plan, b2, params.size, params.thicken, box=box)
-    a_file = _read_png(folder / "A.png")
+    a_file = read_picture(folder / PLAN_PNG)
     err, err95 = wall_error(plan, b2)
     info.update(run=int(run), index=int(index), plan_id=plan_id, wall_error_m=err,
                 wall_error_p95_m=err95, size=params.size, thicken=params.thicken,

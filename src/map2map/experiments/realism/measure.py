@@ -677,7 +677,7 @@ def native_seen(ds: str | os.PathLike, indices, size: int, *, seed: int = 0,
     import warnings
 
     from ...datasets.pair import crop_box
-    from ...datasets.pairfolder import pair_dir
+    from ...datasets.pairfolder import PLAN_YAML, SLAM_YAML, pair_dir
     from ...learn.ab.coverage import explore_rng
     from ...maps.formats import load_map
 
@@ -689,7 +689,7 @@ def native_seen(ds: str | os.PathLike, indices, size: int, *, seed: int = 0,
         it = tqdm(it, total=len(indices), desc="exploring plans", unit="plan")
     for j, i in it:
         folder = pair_dir(ds, int(i))
-        a, b = load_map(folder / "A.yaml"), load_map(folder / "B.yaml")
+        a, b = load_map(folder / PLAN_YAML), load_map(folder / SLAM_YAML)
         sq = seen_on_square(a, crop_box(a, b), size, explore_rng(seed, j), params)
         if sq is None:
             warnings.warn(f"pair {i}: the robot cannot explore its plan; nothing hidden",
@@ -704,9 +704,9 @@ def pair_square_resolution(ds: str | os.PathLike, index: int, size: int) -> floa
     crop window (the union of the plan's and run 1's content, as the build and
     :func:`~map2map.datasets.rerun.rerun_pair` cut it) over ``size``."""
     from ...datasets.pair import crop_box, window_resolution
-    from ...datasets.pairfolder import pair_dir
+    from ...datasets.pairfolder import PLAN_YAML, SLAM_YAML, pair_dir
     from ...maps.formats import load_map
 
     folder = pair_dir(ds, index)
-    a, b = load_map(folder / "A.yaml"), load_map(folder / "B.yaml")
+    a, b = load_map(folder / PLAN_YAML), load_map(folder / SLAM_YAML)
     return window_resolution(a, crop_box(a, b), size)
