@@ -5,6 +5,9 @@ from __future__ import annotations
 import argparse
 import json
 
+from ..datasets.pair import BuildParams
+from ..jobs.dataset import BuildSpec
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
@@ -27,6 +30,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         epilog="example: map2map dataset build --out DS --plans generated --count 40 --seed 0 "
         "--workers 2",
     )
+    job, pair = BuildSpec, BuildParams  # the defaults, read here, not written again
     b.add_argument("--out", required=True, metavar="DS", help="dataset folder")
     b.add_argument(
         "--plans",
@@ -36,7 +40,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "JSON files/renders or ROS/image maps",
     )
     b.add_argument("--count", required=True, type=int, metavar="N", help="number of pairs")
-    b.add_argument("--seed", type=int, default=0, help="dataset seed (default: 0)")
+    b.add_argument("--seed", type=int, default=job.seed, help="dataset seed (default: %(default)s)")
     where = b.add_mutually_exclusive_group()
     where.add_argument(
         "--workers", type=int, default=None, metavar="K",
@@ -49,31 +53,33 @@ def register(sub: argparse._SubParsersAction) -> None:
         "LocalCluster of --workers processes (needs the 'dask' extra)",
     )
     b.add_argument(
-        "--source", choices=["simulate", "deform", "both"], default="simulate",
-        help="simulated robot + SLAM (default), the parametric model, or one of each per plan",
+        "--source", choices=["simulate", "deform", "both"], default=pair.source,
+        help="simulated robot + SLAM (simulate), the parametric model (deform), or one of "
+        "each per plan (default: %(default)s)",
     )  # fmt: skip
     b.add_argument(
         "--fov",
         type=float,
         choices=[180.0, 360.0],
-        default=180.0,
+        default=pair.fov,
         metavar="{180,360}",
-        help="lidar field of view (default: 180, the thesis's)",
+        help="lidar field of view (default: %(default)g, the thesis's)",
     )
-    b.add_argument("--size", type=int, default=256, help="preprocessed map side (default: 256)")
-    b.add_argument("--duration", type=float, default=420.0, metavar="SECONDS",
-                   help="simulated exploration time (default: 420 = 7 minutes)")  # fmt: skip
-    b.add_argument("--mapper", default="rbpf", help="SLAM backend (default: rbpf)")
-    b.add_argument("--thicken", type=int, default=1, metavar="PX",
-                   help="pixels the plan's walls grow after resizing (default: 1)")  # fmt: skip
-    b.add_argument("--resolution", type=float, default=0.05, metavar="R",
-                   help="working resolution of the plans in m/px (default: 0.05)")  # fmt: skip
+    b.add_argument("--size", type=int, default=pair.size,
+                   help="preprocessed map side (default: %(default)s)")
+    b.add_argument("--duration", type=float, default=pair.duration, metavar="SECONDS",
+                   help="simulated exploration time (default: %(default)g s)")
+    b.add_argument("--mapper", default=pair.mapper, help="SLAM backend (default: %(default)s)")
+    b.add_argument("--thicken", type=int, default=pair.thicken, metavar="PX",
+                   help="pixels the plan's walls grow after resizing (default: %(default)s)")
+    b.add_argument("--resolution", type=float, default=job.resolution, metavar="R",
+                   help="working resolution of the plans in m/px (default: %(default)g)")
     b.add_argument("--plan-resolution", type=float, metavar="R",
                    help="m/px of picture plans (HouseExpo renders: 0.01; default: stored, "
                    "else 0.05)")  # fmt: skip
-    b.add_argument("--max-attempts", type=int, default=3, metavar="N",
+    b.add_argument("--max-attempts", type=int, default=job.max_attempts, metavar="N",
                    help="runs of a pair whose worker died before it counts as failed "
-                   "(default: 3)")  # fmt: skip
+                   "(default: %(default)s)")
     b.add_argument("--no-figures", action="store_true", help="skip the contact sheet/histograms")
     b.add_argument("--quiet", action="store_true", help="no progress bar")
     b.set_defaults(func=run_build)
@@ -112,30 +118,24 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run_build(args: argparse.Namespace) -> int:
-    from ..core.errors import InputError
-    from ..datasets.build import build_dataset
-    from ..datasets.pair import BuildParams
+    from ..jobs.dataset import BuildSpec, build
 
-    workers = 1 if args.workers is None else args.workers
-    if workers < 1:
-        raise InputError("--workers", f"must be >= 1, got {workers}")
-    params = BuildParams(source=args.source, fov=args.fov, size=args.size,
-                         duration=args.duration, mapper=args.mapper,
-                         thicken=args.thicken)  # fmt: skip
-    summary = build_dataset(
-        args.out, args.plans, args.count, args.seed, params,
-        workers=workers, scheduler=args.scheduler, resolution=args.resolution,
-        plan_resolution=args.plan_resolution, max_attempts=args.max_attempts,
-        progress=not args.quiet, figures=not args.no_figures,
-    )  # fmt: skip
+    summary = build(BuildSpec(
+        args.out, args.plans, args.count, args.seed,
+        dict(source=args.source, fov=args.fov, size=args.size, duration=args.duration,
+             mapper=args.mapper, thicken=args.thicken),
+        workers=1 if args.workers is None else args.workers, scheduler=args.scheduler,
+        resolution=args.resolution, plan_resolution=args.plan_resolution,
+        max_attempts=args.max_attempts, progress=not args.quiet,
+        figures=not args.no_figures))
     print("\n".join(summary.lines()))
     return 0
 
 
 def run_status(args: argparse.Namespace) -> int:
-    from ..datasets.build import dataset_status
+    from ..jobs.dataset import status
 
-    st = dataset_status(args.ds)
+    st = status(args.ds)
     if args.json:
         print(json.dumps(st, indent=1, default=str))
         return 0
@@ -181,10 +181,10 @@ def run_clean(args: argparse.Namespace) -> int:
 
 
 def run_export(args: argparse.Namespace) -> int:
-    from ..datasets.export import export_dataset
+    from ..jobs.dataset import ExportSpec, export
 
-    res = export_dataset(args.ds, args.format, args.out, everything=args.all,
-                         include_review=args.include_review, progress=not args.quiet)  # fmt: skip
+    res = export(ExportSpec(args.ds, args.format, args.out, everything=args.all,
+                            include_review=args.include_review, progress=not args.quiet))
     print(
         f"{res.path}: {res.count} pairs ("
         + ", ".join(f"{k} {v}" for k, v in res.splits.items())

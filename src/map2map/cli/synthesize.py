@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from ..jobs.synthesize import SynthesizeSpec
 from ._mapargs import add_input_options, read_options_from_args, say_how_read
 
 
@@ -18,53 +19,57 @@ def register(sub: argparse._SubParsersAction) -> None:
         "OUT/<plan>_hypNN.yaml (+ .pgm; or .png with --format png), OUT/<plan>_synthesize.json "
         "(diversity: mean pairwise pixel disagreement) and OUT/<plan>_synthesize.png.",
     )
+    d = SynthesizeSpec  # the job's defaults, read here, not written again
     p.add_argument("input", metavar="PLAN", help="CAD plan (ROS yaml, PNG, DXF, ...)")
     p.add_argument("--out", required=True, help="output folder")
-    p.add_argument("--samples", type=int, default=4, help="number of hypotheses K (4)")
-    p.add_argument("--model", default="pretrained",
+    p.add_argument("--samples", type=int, default=d.samples,
+                   help="number of hypotheses K (default %(default)s)")
+    p.add_argument("--model", default=d.model,
                    help="'pretrained' (shipped weights), a 'train ab' run folder or weights file")
-    p.add_argument("--seed", type=int, default=0, help="seed of the dropout masks (0)")
-    p.add_argument("--format", choices=("ros", "png"), default="ros",
-                   help="ros: .yaml + .pgm (default); png: pictures")
-    p.add_argument("--render", choices=("slam", "plain"), default="slam",
-                   help="slam (default): walls as a SLAM map draws them, the faces next to "
-                   "free space with the training maps' wall thickness, wall interiors "
-                   "unknown; plain: the network's output snapped and upsampled (nearest)")
-    p.add_argument("--drift", choices=("rooms", "parametric", "none"), default="rooms",
-                   help="rooms (default): one rigid transform per room chained along a walk "
-                   "through the doors, blended across walls (the simulated maps' wall error, "
-                   "walls kept whole), plus the parametric field smoothed; parametric: warp "
-                   "each hypothesis along its own drift field of the parametric CAD->SLAM "
-                   "model (thesis 3.2: a route through the plan, LIDAR + odometry errors), "
-                   "the default before session 11; none: the network's straight walls")
-    p.add_argument("--drift-method", choices=("additive", "ekf"), default="additive",
+    p.add_argument("--seed", type=int, default=d.seed,
+                   help="seed of the dropout masks (default %(default)s)")
+    p.add_argument("--format", choices=("ros", "png"), default=d.format,
+                   help="ros: .yaml + .pgm; png: pictures (default %(default)s)")
+    p.add_argument("--render", choices=("slam", "plain"), default=d.render,
+                   help="slam: walls as a SLAM map draws them, the faces next to free space "
+                   "with the training maps' wall thickness, wall interiors unknown; plain: "
+                   "the network's output snapped and upsampled (nearest) (default "
+                   "%(default)s)")
+    p.add_argument("--drift", choices=("rooms", "parametric", "none"), default=d.drift,
+                   help="rooms: one rigid transform per room chained along a walk through "
+                   "the doors, blended across walls (the simulated maps' wall error, walls "
+                   "kept whole), plus the parametric field smoothed; parametric: warp each "
+                   "hypothesis along its own drift field of the parametric CAD->SLAM model "
+                   "(thesis 3.2: a route through the plan, LIDAR + odometry errors); none: "
+                   "the network's straight walls (default %(default)s)")
+    p.add_argument("--drift-method", choices=("additive", "ekf"), default=d.drift_method,
                    help="the drift's odometry-to-map conversion (additive: thesis eqs. "
-                   "3.81-3.90, default; ekf: 3.54-3.80)")
-    p.add_argument("--drift-scale", type=float, default=None,
+                   "3.81-3.90; ekf: 3.54-3.80; default %(default)s)")
+    p.add_argument("--drift-scale", type=float, default=d.drift_scale,
                    help="factor on the drift field (default 1: the parametric model's "
                    "own error magnitudes; docs/synthesize.md)")
-    p.add_argument("--coverage", choices=("explore", "none"), default="explore",
-                   help="explore (default): the simulator's robot explores the plan for each "
+    p.add_argument("--coverage", choices=("explore", "none"), default=d.coverage,
+                   help="explore: the simulator's robot explores the plan for each "
                    "hypothesis (oracle mapper, 275 s, 180 degree LIDAR, seeded; about 0.5 s "
                    "a hypothesis) and what it did not see becomes unknown, as a 7-minute run "
-                   "leaves rooms unseen; none: every room the network draws")
-    p.add_argument("--traces", choices=("lidar", "none"), default=None,
+                   "leaves rooms unseen; none: every room the network draws (default "
+                   "%(default)s)")
+    p.add_argument("--traces", choices=("lidar", "none"), default=d.traces,
                    help="lidar (default with --render slam): what a LIDAR + SLAM leaves "
                    "beyond the faces, a wall band of metric width with a ragged back edge "
-                   "and stray hits off the walls; none: the training maps' wall thickness "
-                   "(the output before session 11, with --drift parametric --coverage none)")
-    p.add_argument("--drift-route", choices=("tour", "explore"), default="tour",
-                   help="the drift's path: tour (default), a roadmap tour of the plan; "
-                   "explore: the hypothesis's exploration (the same one as --coverage "
-                   "explore)")
+                   "and stray hits off the walls; none: the training maps' wall thickness")
+    p.add_argument("--drift-route", choices=("tour", "explore"), default=d.drift_route,
+                   help="the drift's path: tour, a roadmap tour of the plan; explore: the "
+                   "hypothesis's exploration (the same one as --coverage explore) (default "
+                   "%(default)s)")
     p.add_argument("--no-figure", action="store_true", help="do not write the figure")
-    p.add_argument("--device", default="cpu", help="torch device (default cpu)")
+    p.add_argument("--device", default=d.device, help="torch device (default %(default)s)")
     add_input_options(p)
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..jobs.synthesize import SynthesizeSpec, synthesize
+    from ..jobs.synthesize import synthesize
 
     run = synthesize(SynthesizeSpec(
         args.input, args.out, samples=args.samples, model=args.model, seed=args.seed,

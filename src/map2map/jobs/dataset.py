@@ -1,7 +1,13 @@
-"""``map2map dataset clean`` as a job (thesis 4.1): label a dataset's pairs, train and save
-its cleaner (:func:`map2map.datasets.clean.clean_dataset`), or apply a saved cleaner to a
-dataset or a folder of pairs (:func:`map2map.datasets.clean.apply_cleaner`) and write the
-decisions.
+"""``map2map dataset build``, ``status``, ``clean`` and ``export`` as jobs.
+
+* :func:`build`: build (or continue) a paired dataset (:func:`map2map.datasets.build.
+  build_dataset`: resumable, local workers or a Dask cluster);
+* :func:`status`: where a dataset stands (:func:`map2map.datasets.build.dataset_status`);
+* :func:`clean` (thesis 4.1): label a dataset's pairs, train and save its cleaner
+  (:func:`map2map.datasets.clean.clean_dataset`), or apply a saved cleaner to a dataset or
+  a folder of pairs (:func:`map2map.datasets.clean.apply_cleaner`) and write the decisions;
+* :func:`export`: the pairs in a training format (:func:`map2map.datasets.export.
+  export_dataset`).
 
 The cleaner needs scikit-learn and skops (``pip install 'map2map[dataset]'``); without
 them the job says so in one line.
@@ -25,7 +31,72 @@ from typing import Any
 
 from ..core.errors import InputError
 
-__all__ = ["CleanSpec", "CleanRun", "clean"]
+__all__ = ["BuildSpec", "build", "status", "CleanSpec", "CleanRun", "clean", "ExportSpec",
+           "export"]
+
+
+@dataclass
+class BuildSpec:
+    """What ``map2map dataset build`` is asked to do (the parameters of
+    :func:`~map2map.datasets.build.build_dataset`; ``params``: the fields of
+    :class:`~map2map.datasets.pair.BuildParams`, ``None`` values taking its defaults)."""
+
+    out: str | os.PathLike
+    plans: str
+    count: int
+    seed: int = 0
+    params: dict = field(default_factory=dict)
+    workers: int = 1
+    scheduler: str | None = None
+    resolution: float = 0.05
+    plan_resolution: float | None = None
+    max_attempts: int = 3
+    progress: bool = True
+    figures: bool = True
+
+
+def build(spec: BuildSpec):
+    """Build (or continue) the dataset of ``spec``; returns the
+    :class:`~map2map.datasets.build.BuildSummary`."""
+    from ..datasets.build import build_dataset
+    from ..datasets.pair import BuildParams
+
+    if spec.workers < 1:
+        raise InputError("workers", f"must be >= 1, got {spec.workers}")
+    params = BuildParams(**{k: v for k, v in spec.params.items() if v is not None})
+    return build_dataset(
+        spec.out, spec.plans, spec.count, spec.seed, params, workers=spec.workers,
+        scheduler=spec.scheduler, resolution=spec.resolution,
+        plan_resolution=spec.plan_resolution, max_attempts=spec.max_attempts,
+        progress=spec.progress, figures=spec.figures)
+
+
+def status(ds: str | os.PathLike) -> dict:
+    """Where dataset ``ds`` stands (:func:`~map2map.datasets.build.dataset_status`)."""
+    from ..datasets.build import dataset_status
+
+    return dataset_status(ds)
+
+
+@dataclass
+class ExportSpec:
+    """What ``map2map dataset export`` is asked to do (the parameters of
+    :func:`~map2map.datasets.export.export_dataset`)."""
+
+    ds: str | os.PathLike
+    format: str
+    out: str | os.PathLike | None = None
+    everything: bool = False
+    include_review: bool = False
+    progress: bool = True
+
+
+def export(spec: ExportSpec):
+    """Export the dataset of ``spec``; returns the export's result (path, counts, size)."""
+    from ..datasets.export import export_dataset
+
+    return export_dataset(spec.ds, spec.format, spec.out, everything=spec.everything,
+                          include_review=spec.include_review, progress=spec.progress)
 
 
 @dataclass
