@@ -1,4 +1,5 @@
-"""Experiments: the accuracy measurements behind the documented figures, one folder each.
+"""Experiments: the thesis's tables and figures and the accuracy measurements behind the
+documented figures, one folder each.
 
 Every experiment is a package ``map2map.experiments.<name>`` holding its script
 (``__main__.py``, run as ``python -m map2map.experiments.<name> ...``) and a short
@@ -11,6 +12,17 @@ when they are absent. Performance benchmarks (speed, memory) stay in the reposit
 
 Experiments
 -----------
+table53
+    Thesis Table 5.3 / Fig. 5.12: does Model_BA bring held-out simulated SLAM maps closer
+    to their plans (its library, :mod:`~map2map.experiments.table53.measure`, is what
+    ``map2map reproduce`` runs); also where the error comes from and the wall faces.
+table53_real
+    Table 5.3 on the Halmstad sensor maps against their floor plans.
+realism
+    Model_AB's synthesized maps against simulated runs of the same plans (and the
+    perfect generator's null draws).
+fig514
+    Thesis Fig. 5.14: simulated, parametric and Model_AB maps of the same plans.
 halmstad_accuracy
     The alignment on the annotated Halmstad maps: keypoint residuals against their
     floor, and which confidence warnings fire on good, bad and wrong-map pairs.
