@@ -25,6 +25,11 @@ function. Heavy optional dependencies stay where they are needed: ``torch`` only
 ``map2map.learn`` and ``map2map.datasets`` (the scale-out), and ``import map2map``
 loads neither them nor matplotlib nor numba.
 
+One room per idea: the command line imports from ``learn`` only config modules (its
+defaults), the work goes through a job; the pair folder's file names are spelled only in
+``datasets.pairfolder`` and a DXF drawing is made only in ``maps.dxf``; no module of
+``learn`` is over :data:`LEARN_MAX_LINES` lines.
+
 The checks are functions of a source root, so that the tests at the end plant each kind
 of violation in a small package under ``tmp_path`` and see the check refuse it.
 """
@@ -307,6 +312,70 @@ def check_heavy(src: Path, top: str = "map2map") -> list[str]:
     return bad
 
 
+#: Module -> the one place where a kind of file is written or laid out.
+OWNERS = {
+    "pair folder": ("map2map.datasets.pairfolder",
+                    {"A.png", "B.png", "A.yaml", "B.yaml"}),
+}
+#: Calls only one module makes: (dotted call) -> owning module.
+ONE_WRITER = {"ezdxf.new": "map2map.maps.dxf"}
+#: Longest module of learn/ (lines).
+LEARN_MAX_LINES = 600
+
+
+def check_cli_parses_only(src: Path, top: str = "map2map") -> list[str]:
+    """The command line reads only configuration from the learned models (their
+    defaults); the work goes through :mod:`map2map.jobs`."""
+    bad = []
+    for mod, path in modules(src, top).items():
+        if layer_key(mod) != "cli":
+            continue
+        for imp in imports(path, src):
+            parts = imp.name.split(".")
+            if parts[:2] == [top, "learn"] and "config" not in parts:
+                bad.append(f"{mod}:{imp.line} imports {imp.name} (the CLI calls a job)")
+    return bad
+
+
+def _dotted(func: ast.expr) -> str | None:
+    """``a.b.c`` of a call's function, None for anything but names and attributes."""
+    parts = []
+    while isinstance(func, ast.Attribute):
+        parts.append(func.attr)
+        func = func.value
+    if not isinstance(func, ast.Name):
+        return None
+    return ".".join([func.id, *reversed(parts)])
+
+
+def check_owners(src: Path, top: str = "map2map") -> list[str]:
+    """File names of a layout (``"A.png"``) only in the module that owns it, and
+    :data:`ONE_WRITER`'s calls only in theirs."""
+    bad = []
+    for mod, path in modules(src, top).items():
+        tree = ast.parse(path.read_text(), str(path))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Constant) and isinstance(node.value, str):
+                for what, (owner, names) in OWNERS.items():
+                    if node.value in names and mod != owner:
+                        bad.append(f"{mod}:{node.lineno} spells the {what} name "
+                                   f"{node.value!r} (use {owner})")
+            elif isinstance(node, ast.Call):
+                name = _dotted(node.func)
+                if name in ONE_WRITER and mod != ONE_WRITER[name]:
+                    bad.append(f"{mod}:{node.lineno} calls {name} (only "
+                               f"{ONE_WRITER[name]} does)")
+    return bad
+
+
+def check_learn_sizes(src: Path, top: str = "map2map", limit: int = LEARN_MAX_LINES
+                      ) -> list[str]:
+    """Modules of learn/ longer than ``limit`` lines."""
+    return [f"{mod}: {n} lines" for mod, path in modules(src, top).items()
+            if layer_key(mod) == "learn"
+            and (n := len(path.read_text().splitlines())) > limit]
+
+
 # ------------------------------------------------------------------------ the package
 
 
@@ -482,3 +551,51 @@ def test_distributed_counts_as_dask(tmp_path):
         "map2map.core.t:1 imports torch",
         "map2map.sim.farm:2 imports distributed.Client",
     ]
+
+
+def test_the_cli_only_parses():
+    assert not check_cli_parses_only(SRC), "\n".join(check_cli_parses_only(SRC))
+
+
+def test_one_owner_per_file_layout_and_writer():
+    assert not check_owners(SRC), "\n".join(check_owners(SRC))
+
+
+def test_no_learn_module_is_over_600_lines():
+    assert not check_learn_sizes(SRC), "\n".join(check_learn_sizes(SRC))
+
+
+def test_a_cli_doing_a_models_work_is_refused(tmp_path):
+    src = _plant(tmp_path, {
+        "map2map/learn/__init__.py": "",
+        "map2map/learn/ba/__init__.py": "",
+        "map2map/learn/ba/config.py": "A = 1\n",
+        "map2map/learn/ba/autocorrect.py": "B = 2\n",
+        "map2map/cli/__init__.py": "",
+        "map2map/cli/ok.py": "from ..learn.ba.config import A\n",
+        "map2map/cli/bad.py": "def run():\n    from ..learn.ba.autocorrect import B\n",
+    })  # fmt: skip
+    assert check_cli_parses_only(src) == [
+        "map2map.cli.bad:2 imports map2map.learn.ba.autocorrect.B (the CLI calls a job)"]
+
+
+def test_a_second_pair_folder_reader_or_dxf_writer_is_refused(tmp_path):
+    src = _plant(tmp_path, {
+        "map2map/datasets/__init__.py": "",
+        "map2map/datasets/pairfolder.py": "PLAN = 'A.png'\n",
+        "map2map/sim/reader.py": "def f(d):\n    return d / 'B.png'\n",
+        "map2map/maps/__init__.py": "",
+        "map2map/maps/dxf.py": "import ezdxf\ndoc = ezdxf.new()\n",
+        "map2map/sim/cad.py": "import ezdxf\ndoc = ezdxf.new(units=6)\n",
+    })  # fmt: skip
+    assert sorted(check_owners(src)) == [
+        "map2map.sim.cad:2 calls ezdxf.new (only map2map.maps.dxf does)",
+        "map2map.sim.reader:2 spells the pair folder name 'B.png' (use "
+        "map2map.datasets.pairfolder)",
+    ]
+
+
+def test_a_long_learn_module_is_refused(tmp_path):
+    src = _plant(tmp_path, {"map2map/learn/__init__.py": "",
+                            "map2map/learn/big.py": "x = 1\n" * 7})
+    assert check_learn_sizes(src, limit=6) == ["map2map.learn.big: 7 lines"]
