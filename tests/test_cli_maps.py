@@ -63,7 +63,9 @@ def test_convert_every_format(inputs, tmp_path, capsys, name, suffix):
     out = tmp_path / "out" / f"converted{suffix}"
     rc, stdout, err = cli(capsys, "convert", inputs["dir"] / name, out)
     assert rc == 0, err
-    assert "wrote" in stdout and " m, " in stdout
+    # a picture without a stored resolution keeps no metric scale through a conversion
+    assert "wrote" in stdout and (" m, " in stdout or (name == "pic.png"
+                                                        and "no metric scale" in stdout))
     back = load_map(out)
     src = load_map(inputs["dir"] / name)
     assert np.array_equal(back.data, src.data) and back.resolution == src.resolution
@@ -253,3 +255,22 @@ def test_bad_output_suffix(inputs, tmp_path, capsys):
     assert_bad(rc, err, "fig.yaml", "cannot write")
     assert listing(tmp_path) == listing(tmp_path)  # and nothing appeared
     assert not (tmp_path / "map.gif").exists() and not (tmp_path / "fig.yaml").exists()
+
+
+def test_no_scale_bar_on_a_map_without_a_metric_scale():
+    """draw_map draws the metric scale bar only on a map whose resolution is its own."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.offsetbox import AnchoredOffsetbox
+
+    from map2map.core.grid import OccupancyMap
+    from map2map.core.viz import draw_map
+
+    data = np.full((40, 60), 255, np.uint8)
+    for meta, bars in (({}, 1), ({"resolution_assumed": True}, 0)):
+        fig, ax = plt.subplots()
+        draw_map(ax, OccupancyMap(data, 0.05, meta=meta))
+        assert sum(isinstance(a, AnchoredOffsetbox) for a in ax.artists) == bars
+        plt.close(fig)

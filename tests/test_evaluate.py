@@ -416,7 +416,10 @@ def test_cli_bad_inputs(plan, tmp_path, capsys):
         _bad(["evaluate", tgt, tgt, "--out", str(out), "--anchors", str(a)], capsys, out, expect)
     no_res = tmp_path / "nores.png"
     cv2.imwrite(str(no_res), plan)  # a plain picture: no resolution stored
-    _bad(["evaluate", str(no_res), str(no_res), "--out", str(out)], capsys, out, "--resolution")
+    _bad(["evaluate", str(no_res), str(no_res), "--out", str(out), "--units", "m"], capsys,
+         out, "--resolution")
+    _bad(["evaluate", str(no_res), str(no_res), "--out", str(out), "--report", "r.html"],
+         capsys, out, "--resolution")
     pts = tmp_path / "pts.csv"
     pts.write_text("x,y\n1,oops\n")
     _bad(["align", tgt, tgt, "--out", str(out), "--points", str(pts)], capsys, out, "line 2")
@@ -467,3 +470,24 @@ def test_demo_stage_evaluates_a_known_bend(tmp_path, capsys):
     assert re.search(r"inspect known_bend: plan walls \d+ pass, \d+ fail", line)
     e = ctx.evaluation["known_bend"]
     assert 0.0 < e["mean_m"] < e["max_m"]
+
+
+def test_one_rule_for_a_picture_without_a_resolution(plan, tmp_path, capsys):
+    """A picture with no stored resolution is read at 0.05 m/px and has no metric scale:
+    evaluate reports pixels with a note (metres only with --resolution), no scale bar."""
+    import json
+
+    no_res = tmp_path / "nores.png"
+    cv2.imwrite(str(no_res), plan)
+    out = tmp_path / "ev"
+    assert main(["evaluate", str(no_res), str(no_res), "--out", str(out), "--quiet"]) == 0
+    got = capsys.readouterr()
+    assert "errors in pixels: the plan has no metric scale" in got.out + got.err
+    assert "--resolution" in got.out + got.err                     # the way to metres
+    report = json.loads((out / "report.json").read_text())
+    assert report["errors"][report["chosen_chain"]]["mean_m"] is None
+    assert main(["evaluate", str(no_res), str(no_res), "--out", str(tmp_path / "ev_m"),
+                 "--resolution", "0.05", "--quiet"]) == 0
+    metric = json.loads((tmp_path / "ev_m" / "report.json").read_text())
+    assert metric["errors"][metric["chosen_chain"]]["mean_m"] is not None
+    assert "errors in pixels" not in "".join(metric.get("notes", []))

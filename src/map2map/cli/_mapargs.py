@@ -37,7 +37,8 @@ def add_input_options(
             type=float,
             metavar="R",
             help="metres per pixel for pictures, HouseExpo JSON and DXF (default: stored in "
-            "the picture, else 0.05)",
+            "the picture, else 0.05 with a note; such a picture has no metric scale: no "
+            "scale bar, sizes in pixels)",
         )
     g.add_argument(
         "--occupied-thresh",

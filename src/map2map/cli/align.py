@@ -35,7 +35,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--resolution",
         type=float,
         metavar="R",
-        help="metres per pixel of picture inputs, both maps (ROS maps keep their own)",
+        help="metres per pixel of picture inputs, both maps (ROS maps keep their own); "
+        "without it, a picture with no stored resolution is read at 0.05 m/px with a note "
+        "and has no metric scale (no scale bar; evaluate reports pixels)",
     )
     p.add_argument(
         "--source-resolution",
@@ -69,10 +71,12 @@ def report_warnings(warnings: list[str], strict: bool, notes: list[str] = ()) ->
     warning, else 0 (notes never change it)."""
     import sys
 
+    from ._messages import as_options
+
     for n in notes:
-        print(f"map2map: note: {n}", file=sys.stderr)
+        print(f"map2map: note: {as_options(n)}", file=sys.stderr)
     for w in warnings:
-        print(f"map2map: warning: {w}", file=sys.stderr)
+        print(f"map2map: warning: {as_options(w)}", file=sys.stderr)
     if warnings and strict:
         print(f"map2map: {len(warnings)} warning(s) and --strict: exit 3", file=sys.stderr)
         return 3

@@ -31,7 +31,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--resolution",
         type=float,
         metavar="R",
-        help="metres per pixel of picture inputs, both maps (ROS maps keep their own)",
+        help="metres per pixel of picture inputs, both maps (ROS maps keep their own); "
+        "without it, a picture with no stored resolution is read at 0.05 m/px with a note "
+        "and has no metric scale (no scale bar; evaluate reports pixels)",
     )
     p.add_argument(
         "--source-resolution",
@@ -52,9 +54,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--units",
-        choices=("m", "px"),
-        default="m",
-        help="report errors in metres (needs a resolution) or pixels only (default: m)",
+        choices=("auto", "m", "px"),
+        default="auto",
+        help="report errors in metres or pixels; auto (default): metres when PLAN has a "
+        "metric scale (a ROS yaml, a picture with a stored resolution, HouseExpo JSON, DXF, "
+        "or --resolution), else pixels, with a note",
     )
     p.add_argument(
         "--report",
@@ -104,7 +108,7 @@ def run(args: argparse.Namespace) -> int:
             resolution=args.resolution,
             source_resolution=args.source_resolution,
             target_resolution=args.target_resolution,
-            units=args.units,
+            units="m" if args.report is not None and args.units == "auto" else args.units,
             auto_anchor=not args.no_auto_anchors,
             seed=args.seed,
             read_options=read_options_from_args(args),
@@ -112,7 +116,7 @@ def run(args: argparse.Namespace) -> int:
         )
     )
     if args.pairs:
-        unit = "px" if args.units == "px" else "m"
+        unit = run.units
         for r in run.rows:
             print(
                 f"{r['pair']:<24s} {r['chosen_chain']:<8s} wall mean {r['mean_' + unit]:.4g} "

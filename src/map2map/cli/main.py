@@ -10,13 +10,13 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import re
 import sys
 import warnings
 
 from .._version import __version__
 from ..core.errors import EXIT_BAD_INPUT, InputError, MapWarning
 from ..core.limits import for_command
+from ._messages import as_options
 
 #: Command modules, in the order ``--help`` lists them.
 COMMANDS = [
@@ -55,35 +55,14 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-#: Library parameters whose command-line option has another name.
-_OPTION_OF = {"everything": "--all"}
-
-#: A parameter named in a library message: `name` or `name=value` (:mod:`map2map.core.errors`).
-_PARAMETER = re.compile(r"`([a-z][a-z0-9_]*)(?:=([^`\s]+))?`")
-
-
-def _as_options(text: str) -> str:
-    """A library message as the command line says it: `name` -> --name, `name=v` -> --name v.
-
-    >>> _as_options("pass `max_pixels=9` or a coarser `resolution`; `everything`")
-    'pass --max-pixels 9 or a coarser --resolution; --all'
-    """
-
-    def option(m: re.Match) -> str:
-        flag = _OPTION_OF.get(m[1], "--" + m[1].replace("_", "-"))
-        return flag if m[2] is None else f"{flag} {m[2]}"
-
-    return _PARAMETER.sub(option, text)
-
-
 def _as_flags(exc: InputError, args: argparse.Namespace) -> str:
     """The error as the command line says it: a library parameter name becomes its flag.
 
     The library names parameters (``max_range``); when the command has an option of
     that name, the message names the option (``--max-range``). Parameters named in the
-    problem (`` `resolution` ``) become options too (:func:`_as_options`).
+    problem (`` `resolution` ``) become options too (:func:`~map2map.cli._messages.as_options`).
     """
-    name, problem = exc.source, _as_options(exc.problem)
+    name, problem = exc.source, as_options(exc.problem)
     if name and name.isidentifier() and name in vars(args) and name != "func":
         return f"--{name.replace('_', '-')}: {problem}"
     return problem if name is None else f"{name}: {problem}"
@@ -101,7 +80,7 @@ def main(argv: list[str] | None = None) -> int:
 
             def show(message, category, *rest, **kw):  # our warnings: one plain line
                 if issubclass(category, MapWarning):
-                    print(f"map2map: warning: {_as_options(str(message))}", file=sys.stderr)
+                    print(f"map2map: warning: {as_options(str(message))}", file=sys.stderr)
                 else:
                     shown(message, category, *rest, **kw)
 

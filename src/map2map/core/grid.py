@@ -134,6 +134,21 @@ class OccupancyMap:
         return self.data.shape[1]
 
     @property
+    def scale_known(self) -> bool:
+        """Whether the resolution is the map's own (stored in its file or given), not the
+        default a picture without one is read at (``meta["resolution_assumed"]``): only
+        then are lengths on it metres (scale bars, errors in metres, the inspection).
+
+        Examples
+        --------
+        >>> m = OccupancyMap(np.full((2, 2), 255, np.uint8), 0.05)
+        >>> picture = OccupancyMap(m.data, 0.05, meta={"resolution_assumed": True})
+        >>> m.scale_known, picture.scale_known
+        (True, False)
+        """
+        return not self.meta.get("resolution_assumed", False)
+
+    @property
     def size_m(self) -> tuple[float, float]:
         """(width, height) in metres."""
         return self.width * self.resolution, self.height * self.resolution

@@ -84,7 +84,8 @@ def draw_map(
     title : str, optional
         Axes title.
     scale_bar : bool
-        Draw a metric scale bar (:func:`add_scale_bar`).
+        Draw a metric scale bar (:func:`add_scale_bar`), when the map has a metric scale
+        (:attr:`~map2map.core.grid.OccupancyMap.scale_known`).
     alpha : float
         Opacity of the image.
     """
@@ -95,7 +96,7 @@ def draw_map(
     ax.set_yticks([])
     if title:
         ax.set_title(title, fontsize=10)
-    if scale_bar:
+    if scale_bar and m.scale_known:
         add_scale_bar(ax, m.resolution, m.width)
 
 

@@ -98,7 +98,8 @@ def overlay_figure(
         fontsize=8,
         framealpha=0.8,
     )
-    add_scale_bar(ax, plan.resolution, c1 - c0)
+    if plan.scale_known:
+        add_scale_bar(ax, plan.resolution, c1 - c0)
     save_figure(fig, path)
 
 
@@ -173,7 +174,8 @@ def error_map_figure(
     ax.set_title(title, fontsize=10)
     ax.set_xlabel("plan x (px)")
     ax.set_ylabel("plan y (px)")
-    add_scale_bar(ax, plan.resolution, c1 - c0)
+    if plan.scale_known:
+        add_scale_bar(ax, plan.resolution, c1 - c0)
     save_figure(fig, path)
     plt.close("all")
 

@@ -387,8 +387,10 @@ class EvaluateSpec:
         Two anchor point pairs (paper eqs. 1-6); one pair only.
     resolution, source_resolution, target_resolution : float or None
         Metres per pixel of both maps / the SLAM map / the plan (one pair only).
-    units : {"m", "px"}
-        Errors in metres (needs the plan's resolution) or pixels.
+    units : {"auto", "m", "px"}
+        Errors in metres (needs the plan's metric scale: a ROS yaml, a picture with a
+        stored resolution, HouseExpo JSON, DXF, or ``resolution``) or pixels; ``"auto"``
+        (default): metres when every plan has a metric scale, else pixels, with a note.
     auto_anchor : bool
         Look for anchor points automatically.
     seed : int
@@ -407,7 +409,7 @@ class EvaluateSpec:
     resolution: float | None = None
     source_resolution: float | None = None
     target_resolution: float | None = None
-    units: str = "m"
+    units: str = "auto"
     auto_anchor: bool = True
     seed: int = 0
     read_options: Any = None
@@ -426,6 +428,8 @@ class EvaluateRun:
     evaluations: list[Evaluation] = field(default_factory=list)
     rows: list[dict[str, Any]] = field(default_factory=list)
     plans: list[OccupancyMap] = field(default_factory=list)
+    #: the units the errors were given in, ``"m"`` or ``"px"`` (``"auto"`` resolved)
+    units: str = "m"
 
     @property
     def evaluation(self) -> Evaluation | None:
@@ -451,8 +455,8 @@ def _check_evaluate(spec: EvaluateSpec) -> None:
     _check_common(spec.seed, {"resolution": spec.resolution,
                               "source_resolution": spec.source_resolution,
                               "target_resolution": spec.target_resolution})  # fmt: skip
-    if spec.units not in ("m", "px"):
-        raise InputError("units", f"must be m or px, got {spec.units!r}")
+    if spec.units not in ("auto", "m", "px"):
+        raise InputError("units", f"must be auto, m or px, got {spec.units!r}")
     if spec.pairs is not None:
         if spec.slam is not None or spec.plan is not None:
             raise InputError("pairs", "give either the slam and plan maps or pairs, not both")
@@ -492,12 +496,39 @@ def evaluate(spec: EvaluateSpec) -> EvaluateRun:
                      spec.read_options)  # fmt: skip
     tgt = load_input(spec.plan, _pick(spec.target_resolution, spec.resolution),
                      spec.read_options)  # fmt: skip
-    res = _metres_resolution(tgt, spec.units)
+    units = _units(spec.units, [tgt])
+    res = _metres_resolution(tgt, units)
     anch = _anchors(spec.anchors, src, tgt)
     ev = _evaluate(src, tgt, anch, res, spec.seed, spec.auto_anchor)
+    _note_units(ev, spec.units, units)
     with atomic_dir(spec.out, protect=inputs) as out_dir:
         written = write_evaluation(ev, tgt.map, out_dir, res, figures=spec.figures)
-    return EvaluateRun(final_paths(written, out_dir, spec.out), [ev], plans=[tgt.map])
+    return EvaluateRun(final_paths(written, out_dir, spec.out), [ev], plans=[tgt.map],
+                       units=units)
+
+
+#: Why errors come in pixels under ``units="auto"``.
+PIXELS_NOTE = ("errors in pixels: the plan has no metric scale (a picture without a stored "
+               "resolution); give `resolution=R` for metres")
+
+
+def _units(units: str, plans: list[MapInput]) -> str:
+    """``units`` with ``"auto"`` resolved: metres when every plan has a metric scale.
+
+    >>> import numpy as np
+    >>> m = OccupancyMap(np.zeros((2, 2), np.uint8), 0.05)
+    >>> yaml, png = MapInput(Path("a.yaml"), m, True), MapInput(Path("a.png"), m, False)
+    >>> _units("auto", [yaml]), _units("auto", [yaml, png]), _units("m", [png])
+    ('m', 'px', 'm')
+    """
+    if units != "auto":
+        return units
+    return "m" if all(p.resolution_known for p in plans) else "px"
+
+
+def _note_units(ev: Evaluation, asked: str, units: str) -> None:
+    if asked == "auto" and units == "px":
+        ev.report.setdefault("notes", []).append(PIXELS_NOTE)
 
 
 def run_evaluate(
@@ -553,20 +584,23 @@ def _evaluate_pairs(spec: EvaluateSpec) -> EvaluateRun:
     inputs = (spec.pairs, *(x for pair in pairs for x in pair))
     check_output_dir(spec.out, protect=inputs)
     check_read_options(spec.read_options, [x for pair in pairs for x in pair[:2]])
-    loaded = []
+    read = []
     for slam, plan, anchors in pairs:
         src = load_input(slam, spec.resolution, spec.read_options)
         tgt = load_input(plan, spec.resolution, spec.read_options)
-        res = _metres_resolution(tgt, spec.units)
-        loaded.append((src, tgt, _anchors(anchors, src, tgt), res))
+        read.append((src, tgt, anchors))
+    units = _units(spec.units, [tgt for _, tgt, _ in read])
+    loaded = [(src, tgt, _anchors(anchors, src, tgt), _metres_resolution(tgt, units))
+              for src, tgt, anchors in read]
     rows, dists, evs = [], {}, []
     written: dict[str, Path] = {}
-    unit = "px" if spec.units == "px" else "cm"
+    unit = "px" if units == "px" else "cm"
     with atomic_dir(spec.out, protect=inputs) as out_dir:
         bar = tqdm(loaded, desc="evaluate", disable=not spec.progress)
         for i, (src, tgt, anch, res) in enumerate(bar):
             name = f"{i + 1:03d}_{src.path.stem}"
             ev = _evaluate(src, tgt, anch, res, spec.seed, spec.auto_anchor)
+            _note_units(ev, spec.units, units)
             evs.append(ev)
             pair_dir = ensure_output_dir(out_dir / name)
             paths = write_evaluation(ev, tgt.map, pair_dir, res, figures=spec.figures)
@@ -586,7 +620,7 @@ def _evaluate_pairs(spec: EvaluateSpec) -> EvaluateRun:
             error_boxplot(dists, out_dir / "errors_boxplot.png", unit=unit)
             written["boxplot"] = out_dir / "errors_boxplot.png"
     plans = [tgt.map for _, tgt, _, _ in loaded]
-    return EvaluateRun(final_paths(written, out_dir, spec.out), evs, rows, plans)
+    return EvaluateRun(final_paths(written, out_dir, spec.out), evs, rows, plans, units)
 
 
 def _pair_row(name: str, src: MapInput, tgt: MapInput, ev: Evaluation) -> dict[str, Any]:

@@ -42,9 +42,15 @@ def map_summary(m: OccupancyMap) -> str:
     Examples
     --------
     >>> import numpy as np
-    >>> map_summary(OccupancyMap(np.full((20, 40), 255, np.uint8), 0.05))
+    >>> m = OccupancyMap(np.full((20, 40), 255, np.uint8), 0.05)
+    >>> map_summary(m)
     '2.0 x 1.0 m, 5 cm/px (40 x 20 px), free 2.0 m²'
+    >>> map_summary(OccupancyMap(m.data, 0.05, meta={"resolution_assumed": True}))
+    '40 x 20 px, no metric scale (read at 0.05 m/px), free 800 px'
     """
+    if not m.scale_known:
+        return (f"{m.width} x {m.height} px, no metric scale (read at "
+                f"{m.resolution:g} m/px), free {int(m.free.sum())} px")
     w_m, h_m = m.size_m
     res = m.resolution
     res_text = f"{res * 100:.3g} cm/px" if res < 1 else f"{res:.3g} m/px"

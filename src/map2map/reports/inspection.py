@@ -534,7 +534,8 @@ def status_figure(plan: OccupancyMap, inspection: WallInspection):
         "(failed walls numbered)",
         fontsize=10,
     )
-    add_scale_bar(ax, plan.resolution, c1 - c0)
+    if plan.scale_known:
+        add_scale_bar(ax, plan.resolution, c1 - c0)
     return fig
 
 
