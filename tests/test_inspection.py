@@ -210,3 +210,19 @@ def test_a_plan_against_itself_fails_no_wall():
     insp = inspect_walls(evaluate_maps(plan, plan, resolution=plan.resolution), plan)
     assert len(insp.segments) >= 8 and insp.counts["fail"] == 0
     assert insp.counts["pass"] >= 0.8 * len(insp.segments) and not insp.warnings
+
+
+def test_a_relative_report_path_goes_inside_out(tmp_path, monkeypatch):
+    """``--report inspection.html`` lands in ``--out``, not in the current folder."""
+    slam, plan = _maps()
+    save_map(slam, tmp_path / "slam.yaml")
+    save_map(plan, tmp_path / "plan.yaml")
+    cwd = tmp_path / "elsewhere"
+    cwd.mkdir()
+    monkeypatch.chdir(cwd)
+    assert main(["evaluate", str(tmp_path / "slam.yaml"), str(tmp_path / "plan.yaml"),
+                 "--out", str(tmp_path / "ev"), "--report", "inspection.html",
+                 "--quiet"]) == 0
+    assert (tmp_path / "ev" / "inspection.html").is_file()
+    assert (tmp_path / "ev" / "inspection.md").is_file()
+    assert not list(cwd.iterdir())

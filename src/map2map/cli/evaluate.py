@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from ._mapargs import add_input_options, read_options_from_args
 
@@ -65,7 +66,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="HTML",
         help="also write an as-built inspection report: HTML (self-contained, prints to PDF), "
         "its Markdown twin and a CSV of every plan wall segment with pass / fail / not "
-        "observed (with --pairs: one report per pair, HTML_<pair>.html)",
+        "observed (with --pairs: one report per pair, HTML_<pair>.html); a relative path "
+        "is inside --out",
     )
     p.add_argument(
         "--tolerance",
@@ -95,7 +97,7 @@ def run(args: argparse.Namespace) -> int:
         if args.units == "px":
             raise InputError("--report", "the inspection report needs errors in metres, "
                              "not --units px")  # fmt: skip
-        check_report_path(args.report, "--report")
+        check_report_path(_report_path(args), "--report")
     elif args.tolerance is not None:
         raise InputError("--tolerance", "applies to the inspection report: add --report FILE")
     run = evaluate(
@@ -133,11 +135,17 @@ def run(args: argparse.Namespace) -> int:
     return report_warnings(run.warnings, args.strict, run.notes)
 
 
+def _report_path(args: argparse.Namespace) -> Path:
+    """``--report``: inside ``--out`` unless absolute."""
+    p = Path(args.report)
+    return p if p.is_absolute() else Path(args.out) / p
+
+
 def _inspection(run, args: argparse.Namespace, tolerance: float) -> None:
     """Write the inspection report(s) of ``--report`` and say what they found."""
     if args.report is None:
         return
     from ..reports.inspection import write_run_inspections
 
-    for f in write_run_inspections(run, args.report, tolerance=tolerance):
+    for f in write_run_inspections(run, _report_path(args), tolerance=tolerance):
         print(f"wrote {f.html}, {f.md.name} and {f.csv.name}: walls {f.summary()}")
