@@ -97,7 +97,7 @@ def test_csv_one_row_per_segment(case, tmp_path):
         rows = list(csv.DictReader(fh))
     assert len(rows) == len(insp.segments) >= 15
     assert [int(r["id"]) for r in rows] == list(range(1, len(rows) + 1))
-    assert {r["status"] for r in rows} == set(STATUSES)
+    assert {r["status"] for r in rows} <= set(STATUSES)
     for r, s in zip(rows, insp.segments, strict=True):
         assert float(r["x0_m"]) == pytest.approx(s.x0_m, abs=1e-3)
         assert (r["deviation_cm"] == "") == (s.status == "not observed")
@@ -226,3 +226,51 @@ def test_a_relative_report_path_goes_inside_out(tmp_path, monkeypatch):
     assert (tmp_path / "ev" / "inspection.html").is_file()
     assert (tmp_path / "ev" / "inspection.md").is_file()
     assert not list(cwd.iterdir())
+
+
+def test_a_wall_moved_20_cm_fails_and_the_rest_do_not():
+    """One interior wall built 20 cm off fails (its whole interval beyond 5 cm); every
+    other wall passes or is uncertain, none fails."""
+    from map2map.maps.synthetic import draw_walls, office_walls
+
+    plan = OccupancyMap(draw_walls((240, 300), office_walls(300, 240)), 0.05)
+    built = draw_walls((240, 300), office_walls(300, 240, partition_shift=(4.0, 0.0)))
+    insp = inspect_walls(evaluate_maps(OccupancyMap(built, 0.05), plan, resolution=0.05),
+                         plan, tolerance=0.05)
+    failed = [s for s in insp.segments if s.status == "fail"]
+    assert failed and all(abs(s.x0_m - s.x1_m) < 1e-9 for s in failed)  # the partition
+    assert all(s.deviation_lo_cm > 5.0 and 15 < s.deviation_cm < 25 for s in failed)
+    others = [s for s in insp.segments if s not in failed]
+    assert {s.status for s in others} <= {"pass", "uncertain"} and len(others) >= 10
+    assert all(s.deviation_lo_cm <= s.deviation_cm <= s.deviation_hi_cm for s in others)
+
+
+def test_a_wall_stub_beside_a_door_is_judged():
+    """A 25 cm stub between a wall and a door opening is a segment of its own, with a
+    verdict (here: its few wall points are corners, left out by the metric, so it is not
+    observed and says why; in the demo's plan the stubs are observed)."""
+    data = np.full((120, 160), 255, np.uint8)
+    data[:4, :] = 0; data[-4:, :] = 0; data[:, :4] = 0; data[:, -4:] = 0   # outer walls
+    data[4:9, 80:82] = 0                       # a 5 px (25 cm) stub on the top wall
+    data[29:116, 80:82] = 0                    # the door (20 px), then the wall
+    plan = OccupancyMap(data, 0.05)
+    insp = inspect_walls(evaluate_maps(plan, plan, resolution=0.05), plan, tolerance=0.05)
+    stub = [s for s in insp.segments if s.length_m < 0.5 and abs(s.x0_m - s.x1_m) < 0.1
+            and 75 <= s.px[0] <= 83]
+    assert len(stub) == 1 and stub[0].status in STATUSES
+    assert stub[0].status != "not observed" or "evidence" in stub[0].note
+
+
+def test_every_failed_wall_is_numbered_in_the_figure():
+    from map2map.maps.synthetic import draw_walls, office_walls
+    from map2map.reports.inspection import status_figure
+
+    plan = OccupancyMap(draw_walls((240, 300), office_walls(300, 240)), 0.05)
+    built = draw_walls((240, 300), office_walls(300, 240, partition_shift=(4.0, 0.0)))
+    insp = inspect_walls(evaluate_maps(OccupancyMap(built, 0.05), plan, resolution=0.05),
+                         plan, tolerance=0.05)
+    for s in insp.segments[:3]:     # more failed walls than the ten worst would label
+        s.status = "fail"
+    fig = status_figure(plan, insp)
+    labels = {t.get_text() for t in fig.axes[0].texts}
+    assert labels == {str(s.id) for s in insp.segments if s.status == "fail"}

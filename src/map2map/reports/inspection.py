@@ -7,7 +7,9 @@ evaluate_maps`). This module turns that evaluation into walls:
 
 1. **Wall segments of the plan.** The plan's walls are cut into straight segments
    (:func:`map2map.maps.segments.straight_segments`: centre lines, axis snapping,
-   merged collinear pieces; door openings of ``min_gap_m`` 0.4 m or more stay gaps).
+   merged collinear pieces; door openings of ``min_gap_m`` 0.4 m or more stay gaps;
+   wall stubs shorter than that, beside a door or at a T, are cut at half that scale, so
+   they are judged too).
    Endpoints are given in plan metres (the map's ROS frame,
    :meth:`~map2map.core.grid.OccupancyMap.pixel_to_world`).
 2. **As-built evidence of each segment.** Every SLAM wall point counted in the wall
@@ -22,9 +24,15 @@ evaluate_maps`). This module turns that evaluation into walls:
    length but off by a hand's width over its last metre pass. ``mean``, ``max`` and the
    signed ``offset`` (the median displacement across the wall, + toward +y for an
    east-west wall and toward +x for a north-south one: where it was built) are given
-   beside it.
-4. **Status.** ``pass`` when the deviation is at most the tolerance, ``fail`` above
-   it, and ``not observed`` when the SLAM map holds too little evidence of the wall:
+   beside it. **Its uncertainty** (:func:`deviation_interval`): the distribution-free
+   interval of the p95, one standard error either side, from the ranks of the wall's own
+   points (the spread of its evidence: few or scattered points give a wide one), widened
+   on both sides by half a
+   plan pixel (the plan and the SLAM map each place a wall face only on their pixel grid).
+4. **Status.** ``pass`` when the whole interval is within the tolerance, ``fail`` when
+   the whole interval is beyond it, ``uncertain`` when the tolerance lies inside it (the
+   map cannot tell: check on site or use a finer map), and ``not observed`` when the SLAM
+   map holds too little evidence of the wall:
    fewer than ``min_points`` points, or less than ``min_coverage`` of its length
    (2-px bins) seen. A wall not observed is *never* counted as passed. When SLAM wall
    points that match no plan wall (more than 0.3 m from any, see the metric) lie
@@ -73,6 +81,7 @@ from .document import Report
 
 __all__ = [
     "STATUSES",
+    "deviation_interval",
     "WallSegment",
     "WallInspection",
     "check_tolerance",
@@ -85,9 +94,10 @@ __all__ = [
     "check_report_path",
 ]
 
-#: The three statuses of a wall segment, in the order they are counted.
-STATUSES = ("pass", "fail", "not observed")
-STATUS_COLOURS = {"pass": "#1a9850", "fail": "#d73027", "not observed": "#8c8c8c"}
+#: The statuses of a wall segment, in the order they are counted.
+STATUSES = ("pass", "uncertain", "fail", "not observed")
+STATUS_COLOURS = {"pass": "#1a9850", "uncertain": "#f39c12", "fail": "#d73027",
+                  "not observed": "#8c8c8c"}
 
 CSV_COLUMNS = [
     "id",
@@ -98,6 +108,8 @@ CSV_COLUMNS = [
     "length_m",
     "status",
     "deviation_cm",
+    "deviation_lo_cm",
+    "deviation_hi_cm",
     "mean_cm",
     "max_cm",
     "offset_cm",
@@ -114,7 +126,8 @@ class WallSegment:
 
     ``x0_m .. y1_m`` are the endpoints in plan metres (ROS frame), ``px`` the same in
     plan pixels (x = column, y = row, continuous: a pixel's centre is at +0.5).
-    ``deviation_cm`` (p95 of the local errors of its points) decides the status;
+    ``deviation_cm`` (p95 of the local errors of its points) and its interval
+    ``deviation_lo_cm .. deviation_hi_cm`` (:func:`deviation_interval`) decide the status;
     ``mean_cm``, ``max_cm`` and ``offset_cm`` (signed, median across the wall) are
     given beside it; all four are NaN for a wall not observed. ``coverage`` is the
     share of its length seen, ``points`` the SLAM wall points matched to it,
@@ -129,6 +142,8 @@ class WallSegment:
     length_m: float
     status: str
     deviation_cm: float
+    deviation_lo_cm: float
+    deviation_hi_cm: float
     mean_cm: float
     max_cm: float
     offset_cm: float
@@ -158,6 +173,8 @@ class WallSegment:
             "length_m": f(self.length_m, 3),
             "status": self.status,
             "deviation_cm": f(self.deviation_cm, 2),
+            "deviation_lo_cm": f(self.deviation_lo_cm, 2),
+            "deviation_hi_cm": f(self.deviation_hi_cm, 2),
             "mean_cm": f(self.mean_cm, 2),
             "max_cm": f(self.max_cm, 2),
             "offset_cm": f(self.offset_cm, 2),
@@ -220,12 +237,25 @@ def _plan_segments(plan: OccupancyMap, min_gap_m: float, min_length_m: float) ->
     if not walls.any():
         return np.zeros((0, 4))
     cell = max(2.0, min_gap_m / plan.resolution)
-    segs = straight_segments(walls, cell) + 0.5
-    length = np.hypot(segs[:, 2] - segs[:, 0], segs[:, 3] - segs[:, 1])
-    segs = segs[length >= max(2.0, min_length_m / plan.resolution)]
+    min_len = max(2.0, min_length_m / plan.resolution)
+    segs = _long_enough(straight_segments(walls, cell) + 0.5, min_len)
+    # wall stubs (beside a door, at a T) are shorter than a cell: at the door's scale their
+    # free end snaps onto the wall they stand on and they vanish. Cut again at half the
+    # scale and keep the pieces no segment already covers, so every stub is judged.
+    fine = _long_enough(straight_segments(walls, max(2.0, cell / 2)) + 0.5, min_len)
+    if len(fine) and len(segs):
+        mid = 0.5 * (fine[:, :2] + fine[:, 2:])
+        _, dist, _ = _to_segments(mid, segs)
+        fine = fine[dist > 2.0]
+    segs = np.concatenate([segs, fine]) if len(fine) else segs
     # a stable, readable order: top to bottom, then left to right (ids follow it)
     key = np.round(np.minimum(segs[:, 1], segs[:, 3])) * 1e6 + np.minimum(segs[:, 0], segs[:, 2])
     return segs[np.argsort(key, kind="stable")]
+
+
+def _long_enough(segs: np.ndarray, min_len: float) -> np.ndarray:
+    length = np.hypot(segs[:, 2] - segs[:, 0], segs[:, 3] - segs[:, 1])
+    return segs[length >= min_len]
 
 
 def _to_segments(
@@ -335,14 +365,16 @@ def inspect_walls(
             dw = disp[sel] @ _pixel_to_world_linear(plan)
             offset = float(np.median(dw @ normal)) * res * 100.0
             dev = float(np.percentile(e, 95))
-            status = "pass" if dev <= tol * 100.0 + 1e-9 else "fail"
-            stats = (dev, float(e.mean()), float(e.max()), offset)
+            lo, hi = deviation_interval(e, 0.5 * res * 100.0)
+            t = tol * 100.0
+            status = "pass" if hi <= t + 1e-9 else "fail" if lo > t + 1e-9 else "uncertain"
+            stats = (dev, lo, hi, float(e.mean()), float(e.max()), offset)
             note = ""
             if coverage < 0.6:
                 note = f"only {coverage:.0%} of its length seen"
         else:
             status = "not observed"
-            stats = (math.nan,) * 4
+            stats = (math.nan,) * 6
             why = (
                 "no SLAM wall evidence"
                 if e.size == 0
@@ -364,9 +396,11 @@ def inspect_walls(
                 length_m=length_px * res,
                 status=status,
                 deviation_cm=stats[0],
-                mean_cm=stats[1],
-                max_cm=stats[2],
-                offset_cm=stats[3],
+                deviation_lo_cm=stats[1],
+                deviation_hi_cm=stats[2],
+                mean_cm=stats[3],
+                max_cm=stats[4],
+                offset_cm=stats[5],
                 points=int(e.size),
                 coverage=coverage,
                 unmatched_nearby=n_unm,
@@ -377,6 +411,45 @@ def inspect_walls(
     insp = WallInspection(out, tol, res, min_points, min_coverage)
     insp.warnings = _judgement_warnings(insp)
     return insp
+
+
+def deviation_interval(errors_cm: np.ndarray, grid_cm: float, q: float = 0.95,
+                       z: float = 1.0) -> tuple[float, float]:
+    """The interval of a wall's deviation (its points' ``q`` quantile): the distribution-free
+    confidence interval of that quantile from the order statistics of the points (ranks
+    ``n q -+ z sqrt(n q (1 - q))``), widened by ``grid_cm`` on both sides (where the plan
+    and the map can place a wall face at all), clipped at 0.
+
+    Parameters
+    ----------
+    errors_cm : ndarray
+        The local errors of the wall's points, cm.
+    grid_cm : float
+        Half a plan pixel, cm.
+    q, z : float
+        The quantile, and the half-width of the interval in standard errors (1: the 68 %
+        interval; 1.96, the 95 % one, reaches a wall's largest error with about 100
+        points, so one stray point of a pixel off on a perfect wall made it uncertain).
+
+    Returns
+    -------
+    (float, float)
+        Lower and upper bound, cm.
+
+    Examples
+    --------
+    >>> e = np.linspace(0.0, 4.0, 200)            # 200 points, p95 3.8 cm
+    >>> [round(v, 2) for v in deviation_interval(e, 2.5)]
+    [1.22, 6.38]
+    >>> [round(v, 2) for v in deviation_interval(e[::20], 2.5)]   # 10 points: wider
+    [0.31, 6.12]
+    """
+    e = np.sort(np.asarray(errors_cm, float))
+    n = e.size
+    half = z * math.sqrt(n * q * (1.0 - q))
+    lo = e[int(np.clip(math.floor(n * q - half) - 1, 0, n - 1))]
+    hi = e[int(np.clip(math.ceil(n * q + half) - 1, 0, n - 1))]
+    return max(0.0, float(lo) - grid_cm), float(hi) + grid_cm
 
 
 def _pixel_to_world_linear(plan: OccupancyMap) -> np.ndarray:
@@ -414,18 +487,6 @@ def _judgement_warnings(insp: WallInspection) -> list[str]:
             "shifts walls too (see the heat map: a smooth trend across the building points "
             "to the map, single walls off to the building), and a map can only judge a "
             "tolerance a few times coarser than its accuracy."
-        )
-    near = [
-        s
-        for s in insp.segments
-        if s.status != "not observed"
-        and abs(s.deviation_cm - insp.tolerance_m * 100.0) < 0.5 * insp.resolution * 100.0
-    ]
-    if near:
-        w.append(
-            f"{len(near)} wall segment(s) deviate within half a plan pixel of the tolerance "
-            f"(ids {', '.join(str(s.id) for s in near[:10])}{', ...' if len(near) > 10 else ''}): "
-            "their verdict is not certain; check them on site."
         )
     return w
 
@@ -504,13 +565,14 @@ def status_figure(plan: OccupancyMap, inspection: WallInspection):
     bg[view == OCCUPIED] = 0.75
     fig, ax = new_figure(OccupancyMap(view.copy(), plan.resolution), panel_inches=7.0)
     ax.imshow(bg, interpolation="antialiased", extent=(c0, c1, r1, r0))
-    style = {"pass": ("-", 2.2), "fail": ("-", 3.4), "not observed": ((0, (2, 1.5)), 1.6)}
+    style = {"pass": ("-", 2.2), "uncertain": ("-", 2.6), "fail": ("-", 3.4),
+             "not observed": ((0, (2, 1.5)), 1.6)}
     for s in inspection.segments:
         ls, lw = style[s.status]
         x0, y0, x1, y1 = s.px
         ax.plot([x0, x1], [y0, y1], color=STATUS_COLOURS[s.status], ls=ls, lw=lw,
                 solid_capstyle="butt")  # fmt: skip
-    for s in inspection.worst(10):
+    for s in inspection.segments:  # every failed wall, numbered
         if s.status == "fail":
             x0, y0, x1, y1 = s.px
             ax.annotate(
@@ -624,18 +686,24 @@ def inspection_report(
             "p95 wall error": _cm(cm("p95")),
             "max wall error": _cm(cm("max")),
             "walls pass": str(counts["pass"]),
+            "walls uncertain": str(counts["uncertain"]),
             "walls fail": str(counts["fail"]),
             "walls not observed": str(counts["not observed"]),
         }
     )
     s.text(
         f"{len(insp.segments)} straight wall segments were cut from the plan and judged "
-        f"against a tolerance of {insp.tolerance_m * 100:g} cm: a segment passes when 95 % "
-        "of the as-built wall evidence matched to it lies within the tolerance of the "
-        "planned wall (its deviation, the 95th percentile of the local errors), fails "
-        "otherwise, and is not observed when the SLAM map saw too little of it (fewer than "
-        f"{insp.min_points} wall points or under {insp.min_coverage:.0%} of its length): "
-        "a wall not observed is never counted as passed."
+        f"against a tolerance of {insp.tolerance_m * 100:g} cm. A segment's deviation is "
+        "the 95th percentile of the local errors of the as-built wall evidence matched to "
+        "it, given with its uncertainty: one standard error either side of that "
+        "percentile, from the ranks of the wall's own points, widened by half a plan pixel "
+        f"({50 * res:g} cm) where neither map can place a wall face. A segment passes "
+        "when the whole interval is within the tolerance, fails when the whole interval "
+        "is beyond it, and is uncertain when the tolerance falls inside it (the map cannot "
+        "tell: check on site, or measure with a finer map); it is not observed when the "
+        f"SLAM map saw too little of it (fewer than {insp.min_points} wall points or under "
+        f"{insp.min_coverage:.0%} of its length): a wall not observed is never counted as "
+        "passed."
     )
     s.text(
         f"Errors are those of the {chain} chain ({rep['chosen_reason']}; appendix paper, "
@@ -683,9 +751,9 @@ def inspection_report(
     fig = status_figure(plan, insp)
     s.figure(
         fig,
-        "Plan wall segments: green pass, red fail (numbered with their id), grey dashed "
-        "not observed.",
-        alt="plan with wall segments coloured by pass, fail, not observed",
+        "Plan wall segments: green pass, orange uncertain, red fail (every failed wall "
+        "numbered with its id), grey dashed not observed.",
+        alt="plan with wall segments coloured by pass, uncertain, fail, not observed",
     )
     plt.close(fig)
     total = max(1, len(insp.segments))
@@ -701,11 +769,11 @@ def inspection_report(
     if worst:
         s.table(
             ["id", "centre x (m)", "centre y (m)", "length (m)", "deviation (cm)",
-             "mean (cm)", "max (cm)", "offset (cm)", "status"],  # fmt: skip
+             "interval (cm)", "mean (cm)", "max (cm)", "offset (cm)", "status"],  # fmt: skip
             [
                 [w.id, _num(w.centre_m[0], 2), _num(w.centre_m[1], 2), _num(w.length_m, 2),
-                 _num(w.deviation_cm), _num(w.mean_cm), _num(w.max_cm), _num(w.offset_cm),
-                 w.status]  # fmt: skip
+                 _num(w.deviation_cm), f"{_num(w.deviation_lo_cm)}-{_num(w.deviation_hi_cm)}",
+                 _num(w.mean_cm), _num(w.max_cm), _num(w.offset_cm), w.status]  # fmt: skip
                 for w in worst
             ],
             caption=f"The {len(worst)} observed wall segments with the largest deviation",
@@ -794,10 +862,11 @@ class InspectionFiles:
     inspection: WallInspection
 
     def summary(self) -> str:
-        """``"12 pass, 2 fail, 3 not observed at 5 cm"``."""
+        """``"12 pass, 4 uncertain, 2 fail, 3 not observed at 5 cm"``."""
         c = self.inspection.counts
         return (
-            f"{c['pass']} pass, {c['fail']} fail, {c['not observed']} not observed "
+            f"{c['pass']} pass, {c['uncertain']} uncertain, {c['fail']} fail, "
+            f"{c['not observed']} not observed "
             f"at {self.inspection.tolerance_m * 100:g} cm"
         )
 
