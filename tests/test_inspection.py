@@ -250,7 +250,10 @@ def test_a_wall_stub_beside_a_door_is_judged():
     verdict (here: its few wall points are corners, left out by the metric, so it is not
     observed and says why; in the demo's plan the stubs are observed)."""
     data = np.full((120, 160), 255, np.uint8)
-    data[:4, :] = 0; data[-4:, :] = 0; data[:, :4] = 0; data[:, -4:] = 0   # outer walls
+    data[:4, :] = 0
+    data[-4:, :] = 0
+    data[:, :4] = 0
+    data[:, -4:] = 0                           # outer walls
     data[4:9, 80:82] = 0                       # a 5 px (25 cm) stub on the top wall
     data[29:116, 80:82] = 0                    # the door (20 px), then the wall
     plan = OccupancyMap(data, 0.05)
