@@ -80,7 +80,7 @@ from ..core.errors import InputError
 from .base import LaserScan, OdometryReading
 from .carmen import CarmenLog
 
-__all__ = ["BAG_FORMATS", "is_bag", "read_bag", "write_bag"]
+__all__ = ["BAG_FORMATS", "is_bag", "read_bag", "write_bag", "bag_name", "check_bag_format"]
 
 #: ``format`` names of :func:`write_bag`: a ROS 1 ``.bag`` file, a ROS 2 bag folder
 #: with sqlite3 storage (ROS 2 Humble's default) or with mcap storage (Iron's onward).
@@ -110,6 +110,38 @@ def _rosbags(path, doing: str):
             path, f"{doing} a ROS bag needs the rosbags package: {INSTALL_HINT} ({exc})"
         ) from None
     return rosbags
+
+
+def check_bag_format(format: str, source="bag") -> None:
+    """Refuse, before any work, a ``format`` not in :data:`BAG_FORMATS` or a missing rosbags.
+
+    Parameters
+    ----------
+    format : str
+        The format to be written.
+    source : str
+        What the error names.
+
+    Examples
+    --------
+    >>> check_bag_format("mcap")
+    >>> check_bag_format("ros3")
+    Traceback (most recent call last):
+    ...
+    map2map.core.errors.InputError: bag: unknown bag format 'ros3' (ros1, ros2, mcap)
+    """
+    if format not in BAG_FORMATS:
+        raise InputError(source, f"unknown bag format '{format}' ({', '.join(BAG_FORMATS)})")
+    _rosbags(source, "writing")
+
+
+def bag_name(stem: str, format: str) -> str:
+    """File or folder name of a bag: ``STEM.bag`` (ROS 1) or ``STEM_bag`` (a ROS 2 folder).
+
+    >>> bag_name("run", "ros1"), bag_name("run", "mcap")
+    ('run.bag', 'run_bag')
+    """
+    return f"{stem}.bag" if format == "ros1" else f"{stem}_bag"
 
 
 def is_bag(path: str | os.PathLike) -> bool:
@@ -150,12 +182,8 @@ def _bag_path(path: Path) -> Path:
         if not (path / "metadata.yaml").is_file():
             raise InputError(path, "folder is not a ROS 2 bag (no metadata.yaml)")
         return path
-    if path.suffix in (".db3", ".mcap"):
-        if (path.parent / "metadata.yaml").is_file():
-            return path.parent
-        raise InputError(
-            path, "a ROS 2 bag is read as its folder with metadata.yaml; there is none beside it"
-        )
+    if path.suffix in (".db3", ".mcap"):  # its folder (metadata.yaml) if it has one
+        return path.parent if (path.parent / "metadata.yaml").is_file() else path
     if path.suffix != ".bag":
         raise InputError(path, "a ROS 1 bag must be named *.bag")
     return path
@@ -223,12 +251,14 @@ def _rotation(q) -> np.ndarray:
     )
 
 
-def _transform(tr) -> np.ndarray:
-    """4x4 matrix of a geometry_msgs/Transform."""
+def _transform(tr) -> tuple[np.ndarray, tuple[float, float, float] | None]:
+    """4x4 matrix of a geometry_msgs/Transform, and ``(x, y, yaw)`` if it turns about z only."""
     m = np.eye(4)
     m[:3, :3] = _rotation(tr.rotation)
     m[:3, 3] = (tr.translation.x, tr.translation.y, tr.translation.z)
-    return m
+    q = tr.rotation
+    planar = (tr.translation.x, tr.translation.y, _yaw(q)) if q.x == 0 and q.y == 0 else None
+    return m, planar
 
 
 def _choose(path, topics: dict[str, str], msgtype: str, what: str, param: str, chosen):
@@ -267,8 +297,9 @@ def read_bag(
     Parameters
     ----------
     path : path-like
-        A ROS 1 ``.bag`` file, a ROS 2 bag folder (with ``metadata.yaml``) or the
-        ``.db3`` / ``.mcap`` file in one.
+        A ROS 1 ``.bag`` file, a ROS 2 bag folder (with ``metadata.yaml``) or a ROS 2
+        ``.db3`` / ``.mcap`` storage file (its folder is read when it has
+        ``metadata.yaml``).
     scan_topic : str, optional
         The ``sensor_msgs/LaserScan`` topic; needed when the bag has several.
     odom_topic : str, optional
@@ -331,8 +362,8 @@ def _read(path: Path, reader, scan_topic, odom_topic) -> CarmenLog:
     scans: list[tuple[float, str, object]] = []  # (t, frame, msg)
     odom_rows: list[tuple[float, float, float, float]] = []
     odom_child: str | None = None
-    static: dict[str, tuple[str, np.ndarray]] = {}  # child -> (parent, 4x4)
-    tf_first: dict[str, tuple[str, np.ndarray]] = {}  # /tf child -> (parent, first 4x4)
+    static: dict[str, tuple] = {}  # child -> (parent, 4x4, planar (x, y, yaw) or None)
+    tf_first: dict[str, tuple] = {}  # /tf child -> the same, of its first transform
     tf_rows: dict[tuple[str, str], list] = {}  # (parent, child) -> [(t, x, y, yaw)]
     for conn, _, raw in reader.messages(connections=conns):
         msg = reader.deserialize(raw, conn.msgtype)
@@ -348,12 +379,12 @@ def _read(path: Path, reader, scan_topic, odom_topic) -> CarmenLog:
             for tr in msg.transforms:
                 static[_frame(tr.child_frame_id)] = (
                     _frame(tr.header.frame_id),
-                    _transform(tr.transform),
+                    *_transform(tr.transform),
                 )
         else:  # /tf
             for tr in msg.transforms:
                 parent, child = _frame(tr.header.frame_id), _frame(tr.child_frame_id)
-                tf_first.setdefault(child, (parent, _transform(tr.transform)))
+                tf_first.setdefault(child, (parent, *_transform(tr.transform)))
                 tr_ = tr.transform.translation
                 tf_rows.setdefault((parent, child), []).append(
                     (_stamp(tr.header.stamp), tr_.x, tr_.y, _yaw(tr.transform.rotation))
@@ -408,8 +439,9 @@ def _read(path: Path, reader, scan_topic, odom_topic) -> CarmenLog:
     if dropped:
         notes.append(f"{dropped} scans outside the odometry's time span dropped")
     params = {}
-    for r in getattr(reader, "readers", []):
-        custom = getattr(getattr(r, "metadata", None), "custom", None) or {}
+    for r in getattr(reader, "readers", []):  # a ROS 2 bag folder's metadata.yaml
+        storage = getattr(r, "storage", r)
+        custom = getattr(getattr(storage, "metadata", None), "custom", None) or {}
         params.update({k: str(v) for k, v in custom.items() if k.startswith("map2map_")})
     return CarmenLog(out_odom, out_scans, None, params, notes=notes)
 
@@ -451,7 +483,7 @@ def _mounting(laser, base, static, tf_first) -> tuple[tuple[float, float, float]
     if base is None or base == laser:
         return (0.0, 0.0, 0.0), False, f"identity (scans in the robot frame {laser})"
     m, frame, used_tf = np.eye(4), laser, False
-    seen = {laser}
+    seen, planar = {laser}, (0.0, 0.0, 0.0)
     while frame != base:
         edge = static.get(frame)
         if edge is None:
@@ -465,12 +497,23 @@ def _mounting(laser, base, static, tf_first) -> tuple[tuple[float, float, float]
                 "is taken to sit at the robot's centre, facing forward",
             )
         m = edge[1] @ m
+        if planar is not None and edge[2] is not None:  # compose (x, y, yaw): exact for one
+            ex, ey, eth = edge[2]
+            px, py, pth = planar
+            c, s_ = math.cos(eth), math.sin(eth)
+            planar = (ex + (c * px - s_ * py), ey + (s_ * px + c * py), eth + pth)
+        else:
+            planar = None
         frame = edge[0]
         seen.add(frame)
     rot = m[:3, :3]
     mirrored = rot[2, 2] < 0  # the laser's z axis points down
-    yaw = math.atan2(rot[1, 0], rot[0, 0])
-    x, y = float(m[0, 3]), float(m[1, 3])
+    if planar is not None:
+        x, y, yaw = (float(v) for v in planar)
+        yaw = yaw if -math.pi <= yaw <= math.pi else math.remainder(yaw, 2 * math.pi)
+    else:
+        yaw = math.atan2(rot[1, 0], rot[0, 0])
+        x, y = float(m[0, 3]), float(m[1, 3])
     src = "/tf_static" + (" and /tf" if used_tf else "")
     how = f"{base} -> {laser} from {src} (x {x:.4g} m, y {y:.4g} m, yaw {math.degrees(yaw):.4g} deg"
     if mirrored:
@@ -533,7 +576,8 @@ def write_bag(
     *,
     format: str = "ros2",
     scan_topic: str = "/scan",
-    odom_topic: str = "/odom",
+    odom_topic: str | None = "/odom",
+    tf: bool = True,
     odom_frame: str = "odom",
     base_frame: str = "base_footprint",
     laser_frame: str = "base_scan",
@@ -556,8 +600,12 @@ def write_bag(
         ``format="ros1"``: the ``.bag`` file; otherwise the bag folder.
     format : {"ros1", "ros2", "mcap"}
         ROS 1 bag, ROS 2 bag with sqlite3 storage, ROS 2 bag with mcap storage.
-    scan_topic, odom_topic : str
-        Topic names.
+    scan_topic : str
+        The LaserScan topic.
+    odom_topic : str or None
+        The Odometry topic; None writes none (the odometry is then on ``/tf`` only).
+    tf : bool
+        Write the odometry as the ``odom_frame -> base_frame`` transform on ``/tf``.
     odom_frame, base_frame, laser_frame : str
         Frame names (TurtleBot3's by default).
 
@@ -584,12 +632,12 @@ def write_bag(
     if format == "ros1":
         with atomic_path(path) as tmp:
             tmp.unlink()
-            _write(rb, log, tmp, format, scan_topic, odom_topic, odom_frame, base_frame,
+            _write(rb, log, tmp, format, scan_topic, odom_topic, tf, odom_frame, base_frame,
                    laser_frame)  # fmt: skip
     else:
         with atomic_dir(path) as tmp:
             inner = tmp / path.name  # rosbags names the storage file after the folder
-            _write(rb, log, inner, format, scan_topic, odom_topic, odom_frame, base_frame,
+            _write(rb, log, inner, format, scan_topic, odom_topic, tf, odom_frame, base_frame,
                    laser_frame)  # fmt: skip
             for f in list(inner.iterdir()):
                 shutil.move(str(f), str(tmp / f.name))
@@ -597,7 +645,7 @@ def write_bag(
     return path
 
 
-def _write(rb, log, path, format, scan_topic, odom_topic, odom_frame, base_frame, laser_frame):
+def _write(rb, log, path, format, scan_topic, odom_topic, tf, odom_frame, base_frame, laser_frame):
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
     ros1 = format == "ros1"
@@ -647,8 +695,8 @@ def _write(rb, log, path, format, scan_topic, odom_topic, odom_frame, base_frame
     )
     with writer:
         c_static = writer.add_connection(TF_STATIC_TOPIC, TF_TYPE, typestore=ts)
-        c_tf = writer.add_connection(TF_TOPIC, TF_TYPE, typestore=ts)
-        c_odom = writer.add_connection(odom_topic, ODOM_TYPE, typestore=ts)
+        c_tf = writer.add_connection(TF_TOPIC, TF_TYPE, typestore=ts) if tf else None
+        c_odom = writer.add_connection(odom_topic, ODOM_TYPE, typestore=ts) if odom_topic else None
         c_scan = writer.add_connection(scan_topic, SCAN_TYPE, typestore=ts)
         first = log.scans[0]
         msg, ns = tf_msg(first.t, base_frame, laser_frame, *first.sensor_offset)
@@ -661,9 +709,11 @@ def _write(rb, log, path, format, scan_topic, odom_topic, odom_frame, base_frame
                 covariance=zeros36,
             )  # fmt: skip
             m = T[ODOM_TYPE](header=h, child_frame_id=base_frame, pose=pose, twist=no_twist)
-            writer.write(c_odom, ns, serialize(m, ODOM_TYPE))
-            msg, _ = tf_msg(scan.t, odom_frame, base_frame, odo.x, odo.y, odo.theta)
-            writer.write(c_tf, ns, serialize(msg, TF_TYPE))
+            if c_odom is not None:
+                writer.write(c_odom, ns, serialize(m, ODOM_TYPE))
+            if c_tf is not None:
+                msg, _ = tf_msg(scan.t, odom_frame, base_frame, odo.x, odo.y, odo.theta)
+                writer.write(c_tf, ns, serialize(msg, TF_TYPE))
             r = np.asarray(scan.ranges, np.float32)
             n = r.shape[0]
             h, _ = header(scan.t, laser_frame)
