@@ -181,7 +181,7 @@ def test_simulate_writes_its_log_as_a_bag(tmp_path):
 # ----------------------------------------------------------------------------- bad bags
 
 
-def _custom_bag(path, *, scans=("/scan",), odoms=("/odom",), n=12):
+def _custom_bag(path, *, scans=("/scan",), odoms=("/odom",), n=12, stamped=True):
     """A ROS 2 mcap bag with the given LaserScan and Odometry topics (n messages each)."""
     from rosbags.rosbag2 import StoragePlugin, Writer
     from rosbags.typesys import Stores, get_typestore
@@ -192,7 +192,8 @@ def _custom_bag(path, *, scans=("/scan",), odoms=("/odom",), n=12):
 
     def header(k, frame):
         return T["std_msgs/msg/Header"](
-            stamp=T["builtin_interfaces/msg/Time"](sec=k, nanosec=0), frame_id=frame
+            stamp=T["builtin_interfaces/msg/Time"](sec=k if stamped else 0, nanosec=0),
+            frame_id=frame,
         )
 
     with Writer(path, version=8, storage_plugin=StoragePlugin.MCAP) as w:
@@ -235,6 +236,10 @@ def test_a_hand_made_bag_reads_with_ros_semantics(tmp_path):
     assert r[0] == 1.0 and np.isnan(r[1:4]).all() and r[4] == np.inf
     assert "unknown: no transform chain base_link -> laser" in log.notes[0]
     assert log.scans[0].sensor_offset == (0.0, 0.0, 0.0)
+    # no header stamps: the record times
+    log = read_bag(_custom_bag(tmp_path / "c", stamped=False))
+    assert [s.t for s in log.scans] == list(range(12)) and log.odometry[3].x == 0.1 * 3
+    assert "header stamps are all 0 s: the bag's record times used" in log.notes[1]
 
 
 BAD_BAGS = {

@@ -12,7 +12,8 @@ special path:
   (``scan_topic`` chooses when there are several; several without a choice are refused,
   naming them). A reading that is NaN, ``-inf`` or below ``range_min`` is unusable
   (NaN, as a BreezySLAM 0 reading); ``+inf`` or at least ``range_max`` is a no-return
-  (``inf``, as in a CARMEN log). Times are the header stamps.
+  (``inf``, as in a CARMEN log). Times are the header stamps (the bag's record times
+  when the scans carry none: all stamps equal).
 * **odometry** is a ``nav_msgs/Odometry`` topic, found by type (``odom_topic`` chooses),
   or, when the bag has none or ``odom_topic`` is ``/tf``, the ``odom -> base``
   transform on ``/tf`` (the parent frame's name ends in ``odom``, the child is the
@@ -359,20 +360,22 @@ def _read(path: Path, reader, scan_topic, odom_topic) -> CarmenLog:
     wanted = {scan_t, *tf_topics} | ({odom_t} if odom_t else set())
     conns = [c for c in reader.connections if c.topic in wanted]
 
-    scans: list[tuple[float, str, object]] = []  # (t, frame, msg)
-    odom_rows: list[tuple[float, float, float, float]] = []
+    # header stamp and record time (s) of every message: (t, t_bag, ...)
+    scans: list[tuple[float, float, str, object]] = []  # (t, t_bag, frame, msg)
+    odom_rows: list[tuple[float, float, float, float, float]] = []  # (t, t_bag, x, y, yaw)
     odom_child: str | None = None
     static: dict[str, tuple] = {}  # child -> (parent, 4x4, planar (x, y, yaw) or None)
     tf_first: dict[str, tuple] = {}  # /tf child -> the same, of its first transform
-    tf_rows: dict[tuple[str, str], list] = {}  # (parent, child) -> [(t, x, y, yaw)]
-    for conn, _, raw in reader.messages(connections=conns):
+    tf_rows: dict[tuple[str, str], list] = {}  # (parent, child) -> [(t, t_bag, x, y, yaw)]
+    for conn, ns, raw in reader.messages(connections=conns):
         msg = reader.deserialize(raw, conn.msgtype)
+        tb = ns / 1_000_000_000
         if conn.topic == scan_t:
-            scans.append((_stamp(msg.header.stamp), _frame(msg.header.frame_id), msg))
+            scans.append((_stamp(msg.header.stamp), tb, _frame(msg.header.frame_id), msg))
         elif conn.topic == odom_t:
             p = msg.pose.pose
             odom_rows.append(
-                (_stamp(msg.header.stamp), p.position.x, p.position.y, _yaw(p.orientation))
+                (_stamp(msg.header.stamp), tb, p.position.x, p.position.y, _yaw(p.orientation))
             )
             odom_child = odom_child or _frame(msg.child_frame_id)
         elif conn.topic == TF_STATIC_TOPIC:
@@ -387,19 +390,26 @@ def _read(path: Path, reader, scan_topic, odom_topic) -> CarmenLog:
                 tf_first.setdefault(child, (parent, *_transform(tr.transform)))
                 tr_ = tr.transform.translation
                 tf_rows.setdefault((parent, child), []).append(
-                    (_stamp(tr.header.stamp), tr_.x, tr_.y, _yaw(tr.transform.rotation))
+                    (_stamp(tr.header.stamp), tb, tr_.x, tr_.y, _yaw(tr.transform.rotation))
                 )
     if not scans:
         raise InputError(path, f"bag has no messages on the LaserScan topic {scan_t}")
-    laser = scans[0][1]
+    laser = scans[0][2]
     notes = []
+    # scans without header stamps (all equal, e.g. 0): every time is the record time
+    k = 1 if len(scans) > 1 and len({s[0] for s in scans}) == 1 else 0
+
+    def clock(rows):
+        return [(r[k], *r[2:]) for r in rows]
+
     if odom_t is not None:
         if not odom_rows:
             raise InputError(path, f"bag has no messages on the odometry topic {odom_t}")
-        series, base, source = _Series.build(odom_rows), odom_child, f"{odom_t} (nav_msgs/Odometry)"
+        series, base = _Series.build(clock(odom_rows)), odom_child
+        source = f"{odom_t} (nav_msgs/Odometry)"
     else:
         edge = _odom_edge(path, laser, static, tf_first, tf_rows, chosen=use_tf)
-        series, base = _Series.build(tf_rows[edge]), edge[1]
+        series, base = _Series.build(clock(tf_rows[edge])), edge[1]
         source = f"{TF_TOPIC} transform {edge[0]} -> {edge[1]}"
     offset, mirrored, how = _mounting(laser, base, static, tf_first)
     notes.append(
@@ -410,7 +420,11 @@ def _read(path: Path, reader, scan_topic, odom_topic) -> CarmenLog:
     out_scans: list[LaserScan] = []
     out_odom: list[OdometryReading] = []
     n_beams, dropped = None, 0
-    for t, _, msg in sorted(scans, key=lambda s: s[0]):
+    if k:
+        notes.append(
+            f"the scans' header stamps are all {scans[0][0]:g} s: the bag's record times used"
+        )
+    for t, _, msg in sorted(clock(scans), key=lambda s: s[0]):
         pose = series.at(t)
         if pose is None:
             dropped += 1
