@@ -147,7 +147,7 @@ def bag_name(stem: str, format: str) -> str:
 
 def is_bag(path: str | os.PathLike) -> bool:
     """Whether ``path`` is a ROS bag: a ``.bag`` file (or one starting ``#ROSBAG``), a
-    folder with ``metadata.yaml``, or a ``.db3`` / ``.mcap`` file of such a folder.
+    folder with ``metadata.yaml``, or a ROS 2 ``.db3`` / ``.mcap`` storage file.
 
     Parameters
     ----------
