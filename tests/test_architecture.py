@@ -22,8 +22,9 @@ map2map name must be a module that exists (or a name in one) in a package with a
 No two modules import each other, directly or around a loop, not even from inside a
 function. Heavy optional dependencies stay where they are needed: ``torch`` only in
 ``map2map.learn``, ``dask`` (and its ``distributed`` scheduler) only in
-``map2map.learn`` and ``map2map.datasets`` (the scale-out), and ``import map2map``
-loads neither them nor matplotlib nor numba.
+``map2map.learn`` and ``map2map.datasets`` (the scale-out), the optional ``rosbags``
+only in ``map2map.robotlog`` (ROS bags), and ``import map2map`` loads none of them
+nor matplotlib nor numba.
 
 One room per idea: the command line imports from ``learn`` only config modules (its
 defaults), the work goes through a job; the pair folder's file names are spelled only in
@@ -73,6 +74,7 @@ HEAVY = {
     "torch": {"learn"},
     "dask": {"learn", "datasets"},
     "distributed": {"learn", "datasets"},  # dask's scheduler
+    "rosbags": {"robotlog"},  # the optional ROS bag reader and writer (robotlog.rosbag)
 }
 
 #: Modules that import by a computed name, and where those names come from.
@@ -427,7 +429,8 @@ def test_heavy_dependencies_stay_in_their_packages():
 def test_import_map2map_stays_light():
     code = (
         "import sys, map2map\n"
-        "heavy = [m for m in ('matplotlib', 'numba', 'torch', 'dask', 'distributed')"
+        "heavy = [m for m in ('matplotlib', 'numba', 'torch', 'dask', 'distributed',"
+        " 'rosbags')"
         " if m in sys.modules]\n"
         "print(','.join(heavy))\n"
     )

@@ -67,6 +67,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--obstacles", type=int, default=0, metavar="N", help="random furniture boxes")
     p.add_argument("--people", type=int, default=0, metavar="N", help="people walking around")
     p.add_argument("--gif", action="store_true", help="also write exploration.gif")
+    p.add_argument(
+        "--bag",
+        choices=["ros1", "ros2", "mcap"],
+        help="also write the log's odometry and scans as a ROS bag: ros1 (run.bag), ros2 "
+        "(sqlite3) or mcap (folder run_bag); needs pip install 'map2map[ros]'",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     add_input_options(p)
     p.set_defaults(func=run)
@@ -93,6 +99,7 @@ def run(args: argparse.Namespace) -> int:
                 people=args.people,
                 gif=args.gif,
                 progress=not args.quiet,
+                bag=args.bag,
             )
         )
     rep = run.result.report()

@@ -10,7 +10,8 @@ from pathlib import Path
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "slam",
-        help="build a map from a recorded run (CARMEN log, simulator run, BreezySLAM log)",
+        help="build a map from a recorded run (CARMEN log, simulator run, BreezySLAM log, "
+        "ROS bag)",
         description="Replay a recorded run through a SLAM backend (GMapping-style particle "
         "filter or Karto-style graph SLAM) and write the map (ROS yaml + pgm), the estimated "
         "trajectory (CSV) and a figure. Only odometry and scans are used, never ground truth. "
@@ -20,7 +21,8 @@ def register(subparsers) -> None:
         "log",
         type=Path,
         help="CARMEN log (.log, .gz allowed), a 'map2map simulate' output folder, "
-        "or a BreezySLAM raw log (.dat)",
+        "a BreezySLAM raw log (.dat), or a ROS bag: a ROS 1 .bag file or a ROS 2 bag "
+        "folder (sqlite3 or mcap; needs pip install 'map2map[ros]')",
     )
     p.add_argument("--out", type=Path, required=True, help="output folder")
     p.add_argument(
@@ -44,9 +46,20 @@ def register(subparsers) -> None:
     p.add_argument("--seed", type=int, default=0, help="random seed of rbpf (default 0)")
     p.add_argument(
         "--format",
-        choices=["auto", "carmen", "breezyslam", "simrun"],
+        choices=["auto", "carmen", "breezyslam", "simrun", "rosbag"],
         default="auto",
         help="log format (default: detected from the content)",
+    )
+    p.add_argument(
+        "--scan-topic",
+        metavar="TOPIC",
+        help="ROS bag: the sensor_msgs/LaserScan topic (default: the bag's only one)",
+    )
+    p.add_argument(
+        "--odom-topic",
+        metavar="TOPIC",
+        help="ROS bag: the nav_msgs/Odometry topic, or /tf for the odom -> base transform "
+        "(default: the bag's only Odometry topic, else /tf)",
     )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument(
@@ -72,6 +85,8 @@ def run(args: argparse.Namespace) -> int:
             max_range=args.max_range,
             seed=args.seed,
             format=args.format,
+            scan_topic=args.scan_topic,
+            odom_topic=args.odom_topic,
             progress=not args.quiet,
         )
     )

@@ -4,7 +4,8 @@
 files written (``written``) and the in-memory :class:`~map2map.sim.runner.SimResult`.
 :func:`save_run` writes a result: ``slam_map.yaml``/``.pgm`` (plan frame),
 ``trajectory_true.csv``, ``trajectory_estimated.csv`` (``t,x,y,theta``), ``run.log``
-(CARMEN), ``report.json``, ``figure.png`` and optionally ``exploration.gif``.
+(CARMEN), ``report.json``, ``figure.png``, optionally ``exploration.gif`` and the log as a
+ROS bag (``run.bag`` or the ROS 2 folder ``run_bag``, :mod:`map2map.robotlog.rosbag`).
 
 Examples
 --------
@@ -49,7 +50,8 @@ class SimulateSpec:
     the plan's own world frame (for a HouseExpo JSON plan: HouseExpo's x, y, theta,
     converted by :func:`map2map.maps.houseexpo.houseexpo_to_world`). ``figures=False``
     skips ``figure.png`` and the gif (a dataset builder's choice). ``plan_name`` names
-    an in-memory plan in error messages.
+    an in-memory plan in error messages. ``bag`` (a format of
+    :data:`~map2map.robotlog.rosbag.BAG_FORMATS`) also writes the log as a ROS bag.
     """
 
     plan: str | os.PathLike | OccupancyMap
@@ -68,6 +70,8 @@ class SimulateSpec:
     figures: bool = True
     progress: bool = True
     load_options: dict = field(default_factory=dict)
+    #: Also write the log as a ROS bag: "ros1" (run.bag), "ros2" or "mcap" (run_bag/).
+    bag: str | None = None
 
 
 @dataclass
@@ -109,6 +113,10 @@ def simulate(spec: SimulateSpec) -> SimulateRun:
     inputs = (spec.plan_name if isinstance(spec.plan, OccupancyMap) else spec.plan,
               spec.waypoints, spec.trajectory)  # fmt: skip
     check_output_dir(spec.out, protect=inputs)
+    if spec.bag is not None:
+        from ..robotlog.rosbag import check_bag_format
+
+        check_bag_format(spec.bag, "bag")
     if not (math.isfinite(spec.duration) and spec.duration > 0):
         raise InputError("duration", f"duration must be > 0 seconds, got {spec.duration:g}")
     if spec.obstacles < 0 or spec.people < 0:
@@ -141,7 +149,7 @@ def simulate(spec: SimulateSpec) -> SimulateRun:
         route_source=route_file,
     )
     with atomic_dir(spec.out, protect=inputs) as tmp:
-        written = save_run(res, tmp, gif=spec.gif, figures=spec.figures)
+        written = save_run(res, tmp, gif=spec.gif, figures=spec.figures, bag=spec.bag)
     return SimulateRun(final_paths(written, tmp, spec.out), res)
 
 
@@ -255,14 +263,22 @@ def save_gif(res: SimResult, path: Path, max_frames: int = 80) -> None:
 
 
 def save_run(
-    res: SimResult, out: str | os.PathLike, *, gif: bool = False, figures: bool = True
+    res: SimResult,
+    out: str | os.PathLike,
+    *,
+    gif: bool = False,
+    figures: bool = True,
+    bag: str | None = None,
 ) -> dict[str, Path]:
     """Write the run's outputs into folder ``out``; returns name -> path.
 
     ``slam_map.yaml``/``.pgm`` (plan frame), ``trajectory_true.csv``,
     ``trajectory_estimated.csv`` (plan frame, columns ``t,x,y,theta``), ``run.log``
     (CARMEN, odometry frame, with ``TRUEPOS`` in the plan frame), ``report.json``,
-    ``figure.png`` (unless ``figures`` is false) and optionally ``exploration.gif``.
+    ``figure.png`` (unless ``figures`` is false), optionally ``exploration.gif`` and,
+    with ``bag`` (``"ros1"``, ``"ros2"``, ``"mcap"``), the odometry and scans of the log
+    as a ROS bag (``run.bag`` or ``run_bag/``, :func:`map2map.robotlog.rosbag.write_bag`;
+    the true start pose in a ROS 2 bag's ``custom_data``, no ``TRUEPOS``).
     """
 
     out = ensure_output_dir(out)
@@ -278,16 +294,25 @@ def save_run(
     save_map(res.slam_map_plan, paths["slam_map"])
     _write_csv(paths["trajectory_true"], res.times, res.true_poses)
     _write_csv(paths["trajectory_estimated"], res.times, res.estimated_poses)
+    start = {
+        "map2map_start_x": res.start[0],
+        "map2map_start_y": res.start[1],
+        "map2map_start_theta": res.start[2],
+    }
     write_carmen(
         paths["log"],
         zip(res.odometry, res.scans, [tuple(p) for p in res.true_poses], strict=True),
         velocities=[tuple(v) for v in res.velocities],
-        params={
-            "map2map_start_x": res.start[0],
-            "map2map_start_y": res.start[1],
-            "map2map_start_theta": res.start[2],
-        },
+        params=start,
     )
+    if bag is not None:
+        from ..robotlog.carmen import CarmenLog
+        from ..robotlog.rosbag import bag_name, write_bag
+
+        paths["bag"] = out / bag_name("run", bag)
+        params = {k: repr(float(v)) for k, v in start.items()}
+        write_bag(CarmenLog(list(res.odometry), list(res.scans), params=params), paths["bag"],
+                  format=bag)  # fmt: skip
     if figures:
         save_figure_png(res, paths["figure"])
     if figures and gif and res.frames:

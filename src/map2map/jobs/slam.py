@@ -55,6 +55,9 @@ class SlamSpec:
     max_range: float | None = None
     seed: int = 0
     format: str = "auto"
+    #: A ROS bag's LaserScan and odometry topics (``/tf`` for the odom -> base transform).
+    scan_topic: str | None = None
+    odom_topic: str | None = None
     figures: bool = True
     progress: bool = True
 
@@ -96,7 +99,8 @@ def slam(spec: SlamSpec) -> SlamRun:
     kw = dict(particles=spec.particles, resolution=spec.resolution, max_range=spec.max_range)
     check_options(spec.backend, **kw)  # before reading the log: fail fast
     out = check_output_dir(spec.out, protect=(spec.log,))
-    log = load_log(spec.log, spec.format)  # every format problem is raised here, before output
+    # every format problem is raised here, before output
+    log = load_log(spec.log, spec.format, scan_topic=spec.scan_topic, odom_topic=spec.odom_topic)
     res = run_slam(
         log,
         spec.backend,

@@ -1,4 +1,4 @@
-"""Recorded runs for the SLAM backends: CARMEN logs, simulator runs and BreezySLAM raw logs.
+"""Recorded runs for the SLAM backends: CARMEN logs, simulator runs, BreezySLAM logs, ROS bags.
 
 :func:`load_log` reads any of them into a :class:`~map2map.robotlog.carmen.CarmenLog`
 (one :class:`~map2map.robotlog.base.OdometryReading` per
@@ -9,7 +9,9 @@
 * a **simulator run** folder (``map2map simulate --out DIR``) is read from its
   ``run.log`` (CARMEN);
 * **BreezySLAM raw logs** (the Mines ParisTech ``exp*.dat`` files) are parsed by
-  :func:`read_breezyslam`.
+  :func:`read_breezyslam`;
+* **ROS bags** (ROS 1 ``.bag``, ROS 2 bag folders with sqlite3 or mcap storage) are
+  read by :func:`map2map.robotlog.rosbag.read_bag` (optional dependency ``rosbags``).
 
 Every format problem is an :class:`~map2map.core.errors.InputError` naming the file and,
 for a bad line, its line number.
@@ -38,6 +40,7 @@ import numpy as np
 from ..core.errors import InputError
 from .base import LaserScan, OdometryReading
 from .carmen import CarmenLog, read_carmen
+from .rosbag import is_bag, read_bag
 
 __all__ = ["BreezyRobot", "read_breezyslam", "load_log", "detect_format"]
 
@@ -160,10 +163,12 @@ def read_breezyslam(path: str | os.PathLike, robot: BreezyRobot = BreezyRobot())
 
 
 def detect_format(path: str | os.PathLike) -> str:
-    """``"simrun"`` (a simulator output folder), ``"breezyslam"`` or ``"carmen"``.
+    """``"rosbag"``, ``"simrun"`` (a simulator output folder), ``"breezyslam"`` or ``"carmen"``.
 
-    BreezySLAM logs are recognised by their first data line starting with a number;
-    CARMEN lines start with a message name.
+    ROS bags are recognised by :func:`~map2map.robotlog.rosbag.is_bag` (a ``.bag``,
+    ``.db3`` or ``.mcap`` file, a folder with ``metadata.yaml``); BreezySLAM logs by
+    their first data line starting with a number; CARMEN lines start with a message
+    name.
 
     Parameters
     ----------
@@ -176,6 +181,8 @@ def detect_format(path: str | os.PathLike) -> str:
         The format name that :func:`load_log` takes.
     """
     path = Path(path)
+    if path.exists() and is_bag(path):
+        return "rosbag"
     if path.is_dir():
         return "simrun"
     if not path.is_file():
@@ -197,16 +204,25 @@ def detect_format(path: str | os.PathLike) -> str:
     raise InputError(path, "empty log: no lines")
 
 
-def load_log(path: str | os.PathLike, fmt: str = "auto") -> CarmenLog:
+def load_log(
+    path: str | os.PathLike,
+    fmt: str = "auto",
+    *,
+    scan_topic: str | None = None,
+    odom_topic: str | None = None,
+) -> CarmenLog:
     """Read a recorded run (see module docstring); ``fmt`` forces a format.
 
     Parameters
     ----------
     path : path-like
-        A CARMEN log (``.log``, ``.log.gz``), a BreezySLAM ``.dat`` or a simulator
-        output folder (its ``run.log``).
-    fmt : {"auto", "carmen", "breezyslam", "simrun"}
+        A CARMEN log (``.log``, ``.log.gz``), a BreezySLAM ``.dat``, a simulator
+        output folder (its ``run.log``) or a ROS bag (``.bag`` file, ROS 2 bag folder).
+    fmt : {"auto", "carmen", "breezyslam", "simrun", "rosbag"}
         Format; ``"auto"`` asks :func:`detect_format`.
+    scan_topic, odom_topic : str, optional
+        A ROS bag's scan and odometry topics (see
+        :func:`~map2map.robotlog.rosbag.read_bag`); refused for the other formats.
 
     Returns
     -------
@@ -219,6 +235,11 @@ def load_log(path: str | os.PathLike, fmt: str = "auto") -> CarmenLog:
     """
     path = Path(path)
     kind = detect_format(path) if fmt == "auto" else fmt
+    if kind == "rosbag":
+        return read_bag(path, scan_topic=scan_topic, odom_topic=odom_topic)
+    for name, value in (("scan_topic", scan_topic), ("odom_topic", odom_topic)):
+        if value is not None:
+            raise InputError(path, f"`{name}` is for ROS bags; this is a {kind} log")
     if kind == "simrun":
         run = path / "run.log"
         if not run.is_file():
@@ -230,4 +251,6 @@ def load_log(path: str | os.PathLike, fmt: str = "auto") -> CarmenLog:
         return read_carmen(path)
     if kind == "breezyslam":
         return read_breezyslam(path)
-    raise InputError(path, f"unknown log format '{fmt}' (auto, carmen, breezyslam, simrun)")
+    raise InputError(
+        path, f"unknown log format '{fmt}' (auto, carmen, breezyslam, simrun, rosbag)"
+    )
