@@ -467,7 +467,7 @@ def test_demo_stage_evaluates_a_known_bend(tmp_path, capsys):
     assert names == {"report.json", "overlay.png", "error_map.png", "points.csv"} | reports | {
         p.name for p in figures
     } and len(figures) >= 3  # the inspection report's own figures, written beside it
-    assert re.search(r"inspect known_bend: plan walls \d+ pass, \d+ fail", line)
+    assert re.search(r"inspect known_bend: plan walls \d+ pass, \d+ uncertain, \d+ fail", line)
     e = ctx.evaluation["known_bend"]
     assert 0.0 < e["mean_m"] < e["max_m"]
 

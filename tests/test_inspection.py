@@ -17,9 +17,9 @@ import pytest
 from map2map.cli.main import main
 from map2map.core.grid import UNKNOWN, OccupancyMap
 from map2map.evaluate.pipeline import evaluate_maps
+from map2map.evaluate.walls import STATUSES, inspect_walls, write_segments_csv
 from map2map.maps.formats import save_map
 from map2map.maps.synthetic import draw_walls, office_walls
-from map2map.reports.inspection import STATUSES, inspect_walls, write_segments_csv
 
 RES = 0.05
 ORIGIN = (2.0, -1.0, 0.0)

@@ -90,7 +90,8 @@ def run(args: argparse.Namespace) -> int:
 
     tolerance = 0.05
     if args.report is not None:  # checked before any work
-        from ..reports.inspection import check_report_path, check_tolerance
+        from ..evaluate.walls import check_tolerance
+        from ..reports.inspection import check_report_path
 
         if args.tolerance is not None:
             tolerance = check_tolerance(args.tolerance)

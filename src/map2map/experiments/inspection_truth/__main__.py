@@ -21,11 +21,11 @@ import numpy as np
 
 from map2map.core.grid import OCCUPIED, OccupancyMap
 from map2map.evaluate.pipeline import evaluate_maps
+from map2map.evaluate.walls import inspect_walls
 from map2map.maps.floorplan import generate_floorplan
 from map2map.parametric.field import DisplacementField, warp_map
 from map2map.parametric.params import ParametricParams
 from map2map.parametric.pipeline import deform, make_trajectory
-from map2map.reports.inspection import inspect_walls
 
 
 def true_deviation(seg, field: DisplacementField, observed: np.ndarray, walls: np.ndarray,
