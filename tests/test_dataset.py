@@ -536,3 +536,35 @@ def test_cleaner_refuses_one_class_and_bad_labels(reference, tmp_path):
         clean_dataset(ds, bad)
     with pytest.raises(InputError, match="one class"):
         clean_dataset(ds, coverage_threshold=1e-9)  # every pair complete
+
+
+def test_a_count_that_cannot_be_built_is_refused_before_any_work(tmp_path):
+    """A huge --count was accepted and its pairs' tasks were all made up front (9.6 GB
+    after 38 s for 10**12); now it is refused in one line, and tasks are made lazily."""
+    out = subprocess.run(_cli("dataset", "build", "--out", str(tmp_path / "DS"), "--plans",
+                              "generated", "--count", str(10**12)),
+                         env=_env(), capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert out.returncode == 2, out.stderr
+    assert out.stderr.splitlines() == [
+        "map2map: error: --count: must be at most 1000000 (pairs are numbered with six "
+        "digits: pairs/000000 .. pairs/999999), got 1000000000000"]
+    assert not (tmp_path / "DS").exists()
+
+
+def test_the_pool_draws_its_tasks_as_workers_take_them():
+    from map2map.datasets.pool import run_pool
+
+    drawn, got = [], []
+
+    def tasks():
+        for i in range(5):
+            drawn.append(i)
+            yield i
+
+    def on_result(task, result, worker):
+        got.append(result)
+        assert len(drawn) <= len(got) + 2  # one running, one handed out ahead at most
+
+    run_pool(tasks(), abs, 1, on_result=on_result, on_crash=lambda t, why: False,
+             start_method="fork")  # fmt: skip
+    assert sorted(got) == [0, 1, 2, 3, 4]
