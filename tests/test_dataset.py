@@ -568,3 +568,51 @@ def test_the_pool_draws_its_tasks_as_workers_take_them():
     run_pool(tasks(), abs, 1, on_result=on_result, on_crash=lambda t, why: False,
              start_method="fork")  # fmt: skip
     assert sorted(got) == [0, 1, 2, 3, 4]
+
+
+def _interrupting_task(spec):
+    if spec.index == 1:
+        raise KeyboardInterrupt
+    return run_pair(spec)
+
+
+def test_the_build_lock_is_gone_when_a_build_ends(plans, tmp_path):
+    ds = tmp_path / "DS"
+    build_dataset(ds, str(plans), 1, 5, PARAMS, workers=0, progress=False, figures=False)
+    assert not (ds / ".build.lock").exists()  # finished
+    with pytest.raises(KeyboardInterrupt):
+        build_dataset(ds, str(plans), 3, 5, PARAMS, workers=0, progress=False, figures=False,
+                      task=_interrupting_task)  # fmt: skip
+    assert not (ds / ".build.lock").exists()  # interrupted
+    assert dataset_status(ds)["counts"] == {"done": 1}
+
+
+def test_the_build_lock_still_keeps_builds_apart(tmp_path, monkeypatch):
+    import fcntl
+
+    from map2map.datasets.build import _build_lock
+
+    with _build_lock(tmp_path):
+        with pytest.raises(InputError, match="another build is running"):
+            with _build_lock(tmp_path):
+                pass
+    assert not (tmp_path / ".build.lock").exists()
+    # a build that locks a file the previous one has just removed (and a third build has
+    # made again) notices it holds the wrong file and locks the one in the folder
+    real, calls = fcntl.flock, []
+
+    def flock_then_replace(fh, op):
+        real(fh, op)
+        calls.append(fh)
+        if len(calls) == 1:
+            (tmp_path / ".build.lock").unlink()
+            (tmp_path / ".build.lock").write_text("")
+
+    monkeypatch.setattr(fcntl, "flock", flock_then_replace)
+    with _build_lock(tmp_path):
+        monkeypatch.setattr(fcntl, "flock", real)
+        assert len(calls) == 2 and calls[0].closed
+        assert os.fstat(calls[1].fileno()).st_ino == os.stat(tmp_path / ".build.lock").st_ino
+        with pytest.raises(InputError, match="another build is running"):
+            with _build_lock(tmp_path):
+                pass

@@ -146,16 +146,32 @@ def _describe_diff(old: dict, new: dict) -> str:
 
 @contextlib.contextmanager
 def _build_lock(ds: Path):
+    """Hold ``ds/.build.lock`` (an exclusive flock) while a build runs; the file is removed
+    when the build ends, finished or interrupted, while it is still locked. A build that
+    opened the file just before it was removed gets the lock of a file no longer in
+    ``ds``: it notices (another inode, or none, at the path) and takes a fresh one, so
+    two builds never both hold the lock."""
     import fcntl
 
-    fh = open(ds / ".build.lock", "w")
-    try:
+    path = ds / ".build.lock"
+    while True:
+        fh = open(path, "w")
         try:
             fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
+            fh.close()
             raise InputError(ds, "another build is running on this dataset") from None
+        try:
+            if os.stat(path).st_ino == os.fstat(fh.fileno()).st_ino:
+                break
+        except FileNotFoundError:
+            pass
+        fh.close()  # the build that held it has just ended and removed it: try again
+    try:
         yield
     finally:
+        with contextlib.suppress(FileNotFoundError):
+            path.unlink()
         fh.close()
 
 
