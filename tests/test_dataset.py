@@ -616,3 +616,25 @@ def test_the_build_lock_still_keeps_builds_apart(tmp_path, monkeypatch):
         with pytest.raises(InputError, match="another build is running"):
             with _build_lock(tmp_path):
                 pass
+
+
+def test_ctrl_c_stops_a_build_cleanly(plans, tmp_path):
+    """Ctrl-C (SIGINT to the whole process group) while workers are mid-pair: one line,
+    exit 130, no resource_tracker "leaked semaphore" noise, no lock file left."""
+    ds = tmp_path / "DS"
+    args = _cli("dataset", "build", "--out", str(ds), "--plans", str(plans), "--count", "6",
+                "--seed", "5", "--source", "both", "--duration", "12", "--size", "32",
+                "--fov", "360", "--workers", "2", "--quiet", "--no-figures")  # fmt: skip
+    proc = subprocess.Popen(args, env=_env(), start_new_session=True, text=True,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)  # fmt: skip
+    deadline = time.monotonic() + 60
+    while proc.poll() is None and _done(ds) < 1 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert proc.poll() is None, "the build ended before it could be interrupted"
+    os.killpg(proc.pid, signal.SIGINT)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130, err
+    assert "leaked" not in err and "Traceback" not in err, err
+    assert err.strip().splitlines()[-1] == "map2map: interrupted"
+    assert not (ds / ".build.lock").exists()
+    assert 1 <= _done(ds) < 6

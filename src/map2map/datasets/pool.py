@@ -63,8 +63,23 @@ class TaskQueue:
         self._front.appendleft(task)
 
 
+def _quiet_bars() -> None:
+    """Give tqdm a thread lock in a worker. Its default lock holds a multiprocessing
+    semaphore, made by the first bar (a disabled one too, as the simulator's); a worker
+    killed mid-pair (Ctrl-C) cannot release it, and the resource tracker then warned of
+    "leaked semaphore objects" when the build stopped. Workers draw no bars."""
+    import threading
+
+    try:
+        from tqdm import tqdm
+    except ImportError:  # pragma: no cover - tqdm is a dependency
+        return
+    tqdm.set_lock(threading.RLock())
+
+
 def _worker_main(conn, fn) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles Ctrl-C
+    _quiet_bars()
     while True:
         try:
             task = conn.recv()
