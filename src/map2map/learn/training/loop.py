@@ -58,7 +58,7 @@ from .checkpoint import (
     save_checkpoint,
 )
 from .config import TrainConfig, lr_factor
-from .data import ResidentPairs, load_pairs
+from .data import ResidentPairs, load_pairs, warn_about_data
 from .figures import save_loss_curves, save_sample_grid
 from .step import false_targets, gan_step, set_lr
 
@@ -234,42 +234,6 @@ class RunStart:
         return bool(self.state)
 
 
-#: Fewer training pairs than this get a warning: pix2pix's smallest training set (CMP
-#: Facades, Isola et al. 2017) had 400 pairs, the thesis's 4,224.
-FEW_TRAIN_PAIRS = 400
-
-
-def _warn_about_data(src, n_train: int, n_val: int) -> None:
-    """Warn of a training set too small to generalize from, and of no 'val' pairs (the
-    sample grids then show training pairs).
-
-    Examples
-    --------
-    >>> import warnings
-    >>> with warnings.catch_warnings(record=True) as got:
-    ...     warnings.simplefilter("always")
-    ...     _warn_about_data("ds", 1, 0)
-    >>> [str(w.message)[:40] for w in got]
-    ['ds: only 1 training pair: fewer than 400', "ds: no 'val' pairs: the sample grids (sa"]
-    """
-    import warnings
-
-    from ...core.errors import MapWarning
-
-    where = f"{src}: " if src is not None else ""
-    if n_train < FEW_TRAIN_PAIRS:
-        warnings.warn(
-            f"{where}only {n_train} training pair{'s' if n_train != 1 else ''}: fewer than "
-            f"{FEW_TRAIN_PAIRS} (pix2pix's smallest training set; the thesis trained on "
-            "4,224), so the model will learn these pairs rather than maps in general",
-            MapWarning, stacklevel=3)  # fmt: skip
-    if n_val == 0:
-        warnings.warn(
-            f"{where}no 'val' pairs: the sample grids (samples/epoch_NNNN.png) show training "
-            "pairs, which tell how well the model fits them, not how it does on new maps",
-            MapWarning, stacklevel=3)  # fmt: skip
-
-
 def open_run(data, out, config: TrainConfig | None, *, config_type: type, fmt: str,
              model: str, resume: bool, epochs: int | None, find_unused: bool = False
              ) -> RunStart:
@@ -306,7 +270,7 @@ def open_run(data, out, config: TrainConfig | None, *, config_type: type, fmt: s
     if len(train) == 0:
         raise InputError(src, "the dataset has no 'train' pairs")
     if dist.main:
-        _warn_about_data(src, len(train), len(pairs.select("val")))
+        warn_about_data(src, len(train), len(pairs.select("val")))
     meta = dict(pairs.meta)
     meta.setdefault("digest", pairs.digest())
     return RunStart(out, pairs, src, cfg, dist, train, meta, tensors, state)
