@@ -536,3 +536,105 @@ def test_cleaner_refuses_one_class_and_bad_labels(reference, tmp_path):
         clean_dataset(ds, bad)
     with pytest.raises(InputError, match="one class"):
         clean_dataset(ds, coverage_threshold=1e-9)  # every pair complete
+
+
+def test_a_count_that_cannot_be_built_is_refused_before_any_work(tmp_path):
+    """A huge --count was accepted and its pairs' tasks were all made up front (9.6 GB
+    after 38 s for 10**12); now it is refused in one line, and tasks are made lazily."""
+    out = subprocess.run(_cli("dataset", "build", "--out", str(tmp_path / "DS"), "--plans",
+                              "generated", "--count", str(10**12)),
+                         env=_env(), capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert out.returncode == 2, out.stderr
+    assert out.stderr.splitlines() == [
+        "map2map: error: --count: must be at most 1000000 (pairs are numbered with six "
+        "digits: pairs/000000 .. pairs/999999), got 1000000000000"]
+    assert not (tmp_path / "DS").exists()
+
+
+def test_the_pool_draws_its_tasks_as_workers_take_them():
+    from map2map.datasets.pool import run_pool
+
+    drawn, got = [], []
+
+    def tasks():
+        for i in range(5):
+            drawn.append(i)
+            yield i
+
+    def on_result(task, result, worker):
+        got.append(result)
+        assert len(drawn) <= len(got) + 2  # one running, one handed out ahead at most
+
+    run_pool(tasks(), abs, 1, on_result=on_result, on_crash=lambda t, why: False,
+             start_method="fork")  # fmt: skip
+    assert sorted(got) == [0, 1, 2, 3, 4]
+
+
+def _interrupting_task(spec):
+    if spec.index == 1:
+        raise KeyboardInterrupt
+    return run_pair(spec)
+
+
+def test_the_build_lock_is_gone_when_a_build_ends(plans, tmp_path):
+    ds = tmp_path / "DS"
+    build_dataset(ds, str(plans), 1, 5, PARAMS, workers=0, progress=False, figures=False)
+    assert not (ds / ".build.lock").exists()  # finished
+    with pytest.raises(KeyboardInterrupt):
+        build_dataset(ds, str(plans), 3, 5, PARAMS, workers=0, progress=False, figures=False,
+                      task=_interrupting_task)  # fmt: skip
+    assert not (ds / ".build.lock").exists()  # interrupted
+    assert dataset_status(ds)["counts"] == {"done": 1}
+
+
+def test_the_build_lock_still_keeps_builds_apart(tmp_path, monkeypatch):
+    import fcntl
+
+    from map2map.datasets.build import _build_lock
+
+    with _build_lock(tmp_path):
+        with pytest.raises(InputError, match="another build is running"):
+            with _build_lock(tmp_path):
+                pass
+    assert not (tmp_path / ".build.lock").exists()
+    # a build that locks a file the previous one has just removed (and a third build has
+    # made again) notices it holds the wrong file and locks the one in the folder
+    real, calls = fcntl.flock, []
+
+    def flock_then_replace(fh, op):
+        real(fh, op)
+        calls.append(fh)
+        if len(calls) == 1:
+            (tmp_path / ".build.lock").unlink()
+            (tmp_path / ".build.lock").write_text("")
+
+    monkeypatch.setattr(fcntl, "flock", flock_then_replace)
+    with _build_lock(tmp_path):
+        monkeypatch.setattr(fcntl, "flock", real)
+        assert len(calls) == 2 and calls[0].closed
+        assert os.fstat(calls[1].fileno()).st_ino == os.stat(tmp_path / ".build.lock").st_ino
+        with pytest.raises(InputError, match="another build is running"):
+            with _build_lock(tmp_path):
+                pass
+
+
+def test_ctrl_c_stops_a_build_cleanly(plans, tmp_path):
+    """Ctrl-C (SIGINT to the whole process group) while workers are mid-pair: one line,
+    exit 130, no resource_tracker "leaked semaphore" noise, no lock file left."""
+    ds = tmp_path / "DS"
+    args = _cli("dataset", "build", "--out", str(ds), "--plans", str(plans), "--count", "6",
+                "--seed", "5", "--source", "both", "--duration", "12", "--size", "32",
+                "--fov", "360", "--workers", "2", "--quiet", "--no-figures")  # fmt: skip
+    proc = subprocess.Popen(args, env=_env(), start_new_session=True, text=True,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)  # fmt: skip
+    deadline = time.monotonic() + 60
+    while proc.poll() is None and _done(ds) < 1 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert proc.poll() is None, "the build ended before it could be interrupted"
+    os.killpg(proc.pid, signal.SIGINT)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130, err
+    assert "leaked" not in err and "Traceback" not in err, err
+    assert err.strip().splitlines()[-1] == "map2map: interrupted"
+    assert not (ds / ".build.lock").exists()
+    assert 1 <= _done(ds) < 6

@@ -119,3 +119,25 @@ def test_an_interrupted_demo_leaves_no_folder_and_keeps_the_old_one(tmp_path, mo
         raise AssertionError("the interruption was swallowed")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["demo"]
     assert sorted(p.name for p in out.iterdir()) == ["old.txt"]
+
+
+def test_the_demo_says_what_reference_58_is(capsys):
+    """The index cited "[58]" bare: it now says it is the thesis's reference and what the
+    method taken from it does; so do deform's --help and the demo's file labels."""
+    import inspect
+
+    import pytest
+
+    from map2map.cli.main import main
+    from map2map.demo import _description, stage_parametric
+
+    text = _description(stage_parametric)
+    assert "the thesis takes from its reference [58]" in text
+    assert "E_lin = 0.09 dl + sigma, E_ang = 0.095 dtheta + alpha" in text
+    assert "additive method of the thesis's ref. [58]" in inspect.getsource(stage_parametric)
+    with pytest.raises(SystemExit):
+        main(["deform", "--help"])
+    helptext = " ".join(capsys.readouterr().out.split())
+    at = [m.start() for m in re.finditer(re.escape("[58]"), helptext)]
+    assert len(at) == 2
+    assert all("thesis" in helptext[max(0, i - 40):i] for i in at), helptext

@@ -547,3 +547,22 @@ def test_exporters_write_fp16_with_header_and_refuse_the_other_model(tmp_path):
     with pytest.raises(InputError):
         export_ab_model(pretrained_path(), tmp_path / "ab.safetensors")
     assert not (tmp_path / "ab.safetensors").exists()
+
+
+def test_cli_train_on_one_pair_without_val_warns_and_prints_a_rate(tmp_path, capsys):
+    """One clean pair, no 'val' split: trained silently and printed 'at 0 img/s'."""
+    one = _pairs(3)
+    data = tmp_path / "one.npz"
+    save_packed(data, PackedPairs(one.a[:1], one.b[:1], np.array(["p0"]), np.array(["train"])))
+    rc = main(["train", "ba", "--data", str(data), "--out", str(tmp_path / "run"),
+               "--epochs", "1", "--size", "16", "--batch", "1", "--g-channels", "8",
+               "--d-channels", "8", "--d-layers", "2", "--device", "cpu", "--quiet"])
+    err = capsys.readouterr().err
+    assert rc == 0, err
+    warned = [ln for ln in err.splitlines() if ln.startswith("map2map: warning:")]
+    assert len(warned) == 2, err
+    assert "only 1 training pair: fewer than 400" in warned[0]
+    assert "no 'val' pairs: the sample grids" in warned[1]
+    (summary,) = [ln for ln in err.splitlines() if ln.startswith("trained 1 epochs at ")]
+    rate = summary.split(" at ")[1].split(" img/s")[0]
+    assert float(rate) > 0, summary

@@ -57,6 +57,23 @@ def test_simulate_writes_every_output(tmp_path, capsys):
     assert near_wall[slam.occupied].mean() > 0.97
 
 
+def test_simulate_says_its_lidar_field_of_view(tmp_path, capsys):
+    """simulate's 360 degree default differs from dataset build's 180 (the thesis's):
+    its --help says why, and its summary line and report.json say which it used."""
+    with pytest.raises(SystemExit):
+        main(["simulate", "--help"])
+    helptext = " ".join(capsys.readouterr().out.split())
+    assert "(default: 360, the LDS-01's full circle; the thesis cut it to 180" in helptext
+    plan = room_plan(tmp_path)
+    for fov in ("360", "180"):
+        out = tmp_path / f"run{fov}"
+        rc = main(["simulate", str(plan), "--out", str(out), "--duration", "4", "--quiet",
+                   "--mapper", "oracle"] + (["--fov", fov] if fov == "180" else []))
+        assert rc == 0
+        assert f"s (time budget, {fov} deg lidar) in " in capsys.readouterr().out.splitlines()[0]
+        assert json.loads((out / "report.json").read_text())["fov_deg"] == float(fov)
+
+
 def test_simulate_route_files(tmp_path, capsys):
     plan = room_plan(tmp_path)
     wp = tmp_path / "wp.txt"

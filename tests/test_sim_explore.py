@@ -181,3 +181,49 @@ def test_config_value_runs_like_the_keywords():
     c = simulate(m, seed=5, config=SimConfig(**kw))
     d = simulate(m, seed=0, config=SimConfig(**kw))
     assert (c.info["seed"], d.info["seed"]) == (5, 4)
+
+
+def test_a_route_that_turns_back_is_driven_to_its_end():
+    """Pure pursuit over a route that turns back aimed alternately before and after the
+    turn (both within its lookahead) and spun there; the follower drives it leg by leg."""
+    m = two_rooms()
+    route = [(-0.3, 2.0), (2.3, 2.0), (-0.3, 2.15)]
+    res = simulate(m, mapper="oracle", seed=0, duration=90, route=route, progress=False)
+    assert res.stop_reason == "route done"
+    assert np.hypot(*(res.true_poses[-1, :2] - route[-1])) < 0.2
+    assert res.collisions == 0
+    assert res.info["route_driven_m"] == pytest.approx(res.info["route_length_m"])
+
+
+def test_an_unfinished_route_is_warned_about():
+    from map2map.core.errors import MapWarning
+
+    m = two_rooms()
+    route = [(-0.3, 2.0), (2.3, 2.0), (-0.3, 2.15)]
+    with pytest.warns(MapWarning, match=r"not completed within the time budget "
+                      r"\(`duration` 8 s\): the robot got 1\.\d m along its 5\.2 m"):
+        res = simulate(m, mapper="oracle", seed=0, duration=8, route=route, progress=False)
+    assert res.stop_reason == "time budget"
+
+
+def test_a_run_replays_its_own_true_path(tmp_path):
+    """simulate --trajectory run/trajectory_true.csv stalled in a door frame after a
+    quarter of this run's path (steered by the drifting SLAM estimate) and spun at its
+    turns on the spot; now it drives the whole path within the same time budget."""
+    import warnings
+
+    from map2map.jobs.simulate import SimulateSpec
+    from map2map.jobs.simulate import simulate as simulate_job
+    from map2map.maps.floorplan import generate_floorplan
+
+    plan = generate_floorplan(4, kind="apartment")
+    first = simulate_job(SimulateSpec(plan=plan, plan_name="p", out=tmp_path / "run",
+                                      progress=False, figures=False))  # fmt: skip
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        again = simulate_job(SimulateSpec(
+            plan=plan, plan_name="p", out=tmp_path / "run2", progress=False, figures=False,
+            trajectory=tmp_path / "run" / "trajectory_true.csv"))  # fmt: skip
+    assert again.result.stop_reason == "route done"
+    assert again.result.collisions == 0
+    assert again.result.coverage > first.result.coverage - 0.05

@@ -143,9 +143,16 @@ def stage_parametric(ctx: DemoContext) -> None:
     A model of the SLAM map a robot would build, not a SLAM run: the robot tours four
     roadmap nodes and the model displaces the plan by a drawn field. Writes under
     ``parametric/`` the roadmap and trajectory (thesis Fig. 3.3), the files ``map2map
-    deform`` writes for the additive method of [58] and the EKF method's figure (thesis
-    Figs. 5.13, 5.15). Plans larger than 320 pixels on a side are reduced first
+    deform`` writes for the additive method and the EKF method's figure (thesis Figs.
+    5.13, 5.15). Plans larger than 320 pixels on a side are reduced first
     (:func:`map2map.maps.preprocess.reduce_plan`), as the thesis did for its EKF runs.
+
+    The additive method is the one the thesis takes from its reference [58] (thesis eqs.
+    3.81-3.90): odometry errors that grow linearly with the distance driven and the angle
+    turned (E_lin = 0.09 dl + sigma, E_ang = 0.095 dtheta + alpha, fitted to experimental
+    data in [58]) become errors of the map pixels the lidar sees, added up at every
+    re-observation. The EKF method propagates them through EKF-SLAM instead (eqs.
+    3.54-3.80): much slower, and the thesis found the two deformations similar (Fig. 5.13).
     """
     from .jobs.deform import sample_rngs, write_result
     from .maps.preprocess import reduce_plan
@@ -166,7 +173,7 @@ def stage_parametric(ctx: DemoContext) -> None:
     run = {"method": "additive", "seed": ctx.seed, "sample": 0, "source": "map2map demo"}
     paths = write_result(plan, res, folder, run)
     labels = [
-        "modelled SLAM map (additive [58], ROS, plan frame)",
+        "modelled SLAM map (additive method of the thesis's ref. [58], ROS, plan frame)",
         "modelled SLAM map image",
         "displacement field dx, dy [px]",
         "trajectory of the modelled run (t,x,y,theta,v,omega)",

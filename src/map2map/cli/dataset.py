@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 
+from ..datasets.build import MAX_COUNT
 from ..datasets.pair import BuildParams
 from ..jobs.dataset import BuildSpec
 
@@ -39,7 +40,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="'generated' (procedural plans, HouseExpo-like sizes), or a folder of HouseExpo "
         "JSON files/renders or ROS/image maps",
     )
-    b.add_argument("--count", required=True, type=int, metavar="N", help="number of pairs")
+    b.add_argument("--count", required=True, type=int, metavar="N",
+                   help=f"number of pairs (at most {MAX_COUNT})")
     b.add_argument("--seed", type=int, default=job.seed, help="dataset seed (default: %(default)s)")
     where = b.add_mutually_exclusive_group()
     where.add_argument(
@@ -63,7 +65,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         choices=[180.0, 360.0],
         default=pair.fov,
         metavar="{180,360}",
-        help="lidar field of view (default: %(default)g, the thesis's)",
+        help="lidar field of view (default: %(default)g, the thesis's: fewer features seen "
+        "per scan, more deformed maps; simulate's default is 360, the LDS-01's full circle)",
     )
     b.add_argument("--size", type=int, default=pair.size,
                    help="preprocessed map side (default: %(default)s)")

@@ -17,8 +17,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         description=(
             "Drive a TurtleBot3 along a trajectory through PLAN and model the SLAM map it "
             "would build (thesis section 3.2): LIDAR errors (eqs. 3.8-3.30) and odometry "
-            "errors (3.31-3.53) converted to map errors by the additive method of [58] "
-            "(3.81-3.90) or by EKF-SLAM (3.54-3.80). Writes per sample: slam_map.yaml + "
+            "errors (3.31-3.53) converted to map errors by the additive method the thesis "
+            "takes from its reference [58] (3.81-3.90: errors growing linearly with the "
+            "distance driven and angle turned, added up at every re-observation of a "
+            "pixel) or by EKF-SLAM (3.54-3.80). Writes per sample: slam_map.yaml + "
             "slam_map.pgm (the plan's resolution and origin), displacement.npz (dx, dy in "
             "pixels, float32: plan content at pixel p appears at p + d(p); x = columns "
             "right, y = rows down), trajectory.csv (t,x,y,theta,v,omega), params.yaml "
@@ -39,7 +41,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--method",
         choices=["additive", "ekf"],
         default="additive",
-        help="odometry-to-map conversion: additive method of [58] (fast, default) or EKF",
+        help="odometry-to-map conversion: the additive method of the thesis's ref. [58] "
+        "(fast, default) or EKF",
     )
     p.add_argument("--seed", type=int, default=0, help="random seed of sample 0 (default: 0)")
     p.add_argument(

@@ -42,7 +42,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         choices=[360.0, 180.0],
         default=360.0,
         metavar="{360,180}",
-        help="lidar field of view in degrees (default: 360; the thesis used 180)",
+        help="lidar field of view in degrees (default: 360, the LDS-01's full circle; the "
+        "thesis cut it to 180 to get more deformed maps, as 'dataset build' does by default)",
     )
     p.add_argument(
         "--mapper",
@@ -104,7 +105,8 @@ def run(args: argparse.Namespace) -> int:
         )
     rep = run.result.report()
     print(
-        f"simulated {rep['simulated_seconds']:.0f} s ({rep['stop_reason']}) in "
+        f"simulated {rep['simulated_seconds']:.0f} s ({rep['stop_reason']}, "
+        f"{rep['fov_deg']:g} deg lidar) in "
         f"{rep['wall_seconds']:.1f} s: coverage {100 * rep['coverage']:.1f} %, "
         f"path {rep['path_length_m']:.1f} m, {rep['collisions']} collisions"
     )

@@ -44,6 +44,7 @@ from .plans import PlanSource, source_digest
 
 __all__ = [
     "FORMAT",
+    "MAX_COUNT",
     "SPLIT_FRACTIONS",
     "BuildSummary",
     "build_dataset",
@@ -56,6 +57,9 @@ FORMAT = "map2map-dataset"
 VERSION = 1
 #: train / val / test shares of the plans.
 SPLIT_FRACTIONS = (0.8, 0.1, 0.1)
+#: The most pairs a dataset holds: pairs and generated plans are numbered with six digits
+#: (``pairs/000000`` .. ``pairs/999999``, ``gen-SEED-000000``).
+MAX_COUNT = 1_000_000
 
 
 def split_for_plan(plan_id: str, fractions=SPLIT_FRACTIONS) -> str:
@@ -142,16 +146,32 @@ def _describe_diff(old: dict, new: dict) -> str:
 
 @contextlib.contextmanager
 def _build_lock(ds: Path):
+    """Hold ``ds/.build.lock`` (an exclusive flock) while a build runs; the file is removed
+    when the build ends, finished or interrupted, while it is still locked. A build that
+    opened the file just before it was removed gets the lock of a file no longer in
+    ``ds``: it notices (another inode, or none, at the path) and takes a fresh one, so
+    two builds never both hold the lock."""
     import fcntl
 
-    fh = open(ds / ".build.lock", "w")
-    try:
+    path = ds / ".build.lock"
+    while True:
+        fh = open(path, "w")
         try:
             fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
+            fh.close()
             raise InputError(ds, "another build is running on this dataset") from None
+        try:
+            if os.stat(path).st_ino == os.fstat(fh.fileno()).st_ino:
+                break
+        except FileNotFoundError:
+            pass
+        fh.close()  # the build that held it has just ended and removed it: try again
+    try:
         yield
     finally:
+        with contextlib.suppress(FileNotFoundError):
+            path.unlink()
         fh.close()
 
 
@@ -208,7 +228,7 @@ def build_dataset(
     plans : str or PlanSource
         ``"generated"``, a folder of plans, or a :class:`PlanSource`.
     count : int
-        Number of pairs (indices ``0 .. count - 1``).
+        Number of pairs (indices ``0 .. count - 1``), at most :data:`MAX_COUNT`.
     seed : int
         Dataset seed; pair ``i`` depends on ``(seed, i)`` only.
     params : BuildParams
@@ -244,6 +264,9 @@ def build_dataset(
 
     if isinstance(count, bool) or not isinstance(count, int) or count < 1:
         raise InputError("count", f"must be an integer >= 1, got {count!r}")
+    if count > MAX_COUNT:
+        raise InputError("count", f"must be at most {MAX_COUNT} (pairs are numbered with six "
+                         f"digits: pairs/000000 .. pairs/999999), got {count}")
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise InputError("seed", f"must be an integer >= 0, got {seed!r}")
     if workers < 0:
@@ -285,15 +308,17 @@ def build_dataset(
         man.set_info("count", max(count, old_count or 0))
         finished = man.finished()
         _tidy(ds, {r["idx"] for r in man.rows("done")})
-        todo = [i for i in range(count) if i not in finished]
-        # each task carries only its own plan file (load_plan gives the same plan)
-        specs = [
-            PairSpec(i, seed, src.only(pair_layout(i, params.source)[1]), params) for i in todo
-        ]
+        n_todo = count - sum(1 for i in finished if i < count)
+        # made one at a time as workers take them; each task carries only its own plan file
+        # (load_plan gives the same plan)
+        specs = (
+            PairSpec(i, seed, src.only(pair_layout(i, params.source)[1]), params)
+            for i in range(count) if i not in finished
+        )
         made = failed = 0
         failures: list[tuple[int, str, str]] = []
         t0 = time.perf_counter()
-        bar = tqdm(total=count, initial=count - len(todo), unit="pair", desc="dataset",
+        bar = tqdm(total=count, initial=count - n_todo, unit="pair", desc="dataset",
                    disable=not progress, dynamic_ncols=True)  # fmt: skip
 
         def tick() -> None:
@@ -335,7 +360,7 @@ def build_dataset(
             return False
 
         try:
-            if not specs:
+            if not n_todo:
                 pass
             elif scheduler:
                 from .dask_backend import run_dask
@@ -349,7 +374,7 @@ def build_dataset(
             else:
                 from .pool import run_pool
 
-                run_pool(specs, task, min(workers, len(specs)), on_result=on_result,
+                run_pool(specs, task, min(workers, n_todo), on_result=on_result,
                          on_crash=on_crash, start_method=start_method)  # fmt: skip
         finally:
             bar.close()

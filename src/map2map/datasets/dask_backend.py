@@ -57,11 +57,11 @@ from __future__ import annotations
 import logging
 import time
 import warnings
-from collections import deque
 from collections.abc import Callable, Iterable
 from typing import Any
 
 from ..core.errors import InputError, MapWarning
+from .pool import TaskQueue
 
 __all__ = ["run_dask", "DaskWarning", "LOCAL_CLUSTER_CONFIG"]
 
@@ -140,7 +140,7 @@ def run_dask(
         raise InputError(
             "scheduler", "dask.distributed is not installed (pip install 'map2map[dask]')"
         ) from None
-    queue = deque(tasks)
+    queue = TaskQueue(tasks)
     if not queue:
         return
     cluster = None
@@ -216,7 +216,7 @@ def _threads(client, warned: set) -> int:
 
 
 def _run(
-    client, queue: deque, fn, on_result, on_crash, key_prefix, killed_worker, wait, *,
+    client, queue: TaskQueue, fn, on_result, on_crash, key_prefix, killed_worker, wait, *,
     local: bool = False, where: str = "", no_worker_s: float | None = None,
 ) -> None:  # fmt: skip
     in_flight: dict[Any, Any] = {}  # future -> task

@@ -25,11 +25,61 @@ from collections.abc import Callable, Iterable
 from multiprocessing.connection import wait
 from typing import Any
 
-__all__ = ["run_pool", "death_reason"]
+__all__ = ["run_pool", "death_reason", "TaskQueue"]
+
+
+class TaskQueue:
+    """The tasks still to hand out: drawn from an iterable only when needed (a build of
+    many pairs makes its tasks one at a time), with the tasks to run again in front.
+
+    Examples
+    --------
+    >>> q = TaskQueue(iter(range(3)))
+    >>> q.popleft(), bool(q)
+    (0, True)
+    >>> q.appendleft(0)
+    >>> [q.popleft() for _ in range(3)], bool(q)
+    ([0, 1, 2], False)
+    """
+
+    def __init__(self, tasks: Iterable[Any]):
+        self._it = iter(tasks)
+        self._front: deque = deque()
+
+    def __bool__(self) -> bool:
+        if not self._front:
+            try:
+                self._front.append(next(self._it))
+            except StopIteration:
+                return False
+        return True
+
+    def popleft(self) -> Any:
+        if not self:
+            raise IndexError("no task left")
+        return self._front.popleft()
+
+    def appendleft(self, task: Any) -> None:
+        self._front.appendleft(task)
+
+
+def _quiet_bars() -> None:
+    """Give tqdm a thread lock in a worker. Its default lock holds a multiprocessing
+    semaphore, made by the first bar (a disabled one too, as the simulator's); a worker
+    killed mid-pair (Ctrl-C) cannot release it, and the resource tracker then warned of
+    "leaked semaphore objects" when the build stopped. Workers draw no bars."""
+    import threading
+
+    try:
+        from tqdm import tqdm
+    except ImportError:  # pragma: no cover - tqdm is a dependency
+        return
+    tqdm.set_lock(threading.RLock())
 
 
 def _worker_main(conn, fn) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles Ctrl-C
+    _quiet_bars()
     while True:
         try:
             task = conn.recv()
@@ -117,7 +167,7 @@ def run_pool(
     if workers < 1:
         raise ValueError("workers must be >= 1")
     ctx = mp.get_context(start_method)
-    queue = deque(tasks)
+    queue = TaskQueue(tasks)
     pool: list[_Worker] = []
     serial = 0
     try:

@@ -29,7 +29,7 @@ from typing import Any
 
 from ..core.errors import InputError
 
-__all__ = ["TrainSpec", "TrainRun", "train", "MODELS"]
+__all__ = ["TrainSpec", "TrainRun", "train", "MODELS", "rate_text"]
 
 #: The trainable models: name -> what it learns.
 MODELS = {"ba": "Model_BA: SLAM map -> CAD plan", "ab": "Model_AB: CAD plan -> SLAM map"}
@@ -81,9 +81,28 @@ class TrainRun:
         steps = f" ({last['step']} steps)" if "step" in last else ""
         stage = (f" (now {last.get('resolution', '?')} px, alpha "
                  f"{last.get('alpha', float('nan')):.2f})" if self.model == "ab" else "")
-        return (f"trained {res.epochs_done} epochs{stage} at {res.images_per_s:.0f} img/s"
+        return (f"trained {res.epochs_done} epochs{stage} at {rate_text(res.images_per_s)}"
                 f"{steps}; loss G {last.get('loss_G', float('nan')):.4f} D "
                 f"{last.get('loss_D', float('nan')):.4f}; run in {res.run}")
+
+
+def rate_text(images_per_s: float) -> str:
+    """A training rate for people: whole images per second from 10 on, one decimal
+    below (a run of a few pairs printed "0 img/s"), two significant digits under 0.1.
+
+    Examples
+    --------
+    >>> rate_text(2403.4), rate_text(46.2), rate_text(0.4), rate_text(0.012)
+    ('2403 img/s', '46 img/s', '0.4 img/s', '0.012 img/s')
+    >>> rate_text(float("nan"))
+    'an unmeasured rate'
+    """
+    r = images_per_s
+    if not (r == r and 0 < r < float("inf")):
+        return "an unmeasured rate"
+    if r >= 10:
+        return f"{r:.0f} img/s"
+    return f"{r:.1f} img/s" if r >= 0.1 else f"{r:.2g} img/s"
 
 
 def _config(spec: TrainSpec):

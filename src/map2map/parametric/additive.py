@@ -1,5 +1,8 @@
 """Odometry error to map error by the additive method of ref. [58], thesis eqs. 3.81-3.90.
 
+Ref. [58] is entry 58 of the thesis's bibliography (not in the thesis text this package
+was written from), the source of the method and of its linear error fits (eqs. 3.81-3.82).
+
 From the per-step odometry errors (thesis eqs. 3.48-3.53) the linear and angular odometry
 errors ``E_lin`` and ``E_ang`` (thesis eqs. 3.81-3.82) are computed for every key pose. At each
 key pose the pixels in the LIDAR's field of view (the *mask*, from

@@ -862,12 +862,24 @@ def _coarsen(cost, labels, m: OccupancyMap, f: int):
 
 
 class RouteFollower:
-    """Drive through waypoints ``(x, y[, theta])`` given in the mapper's frame.
+    """Drive through waypoints ``(x, y[, theta])`` given in the frame of the pose it is
+    handed.
 
-    Consecutive waypoints are joined by straight segments, resampled every 5 cm,
-    and followed with :class:`PathController`. If the robot is blocked for
-    ``skip_after`` seconds it gives up the current stretch and heads for the next
-    waypoint. :attr:`done` is set at the last waypoint.
+    Consecutive waypoints are joined by straight segments, resampled every 5 cm, and
+    followed with :class:`PathController`, one *leg* at a time: the route is cut where
+    it turns back by more than 90 degrees (a recorded trajectory's turns on the spot),
+    and each leg ends at its last point (within half ``goal_tolerance``). Pure pursuit on
+    the whole route would aim, near such a turn, alternately at the points before and
+    after it (both within its lookahead) and spin there for ever. If the robot makes no
+    progress along its leg (10 cm) for ``skip_after`` seconds (blocked, or crawling at a
+    door frame) it skips one metre ahead, or to the next leg. :attr:`done` is set at the
+    last waypoint; :meth:`progress` says how far along the route it got.
+
+    Examples
+    --------
+    >>> f = RouteFollower([(0, 0), (1, 0), (0, 0.05)], ExploreConfig(), 0.26, 1.82)
+    >>> [len(leg) for leg in f.legs], round(f.length, 2)
+    ([21, 22], 2.0)
     """
 
     def __init__(
@@ -879,30 +891,60 @@ class RouteFollower:
             n = max(1, int(math.ceil(math.hypot(*(b - a)) / 0.05)))
             seg.append(a + (b - a) * (np.arange(1, n + 1) / n)[:, None])
         self.path = np.concatenate(seg)
+        # legs: cut at every waypoint where the route turns back (> 90 degrees)
+        ends = [0]
+        for k in range(1, len(wp) - 1):
+            if float(np.dot(wp[k] - wp[k - 1], wp[k + 1] - wp[k])) < 0.0:
+                ends.append(sum(len(x) for x in seg[: k + 1]) - 1)
+        ends.append(len(self.path) - 1)
+        self.legs = [self.path[a : b + 1] for a, b in zip(ends[:-1], ends[1:], strict=True)]
+        self._leg_start = ends[:-1]
+        steps = np.hypot(*np.diff(self.path, axis=0).T) if len(self.path) > 1 else np.zeros(0)
+        self._arc = np.concatenate([[0.0], np.cumsum(steps)])
+        #: Length of the route (metres).
+        self.length = float(self._arc[-1])
         self.ctrl = PathController(config, max_v, max_w)
-        self.ctrl.set_path(self.path)
         self.cfg = config
         self.done = False
         self.skip_after = skip_after
-        self._blocked_since: float | None = None
         self.stats = ExploreStats()
+        self._leg = 0
+        self._furthest = 0  # index into ``path`` of the furthest point reached
+        self._start_leg(0, 0)
+
+    def _start_leg(self, leg: int, skip: int) -> None:
+        self._leg = leg
+        self._offset = self._leg_start[leg] + skip  # index into ``path`` of ctrl.path[0]
+        self.ctrl.set_path(self.legs[leg][skip:])
+        self._best = math.inf
+        self._since: float | None = None
+
+    def progress(self) -> float:
+        """Metres of the route driven so far (to the furthest point reached)."""
+        return float(self._arc[self._furthest])
 
     def command(self, t: float, pose, mapper, scan: LaserScan | None) -> tuple[float, float]:
         if self.done:
             return 0.0, 0.0
-        end = self.path[-1]
-        if math.hypot(pose[0] - end[0], pose[1] - end[1]) < self.cfg.goal_tolerance * 0.5:
-            self.done = True
-            return 0.0, 0.0
-        v, w, blocked = self.ctrl.command(pose, scan)
-        if blocked:
-            self._blocked_since = t if self._blocked_since is None else self._blocked_since
-            if t - self._blocked_since > self.skip_after:  # skip ahead one metre
-                i = min(self.ctrl._i + 20, len(self.ctrl.path) - 1)
-                self.ctrl.set_path(self.ctrl.path[i:])
-                self._blocked_since = None
-        else:
-            self._blocked_since = None
-        if v == 0.0 and w == 0.0 and not blocked:
-            self.done = True
+        leg = self.legs[self._leg]
+        near_end = math.hypot(pose[0] - leg[-1, 0], pose[1] - leg[-1, 1])
+        if near_end < self.cfg.goal_tolerance * 0.5:
+            self._furthest = max(self._furthest, self._leg_start[self._leg] + len(leg) - 1)
+            if self._leg == len(self.legs) - 1:
+                self.done = True
+                return 0.0, 0.0
+            self._start_leg(self._leg + 1, 0)
+        v, w, _ = self.ctrl.command(pose, scan)
+        self._furthest = max(self._furthest, self._offset + self.ctrl._i)
+        left = self.ctrl.remaining(pose)
+        if self._since is None or left < self._best - 0.1:
+            self._best, self._since = left, t
+        elif t - self._since > self.skip_after:  # no progress: skip ahead one metre
+            i = self._offset - self._leg_start[self._leg] + self.ctrl._i + 20
+            if i < len(self.legs[self._leg]) - 1:
+                self._start_leg(self._leg, i)
+            elif self._leg < len(self.legs) - 1:
+                self._start_leg(self._leg + 1, 0)
+            else:
+                self._best, self._since = left, t  # the last point: keep trying
         return v, w

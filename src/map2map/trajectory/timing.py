@@ -304,7 +304,8 @@ def trajectory_from_poses(
 def _read_table(path: str | os.PathLike, what: str) -> tuple[list[str] | None, np.ndarray]:
     source = os.fspath(path)
     try:
-        text = open(path, encoding="utf-8").read()
+        with open(path, encoding="utf-8") as fh:
+            text = fh.read()
     except OSError as exc:
         raise InputError(source, f"cannot read {what} ({exc.strerror})") from None
     except UnicodeDecodeError:

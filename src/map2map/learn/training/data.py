@@ -44,7 +44,7 @@ from ...datasets.packed import PackedPairs, load_packed
 
 __all__ = ["ContentSquare", "content_square", "MARGIN_PX", "wall_thickness_px",
            "resolve_packed", "load_pairs", "downsample_input", "downsample_target",
-           "reduce_input", "ResidentPairs"]
+           "reduce_input", "ResidentPairs", "FEW_TRAIN_PAIRS", "warn_about_data"]
 
 
 def resolve_packed(path: str | os.PathLike) -> Path:
@@ -216,3 +216,39 @@ def content_square(m: OccupancyMap, data_size: int) -> ContentSquare | None:
     cs, ce = max(0, col0), min(W, col0 + side)
     sq[rs - row0:re - row0, cs - col0:ce - col0] = m.data[rs:re, cs:ce]
     return ContentSquare(sq, row0, col0, side)
+
+
+#: Fewer training pairs than this get a warning: pix2pix's smallest training set (CMP
+#: Facades, Isola et al. 2017) had 400 pairs, the thesis's 4,224.
+FEW_TRAIN_PAIRS = 400
+
+
+def warn_about_data(src, n_train: int, n_val: int) -> None:
+    """Warn of a training set too small to generalize from, and of no 'val' pairs (the
+    sample grids then show training pairs).
+
+    Examples
+    --------
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as got:
+    ...     warnings.simplefilter("always")
+    ...     warn_about_data("ds", 1, 0)
+    >>> [str(w.message)[:40] for w in got]
+    ['ds: only 1 training pair: fewer than 400', "ds: no 'val' pairs: the sample grids (sa"]
+    """
+    import warnings
+
+    from ...core.errors import MapWarning
+
+    where = f"{src}: " if src is not None else ""
+    if n_train < FEW_TRAIN_PAIRS:
+        warnings.warn(
+            f"{where}only {n_train} training pair{'s' if n_train != 1 else ''}: fewer than "
+            f"{FEW_TRAIN_PAIRS} (pix2pix's smallest training set; the thesis trained on "
+            "4,224), so the model will learn these pairs rather than maps in general",
+            MapWarning, stacklevel=3)  # fmt: skip
+    if n_val == 0:
+        warnings.warn(
+            f"{where}no 'val' pairs: the sample grids (samples/epoch_NNNN.png) show training "
+            "pairs, which tell how well the model fits them, not how it does on new maps",
+            MapWarning, stacklevel=3)  # fmt: skip

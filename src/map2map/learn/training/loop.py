@@ -58,7 +58,7 @@ from .checkpoint import (
     save_checkpoint,
 )
 from .config import TrainConfig, lr_factor
-from .data import ResidentPairs, load_pairs
+from .data import ResidentPairs, load_pairs, warn_about_data
 from .figures import save_loss_curves, save_sample_grid
 from .step import false_targets, gan_step, set_lr
 
@@ -269,6 +269,8 @@ def open_run(data, out, config: TrainConfig | None, *, config_type: type, fmt: s
     train = pairs.select("train")
     if len(train) == 0:
         raise InputError(src, "the dataset has no 'train' pairs")
+    if dist.main:
+        warn_about_data(src, len(train), len(pairs.select("val")))
     meta = dict(pairs.meta)
     meta.setdefault("digest", pairs.digest())
     return RunStart(out, pairs, src, cfg, dist, train, meta, tensors, state)
