@@ -32,6 +32,9 @@ metric_accuracy
 align_sweep
     ``evaluate`` on plans against rotated and scaled copies of themselves: recovered,
     flagged and silently wrong alignments.
+inspection_truth
+    The as-built inspection's wall verdicts against the known field of parametric
+    deformations.
 slam_accuracy
     The SLAM backends' trajectory and map error: on the two real CARMEN logs against
     their corrected poses (``slam_accuracy.carmen``) and on simulated explorations
