@@ -468,14 +468,16 @@ def _set_up(plan, cfg: SimConfig, route, start, src, route_source) -> _Setup:
         start = choose_start(base, robot.radius, rng_start)
     start = tuple(float(v) for v in start)
     check_start(base, start, robot.radius, src)
-    world = World.build(
-        plan,
-        start=start,
-        obstacles=cfg.obstacles,
-        people=cfg.people,
-        robot_radius=robot.radius,
-        rng=rng_world,
-    )
+    world = base  # nothing to add: the same world (its build drew nothing from rng_world)
+    if cfg.obstacles or cfg.people:
+        world = World.build(
+            plan,
+            start=start,
+            obstacles=cfg.obstacles,
+            people=cfg.people,
+            robot_radius=robot.radius,
+            rng=rng_world,
+        )
     mapper = cfg.mapper
     if isinstance(mapper, str):
         mapper = make_mapper(mapper, resolution=plan.resolution, seed=cfg.seed)
