@@ -83,22 +83,18 @@ def make_cast_grid(
     from scipy.ndimage import distance_transform_edt
 
     s = np.asarray(solid, bool)
-    g = np.full((s.shape[0] + 2, s.shape[1] + 2), 2, np.uint8)
-    g[1:-1, 1:-1] = s
-    if within is None:
-        skip = distance_transform_edt(g == 0) - math.sqrt(2.0) - 1e-6
-    else:
-        r0, r1, c0, c1 = within
-        r0, c0 = max(r0, 0), max(c0, 0)
-        r1, c1 = max(min(r1, s.shape[0]), r0), max(min(c1, s.shape[1]), c0)
-        box = np.full((r1 - r0 + 2, c1 - c0 + 2), 2, np.uint8)  # its own border ring
-        box[1:-1, 1:-1] = s[r0:r1, c0:c1]
-        skip = np.zeros(g.shape)
-        skip[r0 + 1 : r1 + 1, c0 + 1 : c1 + 1] = distance_transform_edt(box == 0)[1:-1, 1:-1]
-        skip = skip - math.sqrt(2.0) - 1e-6
-    field = np.maximum(skip, 0.0).astype(np.float32)
-    field[g == 1] = -1.0
-    field[g == 2] = -2.0
+    h, w = s.shape
+    r0, r1, c0, c1 = within or (0, h, 0, w)
+    r0, c0 = max(r0, 0), max(c0, 0)
+    r1, c1 = max(min(r1, h), r0), max(min(c1, w), c0)
+    box = np.full((r1 - r0 + 2, c1 - c0 + 2), 2, np.uint8)  # with its own border ring
+    box[1:-1, 1:-1] = s[r0:r1, c0:c1]
+    skip = distance_transform_edt(box == 0) - math.sqrt(2.0) - 1e-6
+    field = np.zeros((h + 2, w + 2), np.float32)  # outside the box: no skipping
+    field[r0 + 1 : r1 + 1, c0 + 1 : c1 + 1] = np.maximum(skip[1:-1, 1:-1], 0.0)
+    field[1:-1, 1:-1][s] = -1.0
+    field[[0, -1], :] = -2.0
+    field[:, [0, -1]] = -2.0
     return field
 
 

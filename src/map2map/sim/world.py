@@ -74,7 +74,7 @@ class World:
         self.scene = Scene(plan, solid)
         # distance (m) from each cell centre to the nearest blocked cell centre,
         # minus half a cell: a conservative distance to the blocked squares
-        self.clearance = (_blocked_distance(blocked) - 0.5) * plan.resolution
+        self.clearance = _clearance(blocked, plan.resolution)
         self.people = People(np.zeros((0, 2)), np.zeros((0, 2)))
 
     # ------------------------------------------------------------ geometry
@@ -283,17 +283,18 @@ def _bbox(mask: np.ndarray, pad: int) -> tuple[int, int, int, int] | None:
             max(int(cols[0]) - pad, 0), min(int(cols[-1]) + 1 + pad, w))  # fmt: skip
 
 
-def _blocked_distance(blocked: np.ndarray) -> np.ndarray:
-    """``distance_transform_edt(~blocked)`` (pixels), computed over the unblocked cells'
-    bounding box plus one cell only: every cell outside it is blocked (distance 0), and
-    the blocked ring around the box is nearer to a cell inside than anything beyond
-    it, so the values are the same as over the whole grid (a 1 cm/px HouseExpo render
-    is 12 MP of which the building is a tenth)."""
-    out = np.zeros(blocked.shape)
+def _clearance(blocked: np.ndarray, resolution: float) -> np.ndarray:
+    """``(distance_transform_edt(~blocked) - 0.5) * resolution``, the distance computed
+    over the unblocked cells' bounding box plus one cell only: every cell outside it is
+    blocked (distance 0), and the blocked ring around the box is nearer to a cell inside
+    than anything beyond it, so the values are the same as over the whole grid (a
+    HouseExpo render is a 12 MP picture of which the building is a tenth)."""
+    out = np.full(blocked.shape, (0.0 - 0.5) * resolution)
     box = _bbox(~blocked, 1)
     if box is not None:
         r0, r1, c0, c1 = box
-        out[r0:r1, c0:c1] = ndimage.distance_transform_edt(~blocked[r0:r1, c0:c1])
+        edt = ndimage.distance_transform_edt(~blocked[r0:r1, c0:c1])
+        out[r0:r1, c0:c1] = (edt - 0.5) * resolution
     return out
 
 
