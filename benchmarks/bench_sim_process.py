@@ -12,11 +12,22 @@ Usage::
     python3 -m benchmarks.bench_sim_process               # 8 runs, 2 at a time
     python3 -m benchmarks.bench_sim_process --runs 16 --jobs 2
     python3 -m benchmarks.bench_sim_process --mapper oracle
+    python3 -m benchmarks.bench_sim_process --held-out 8  # issue 35 item 4: as a user would
+    python3 -m benchmarks.bench_sim_process --held-out 8 --sim-args "--resolution 0.01"
 
-Plans: the two HouseExpo JSON plans and the HouseExpo renders (reduced to
-0.05 m/px, ``benchmarks/_sim_plans.py``) from the shared data, cycled; procedural
-apartments when the shared data is absent. Run ``i`` uses ``--seed i``. One
-untimed run first fills the numba cache (as a user's first run would).
+Plans: the two HouseExpo JSON plans and the first ``--renders`` HouseExpo renders
+(cropped and reduced to 0.05 m/px, ``benchmarks/_sim_plans.py``) from the shared data,
+cycled; procedural apartments when the shared data is absent. Run ``i`` uses
+``--seed i``. One untimed run first fills the numba cache (as a user's first run would).
+
+``--held-out N`` runs ``map2map simulate RENDER.png --out RUN`` exactly as a user would
+on the last ``N`` HouseExpo renders in sorted name order, the files as they are
+(3746x3268 at 1 cm/px, no resolution stored: ``simulate`` assumes 0.05 m/px and says
+so), with every default; pass ``--sim-args`` to add options (``"--resolution 0.01"``
+reads them at their true scale). No plan the simulator was tuned on is among them:
+tuning used the JSON plans and the first renders. Run ``i`` is render ``i mod N`` with
+``--seed i // N`` (the default seed 0 on the first pass). The untimed first run uses
+the first render (not held out).
 
 Printed per run: wall seconds of the process, its CPU seconds (user + system,
 ``os.wait4``), and the in-process simulation wall time from ``report.json``.
@@ -31,6 +42,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shlex
 import subprocess
 import sys
 import tempfile
@@ -61,12 +73,19 @@ def plan_files(tmp: Path, n_renders: int) -> list[Path]:
     return files
 
 
-def run_one(plan: Path, out: Path, seed: int, mapper: str, src: Path) -> dict:
+def held_out_renders(n: int) -> list[Path]:
+    """The last ``n`` HouseExpo renders in sorted name order (files as they are)."""
+    return sorted((HOUSEEXPO / "renders").glob("*.png"))[-n:]
+
+
+def run_one(
+    plan: Path, out: Path, seed: int, mapper: str, src: Path, extra: tuple[str, ...] = ()
+) -> dict:
     """One ``map2map simulate`` process; its wall and CPU seconds and report."""
     env = dict(os.environ)
     env["PYTHONPATH"] = str(src) + os.pathsep + env.get("PYTHONPATH", "")
     cmd = [sys.executable, "-m", "map2map", "simulate", str(plan), "--out", str(out)]
-    cmd += ["--seed", str(seed), "--mapper", mapper, "--quiet"]
+    cmd += ["--seed", str(seed), "--mapper", mapper, "--quiet", *extra]
     log = out.with_suffix(".stderr")
     with open(log, "wb") as err:
         t0 = time.perf_counter()
@@ -86,6 +105,7 @@ def run_one(plan: Path, out: Path, seed: int, mapper: str, src: Path) -> dict:
         "sim_wall": rep["wall_seconds"],
         "coverage": rep["coverage"],
         "rss_mb": ru.ru_maxrss / 1024,
+        "cmd": cmd,
     }
 
 
@@ -102,20 +122,46 @@ def main() -> None:
         help="package sources to run (default: this checkout's src; e.g. an older checkout's "
         "src for a before/after comparison)",
     )
+    ap.add_argument(
+        "--held-out",
+        type=int,
+        default=0,
+        metavar="N",
+        help="run on the last N HouseExpo renders as files, as a user would (see above)",
+    )
+    ap.add_argument(
+        "--sim-args",
+        default="",
+        metavar="ARGS",
+        help='more options for every simulate run, e.g. "--resolution 0.01"',
+    )
     args = ap.parse_args()
+    extra = tuple(shlex.split(args.sim_args))
+    if args.held_out and not HOUSEEXPO.is_dir():
+        ap.error(f"--held-out needs the HouseExpo renders ({HOUSEEXPO})")
     with tempfile.TemporaryDirectory(prefix="bench_sim_process_") as d:
         tmp = Path(d)
-        plans = plan_files(tmp, args.renders)
+        src = args.src.resolve()
+        if args.held_out:
+            plans = held_out_renders(args.held_out)
+            warm = sorted((HOUSEEXPO / "renders").glob("*.png"))[0]
+            what = f"held-out HouseExpo renders as files ({plans[0].name[:8]}..)"
+            seeds = [i // len(plans) for i in range(args.runs)]
+        else:
+            plans = plan_files(tmp, args.renders)
+            warm = plans[0]
+            what = "HouseExpo" if HOUSEEXPO.is_dir() else "apartments"
+            seeds = list(range(args.runs))
         print(
-            f"{len(plans)} plans ({'HouseExpo' if HOUSEEXPO.is_dir() else 'apartments'}), "
-            f"{args.runs} runs of `map2map simulate --mapper {args.mapper}`, "
+            f"{len(plans)} plans ({what}), {args.runs} runs of `map2map simulate PLAN --out RUN "
+            f"--seed S --mapper {args.mapper} --quiet{' ' if extra else ''}{shlex.join(extra)}`, "
             f"{args.jobs} at a time; {os.cpu_count()} cores visible; sources {args.src}",
             flush=True,
         )
-        src = args.src.resolve()
-        run_one(plans[0], tmp / "warmup", 0, args.mapper, src)  # numba cache, OS file cache
+        run_one(warm, tmp / "warmup", 0, args.mapper, src, extra)  # numba cache, OS file cache
         jobs = [
-            (plans[i % len(plans)], tmp / f"run{i}", i, args.mapper, src) for i in range(args.runs)
+            (plans[i % len(plans)], tmp / f"run{i}", seeds[i], args.mapper, src, extra)
+            for i in range(args.runs)
         ]
         t0 = time.perf_counter()
         with ThreadPoolExecutor(max_workers=args.jobs) as pool:

@@ -140,3 +140,47 @@ def test_lidar_noise_quantised_and_outliers():
     half = Lidar(LidarConfig(fov_deg=180))
     assert half.config.n_beams == 181
     assert half.config.angle_min == pytest.approx(-np.pi / 2)
+
+
+def test_boxed_field_casts_like_the_whole_grid():
+    """A plan in a wide unknown canvas (a HouseExpo render): the Scene's field over the
+    known cells plus the range gives the whole grid's ranges to the bit, and World's
+    clearance and reachable cells (computed on boxes) equal the whole-grid formulas."""
+    from scipy import ndimage
+
+    from map2map.sim.world import World
+
+    rng = np.random.default_rng(5)
+    data = np.full((400, 380), 127, np.uint8)
+    room = np.full((120, 150), 255, np.uint8)
+    room[[0, -1], :] = 0
+    room[:, [0, -1]] = 0
+    room[60, 10:90] = 0
+    room[rng.integers(1, 119, 40), rng.integers(1, 149, 40)] = 0
+    room[30, 0] = 127  # a gap in the outer wall into the canvas
+    data[150:270, 120:270] = room
+    plan = OccupancyMap(data, 0.05)
+    world = World.build(plan, start=(0.0, 0.0, 0.0), rng=rng)
+    whole = Scene(plan, plan.occupied)
+    whole._field, whole._reach = make_cast_grid(plan.occupied), math.inf  # the whole grid's
+    angles = np.linspace(-math.pi, math.pi, 360, endpoint=False)
+    for _ in range(30):
+        r, c = rng.integers(151, 269), rng.integers(121, 269)
+        if not plan.free[r, c]:
+            continue
+        x, y = plan.pixel_to_world([r], [c])
+        got = world.scene.cast(float(x[0]) + 0.013, float(y[0]), 0.3, angles, 3.5)
+        ref = whole.cast(float(x[0]) + 0.013, float(y[0]), 0.3, angles, 3.5)
+        assert np.array_equal(got, ref) and np.isfinite(got).sum() > 100
+    edt = ndimage.distance_transform_edt(~world.blocked)
+    assert np.array_equal(world.clearance, ((edt - 0.5) * 0.05).astype(np.float64))
+    ok = world.clearance >= 0.25
+    r, c = np.argwhere(ok)[len(np.argwhere(ok)) // 2]
+    x, y = plan.pixel_to_world([r], [c])
+    start = (float(x[0]), float(y[0]), 0.0)
+    lab, _ = ndimage.label(ok)
+    yy, xx = np.mgrid[-4:5, -4:5]
+    disk = xx**2 + yy**2 <= 4.0**2
+    ref = ndimage.binary_dilation(lab == lab[r, c], disk) & ~world.blocked
+    assert ref.sum() > 1000
+    assert np.array_equal(world.reachable_cells(start, 0.2, 0.05), ref)

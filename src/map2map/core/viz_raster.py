@@ -37,7 +37,8 @@ import numpy as np
 from ._io import atomic_path
 from .grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 
-__all__ = ["MAP_COLOURS", "map_to_rgb", "nice_length", "Panel", "save_panels"]
+__all__ = ["MAP_COLOURS", "map_to_rgb", "map_to_rgb8", "rgb8", "nice_length", "Panel",
+           "save_panels"]  # fmt: skip
 
 #: RGB colours of the three cell states.
 MAP_COLOURS = {
@@ -77,6 +78,35 @@ def map_to_rgb(m: OccupancyMap | np.ndarray) -> np.ndarray:
     rgb[data == FREE] = MAP_COLOURS[FREE]
     rgb[data == OCCUPIED] = MAP_COLOURS[OCCUPIED]
     return rgb
+
+
+def rgb8(colour: Colour) -> np.ndarray:
+    """A float colour as the uint8 RGB a :class:`Panel` makes of it (round half up).
+
+    Examples
+    --------
+    >>> rgb8((1.0, 0.5, 0.0)).tolist()
+    [255, 128, 0]
+    """
+    return _to_uint8(np.asarray(colour, float).reshape(1, 1, 3))[0, 0]
+
+
+def map_to_rgb8(m: OccupancyMap | np.ndarray) -> np.ndarray:
+    """:func:`map_to_rgb` as the uint8 image a :class:`Panel` makes of it, by table look-up:
+    the same pixels without a float image of 24 bytes per cell (a 12 MP map).
+
+    Examples
+    --------
+    >>> d = np.array([[0, 127, 255, 3]], np.uint8)
+    >>> bool((map_to_rgb8(d) == _to_uint8(map_to_rgb(d))).all())
+    True
+    """
+    data = m.data if isinstance(m, OccupancyMap) else np.asarray(m)
+    lut = np.empty((256, 3), np.uint8)
+    lut[:] = rgb8(MAP_COLOURS[UNKNOWN])
+    lut[FREE] = rgb8(MAP_COLOURS[FREE])
+    lut[OCCUPIED] = rgb8(MAP_COLOURS[OCCUPIED])
+    return lut[data.astype(np.uint8, copy=False)]
 
 
 def nice_length(target_m: float) -> float:

@@ -177,14 +177,14 @@ def save_figure_png(res: SimResult, path: Path) -> None:
     ``map2map simulate`` process spends about 0.6 CPU seconds less (imports and
     drawing), which counts when thousands of runs build a data set.
     """
-    from ..core.viz_raster import Panel, map_to_rgb, save_panels
+    from ..core.viz_raster import Panel, map_to_rgb8, rgb8, save_panels
 
     plan = plan_with_world(res)
     tr, tc = res.plan.world_to_pixel_float(res.true_poses[:, 0], res.true_poses[:, 1])
     er, ec = res.plan.world_to_pixel_float(res.estimated_poses[:, 0], res.estimated_poses[:, 1])
     green, red = (0.17, 0.63, 0.17), (0.84, 0.15, 0.16)  # matplotlib's tab:green, tab:red
     p0 = Panel(
-        map_to_rgb(plan),
+        map_to_rgb8(plan),
         title="plan (+furniture): true and estimated path",
         resolution=plan.resolution,
     )
@@ -199,16 +199,17 @@ def save_figure_png(res: SimResult, path: Path) -> None:
         legend.append(("collision", (1.0, 0.0, 0.0), "x"))
     p0.legend(legend)
     p1 = Panel(
-        map_to_rgb(res.slam_map_plan),
+        map_to_rgb8(res.slam_map_plan),
         title=f"{res.info.get('mapper', '')} map, coverage {100 * res.coverage:.1f} %",
         resolution=res.slam_map_plan.resolution,
     )
     p1.line(tr, tc, colour=green, width=1, alpha=0.7)
-    rgb = np.ones((*plan.shape, 3))
-    rgb[res.reachable & ~res.slam_map_plan.free] = (1.0, 0.75, 0.3)
-    rgb[res.reachable & res.slam_map_plan.free] = (0.75, 0.9, 0.75)
-    rgb[plan.occupied] = (0.2, 0.2, 0.2)
-    rgb[res.slam_map_plan.occupied] = (0.85, 0.1, 0.1)
+    # uint8 colours as the Panel would round them: no float image of a 12 MP plan
+    rgb = np.full((*plan.shape, 3), 255, np.uint8)
+    rgb[res.reachable & ~res.slam_map_plan.free] = rgb8((1.0, 0.75, 0.3))
+    rgb[res.reachable & res.slam_map_plan.free] = rgb8((0.75, 0.9, 0.75))
+    rgb[plan.occupied] = rgb8((0.2, 0.2, 0.2))
+    rgb[res.slam_map_plan.occupied] = rgb8((0.85, 0.1, 0.1))
     p2 = Panel(rgb, title="reachable: mapped (green) / missed (orange); map walls red")
     save_panels(
         [p0, p1, p2],

@@ -142,7 +142,27 @@ class Scene:
 
     def __post_init__(self) -> None:
         self.solid = np.asarray(self.solid, bool)
-        self._field = make_cast_grid(self.solid)
+        self._field: np.ndarray | None = None
+        self._reach = -1.0
+
+    def _cast_field(self, reach: float) -> np.ndarray:
+        """The casting field (:func:`make_cast_grid`), made at the first cast (a world
+        whose lidar never casts, such as a furniture trial, never pays for it) over the
+        known cells plus more than ``reach`` pixels: rays start in free space, and a cell
+        the box leaves out is farther from a ray's path than the ray is long, so the
+        ranges are those of the whole grid's field, to the bit."""
+        if self._field is None or reach > self._reach:
+            within = None
+            if math.isfinite(reach):
+                known = self.solid | self.frame.free
+                rows = np.flatnonzero(known.any(axis=1))
+                cols = np.flatnonzero(known.any(axis=0))
+                pad = int(math.ceil(reach)) + 8
+                if rows.size:
+                    within = (rows[0] - pad, rows[-1] + 1 + pad, cols[0] - pad, cols[-1] + 1 + pad)
+            self._field = make_cast_grid(self.solid, within)
+            self._reach = reach
+        return self._field
 
     @classmethod
     def from_map(cls, m: OccupancyMap) -> Scene:
@@ -188,7 +208,7 @@ class Scene:
         rel = -np.asarray(rel_angles, float)
         out = np.empty(rel.shape[0])
         cast_scan(
-            self._field,
+            self._cast_field(max_range / m.resolution),
             px,
             py,
             heading,

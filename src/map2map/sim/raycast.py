@@ -43,7 +43,9 @@ __all__ = ["make_cast_grid", "cast_rays", "cast_scan", "cast_rays_many", "TIE_EP
 TIE_EPS = 1e-9
 
 
-def make_cast_grid(solid: np.ndarray) -> np.ndarray:
+def make_cast_grid(
+    solid: np.ndarray, within: tuple[int, int, int, int] | None = None
+) -> np.ndarray:
     """Prepare a boolean grid for casting: one ``float32`` field with a one-cell border.
 
     A cell holds -1 if solid, -2 outside the grid (the border, so the traversal
@@ -55,10 +57,18 @@ def make_cast_grid(solid: np.ndarray) -> np.ndarray:
     Coordinates into the field are shifted by one cell; the ``cast_*`` functions
     take the unshifted coordinates of the original grid.
 
+    With ``within`` (half-open ``(r0, r1, c0, c1)`` of ``solid``) the distances are
+    taken inside that box only, as if its edge were the grid's border, and cells
+    outside it get 0 (no skipping): both only shorten jumps, so casts stay exact, and
+    the field costs the box's size rather than the grid's (:class:`~map2map.sim.lidar.Scene`
+    boxes the plan's known cells plus more than the lidar's range).
+
     Parameters
     ----------
     solid : (H, W) bool array
         Cells that stop a ray.
+    within : (r0, r1, c0, c1), optional
+        Where jumps are wanted (clipped to the grid); default everywhere.
 
     Returns
     -------
@@ -73,12 +83,18 @@ def make_cast_grid(solid: np.ndarray) -> np.ndarray:
     from scipy.ndimage import distance_transform_edt
 
     s = np.asarray(solid, bool)
-    g = np.full((s.shape[0] + 2, s.shape[1] + 2), 2, np.uint8)
-    g[1:-1, 1:-1] = s
-    skip = distance_transform_edt(g == 0) - math.sqrt(2.0) - 1e-6
-    field = np.maximum(skip, 0.0).astype(np.float32)
-    field[g == 1] = -1.0
-    field[g == 2] = -2.0
+    h, w = s.shape
+    r0, r1, c0, c1 = within or (0, h, 0, w)
+    r0, c0 = max(r0, 0), max(c0, 0)
+    r1, c1 = max(min(r1, h), r0), max(min(c1, w), c0)
+    box = np.full((r1 - r0 + 2, c1 - c0 + 2), 2, np.uint8)  # with its own border ring
+    box[1:-1, 1:-1] = s[r0:r1, c0:c1]
+    skip = distance_transform_edt(box == 0) - math.sqrt(2.0) - 1e-6
+    field = np.zeros((h + 2, w + 2), np.float32)  # outside the box: no skipping
+    field[r0 + 1 : r1 + 1, c0 + 1 : c1 + 1] = np.maximum(skip[1:-1, 1:-1], 0.0)
+    field[1:-1, 1:-1][s] = -1.0
+    field[[0, -1], :] = -2.0
+    field[:, [0, -1]] = -2.0
     return field
 
 

@@ -175,14 +175,20 @@ def choose_start(world: World, radius: float, rng: np.random.Generator):
     """
     from scipy import ndimage
 
-    ok = world.clearance >= radius + 0.15
-    if not ok.any():
-        ok = world.clearance >= radius
-    if not ok.any():
+    room = world.clearance >= radius
+    rows, cols = np.flatnonzero(room.any(axis=1)), np.flatnonzero(room.any(axis=0))
+    if rows.size == 0:
         raise InputError(None, "plan too small for the robot: no place with enough clearance")
-    lab, n = ndimage.label(world.clearance >= radius + REACH_MARGIN)
+    # every set below lies within `room`: its bounding box keeps their cells in the same
+    # (row-major) order, the labels in the same order, so the same draw picks the same cell
+    r0, c0 = int(rows[0]), int(cols[0])
+    clear = world.clearance[r0 : int(rows[-1]) + 1, c0 : int(cols[-1]) + 1]
+    ok = clear >= radius + 0.15
+    if not ok.any():
+        ok = clear >= radius
+    lab, n = ndimage.label(clear >= radius + REACH_MARGIN)
     if n == 0:
-        lab, n = ndimage.label(world.clearance >= radius)
+        lab, n = ndimage.label(clear >= radius)
     sizes = np.bincount(lab.ravel(), minlength=n + 1)
     sizes[0] = 0
     big = lab == int(np.argmax(sizes))
@@ -190,7 +196,8 @@ def choose_start(world: World, radius: float, rng: np.random.Generator):
     if not len(cand):
         cand = np.flatnonzero(big.ravel())
     k = int(cand[rng.integers(len(cand))])
-    r, c = divmod(k, world.plan.width)
+    r, c = divmod(k, clear.shape[1])
+    r, c = r + r0, c + c0
     x, y = world.plan.pixel_to_world([r], [c])
     return float(x[0]), float(y[0]), float(rng.uniform(-math.pi, math.pi))
 
@@ -468,14 +475,16 @@ def _set_up(plan, cfg: SimConfig, route, start, src, route_source) -> _Setup:
         start = choose_start(base, robot.radius, rng_start)
     start = tuple(float(v) for v in start)
     check_start(base, start, robot.radius, src)
-    world = World.build(
-        plan,
-        start=start,
-        obstacles=cfg.obstacles,
-        people=cfg.people,
-        robot_radius=robot.radius,
-        rng=rng_world,
-    )
+    world = base  # nothing to add: the same world (its build drew nothing from rng_world)
+    if cfg.obstacles or cfg.people:
+        world = World.build(
+            plan,
+            start=start,
+            obstacles=cfg.obstacles,
+            people=cfg.people,
+            robot_radius=robot.radius,
+            rng=rng_world,
+        )
     mapper = cfg.mapper
     if isinstance(mapper, str):
         mapper = make_mapper(mapper, resolution=plan.resolution, seed=cfg.seed)

@@ -74,8 +74,7 @@ class World:
         self.scene = Scene(plan, solid)
         # distance (m) from each cell centre to the nearest blocked cell centre,
         # minus half a cell: a conservative distance to the blocked squares
-        edt = ndimage.distance_transform_edt(~blocked)
-        self.clearance = ((edt - 0.5) * plan.resolution).astype(np.float64)
+        self.clearance = _clearance(blocked, plan.resolution)
         self.people = People(np.zeros((0, 2)), np.zeros((0, 2)))
 
     # ------------------------------------------------------------ geometry
@@ -121,13 +120,15 @@ class World:
         r, c = (int(v) for v in self.plan.world_to_pixel(start[0], start[1]))
         if not ok[r, c]:  # a start closer to a wall than the margin: use its own region
             ok = self.clearance >= radius
-        lab, _ = ndimage.label(ok)
-        comp = lab == lab[r, c]
         rad = radius / self.plan.resolution
         k = int(math.ceil(rad))
-        yy, xx = np.mgrid[-k : k + 1, -k : k + 1]
-        disk = xx**2 + yy**2 <= rad**2
-        return ndimage.binary_dilation(comp, disk) & ~self.blocked
+        out = np.zeros(ok.shape, bool)
+        box = _bbox(ok, k) if ok[r, c] else None  # the cells that can take part, k wider
+        r0, r1, c0, c1 = box or (0, ok.shape[0], 0, ok.shape[1])
+        lab, _ = ndimage.label(ok[r0:r1, c0:c1])
+        comp = lab == lab[r - r0, c - c0]
+        out[r0:r1, c0:c1] = _dilate_disk(comp, rad) & ~self.blocked[r0:r1, c0:c1]
+        return out
 
     # ------------------------------------------------------------ building
     @classmethod
@@ -268,6 +269,45 @@ class World:
                 pp.goals[k] = self._goal_pool[rng.integers(len(self._goal_pool))]
                 pp.wait[k] = rng.uniform(0.5, 2.0)
         self.scene.circles = pp.circles
+
+
+def _bbox(mask: np.ndarray, pad: int) -> tuple[int, int, int, int] | None:
+    """Half-open ``(r0, r1, c0, c1)`` of the true cells of ``mask``, ``pad`` cells wider
+    (clipped to the grid); None if there are none."""
+    rows = np.flatnonzero(mask.any(axis=1))
+    if rows.size == 0:
+        return None
+    cols = np.flatnonzero(mask.any(axis=0))
+    h, w = mask.shape
+    return (max(int(rows[0]) - pad, 0), min(int(rows[-1]) + 1 + pad, h),
+            max(int(cols[0]) - pad, 0), min(int(cols[-1]) + 1 + pad, w))  # fmt: skip
+
+
+def _clearance(blocked: np.ndarray, resolution: float) -> np.ndarray:
+    """``(distance_transform_edt(~blocked) - 0.5) * resolution``, the distance computed
+    over the unblocked cells' bounding box plus one cell only: every cell outside it is
+    blocked (distance 0), and the blocked ring around the box is nearer to a cell inside
+    than anything beyond it, so the values are the same as over the whole grid (a
+    HouseExpo render is a 12 MP picture of which the building is a tenth)."""
+    out = np.full(blocked.shape, (0.0 - 0.5) * resolution)
+    box = _bbox(~blocked, 1)
+    if box is not None:
+        r0, r1, c0, c1 = box
+        edt = ndimage.distance_transform_edt(~blocked[r0:r1, c0:c1])
+        out[r0:r1, c0:c1] = (edt - 0.5) * resolution
+    return out
+
+
+def _dilate_disk(mask: np.ndarray, rad: float) -> np.ndarray:
+    """``binary_dilation(mask, disk)`` with the disk ``x**2 + y**2 <= rad**2`` (pixels),
+    from the exact nearest true cell of the feature transform: the same cells, without
+    the cost of a structure of ``(2 rad + 1)**2`` elements (1 s per MP at 1 cm/px)."""
+    if not mask.any():
+        return mask.copy()
+    idx = ndimage.distance_transform_edt(~mask, return_distances=False, return_indices=True)
+    rr, cc = np.indices(mask.shape)
+    d2 = (idx[0] - rr) ** 2 + (idx[1] - cc) ** 2
+    return d2 <= rad**2
 
 
 def check_start(world: World, start, radius: float, source) -> None:
