@@ -32,6 +32,10 @@ metric_accuracy
 align_sweep
     ``evaluate`` on plans against rotated and scaled copies of themselves: recovered,
     flagged and silently wrong alignments.
+alignment_confidence
+    Fits and checks ``p_correct`` (the probability that an alignment is right) on the
+    sweep and the Halmstad pairs with held-out folds: reliability, the "doubtful"
+    threshold and the warning rates on right and wrong alignments per data set.
 slam_accuracy
     The SLAM backends' trajectory and map error: on the two real CARMEN logs against
     their corrected poses (``slam_accuracy.carmen``) and on simulated explorations

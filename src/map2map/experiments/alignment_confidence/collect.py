@@ -19,6 +19,12 @@ Data sets:
   (:mod:`map2map.experiments.halmstad_accuracy`);
 * ``wrong_building``: every sensor map <-> the other building's layout, both ways
   (36): wrong by construction.
+
+Examples
+--------
+>>> room = _symmetric_room(20, 30)  # one rectangular room: turned 180 deg, the same
+>>> room.shape, bool((room[::-1, ::-1] == room).all())
+((40, 50), True)
 """
 
 from __future__ import annotations
