@@ -108,17 +108,18 @@ def test_no_hypothesis_passes_warns_and_falls_back(plan):
     assert np.all(np.isfinite(res.similarity))
 
 
-def test_a_weak_hypothesis_is_kept_with_a_warning_only_when_it_beats_the_rigid_fallback(plan):
+def test_a_weak_hypothesis_is_kept_with_a_note_only_when_it_beats_the_rigid_fallback(plan):
     # a scaled copy: the search finds it, but demand a search score it cannot reach so
     # that it is "weak"; it fits far better than any scale-1 rigid fallback, so it is
-    # kept (right scale) with a low-confidence warning instead of replaced by a wrong rigid
+    # kept (right scale) with a low-confidence note instead of replaced by a wrong rigid
     C = np.array([[1, 0, 0.5], [0, 1, 0.5], [0, 0, 1.0]])
     T_true = similarity_matrix(0.8, math.radians(10.0), 40.0, 30.0)
     source = _transform_map(plan, np.linalg.inv(C) @ T_true @ C, (H, W))
     weak = AlignParams(auto_anchor=False, min_score=0.99)
     res = align_maps(source, plan, params=weak)
     assert res.hypotheses["score_source_to_target"] < 0.99
-    assert any("low-confidence alignment" in w for w in res.warnings)
+    # a note since p_correct measures the doubt (it fired on 2 right Halmstad pairs)
+    assert any("low-confidence alignment" in n for n in res.notes)
     assert decompose_similarity(res.similarity)[0] == pytest.approx(1 / 0.8, rel=0.02)
     # a margin no hypothesis can reach: back to the rigid fallback, with its warning
     res = align_maps(source, plan, params=AlignParams(auto_anchor=False, min_score=0.99,
@@ -362,6 +363,7 @@ def test_cli_align_and_evaluate_outputs(plan, tmp_path, capsys):
     doc = json.loads((out / "alignment.json").read_text())
     for k in ("similarity", "affine", "rigid"):
         assert np.array(doc[k]).shape == (3, 3)
+    assert 0.45 < doc["p_correct"] <= 1.0  # a clean, right alignment: not doubtful
     T = np.array(doc["similarity"])  # np.rot90: source (x, y) = plan (y, W - x)
     np.testing.assert_allclose(apply(T, [[30.5, W - 20.5]]), [[20.5, 30.5]], atol=1.5)
     rows = list(csv.DictReader((out / "points_aligned.csv").open()))
@@ -373,6 +375,7 @@ def test_cli_align_and_evaluate_outputs(plan, tmp_path, capsys):
     assert main(["evaluate", src, tgt, "--out", str(ev_out)]) == 0
     rep = json.loads((ev_out / "report.json").read_text())
     assert rep["chosen_chain"] == "rigid"
+    assert rep["p_correct"] == rep["alignment"]["p_correct"] == pytest.approx(doc["p_correct"])
     assert rep["chosen_errors"]["max_m"] == pytest.approx(0.25, rel=0.1)
     assert {"rigid", "nonrigid"} <= set(rep["errors"]) and "from_identity" in rep["icp"]
     assert (ev_out / "overlay.png").exists() and (ev_out / "error_map.png").exists()
@@ -382,6 +385,7 @@ def test_cli_align_and_evaluate_outputs(plan, tmp_path, capsys):
     assert main(["evaluate", "--pairs", str(pairs), "--out", str(tmp_path / "b"), "--quiet"]) == 0
     table = list(csv.DictReader((tmp_path / "b" / "pairs.csv").open()))
     assert len(table) == 2 and float(table[1]["max_px"]) < 1.0
+    assert float(table[1]["p_correct"]) > 0.9  # the plan on itself
     assert (tmp_path / "b" / "errors_boxplot.png").exists()
     capsys.readouterr()
 

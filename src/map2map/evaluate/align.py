@@ -23,7 +23,7 @@ free-space share; real pairs score 0.3-1, unrelated maps about 0.15) or
 ``min_fitness`` at full resolution, a warning says so and the best
 rigid (or anchored) result is returned instead -- unless the best hypothesis, below
 ``min_score``, still fits ``weak_margin`` times better than that rigid fallback at full
-resolution: then it is kept with a low-confidence warning.
+resolution: then it is kept with a low-confidence note.
 
 Examples
 --------
@@ -64,7 +64,7 @@ from ..core.geometry import (
 )
 from ..core.grid import FREE, OCCUPIED, UNKNOWN
 from .anchors import Anchors, anchor, auto_anchors
-from .confidence import ConfidenceParams, alignment_notes, alignment_warnings
+from .confidence import ConfidenceParams, alignment_notes, alignment_warnings, p_correct
 from .decomposition import Face, decompose
 from .features import (
     downsample,
@@ -102,7 +102,7 @@ class AlignParams:
     pixel for the same metric length (``res_source / res_target``); 1 when both
     maps share a resolution, which the paper assumes. ``min_score`` and
     ``min_fitness`` decide whether any hypothesis passed; a hypothesis scoring below
-    ``min_score`` is still kept (with a low-confidence warning) when at full resolution
+    ``min_score`` is still kept (with a low-confidence note) when at full resolution
     it fits ``weak_margin`` times better than the rigid fallback. ``full_sigmas`` are the
     final Gaussian widths (px) of the full-resolution fit, ``line_sigmas`` replace
     them when one map draws its walls as lines (a plan) and ``affine_line`` applies
@@ -156,6 +156,7 @@ class Alignment:
     fields: SideFields | None = None
     timings: dict[str, float] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
+    p_correct: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         s, a, tx, ty = decompose_similarity(self.similarity)
@@ -166,6 +167,7 @@ class Alignment:
             "fitness": self.fitness,
             "fitness_affine": self.fitness_affine,
             "fitness_rigid": self.fitness_rigid,
+            "p_correct": self.p_correct,
             "scale": s,
             "rotation_deg": math.degrees(a),
             "translation": [tx, ty],
@@ -631,7 +633,7 @@ def _search_stats(fwd: _Search, bwd: _Search, reverse: bool, p: AlignParams) -> 
 
 
 def _full_resolution(srch: _Search, a, b, q: AlignParams, f1: int, f2: int, anchored: bool,
-                     warnings: list[str]):
+                     warnings: list[str], notes: list[str]):
     """Refine the winning hypothesis (a -> b) at full resolution: similarity, affine, rigid.
 
     Returns ``(sim, aff, rig, passed, line_plan)``; when no hypothesis passes, all three
@@ -691,8 +693,8 @@ def _full_resolution(srch: _Search, a, b, q: AlignParams, f1: int, f2: int, anch
             rig = fallback_rigid()
             fit_rig = fitness(Mf3, apply(rig, A3))
             passed = fit_sim >= q.weak_margin * fit_rig
-            if passed:
-                warnings.append(
+            if passed:  # a fact: whether it is right is p_correct's to say
+                notes.append(
                     f"low-confidence alignment: the best hypothesis scored {srch.score:.3f} in "
                     f"the search (< {q.min_score} confirms a match); kept because it fits "
                     f"{fit_sim:.0%} of the walls against {fit_rig:.0%} for the best rigid "
@@ -825,6 +827,7 @@ def align_maps(
     p = params or AlignParams()
     timings: dict[str, float] = {}
     warnings: list[str] = []
+    notes: list[str] = []
     t0 = time.perf_counter()
     crop = _Crop.of(check_map(source, names[0]), check_map(target, names[1]))
     src, tgt = crop.cut(source, target)
@@ -840,7 +843,7 @@ def align_maps(
 
     t1 = time.perf_counter()
     sim, aff, rig, passed, line_plan = _full_resolution(
-        srch, a, b, q, f1, f2, anchors is not None, warnings
+        srch, a, b, q, f1, f2, anchors is not None, warnings, notes
     )
     if reverse:
         sim, aff, rig = (np.linalg.inv(T) for T in (sim, aff, rig))
@@ -873,6 +876,7 @@ def align_maps(
     if "rotation_deg" in stats["runner_up"]:
         quality["runner_up_rotation_deg"] = stats["runner_up"]["rotation_deg"]
         quality["runner_up_scale"] = stats["runner_up"]["scale"]
+    quality["p_correct"] = p_correct(quality)
     stats["quality"] = quality
     warnings.extend(alignment_warnings(quality, p.confidence))
     timings["total"] = time.perf_counter() - t0
@@ -898,7 +902,8 @@ def align_maps(
             "offset_target": (c0t, r0t),
         },
         timings=timings,
-        notes=alignment_notes(quality, p.confidence),
+        notes=notes + alignment_notes(quality, p.confidence),
+        p_correct=quality["p_correct"],
     )
 
 

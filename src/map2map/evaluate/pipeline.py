@@ -283,6 +283,7 @@ def evaluate_maps(
         "source": names[0],
         "target": names[1],
         "resolution_m_per_px": resolution,
+        "p_correct": al.p_correct,
         "alignment": al.to_dict(),
         "errors": {k: e.summary(resolution) for k, e in errors.items()},
         "chosen_chain": chosen,

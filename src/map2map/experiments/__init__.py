@@ -32,6 +32,10 @@ metric_accuracy
 align_sweep
     ``evaluate`` on plans against rotated and scaled copies of themselves: recovered,
     flagged and silently wrong alignments.
+alignment_confidence
+    Fits and checks ``p_correct`` (the probability that an alignment is right) on the
+    sweep and the Halmstad pairs with held-out folds: reliability, the "doubtful"
+    threshold and the warning rates on right and wrong alignments per data set.
 inspection_truth
     The as-built inspection's wall verdicts against the known field of parametric
     deformations.

@@ -641,6 +641,7 @@ def _pair_row(name: str, src: MapInput, tgt: MapInput, ev: Evaluation) -> dict[s
         "iou_free": ev.report["iou"][ev.chosen]["free"],
         "icp_mean_px": ev.report["icp"]["from_identity"]["mean_px"],
         "fitness": ev.report["alignment"]["fitness"],
+        "p_correct": ev.report.get("p_correct"),
         "seconds": ev.report["timings_s"]["total"],
         "warnings": "; ".join(ev.report["warnings"]),
         "notes": "; ".join(ev.report.get("notes", [])),

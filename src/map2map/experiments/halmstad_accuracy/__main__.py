@@ -30,6 +30,9 @@ E5_04, E5_12 both ways, which a known metric scale clears on E5_01/E5_04; weak
 hypothesis 2: HIH_04), every good pair carrying notes instead, and all 5 bad or
 wrong-map pairs still warn (ambiguity 5, poor fit 3, free space 2, no shared walls
 2). Transforms and error figures identical before and after on all 40 pairs.
+Since 2026-11-27 one "doubtful alignment" warning (``p_correct``, calibrated by
+``map2map.experiments.alignment_confidence``) replaces ambiguity, poor fit and free space:
+good pairs warned 3/35, bad or wrong-map pairs 5/5 (README.md).
 """
 
 from __future__ import annotations
@@ -48,7 +51,8 @@ from map2map.maps.halmstad import halmstad_pairs, keypoint_residuals, load_halms
 
 #: warning text -> the check that raised it (confidence.py, align.py)
 CHECKS = (
-    ("ambiguous alignment", "ambiguity"),
+    ("doubtful alignment", "doubtful"),  # p_correct (since 2026-11-27, issue #34 item 2)
+    ("ambiguous alignment", "ambiguity"),  # the warnings it replaced, for old --json files
     ("poor fit", "fitness"),
     ("free space disagrees", "free_space"),
     ("scale mismatch", "scale"),
@@ -80,6 +84,7 @@ def figures(report: dict) -> dict:
     q = report["alignment"]["hypotheses"]["quality"]
     iou_known = report["iou"][report["chosen_chain"]].get("free_known")
     return {
+        "p_correct": report.get("p_correct"),
         "fitness": q.get("fitness"),
         "free_agreement": q.get("free_agreement"),
         "runner_up_ratio": q.get("runner_up_ratio"),
@@ -162,8 +167,8 @@ def summary(rows: list[dict]) -> str:
         g = sum(1 for r in good if any(w["check"] == n for w in r["warnings"]))
         b = sum(1 for r in bad if any(w["check"] == n for w in r["warnings"]))
         out.append(f"  {n:<16s} fires on {g:2d}/{len(good)} good, {b:2d}/{len(bad)} bad")
-    for k in ("fitness", "free_agreement", "runner_up_ratio", "search_score", "iou_free_known",
-              "unmatched_share"):
+    for k in ("p_correct", "fitness", "free_agreement", "runner_up_ratio", "search_score",
+              "iou_free_known", "unmatched_share"):
         def rng(rs, k=k):
             v = [r["figures"][k] for r in rs if r["figures"].get(k) is not None]
             return f"{min(v):.2f}-{max(v):.2f}" if v else "-"
