@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 import pytest
 
-from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from map2map.core.grid import UNKNOWN, OccupancyMap
 from map2map.evaluate.align import AlignParams, align_maps
 from map2map.evaluate.confidence import (
     alignment_notes,
@@ -24,7 +24,7 @@ from map2map.evaluate.confidence import (
 )
 from map2map.evaluate.pipeline import evaluate_maps
 from map2map.maps.irregular import irregular_plan
-from map2map.maps.synthetic import draw_walls, office_walls
+from map2map.maps.synthetic import cluttered, draw_walls, office_walls
 
 # figures measured on Halmstad pairs (map2map.experiments.alignment_confidence, 2026-11-27)
 HIH_03_GOOD = {"fitness": 0.368, "fitness_source_to_target": 0.176,
@@ -47,21 +47,6 @@ HIH_01_ON_E5 = {"fitness": 0.209, "fitness_source_to_target": 0.209,
 @pytest.fixture(scope="module")
 def office():
     return draw_walls((240, 300), office_walls(300, 240))
-
-
-def cluttered(plan: np.ndarray, seed: int = 0, n: int = 80) -> np.ndarray:
-    """The plan as a robot maps it: furniture blocks, clutter, noisy wall clouds."""
-    rng = np.random.default_rng(seed)
-    m = plan.copy()
-    free = np.argwhere(m == FREE)
-    for _ in range(n):
-        r, c = free[rng.integers(len(free))]
-        h, w = rng.integers(3, 9, 2)
-        m[r : r + h, c : c + w] = OCCUPIED
-    m[(m == FREE) & (rng.random(m.shape) < 0.01)] = OCCUPIED
-    thick = cv2.dilate((m == OCCUPIED).astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
-    m[thick & (rng.random(m.shape) < 0.5)] = OCCUPIED
-    return m
 
 
 def test_p_correct_on_measured_halmstad_figures():

@@ -35,6 +35,7 @@ from ..core.grid import FREE, OCCUPIED, UNKNOWN
 
 __all__ = [
     "Wall",
+    "cluttered",
     "office_walls",
     "draw_walls",
     "wall_displacement",
@@ -543,3 +544,30 @@ def true_errors(
     none = ~step.any(1)
     err[none] = np.hypot(*(apply(T, X[none]) - (X[none] - u[r[none], c[none]])).T)
     return err
+
+
+def cluttered(plan: np.ndarray, seed: int = 0, n: int = 80) -> np.ndarray:
+    """The plan as a robot maps it: ``n`` furniture blocks (3-8 px) on free cells, 1 % of
+    free cells occupied (clutter), and walls grown into noisy clouds (half the cells
+    beside a wall occupied). Seeded: the same plan and seed give the same map.
+
+    Examples
+    --------
+    >>> plan = draw_walls((60, 80), office_walls(80, 60))
+    >>> m = cluttered(plan, seed=1)
+    >>> bool((m == 0).sum() > (plan == 0).sum()), bool(np.array_equal(m, cluttered(plan, 1)))
+    (True, True)
+    """
+    from ..core.grid import FREE, OCCUPIED
+
+    rng = np.random.default_rng(seed)
+    m = plan.copy()
+    free = np.argwhere(m == FREE)
+    for _ in range(n):
+        r, c = free[rng.integers(len(free))]
+        h, w = rng.integers(3, 9, 2)
+        m[r : r + h, c : c + w] = OCCUPIED
+    m[(m == FREE) & (rng.random(m.shape) < 0.01)] = OCCUPIED
+    thick = cv2.dilate((m == OCCUPIED).astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
+    m[thick & (rng.random(m.shape) < 0.5)] = OCCUPIED
+    return m

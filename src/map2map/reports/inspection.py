@@ -10,14 +10,10 @@ error heat map in cm, walls by status, the walls that deviate most, every segmen
 
 Examples
 --------
->>> import numpy as np
->>> from map2map.core.grid import OccupancyMap
 >>> from map2map.evaluate.pipeline import evaluate_maps
->>> from map2map.maps.synthetic import draw_walls, office_walls
->>> plan = OccupancyMap(draw_walls((240, 300), office_walls(300, 240)), 0.05)
->>> built = draw_walls((240, 300), office_walls(300, 240, partition_shift=(2.0, 0.0)))
->>> ev = evaluate_maps(OccupancyMap(built, 0.05), plan, resolution=0.05)
->>> report = inspection_report(ev, plan, tolerance=0.05)
+>>> from map2map.maps.floorplan import generate_floorplan
+>>> plan = generate_floorplan(3, size=(10, 8))
+>>> report = inspection_report(evaluate_maps(plan, plan, resolution=0.05), plan)
 >>> report.title, len(report.sections) > 3
 ('As-built inspection', True)
 """

@@ -36,7 +36,6 @@ from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
-import cv2
 import numpy as np
 
 from map2map.core.geometry import apply, decompose_similarity
@@ -46,7 +45,7 @@ from map2map.evaluate.features import surface_points
 from map2map.experiments.align_sweep.__main__ import plans, transformed_copy
 from map2map.maps.halmstad import halmstad_pairs, keypoint_residuals, load_halmstad
 from map2map.maps.irregular import irregular_plan
-from map2map.maps.synthetic import draw_walls, office_walls
+from map2map.maps.synthetic import cluttered, draw_walls, office_walls
 
 SAME_ROT = (23.0, 90.0, -37.0)
 SAME_SCALE = (0.8, 1.3)
@@ -121,21 +120,6 @@ def _symmetric_room(h: int, w: int) -> np.ndarray:
     return plan
 
 
-def _cluttered(plan: np.ndarray, seed: int) -> np.ndarray:
-    """The plan as a robot maps it: furniture blocks and noisy wall clouds."""
-    rng = np.random.default_rng(seed)
-    m = plan.copy()
-    free = np.argwhere(m == FREE)
-    for _ in range(80):
-        r, c = free[rng.integers(len(free))]
-        h, w = rng.integers(3, 9, 2)
-        m[r : r + h, c : c + w] = OCCUPIED
-    m[(m == FREE) & (rng.random(m.shape) < 0.01)] = OCCUPIED
-    thick = cv2.dilate((m == OCCUPIED).astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
-    m[thick & (rng.random(m.shape) < 0.5)] = OCCUPIED
-    return m
-
-
 def hard_case(args) -> dict[str, Any]:
     """The hard synthetic cases of tests/test_trust.py and tests/test_confidence.py, varied:
     (name, group, source, target, truth source->target or None, metric_scale)."""
@@ -171,7 +155,7 @@ def hard_cases() -> list[tuple]:
         part[:, :cols] = office[:, :cols]
         out.append((f"partial office {cols} cols", "office", part, office, np.eye(3), None))
     for seed in (0, 1):
-        out.append((f"cluttered office seed {seed}", "office", _cluttered(office, seed), office,
+        out.append((f"cluttered office seed {seed}", "office", cluttered(office, seed), office,
                     np.eye(3), None))  # fmt: skip
     small, T = transformed_copy(office, 0.75, 0.0)
     out.append(("wrong resolution office 0.75 told 1", "office", small, office,
