@@ -1,4 +1,5 @@
-"""``map2map autocorrect``: turn SLAM maps into CAD-like plans with Model_BA."""
+"""``map2map autocorrect``: turn SLAM maps into CAD-like plans with Model_BA (or, with
+``--model none``, with the classical cleaning alone)."""
 
 from __future__ import annotations
 
@@ -9,17 +10,21 @@ from ._mapargs import add_input_options, read_options_from_args, say_how_read
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    from ..jobs.autocorrect import model_names_help
+
     p = sub.add_parser(
         "autocorrect",
-        help="learned SLAM -> CAD auto-correct (Model_BA)",
+        help="SLAM -> CAD auto-correct (Model_BA, or --model none)",
         description="Auto-correct a SLAM map into a CAD-like plan (straight walls, no noise) "
-        "with Model_BA, in the input's frame, resolution and origin. INPUT may be a folder: "
+        "with Model_BA (--model), in the input's frame, resolution and origin. INPUT may be "
+        "a folder: "
         "every map in it is corrected into the --out folder (same names).",
     )
     p.add_argument("input", metavar="INPUT", help="SLAM map (ROS yaml, PNG, ...) or a folder")
     p.add_argument("--out", required=True, help="output map (.yaml/.png/.pgm) or folder")
-    p.add_argument("--model", default="pretrained",
-                   help="'pretrained' (shipped weights), a training run folder or weights file")
+    p.add_argument("--model", default=None, metavar="NAME|PATH",
+                   help="which corrector: " + model_names_help().replace("%", "%%")
+                        + " ('pretrained' is 'thesis')")
     p.add_argument("--dxf", metavar="FILE", help="also write the walls as DXF line segments "
                    "(with a folder INPUT: a folder)")
     p.add_argument("--figure", metavar="PNG", help="before/after figure (folder INPUT: folder)")

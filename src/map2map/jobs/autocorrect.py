@@ -1,9 +1,11 @@
 """``map2map autocorrect`` as a job: SLAM maps in, CAD-like plans (and DXF walls, figures)
-out, with Model_BA (:mod:`map2map.learn.ba.autocorrect`).
+out, with Model_BA (:mod:`map2map.learn.ba.autocorrect`) or without a network.
 
-The model is loaded once for all the maps; every output path is checked before any map
-is read; each file is written atomically. A folder input corrects every map in it into
-the output folder (same names).
+The model is chosen by name from :data:`MODELS` (``--model``; :data:`DEFAULT_MODEL`) or
+is a Model_BA weights file or training run; every choice is a :class:`Corrector`. The
+model is loaded once for all the maps; every output path is checked before any map is
+read; each file is written atomically. A folder input corrects every map in it into the
+output folder (same names).
 
 Examples
 --------
@@ -20,14 +22,113 @@ from __future__ import annotations
 
 import os
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 from ..core.errors import InputError
 
+if TYPE_CHECKING:
+    from ..core.grid import OccupancyMap
+
 __all__ = ["AutocorrectSpec", "AutocorrectRun", "autocorrect", "MAP_SUFFIXES",
-           "parse_thickness"]
+           "parse_thickness", "Corrector", "ModelEntry", "MODELS", "DEFAULT_MODEL",
+           "ALIASES", "corrector", "model_names_help"]
+
+
+@runtime_checkable
+class Corrector(Protocol):
+    """What every ``--model`` is: a ``name`` (tables, messages), a ``source`` (the
+    weights file, or what stands in for one) and ``correct_many``: maps in, one output
+    per map in its input's frame, carrying ``meta["autocorrect"]`` (``segments_px``:
+    wall segments in input pixels, ``warnings``, ``model``). ``options`` are
+    :func:`~map2map.learn.ba.autocorrect.autocorrect_many`'s keywords (``straighten``,
+    ``anchor``, ``thickness``, ``open_frontiers``, ``large``, ...); a corrector raises
+    :class:`~map2map.core.errors.InputError` (naming ``model``) for one it has no
+    meaning for."""
+
+    name: str
+    source: str
+
+    def correct_many(self, maps: list[OccupancyMap], **options) -> list[OccupancyMap]:
+        ...
+
+
+@dataclass(frozen=True)
+class ModelEntry:
+    """A named model: ``make(device) -> Corrector`` (imports lazily: naming the models
+    imports no torch) and a one-line description for ``--help``."""
+
+    make: Callable[[str], Corrector]
+    help: str
+
+
+def _none(device: str) -> Corrector:
+    from ..learn.ba.correctors import NullCorrector
+
+    return NullCorrector()
+
+
+def _thesis(device: str) -> Corrector:
+    from ..learn.ba.correctors import ThesisCorrector
+
+    return ThesisCorrector("pretrained", device, name="thesis")
+
+
+#: The models ``--model`` names (a new one is one entry here).
+MODELS: dict[str, ModelEntry] = {
+    "none": ModelEntry(_none, "the classical cleaning alone, no network: the input's own "
+                              "walls straightened, specks and clutter removed"),
+    "thesis": ModelEntry(_thesis, "the thesis's Model_BA (Model_32 + post-processing), "
+                                  "shipped weights"),
+}
+#: What ``--model`` is when not given.
+DEFAULT_MODEL = "thesis"
+#: Other names of :data:`MODELS` entries (``pretrained``: the shipped weights, as before).
+ALIASES = {"pretrained": "thesis"}
+
+
+def model_names_help() -> str:
+    """``--model``'s help: the names, the default, and that a path is weights.
+
+    >>> model_names_help().startswith("'none'")
+    True
+    """
+    names = "; ".join(f"'{k}'{' (default)' if k == DEFAULT_MODEL else ''}: {e.help}"
+                      for k, e in MODELS.items())
+    return f"{names}; or a Model_BA training run folder or weights file"
+
+
+def corrector(model: str | os.PathLike | Corrector | None = None,
+              device: str = "cpu") -> Corrector:
+    """The :class:`Corrector` of a ``--model`` value: a name of :data:`MODELS` (or an
+    alias), a Model_BA training run folder or weights file, or a corrector (returned as
+    it is); None is :data:`DEFAULT_MODEL`.
+
+    Examples
+    --------
+    >>> corrector("none").name
+    'none'
+    >>> corrector("no-such-model")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    map2map.core.errors.InputError: no-such-model: not a model name ('none', 'thesis') nor...
+    """
+    if model is None:
+        model = DEFAULT_MODEL
+    if not isinstance(model, str | os.PathLike):
+        return model
+    key = ALIASES.get(os.fspath(model), os.fspath(model))
+    if key in MODELS:
+        return MODELS[key].make(device)
+    if not Path(model).exists():
+        names = ", ".join(repr(k) for k in MODELS)
+        raise InputError(model, f"not a model name ({names}) nor a Model_BA training run "
+                                "folder or weights file")
+    from ..learn.ba.correctors import ThesisCorrector
+
+    return ThesisCorrector(model, device)
 
 #: Files of a folder input that are read as maps.
 MAP_SUFFIXES = (".yaml", ".yml", ".png", ".pgm", ".jpg", ".jpeg", ".tif", ".tiff", ".json")
@@ -44,8 +145,10 @@ class AutocorrectSpec:
         of them.
     out : path-like
         The output map, or folder (folder input).
-    model : str or path-like
-        ``"pretrained"`` (shipped weights), a training run folder or a weights file.
+    model : str, path-like or Corrector
+        A name of :data:`MODELS` (``"none"``, ``"thesis"``; ``"pretrained"`` is
+        ``"thesis"``), a Model_BA training run folder or weights file, or a corrector;
+        None: :data:`DEFAULT_MODEL`.
     dxf, figure : path-like or None
         Also write the walls as DXF line segments / a before-after figure (folder input:
         folders).
@@ -66,7 +169,7 @@ class AutocorrectSpec:
 
     input: str | os.PathLike
     out: str | os.PathLike
-    model: str | os.PathLike = "pretrained"
+    model: str | os.PathLike | Corrector | None = None
     dxf: str | os.PathLike | None = None
     figure: str | os.PathLike | None = None
     straighten: bool = True
@@ -140,8 +243,7 @@ def autocorrect(spec: AutocorrectSpec) -> AutocorrectRun:
     from ..maps.formats import check_output_path, load_map, save_map
 
     try:
-        from ..learn.ba.autocorrect import autocorrect_many
-        from ..learn.ba.model import load_model
+        from ..learn.ba.autocorrect import Correction
         from ..learn.training.figures import save_before_after
     except ImportError as exc:
         raise InputError("autocorrect", f"needs PyTorch: pip install 'map2map[learn]' ({exc})"
@@ -151,12 +253,12 @@ def autocorrect(spec: AutocorrectSpec) -> AutocorrectRun:
     for o in outs:
         check_output_path(o["map"])
     maps = [load_map(f, spec.read_options) for f in files]
-    model = load_model(spec.model, spec.device)
+    model = corrector(spec.model, spec.device)
+    options = dict(straighten=spec.straighten, anchor=spec.anchor, thickness=thickness,
+                   open_frontiers=spec.open_frontiers, large=spec.large)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        results = autocorrect_many(maps, model, straighten=spec.straighten, anchor=spec.anchor,
-                                   device=spec.device, thickness=thickness,
-                                   open_frontiers=spec.open_frontiers, large=spec.large)
+        results = [Correction.of(o) for o in model.correct_many(maps, **options)]
     written = []
     for f, m, r, o in zip(files, maps, results, outs, strict=True):
         w = dict(o)
@@ -167,6 +269,7 @@ def autocorrect(spec: AutocorrectSpec) -> AutocorrectRun:
             save_segments_dxf(r.segments, o["dxf"])
         if "figure" in o:
             save_before_after(m, r.map, o["figure"], r.map.meta["autocorrect"]["segments_px"],
-                              title=f"{f.name} -> {o['map'].name} ({Path(model.source).name})")
+                              title=f"{f.name} -> {o['map'].name} ({Path(model.source).name})",
+                              label="Model_BA" if model.name == "thesis" else model.name)
         written.append(w)
     return AutocorrectRun(maps, results, files, model.source, written)

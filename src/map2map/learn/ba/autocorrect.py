@@ -160,6 +160,34 @@ class Correction:
     segments: np.ndarray
     warnings: list[str]
 
+    @classmethod
+    def of(cls, out: OccupancyMap) -> Correction:
+        """The correction an output map carries in ``meta["autocorrect"]`` (its wall
+        segments in input pixels, its warnings): what every corrector of
+        ``map2map autocorrect --model`` returns, as :func:`autocorrect_many` does.
+
+        Examples
+        --------
+        >>> m = OccupancyMap(np.full((20, 30), 255, np.uint8), 0.05, (1.0, 2.0, 0.0))
+        >>> m.meta["autocorrect"] = {"segments_px": [[0.5, 10.5, 20.5, 10.5]],
+        ...                          "warnings": []}
+        >>> Correction.of(m).segments.round(3).tolist()  # x0 y0 x1 y1, metres
+        [[1.025, 2.475, 2.025, 2.475]]
+        """
+        ac = out.meta.get("autocorrect", {})
+        return cls(out, _world_segments(out, np.asarray(ac.get("segments_px", []), float)),
+                   list(ac.get("warnings", [])))
+
+
+def _world_segments(m: OccupancyMap, seg_px: np.ndarray) -> np.ndarray:
+    """Segments in continuous input pixel coordinates (x = column) -> world metres."""
+    seg_px = seg_px.reshape(-1, 4)
+    if not len(seg_px):
+        return np.zeros((0, 4))
+    x0, y0 = m.pixel_to_world(seg_px[:, 1] - 0.5, seg_px[:, 0] - 0.5)
+    x1, y1 = m.pixel_to_world(seg_px[:, 3] - 0.5, seg_px[:, 2] - 0.5)
+    return np.stack([x0, y0, x1, y1], 1)
+
 
 def drawn_wall_px(net: BAModel, m: OccupancyMap, shrink: float, thickness: str | float,
                   square: np.ndarray | None = None) -> float:
@@ -228,7 +256,7 @@ def autocorrect_many(maps: list[OccupancyMap], model: str | os.PathLike | BAMode
     ``open_frontiers`` and ``large`` as :func:`autocorrect` (``None``: :data:`THICKNESS`,
     :data:`OPEN_FRONTIERS` (True for a map corrected in tiles), :data:`LARGE`).
     """
-    net = load_model(model, device)
+    net = model if _is_network(model) else load_model(model, device)
     thickness = THICKNESS if thickness is None else thickness
     frontiers = open_frontiers  # None: by map, whole or in tiles
     large = LARGE if large is None else large
@@ -268,6 +296,14 @@ def autocorrect_many(maps: list[OccupancyMap], model: str | os.PathLike | BAMode
         for w in results[i].warnings:
             warnings.warn(w, stacklevel=2)
     return results
+
+
+def _is_network(model) -> bool:
+    """``model`` is a loaded network (a :class:`BAModel`, or a stand-in with its
+    ``predict``, ``size``, ``data_size``, ``target_wall_px``, ``header`` and ``source``,
+    e.g. :class:`~map2map.learn.ba.correctors.NullNetwork`), not a name or path."""
+    return isinstance(model, BAModel) or (hasattr(model, "predict")
+                                          and hasattr(model, "target_wall_px"))
 
 
 def _open(open_frontiers: bool | None, tiled: bool) -> bool:
@@ -328,7 +364,7 @@ def _finish(m: OccupancyMap, sq: Prepared | None, output: np.ndarray | None, net
     seg_px = segs + np.array([col0, row0, col0, row0])
     seg_px = drawn_pieces(seg_px, data == OCCUPIED) + 0.5
     warns = []
-    if side / net.data_size > MAX_SHRINK and not tiled:
+    if side / net.data_size > MAX_SHRINK and not tiled and getattr(net, "learnt", True):
         warns.append(f"the map is {side / net.data_size:.1f}x larger than the maps the "
                      "model learnt on "
                      f"({net.data_size} px): small walls may be lost and the layout "
@@ -345,10 +381,7 @@ def _finish(m: OccupancyMap, sq: Prepared | None, output: np.ndarray | None, net
                                "deskew_deg": angle}
     if tiled:
         out.meta["autocorrect"]["tiles"] = tile_grid(n, net.data_size)[0] ** 2
-    x0, y0 = m.pixel_to_world(seg_px[:, 1] - 0.5, seg_px[:, 0] - 0.5)
-    x1, y1 = m.pixel_to_world(seg_px[:, 3] - 0.5, seg_px[:, 2] - 0.5)
-    seg_w = np.stack([x0, y0, x1, y1], 1) if len(seg_px) else np.zeros((0, 4))
-    return Correction(out, seg_w, warns)
+    return Correction(out, _world_segments(m, seg_px), warns)
 
 
 def _support(inp: np.ndarray, out: np.ndarray, tol: float) -> float | None:
@@ -375,8 +408,9 @@ def autocorrect(m: OccupancyMap, model: str | os.PathLike | BAModel | None = "pr
     ----------
     m : OccupancyMap
         The SLAM map (any size, resolution, origin).
-    model : "pretrained", run folder, weights file or BAModel
-        Which Model_BA to use.
+    model : "pretrained", run folder, weights file, BAModel or NullNetwork
+        Which Model_BA to use (:class:`~map2map.learn.ba.correctors.NullNetwork`: none,
+        the post-processing alone, ``map2map autocorrect --model none``).
     straighten : bool
         Post-processing steps 3-5 (straight walls); False keeps the snapped upsampling.
     deskew : bool

@@ -90,9 +90,11 @@ def save_sample_grid(inputs: np.ndarray, outputs: np.ndarray, targets: np.ndarra
 
 
 def save_before_after(before: OccupancyMap, after: OccupancyMap, path: str | os.PathLike,
-                      segments: np.ndarray | None = None, title: str = "") -> None:
+                      segments: np.ndarray | None = None, title: str = "",
+                      label: str = "Model_BA") -> None:
     """Input SLAM map | auto-corrected map (its wall segments in red, continuous pixel
-    coordinates of the map), metric axes, zoomed on the input's known part."""
+    coordinates of the map), metric axes, zoomed on the input's known part; ``label``
+    names what corrected it (the right panel's title)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -102,7 +104,7 @@ def save_before_after(before: OccupancyMap, after: OccupancyMap, path: str | os.
     ext = (0, w * before.resolution, 0, h * before.resolution)
     fig, axes = plt.subplots(1, 2, figsize=(11, 5.5 * h / max(w, 1) + 0.8))
     for ax, m, name in ((axes[0], before, "SLAM map (input)"),
-                        (axes[1], after, "auto-corrected (Model_BA)")):
+                        (axes[1], after, f"auto-corrected ({label})")):
         ax.imshow(m.data, cmap="gray", vmin=0, vmax=255, extent=ext, interpolation="nearest")
         ax.set(title=name, xlabel="m")
     r = before.resolution

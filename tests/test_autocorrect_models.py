@@ -1,0 +1,119 @@
+"""``map2map autocorrect --model none|thesis|PATH`` (issue #32): the registry of
+correctors in the jobs layer, the classical cleaning without a network (``none``) and
+the thesis's Model_BA, from the command line on a small generated map."""
+
+from __future__ import annotations
+
+import shutil
+
+import numpy as np
+import pytest
+
+pytest.importorskip("torch")
+
+from map2map.cli.main import main  # noqa: E402
+from map2map.core.grid import OCCUPIED, OccupancyMap  # noqa: E402
+from map2map.jobs.autocorrect import (  # noqa: E402
+    DEFAULT_MODEL,
+    MODELS,
+    Corrector,
+    corrector,
+)
+from map2map.learn.training.synthetic import make_pairs  # noqa: E402
+from map2map.maps.formats import load_map, save_map  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def slam_map() -> OccupancyMap:
+    """A small generated SLAM map (the parametric model's), not at the grid origin."""
+    return OccupancyMap(make_pairs(1, 128, seed=3).b[0], 0.05, (1.0, -2.0, 0.0))
+
+
+@pytest.mark.parametrize("model", ["none", "thesis", "PATH"])
+def test_every_model_runs_from_the_command_line(tmp_path, capsys, slam_map, model):
+    from map2map.learn.ba.model import pretrained_path
+
+    save_map(slam_map, tmp_path / "in.yaml")
+    if model == "PATH":  # a weights file given by its path
+        model = str(shutil.copy(pretrained_path(), tmp_path / "w.safetensors"))
+    rc = main(["autocorrect", str(tmp_path / "in.yaml"), "--out", str(tmp_path / "o.yaml"),
+               "--model", model, "--dxf", str(tmp_path / "o.dxf"),
+               "--figure", str(tmp_path / "o.png")])
+    err = capsys.readouterr().err
+    assert rc == 0, err
+    out = load_map(tmp_path / "o.yaml")
+    assert out.shape == slam_map.shape and out.origin == slam_map.origin
+    assert (out.data == OCCUPIED).any()
+    assert (tmp_path / "o.dxf").is_file() and (tmp_path / "o.png").is_file()
+    assert "auto-corrected 1 map(s) with " in err
+
+
+def test_none_reads_no_weights(tmp_path, capsys, monkeypatch, slam_map):
+    """``--model none`` works where the weights are unreadable; ``thesis`` then fails
+    with one line and exit 2."""
+    import map2map.learn.ba.model as model_mod
+
+    bad = tmp_path / "unreadable.safetensors"
+    bad.write_bytes(b"not weights")
+    bad.chmod(0)
+    monkeypatch.setattr(model_mod, "pretrained_path", lambda: bad)
+
+    def refuse(*a, **k):
+        raise AssertionError("load_model called")
+
+    monkeypatch.setattr(model_mod, "load_model", refuse)
+    monkeypatch.setattr("map2map.learn.ba.autocorrect.load_model", refuse)
+    save_map(slam_map, tmp_path / "in.yaml")
+    rc = main(["autocorrect", str(tmp_path / "in.yaml"), "--out", str(tmp_path / "o.yaml"),
+               "--model", "none"])
+    assert rc == 0 and load_map(tmp_path / "o.yaml").shape == slam_map.shape
+    assert "with none" in capsys.readouterr().err
+    monkeypatch.undo()
+    monkeypatch.setattr(model_mod, "pretrained_path", lambda: bad)
+    rc = main(["autocorrect", str(tmp_path / "in.yaml"), "--out", str(tmp_path / "t.yaml"),
+               "--model", "thesis"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+def test_none_is_the_anchored_cleaning_alone(slam_map):
+    """``none`` straightens the input's own walls (fewer jagged wall pixels, the walls
+    where they were), warns of no model, and refuses the options that need a network."""
+    from map2map.core.errors import InputError
+
+    none = corrector("none")
+    assert isinstance(none, Corrector) and none.name == "none"
+    (out,) = none.correct_many([slam_map])
+    ac = out.meta["autocorrect"]
+    assert ac["model"] == "none" and ac["warnings"] == [] and ac["segments_px"]
+    occ_in, occ_out = slam_map.data == OCCUPIED, out.data == OCCUPIED
+    assert (occ_in & occ_out).sum() > 0.5 * occ_in.sum()          # the input's own walls
+    for bad in ({"anchor": False}, {"straighten": False}):
+        with pytest.raises(InputError, match="need a network"):
+            none.correct_many([slam_map], **bad)
+
+
+def test_the_default_is_the_thesis_and_pretrained_its_alias():
+    assert DEFAULT_MODEL == "thesis" and set(MODELS) >= {"none", "thesis"}
+    assert corrector(None).name == "thesis" and corrector("pretrained").name == "thesis"
+    assert corrector("thesis").source == corrector(None).source
+
+
+def test_the_default_output_is_the_shipped_models(slam_map):
+    """The ``thesis`` corrector is :func:`autocorrect_many` with the shipped weights,
+    pixel for pixel (the job's output before the registry)."""
+    from map2map.learn.ba.autocorrect import autocorrect_many
+
+    (ref,) = autocorrect_many([slam_map], "pretrained")
+    (got,) = corrector("thesis").correct_many([slam_map])
+    assert np.array_equal(ref.map.data, got.data)
+    assert ref.map.meta["autocorrect"]["segments_px"] == got.meta["autocorrect"]["segments_px"]
+
+
+def test_none_draws_one_sided_walls_as_thick_as_the_shipped_model():
+    from map2map.learn.ba.correctors import PLAN_WALL_PX, NullNetwork
+    from map2map.learn.ba.model import load_model
+
+    net = load_model("pretrained")
+    assert PLAN_WALL_PX == net.target_wall_px
+    assert (NullNetwork().size, NullNetwork().data_size) == (net.size, net.data_size)
