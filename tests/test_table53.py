@@ -59,38 +59,118 @@ def _slam(plan: np.ndarray, seed=0) -> np.ndarray:
 class _Corrector:
     """A stand-in model: returns fixed outputs (the plans: a perfect correction)."""
 
-    def __init__(self, outputs, source="oracle"):
-        self.outputs, self.source = outputs, source
+    def __init__(self, outputs, name="oracle"):
+        self.outputs, self.name, self.source = outputs, name, name
 
     def correct(self, maps):
         return [o.copy() for o in self.outputs]
 
 
-def test_run_table53_counts_improved_maps_and_its_guards():
+def _pairs3():
     plans = np.stack([_plan(seed=s) for s in range(3)])
     slam = np.stack([_slam(p, s) for s, p in enumerate(plans)])
-    pairs = PackedPairs(plans, slam, ["p0", "p1", "p2"], ["test"] * 3)
-    same = run_table53(pairs, _Corrector(slam, "identity"), progress=False)
-    assert same.summary["n"] == 3 and same.summary["improved"] == 0
-    assert all(r["diff"] == 0 for r in same.rows)
-    perfect = run_table53(pairs, _Corrector(plans), progress=False, baseline=same)
-    s = perfect.summary
-    assert s["improved"] == 3 and s["share_improved"] == 1.0
-    assert s["sign_test_p"] == pytest.approx(0.125)                 # 0.5 ** 3, one-sided
-    assert s["median_error_gen"] < s["median_error_sim"]
-    assert s["median_gen_wall_recall"] == 1.0 > s["median_sim_wall_recall"]
-    assert s["improved_but_lost_recall"] == 0
-    assert [r["error_sim"] for r in perfect.rows] == [r["error_sim"] for r in same.rows]
-    # an output that drops every wall it can: counted apart when it scores better
-    dropped = plans.copy()
+    return PackedPairs(plans, slam, ["p0", "p1", "p2"], ["test"] * 3)
+
+
+def test_run_table53_counts_improved_maps_and_its_guards():
+    pairs = _pairs3()
+    plans, slam = pairs.a, pairs.b
+    dropped = plans.copy()        # an output that drops every wall it can
     dropped[:, :, :48][dropped[:, :, :48] == OCCUPIED] = FREE
-    t = run_table53(pairs, _Corrector(dropped), progress=False, baseline=same)
-    lost = [r for r in t.rows if r["diff"] > 0 and r["gen_wall_recall"] < r["sim_wall_recall"]]
-    assert t.summary["improved_but_lost_recall"] == len(lost)
-    fig = perfect.figure()
-    assert fig.axes[0].get_title().startswith("Fig. 5.12: 3/3")
-    assert len(perfect.examples_figure().axes) == 9                   # 3 maps x 3 panels
-    assert "3/3 = 100.0%" in perfect.format()
+    t = run_table53(pairs, [_Corrector(slam, "identity"), _Corrector(dropped, "dropped"),
+                            _Corrector(plans, "perfect")], progress=False)
+    same = t.model("identity")
+    assert same.summary["n"] == 3 and same.summary["improved"] == 0
+    assert all(r["diff"] == 0 and r["diff_all"] == 0 for r in same.rows)
+    perfect = t.model("perfect")
+    s = perfect.summary
+    assert s["improved"] == 3 and s["share_improved"] == 1.0 and s["improved_all"] == 3
+    assert s["sign_test_p"] == pytest.approx(0.125)                 # 0.5 ** 3, one-sided
+    assert s["median_error_gen"] < t.summary["median_error_sim"]
+    assert s["median_error_gen_all"] < t.summary["median_error_sim_all"]
+    assert s["median_gen_wall_recall"] == 1.0 > t.summary["median_sim_wall_recall"]
+    assert s["improved_but_lost_recall"] == 0
+    # dropping walls: never counted improved, counted apart when it scores better
+    d = t.model("dropped")
+    lost = [r for r in d.rows if r["diff"] > 0.05 and r["gen_wall_recall"] < r["sim_wall_recall"]]
+    assert d.summary["improved_but_lost_recall"] == len(lost)
+    assert not any(r["improved"] for r in d.rows
+                   if r["gen_wall_recall"] < r["sim_wall_recall"])
+    # the newest model (perfect, last) against the input: 3 better of 3
+    assert t.newest is perfect and t.tests["vs_input"]["better"] == 3
+    assert "vs_none" not in t.tests                                    # no none row
+    assert len(t.examples_figure().axes) == 3 * 5    # 3 maps x (input, 3 models, plan)
+    assert len(t.figure().axes) == 2                          # matched, every point
+    text = t.format()
+    assert "3/3 100%" in text and "every point" in text
+
+
+def test_improved_needs_the_margin_and_the_recall():
+    from map2map.experiments.table53.table import IMPROVED_MARGIN_PX, improved
+
+    assert IMPROVED_MARGIN_PX == 0.05
+    e_sim = np.array([1.00, 1.00, 1.00, 1.00, 1.00, np.nan])
+    e_gen = np.array([0.94, 0.96, 0.94, 0.80, 1.20, 0.50])
+    r_sim = np.full(6, 0.6)
+    r_gen = np.array([0.6, 0.9, 0.59, 0.7, 0.9, 0.9])
+    assert improved(e_sim, e_gen, r_sim, r_gen).tolist() == [
+        True,     # 0.06 lower, recall kept
+        False,    # 0.04 lower: within the margin
+        False,    # lower, but recall lost
+        True,     # lower, recall up
+        False,    # higher
+        False]    # alignment failed
+    assert improved(e_sim, e_gen, r_sim, r_gen, margin=0.0).tolist()[1] is True
+    assert improved(1.0, 0.9, 0.5, 0.5, margin=0.2) == np.False_
+
+
+def test_sign_test_is_one_sided_towards_the_model_and_leaves_ties_out():
+    from map2map.experiments.table53.table import sign_test
+
+    better = sign_test([0.3, 0.2, 0.1, 0.4, 0.5, 0.0, 0.0])          # 5 of 5, 2 ties
+    assert (better["better"], better["worse"], better["ties"]) == (5, 0, 2)
+    assert better["p"] == pytest.approx(0.5 ** 5)
+    worse = sign_test([-0.3, -0.2, -0.1, -0.4, -0.5])
+    assert worse["p"] == pytest.approx(1.0)                  # one-sided: no evidence
+    assert np.isnan(sign_test([0.0, np.nan])["p"])
+
+
+def test_the_newest_model_is_tested_against_none(tmp_path):
+    """With a ``none`` row before it, the newest model gets its sign test against none
+    and the share of maps where it beats none by more than the margin; the CSVs are one
+    per model plus the summary."""
+    pairs = _pairs3()
+    t = run_table53(pairs, [_Corrector(pairs.b, "none"), _Corrector(pairs.a, "perfect")],
+                    progress=False)
+    assert t.tests["vs_none"]["better"] == 3 and t.tests["share_beats_none"] == 1.0
+    assert t.tests["vs_none_all"]["p"] == pytest.approx(0.125)
+    paths = t.to_csv(tmp_path)
+    assert [p.name for p in paths] == ["table53.csv", "table53_none.csv",
+                                       "table53_perfect.csv"]
+    import csv
+
+    with open(paths[0]) as fh:
+        rows = list(csv.DictReader(fh))
+    assert [r["model"] for r in rows] == ["input", "none", "perfect"]
+    assert "beats none by > 0.05 px" in t.format()
+
+
+def test_table53_quick_from_the_command_line_prints_both_variants(tmp_path, capsys):
+    """``python -m map2map.experiments.table53`` on 2 tiny pairs with two models (none
+    and the shipped thesis)."""
+    from map2map.datasets.packed import save_packed
+    from map2map.experiments.table53.__main__ import main
+
+    p = _pairs3()
+    save_packed(tmp_path / "h.npz", PackedPairs(p.a[:2], p.b[:2], p.plan_id[:2], p.split[:2]))
+    assert main(["--data", str(tmp_path / "h.npz"), "--models", "none", "thesis",
+                 "--out", str(tmp_path / "out")]) == 0
+    out = capsys.readouterr().out
+    assert "improved all" in out and "Error all" in out and "every point" in out
+    assert "\nnone " in out and "\nthesis " in out and "vs none" in out
+    for f in ("table53.csv", "table53_none.csv", "table53_thesis.csv", "table53.txt",
+              "fig512.png", "examples.png", "heldout.npz"):
+        assert (tmp_path / "out" / f).is_file()
 
 
 def _tiny_dataset(tmp_path, splits):

@@ -1,20 +1,26 @@
-"""Thesis Table 5.3 / Fig. 5.12 as a command: does Model_BA bring SLAM maps closer to
-their plans? A thin caller of :mod:`map2map.experiments.table53.measure` (the metric, the guards and
-the sign test are documented there).
+"""Thesis Table 5.3 / Fig. 5.12 as a command, one row per model: do the correctors of
+``map2map autocorrect`` bring SLAM maps closer to their plans, and does the network add
+anything to the classical cleaning (``none``)? A thin caller of
+:mod:`map2map.experiments.table53.measure` (the metric, the improvement rule, the guards and
+the sign tests are documented there and in :mod:`map2map.experiments.table53.table`).
 
     python3 -m map2map.experiments.table53                        # 100 generated held-out pairs
     python3 -m map2map.experiments.table53 --quick                # 12 pairs
-    python3 -m map2map.experiments.table53 --data DS --model RUN  # a dataset's test split, a run
+    python3 -m map2map.experiments.table53 --models none thesis field   # rows, newest last
+    python3 -m map2map.experiments.table53 --data DS --model RUN  # none, thesis and a run
     python3 -m map2map.experiments.table53 --data DS --ac open_frontiers=true  # autocorrect option
     python3 -m map2map.experiments.table53 --data DS1 --data DS2 --split test val \\
         --cleaner DS1/cleaner.skops                      # several builds, merged by plan
 
-``--data`` takes a dataset folder (read-only, even while its build runs; cleaned pairs
-``complete`` only, ``--all`` for every finished pair; ``--cleaner`` applies another
-dataset's cleaner in memory to a dataset not cleaned yet) or a packed ``.npz``; several
-``--data`` are merged, each plan once. Writes ``OUT/table53.csv``, ``OUT/fig512.png``,
-``OUT/examples.png`` and ``OUT/heldout.npz`` (the held-out pairs measured, so that
-another model is compared on the same maps with ``--data OUT/heldout.npz``).
+``--models`` names the rows (``map2map autocorrect --model`` names or weights paths;
+default ``none thesis``), ``--model`` adds one more after them. ``--data`` takes a dataset
+folder (read-only, even while its build runs; cleaned pairs ``complete`` only, ``--all``
+for every finished pair; ``--cleaner`` applies another dataset's cleaner in memory to a
+dataset not cleaned yet) or a packed ``.npz``; several ``--data`` are merged, each plan
+once. Writes ``OUT/table53.csv`` (one row per model), ``OUT/table53_<model>.csv`` (per
+map), ``OUT/table53.txt`` (the printed table), ``OUT/fig512.png``, ``OUT/examples.png``
+and ``OUT/heldout.npz`` (the held-out pairs measured, so that another model is compared
+on the same maps with ``--data OUT/heldout.npz``).
 """
 
 from __future__ import annotations
@@ -25,6 +31,8 @@ from pathlib import Path
 
 from map2map.datasets.packed import save_packed
 from map2map.experiments.table53.measure import (
+    DEFAULT_MODELS,
+    IMPROVED_MARGIN_PX,
     ac_options,
     generated_heldout_pairs,
     heldout_pairs_from_dataset,
@@ -40,7 +48,15 @@ def main(argv=None) -> int:
     ap.add_argument("--all", action="store_true", help="every finished pair, not only "
                     "those the cleaner kept as complete")
     ap.add_argument("--cleaner", help="cleaner.skops applied to datasets not yet cleaned")
-    ap.add_argument("--model", default="pretrained")
+    ap.add_argument("--models", nargs="+", default=None, metavar="MODEL",
+                    help="the rows, newest last: 'none', 'thesis' (map2map autocorrect "
+                         "--model names) or weights paths (default: "
+                         f"{' '.join(DEFAULT_MODELS)})")
+    ap.add_argument("--model", default=None, metavar="MODEL",
+                    help="one more row after --models (e.g. a training run)")
+    ap.add_argument("--margin", type=float, default=IMPROVED_MARGIN_PX,
+                    help="improved: Error(gen) lower than Error(sim) by more than this, px "
+                         f"(default {IMPROVED_MARGIN_PX}), and wall recall not lower")
     ap.add_argument("--n", type=int, default=None, help="at most N held-out pairs "
                     "(default: all of a dataset's split, 100 generated)")
     ap.add_argument("--quick", action="store_true", help="12 pairs")
@@ -71,14 +87,17 @@ def main(argv=None) -> int:
         pairs = PackedPairs(pairs.a[:n], pairs.b[:n], pairs.plan_id[:n], pairs.split[:n],
                             pairs.meta)
     save_packed(out / "heldout.npz", pairs)
-    table = run_table53(pairs, args.model, seed=args.seed, anchor=not args.no_anchor,
-                        autocorrect_kw=ac_options(args.ac))
-    print(table.format())
-    table.to_csv(out / "table53.csv")
+    models = list(args.models or DEFAULT_MODELS) + ([args.model] if args.model else [])
+    table = run_table53(pairs, models, seed=args.seed, anchor=not args.no_anchor,
+                        margin=args.margin, autocorrect_kw=ac_options(args.ac))
+    text = table.format()
+    print(text)
+    (out / "table53.txt").write_text(text + "\n")
+    csvs = table.to_csv(out)
     table.figure(out / "fig512.png")
     table.examples_figure(out / "examples.png")
-    print(f"wrote {out / 'table53.csv'}, {out / 'fig512.png'}, {out / 'examples.png'} and "
-          f"{out / 'heldout.npz'}")
+    print(f"wrote {', '.join(str(c) for c in csvs)}, {out / 'table53.txt'}, "
+          f"{out / 'fig512.png'}, {out / 'examples.png'} and {out / 'heldout.npz'}")
     return 0
 
 

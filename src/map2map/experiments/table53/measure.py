@@ -1,19 +1,26 @@
-"""Thesis Table 5.3 / Fig. 5.12 as a library: does Model_BA bring SLAM maps closer to
-their plans?
+"""Thesis Table 5.3 / Fig. 5.12 as a library: do the correctors of ``map2map
+autocorrect`` bring SLAM maps closer to their plans, and does the network add anything
+to the classical cleaning? (issue #32)
 
 On held-out pairs (plans never seen in training), for every pair (plan A, SLAM map B):
 ``Error(sim)`` = the appendix-paper metric (:func:`map2map.evaluate.pipeline.evaluate_maps`,
 the chosen chain's mean local error in px) of B against A, ``Error(gen)`` = the same, with
-the same settings, of ``autocorrect(B)`` against A. ``diff = Error(sim) - Error(gen)``:
-positive is improved (in the thesis's Table 5.3 15 of 20 values are positive and it
-reports "75 % improved", although its text calls the negative ones the improvements).
+the same settings, of each model's output against A, on both variants of the metric
+(matched points; every point, Algorithm 1 as written). ``diff = Error(sim) -
+Error(gen)``: positive is lower (in the thesis's Table 5.3 15 of 20 values are positive
+and it reports "75 % improved", although its text calls the negative ones the
+improvements).
 
-The summary gives the share improved with its one-sided sign-test p-value
-(:func:`scipy.stats.binomtest`, ties and failed alignments left out) and the guards
+One row per model (:class:`~map2map.experiments.table53.table.Table53`): the SLAM map
+itself, then ``none`` (the classical cleaning alone, no network), ``thesis`` (Model_BA
+with the shipped weights) and any further model; each with the maps improved
+(:func:`~map2map.experiments.table53.table.improved`: lower by more than
+:data:`IMPROVED_MARGIN_PX` and wall recall not lower), the median errors and the guards
 against an output that scores a low error by dropping walls
 (:func:`map2map.evaluate.wallmetrics.wall_metrics` of B and of the output against A: wall
-recall, boundary F1 at 2 px, Chamfer distance, per-class IoU); an improvement that loses
-wall recall is counted apart (``improved_but_lost_recall``).
+recall, boundary F1 at 2 px, Chamfer distance, per-class IoU). The newest model (the
+last) gets one-sided sign tests (:func:`scipy.stats.binomtest`, ties and failed
+alignments left out) against the input and against ``none``.
 
 Held-out pairs come from a dataset built by ``map2map dataset build``
 (:func:`heldout_pairs_from_dataset`: a split of its plans, never trained on; a running
@@ -29,20 +36,19 @@ Examples
 >>> plan[0, 8:56, 8:56] = 255; plan[0, 8:11, 8:56] = 0; plan[0, 53:56, 8:56] = 0
 >>> plan[0, 8:56, 8:11] = 0; plan[0, 8:56, 53:56] = 0; plan[0, 8:56, 30:33] = 0
 >>> pairs = PackedPairs(plan, plan.copy(), ["p"], ["test"])
->>> t = run_table53(pairs, _IdentityModel(), progress=False)   # output = input
->>> t.summary["n"], t.summary["improved"], round(t.rows[0]["diff"], 6)
+>>> t = run_table53(pairs, [_IdentityModel()], progress=False)   # output = input
+>>> s = t.model("identity").summary
+>>> s["n"], s["improved"], round(t.models[0].rows[0]["diff"], 6)
 (1, 0, 0.0)
 """
 
 from __future__ import annotations
 
-import csv
 import hashlib
 import os
 import sqlite3
 import time
 import warnings
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -50,15 +56,17 @@ import numpy as np
 from ...core.errors import InputError
 from ...core.grid import OccupancyMap
 from ...datasets.packed import PackedPairs
+from .table import GUARDS, IMPROVED_MARGIN_PX, ModelRows, Table53, improved, sign_test
 
-__all__ = ["Table53", "run_table53", "heldout_pairs_from_dataset", "generated_heldout_pairs",
-           "merge_pairs", "HELD_OUT_SEED", "GUARDS", "ac_options"]
+__all__ = ["Table53", "ModelRows", "run_table53", "heldout_pairs_from_dataset",
+           "generated_heldout_pairs", "merge_pairs", "HELD_OUT_SEED", "GUARDS",
+           "IMPROVED_MARGIN_PX", "DEFAULT_MODELS", "improved", "sign_test", "ac_options"]
 
 #: Generated plans 100000.. are never used by ``benchmarks/train_ba.sh``.
 HELD_OUT_SEED = 100_000
-#: Wall-level guards reported for the SLAM map and the output (medians in the summary).
-GUARDS = ("wall_recall", "boundary_f1", "chamfer_px", "iou_occupied", "iou_free",
-          "iou_unknown")
+#: The rows measured when no model is named: the classical cleaning alone, then the
+#: thesis's Model_BA (``map2map autocorrect --model``'s names).
+DEFAULT_MODELS = ("none", "thesis")
 
 
 def _digest(pairs: PackedPairs) -> str:
@@ -213,251 +221,192 @@ def generated_heldout_pairs(n: int = 100, *, seed: int = HELD_OUT_SEED, size: in
     return pairs
 
 
-@dataclass
-class Table53:
-    """Table 5.3 on a held-out set (see the module docstring).
-
-    Attributes
-    ----------
-    rows : list of dict
-        Per map: ``map`` (1-based), ``plan_id``, ``error_sim``, ``error_gen``, ``diff``,
-        and ``sim_<guard>`` / ``gen_<guard>`` for every guard of :data:`GUARDS` (plus wall
-        precision).
-    summary : dict
-        ``n`` (evaluated), ``failed`` (alignment failed), ``improved``, ``worse``,
-        ``share_improved``, ``sign_test_p``, ``median_error_sim``, ``median_error_gen``,
-        ``improved_but_lost_recall``, ``median_sim_<guard>``/``median_gen_<guard>``,
-        ``maps_per_s`` (end-to-end inference).
-    inputs, outputs, plans : ndarray (N, H, W) uint8
-        SLAM maps, auto-corrected maps, plans.
-    model, source : str
-        Which model and which held-out pairs.
-    """
-
-    rows: list[dict]
-    summary: dict
-    inputs: np.ndarray
-    outputs: np.ndarray
-    plans: np.ndarray
-    model: str = ""
-    source: str = ""
-    digest: str = field(default="", repr=False)
-
-    def format(self) -> str:
-        """The table and its summary as text."""
-        s = self.summary
-        lines = [f"Table 5.3 on {len(self.rows)} held-out maps ({self.source}); "
-                 f"model {self.model}",
-                 f"{'map':>4} {'Error(sim)':>10} {'Error(gen)':>10} {'sim-gen':>8} "
-                 f"{'recall s/g':>11} {'F1 s/g':>11}"]
-        for r in self.rows:
-            lines.append(f"{r['map']:>4} {r['error_sim']:>10.3f} {r['error_gen']:>10.3f} "
-                         f"{r['diff']:>8.3f} {r['sim_wall_recall']:>5.2f}/"
-                         f"{r['gen_wall_recall']:<5.2f} {r['sim_boundary_f1']:>5.2f}/"
-                         f"{r['gen_boundary_f1']:<5.2f}")
-        lines += [
-            f"evaluated: {s['n']} (alignment failed: {s['failed']})",
-            f"improved (Error(sim) - Error(gen) > 0): {s['improved']}/{s['n']} = "
-            f"{s['share_improved']:.1%} (thesis: 15/20 = 75%; target >= 95%); "
-            f"sign test p = {s['sign_test_p']:.3g}",
-            f"improved but lost wall recall: {s['improved_but_lost_recall']}",
-            f"median Error(sim) {s['median_error_sim']:.3f} px, "
-            f"Error(gen) {s['median_error_gen']:.3f} px",
-        ]
-        for k in GUARDS:
-            lines.append(f"median {k:<13} SLAM {s[f'median_sim_{k}']:7.3f}  "
-                         f"auto-corrected {s[f'median_gen_{k}']:7.3f}")
-        if s.get("maps_per_s"):
-            lines.append(f"inference: {s['maps_per_s']:.1f} maps/s, batched, network + "
-                         "post-processing (one cold pass, CPU)")
-        return "\n".join(lines)
-
-    def to_csv(self, path: str | os.PathLike) -> Path:
-        """Write :attr:`rows` as CSV (atomically)."""
-        from ...core._io import atomic_path
-
-        path = Path(path)
-        with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
-            w = csv.DictWriter(fh, fieldnames=list(self.rows[0]) if self.rows else ["map"])
-            w.writeheader()
-            w.writerows(self.rows)
-        return path
-
-    def _diff(self) -> np.ndarray:
-        return np.array([r["diff"] for r in self.rows], float)
-
-    def figure(self, path: str | os.PathLike | None = None):
-        """Fig. 5.12: box plot of ``Error(sim) - Error(gen)`` (px); saved to ``path`` when
-        given. Returns the matplotlib figure."""
-        from ...core.viz import plt
-        d = self._diff()
-        ok = np.isfinite(d)
-        fig, ax = plt.subplots(figsize=(4, 5))
-        ax.boxplot(d[ok])
-        ax.axhline(0, color="grey", lw=0.8)
-        ax.set(ylabel="Error(sim) - Error(gen) [px]",
-               title=f"Fig. 5.12: {self.summary['improved']}/{self.summary['n']} improved")
-        fig.tight_layout()
-        if path is not None:
-            from ...core.viz import save_figure
-
-            save_figure(fig, path, dpi=100)
-        return fig
-
-    def examples_figure(self, path: str | os.PathLike | None = None, k: int = 3):
-        """The ``k`` worst and ``k`` best maps: SLAM map | auto-corrected | plan."""
-        from ...core.viz import plt
-        d = self._diff()
-        ok = np.isfinite(d)
-        worst = [int(i) for i in np.argsort(np.where(ok, d, np.inf))[:k] if ok[i]]
-        best = [int(i) for i in np.argsort(np.where(ok, -d, np.inf))[:k] if ok[i]]
-        picks = worst + [i for i in best if i not in worst]
-        fig, axes = plt.subplots(max(1, len(picks)), 3, figsize=(7.5, 2.5 * max(1, len(picks))),
-                                 squeeze=False)
-        for row, i in enumerate(picks):
-            for col, (img, name) in enumerate(((self.inputs[i], "SLAM map"),
-                                               (self.outputs[i], "auto-corrected"),
-                                               (self.plans[i], "plan"))):
-                ax = axes[row, col]
-                ax.imshow(img, cmap="gray", vmin=0, vmax=255, interpolation="nearest")
-                ax.set_xticks([])
-                ax.set_yticks([])
-                if col == 0:
-                    ax.set_ylabel(f"map {i + 1}: {d[i]:+.2f} px", fontsize=8)
-                if row == 0:
-                    ax.set_title(name, fontsize=9)
-        fig.suptitle("worst (top) and best (bottom) Error(sim) - Error(gen)", fontsize=9)
-        fig.tight_layout()
-        if path is not None:
-            from ...core.viz import save_figure
-
-            save_figure(fig, path, dpi=90)
-        return fig
-
-
-def _error(src: np.ndarray, plan: np.ndarray, seed: int) -> float:
+def _errors(src: np.ndarray, plan: np.ndarray, seed: int) -> tuple[float, float]:
+    """The appendix metric of ``src`` against ``plan`` (px, chosen chain): the mean over
+    the matched points and over every point (Algorithm 1 as written); NaN, NaN where the
+    alignment fails (the thesis's Map 6)."""
     from ...evaluate.pipeline import EvaluateParams, evaluate_maps
 
     try:
         ev = evaluate_maps(OccupancyMap(src, 0.05), OccupancyMap(plan, 0.05),
                            params=EvaluateParams(seed=seed))
-        return float(ev.report["chosen_errors"]["mean_px"])
-    except Exception:  # the alignment fails on some maps (the thesis's Map 6)
-        return float("nan")
+        e = ev.report["chosen_errors"]
+        return float(e["mean_px"]), float(e["mean_all_px"])
+    except Exception:  # the alignment fails on some maps
+        return float("nan"), float("nan")
 
 
 class _IdentityModel:
     """Stand-in "model" for tests and the example: returns its input maps."""
 
+    name = "identity"
     source = "identity (output = input)"
 
     def correct(self, maps: list[np.ndarray]) -> list[np.ndarray]:
         return [m.copy() for m in maps]
 
 
-def run_table53(pairs: PackedPairs, model="pretrained", *, seed: int = 0,
-                progress: bool = True, baseline: Table53 | None = None,
+def _correct(model, b: np.ndarray, options: dict) -> np.ndarray:
+    """The outputs of ``model`` on the SLAM maps ``b`` (N, H, W): a corrector's
+    ``correct_many`` on 0.05 m maps, or a stand-in's ``correct`` on the arrays."""
+    if not len(b):
+        return b.copy()
+    if hasattr(model, "correct_many"):
+        outs = model.correct_many([OccupancyMap(x, 0.05) for x in b], **options)
+        return np.stack([o.data for o in outs])
+    return np.stack(model.correct(list(b)))
+
+
+def run_table53(pairs: PackedPairs, models=DEFAULT_MODELS, *, seed: int = 0,
+                progress: bool = True, margin: float = IMPROVED_MARGIN_PX,
                 straighten: bool = True, anchor: bool = True,
                 autocorrect_kw: dict | None = None) -> Table53:
-    """Table 5.3 of ``model`` on held-out ``pairs`` (module docstring).
+    """Table 5.3 of each of ``models`` on held-out ``pairs``, one row per model beside
+    the SLAM maps themselves (module docstring, :mod:`~map2map.experiments.table53.table`).
 
     Parameters
     ----------
     pairs : PackedPairs
         Held-out pairs (``a`` plans, ``b`` SLAM maps), from
         :func:`heldout_pairs_from_dataset` or :func:`generated_heldout_pairs`.
-    model : "pretrained", run folder, weights file, BAModel, or a corrector
-        The Model_BA to measure (:func:`map2map.learn.ba.autocorrect.load_model`); or any
-        object with ``correct(list of uint8 maps) -> list of maps`` and a ``source``
-        string (a baseline or an ablation measured the same way).
+    models : sequence, or one model
+        Each a name of ``map2map autocorrect --model`` (``"none"``, ``"thesis"``;
+        ``"pretrained"`` is ``"thesis"``; :data:`map2map.jobs.autocorrect.MODELS`), a
+        Model_BA weights file or run folder, a
+        :class:`~map2map.jobs.autocorrect.Corrector`, or a stand-in with
+        ``correct(list of uint8 maps) -> list of maps``, ``name`` and ``source``. The
+        last is the newest model: its sign tests go in ``Table53.tests``. Default
+        :data:`DEFAULT_MODELS`.
     seed : int
         Seed of the metric's point subsampling (``EvaluateParams.seed``), the same for
-        both maps of a pair.
+        every map of a pair.
     progress : bool
         tqdm progress bar over the maps.
-    baseline : Table53, optional
-        A previous table on the same pairs with the same seed: its ``Error(sim)`` and SLAM
-        guards are reused instead of recomputed (they do not depend on the model).
+    margin : float
+        Error(gen) must be this much lower than Error(sim) for a map to count as
+        improved (:data:`IMPROVED_MARGIN_PX`; :func:`~.table.improved`).
     straighten, anchor : bool
-        Passed to :func:`~map2map.learn.ba.autocorrect.autocorrect_many`.
+        Passed to every model but ``none`` (which is the anchored, straightened
+        post-processing alone); ``anchor=False`` adds " (anchor off)" to their names.
     autocorrect_kw : dict, optional
-        More keyword arguments of it (``thickness``, ``open_frontiers``, ...).
+        More keyword arguments of
+        :func:`~map2map.learn.ba.autocorrect.autocorrect_many` (``thickness``,
+        ``open_frontiers``, ...), for every model.
 
     Returns
     -------
     Table53
     """
-    from scipy.stats import binomtest
     from tqdm import tqdm
 
     from ...evaluate.wallmetrics import wall_metrics
+    from ...jobs.autocorrect import corrector
 
+    if isinstance(models, str | os.PathLike) or not isinstance(models, list | tuple):
+        models = [models]
     a, b = pairs.a, pairs.b
-    digest = _digest(pairs)
+    base = dict(autocorrect_kw or {})
+    if not straighten:
+        base["straighten"] = False
+    if not anchor:
+        base["anchor"] = False
+    runs = []
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        if hasattr(model, "correct"):
+        for spec in models:
+            model = spec if hasattr(spec, "correct") else corrector(spec)
+            name = getattr(model, "name", None) or str(spec)
+            opts = base
+            if name == "none":
+                opts = {k: v for k, v in base.items() if k not in ("anchor", "straighten")}
+            elif opts.get("anchor") is False:
+                name += " (anchor off)"
             t0 = time.perf_counter()
-            gen = np.stack(model.correct(list(b))) if len(b) else b.copy()
-            name = model.source
-        else:
-            from ...learn.ba.autocorrect import autocorrect_many
-            from ...learn.ba.model import load_model
-
-            net = load_model(model)
-            name = net.source
-            t0 = time.perf_counter()
-            res = autocorrect_many([OccupancyMap(x, 0.05) for x in b], net,
-                                   straighten=straighten, anchor=anchor,
-                                   **(autocorrect_kw or {}))
-            gen = np.stack([r.map.data for r in res]) if res else b.copy()
-        dt = time.perf_counter() - t0
-    reuse = baseline is not None and baseline.digest == digest \
-        and baseline.summary.get("seed") == seed
-    rows = []
+            gen = _correct(model, b, opts)
+            dt = time.perf_counter() - t0
+            runs.append((name, str(model.source), gen, dt))
+    sim, gens = [], [[] for _ in runs]
     for i in tqdm(range(len(a)), desc="Table 5.3", disable=not progress):
-        if reuse:
-            old = baseline.rows[i]
-            e_sim = old["error_sim"]
-            ws = {k[4:]: v for k, v in old.items() if k.startswith("sim_")}
-        else:
-            e_sim = _error(b[i], a[i], seed)
-            ws = wall_metrics(b[i], a[i])
-        e_gen = _error(gen[i], a[i], seed)
-        wg = wall_metrics(gen[i], a[i])
-        rows.append({"map": i + 1, "plan_id": str(pairs.plan_id[i]), "error_sim": e_sim,
-                     "error_gen": e_gen, "diff": e_sim - e_gen,
-                     **{f"sim_{k}": v for k, v in ws.items()},
-                     **{f"gen_{k}": v for k, v in wg.items()}})
+        sim.append((*_errors(b[i], a[i], seed), wall_metrics(b[i], a[i])))
+        for k, (_, _, gen, _) in enumerate(runs):
+            gens[k].append((*_errors(gen[i], a[i], seed), wall_metrics(gen[i], a[i])))
+    rows_of = []
+    for (name, source, gen, dt), g in zip(runs, gens, strict=True):
+        rows = []
+        for i, ((es, esa, ws), (eg, ega, wg)) in enumerate(zip(sim, g, strict=True)):
+            rows.append({
+                "map": i + 1, "plan_id": str(pairs.plan_id[i]), "error_sim": es,
+                "error_gen": eg, "diff": es - eg, "error_sim_all": esa, "error_gen_all": ega,
+                "diff_all": esa - ega,
+                "improved": bool(improved(es, eg, ws["wall_recall"], wg["wall_recall"],
+                                          margin)),
+                "improved_all": bool(improved(esa, ega, ws["wall_recall"], wg["wall_recall"],
+                                              margin)),
+                **{f"sim_{k}": v for k, v in ws.items()},
+                **{f"gen_{k}": v for k, v in wg.items()}})
+        rows_of.append(ModelRows(name, source, rows, _model_summary(rows, margin, len(b), dt),
+                                 gen))
+    summary = {"n": len(a), "seed": seed, "margin_px": margin,
+               "median_error_sim": _nanmedian([s[0] for s in sim]),
+               "median_error_sim_all": _nanmedian([s[1] for s in sim])}
+    for k in GUARDS:
+        summary[f"median_sim_{k}"] = _nanmedian([s[2][k] for s in sim])
+    source = pairs.meta.get("heldout", {}).get("source", "") if pairs.meta else ""
+    return Table53(rows_of, summary, _newest_tests(rows_of, margin), b, a, str(source),
+                   _digest(pairs))
+
+
+def _model_summary(rows: list[dict], margin: float, n_maps: int, dt: float) -> dict:
+    """:attr:`ModelRows.summary` of one model's rows."""
     diff = np.array([r["diff"] for r in rows], float)
-    ok = np.isfinite(diff)
-    improved, worse = int((diff[ok] > 0).sum()), int((diff[ok] < 0).sum())
-    p = binomtest(improved, improved + worse, 0.5, alternative="greater").pvalue \
-        if improved + worse else float("nan")
-    lost = sum(1 for r in rows if np.isfinite(r["diff"]) and r["diff"] > 0
-               and r["gen_wall_recall"] < r["sim_wall_recall"])
-    n = int(ok.sum())
-    summary = {
-        "n": n, "failed": int((~ok).sum()), "improved": improved, "worse": worse,
-        "share_improved": improved / n if n else float("nan"), "sign_test_p": float(p),
-        "median_error_sim": _nanmedian([r["error_sim"] for r in rows]),
+    diff_all = np.array([r["diff_all"] for r in rows], float)
+    ok, ok_all = np.isfinite(diff), np.isfinite(diff_all)
+    n, n_all = int(ok.sum()), int(ok_all.sum())
+    imp = sum(r["improved"] for r in rows)
+    imp_all = sum(r["improved_all"] for r in rows)
+    out = {
+        "n": n, "n_all": n_all, "failed": int((~ok).sum()), "margin_px": margin,
+        "improved": imp, "share_improved": imp / n if n else float("nan"),
+        "improved_all": imp_all, "share_improved_all": imp_all / n_all if n_all
+        else float("nan"),
+        "improved_any": int((diff[ok] > 0).sum()), "worse": int((diff[ok] < 0).sum()),
+        "improved_but_lost_recall": sum(1 for r in rows if r["diff"] > margin
+                                        and r["gen_wall_recall"] < r["sim_wall_recall"]),
+        "sign_test_p": sign_test(diff)["p"],
         "median_error_gen": _nanmedian([r["error_gen"] for r in rows]),
-        "improved_but_lost_recall": lost, "seed": seed,
-        "maps_per_s": len(b) / dt if dt > 0 and len(b) else float("nan"),
+        "median_error_gen_all": _nanmedian([r["error_gen_all"] for r in rows]),
+        "maps_per_s": n_maps / dt if dt > 0 and n_maps else float("nan"),
     }
     for k in GUARDS:
-        summary[f"median_sim_{k}"] = _nanmedian([r[f"sim_{k}"] for r in rows])
-        summary[f"median_gen_{k}"] = _nanmedian([r[f"gen_{k}"] for r in rows])
-    source = pairs.meta.get("heldout", {}).get("source", "") if pairs.meta else ""
-    if not hasattr(model, "correct") and not anchor:
-        name += " (anchor off)"
-    return Table53(rows, summary, b, gen, a, name, str(source), digest)
+        out[f"median_gen_{k}"] = _nanmedian([r[f"gen_{k}"] for r in rows])
+    return out
+
+
+def _newest_tests(models: list[ModelRows], margin: float) -> dict:
+    """The last model's sign tests against the input and against a ``none`` row."""
+    if not models:
+        return {}
+    new = models[-1]
+    out = {"model": new.name,
+           "vs_input": sign_test([r["diff"] for r in new.rows]),
+           "vs_input_all": sign_test([r["diff_all"] for r in new.rows])}
+    none = next((m for m in models[:-1] if m.name == "none"), None)
+    if none is not None:
+        gain = np.array([q["error_gen"] - r["error_gen"]
+                         for q, r in zip(none.rows, new.rows, strict=True)], float)
+        gain_all = [q["error_gen_all"] - r["error_gen_all"]
+                    for q, r in zip(none.rows, new.rows, strict=True)]
+        ok = np.isfinite(gain)
+        beats = int((gain[ok] > margin).sum())
+        out.update(vs_none=sign_test(gain), vs_none_all=sign_test(gain_all),
+                   beats_none=beats, n_vs_none=int(ok.sum()),
+                   share_beats_none=beats / ok.sum() if ok.any() else float("nan"))
+    return out
 
 
 def _nanmedian(v) -> float:
     v = np.asarray(v, float)
     return float(np.nanmedian(v)) if np.isfinite(v).any() else float("nan")
-
 
 def ac_options(items: list[str]) -> dict:
     """``KEY=VALUE`` strings -> keyword arguments of ``autocorrect_many`` (true/false,
