@@ -111,9 +111,26 @@ def test_the_default_output_is_the_shipped_models(slam_map):
 
 
 def test_none_draws_one_sided_walls_as_thick_as_the_shipped_model():
-    from map2map.learn.ba.correctors import PLAN_WALL_PX, NullNetwork
+    from map2map.learn.ba.null import PLAN_WALL_PX, NullNetwork
     from map2map.learn.ba.model import load_model
 
     net = load_model("pretrained")
     assert PLAN_WALL_PX == net.target_wall_px
     assert (NullNetwork().size, NullNetwork().data_size) == (net.size, net.data_size)
+
+
+def test_the_library_takes_the_same_names(slam_map):
+    """``map2map.autocorrect(m, "none" | "thesis")`` as the command line's ``--model``."""
+    import warnings
+
+    from map2map.core.errors import InputError
+    from map2map.learn.ba.autocorrect import autocorrect
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        thesis = autocorrect(slam_map, "thesis")
+        assert np.array_equal(thesis.data, autocorrect(slam_map).data)
+    none = autocorrect(slam_map, "none")
+    assert np.array_equal(none.data, corrector("none").correct_many([slam_map])[0].data)
+    with pytest.raises(InputError, match="need a network"):
+        autocorrect(slam_map, "none", anchor=False)

@@ -1,6 +1,8 @@
 """``map2map autocorrect``: a SLAM map in, a CAD-like plan out, in the input's frame.
 
-:func:`autocorrect` runs Model_BA on any map, whatever its size, resolution and origin:
+:func:`autocorrect` runs Model_BA on any map, whatever its size, resolution and origin
+(``model="none"``: the same steps with a network that draws no wall, the classical
+cleaning alone, :mod:`~map2map.learn.ba.correctors`):
 
 1. the known part of the map (its content box, plus a margin that is 4 px at the
    dataset's size, as in the dataset's crop) is padded to a square with unknown cells;
@@ -61,6 +63,8 @@ Examples
 ((90, 140), 0.04, (1.0, -2.0, 0.0))
 >>> sorted(out.meta["autocorrect"])
 ['deskew_deg', 'model', 'segments_px', 'support', 'warnings']
+>>> autocorrect(m, "none").meta["autocorrect"]["model"]   # no network, no weights read
+'none'
 """
 
 from __future__ import annotations
@@ -74,9 +78,11 @@ from pathlib import Path
 
 import numpy as np
 
+from ...core.errors import InputError
 from ...core.grid import OCCUPIED, UNKNOWN, OccupancyMap
 from ...maps.preprocess import square_resize
 from .model import BAModel, load_model, pretrained_path
+from .null import NullNetwork
 from .pieces import drawn_pieces
 from .postprocess import postprocess
 from .squares import (
@@ -247,7 +253,8 @@ def autocorrect_many(maps: list[OccupancyMap], model: str | os.PathLike | BAMode
                      workers: int | None = None, thickness: str | float | None = None,
                      open_frontiers: bool | None = None,
                      large: str | None = None) -> list[Correction]:
-    """:func:`autocorrect` for several maps, the network run in batches.
+    """:func:`autocorrect` for several maps, the network run in batches (``model`` as
+    :func:`autocorrect`'s).
 
     The per-map work around the network (squaring, deskewing, post-processing, the way
     back to the input's frame) runs on ``workers`` threads (default: one per CPU core, at
@@ -256,7 +263,11 @@ def autocorrect_many(maps: list[OccupancyMap], model: str | os.PathLike | BAMode
     ``open_frontiers`` and ``large`` as :func:`autocorrect` (``None``: :data:`THICKNESS`,
     :data:`OPEN_FRONTIERS` (True for a map corrected in tiles), :data:`LARGE`).
     """
-    net = model if _is_network(model) else load_model(model, device)
+    net = _network(model, device)
+    if not getattr(net, "learnt", True) and not (anchor and straighten):
+        raise InputError("model", "'none' is the anchored, straightened post-processing "
+                                  "alone: anchor=False and straighten=False "
+                                  "(--no-anchor, --no-straighten) need a network")
     thickness = THICKNESS if thickness is None else thickness
     frontiers = open_frontiers  # None: by map, whole or in tiles
     large = LARGE if large is None else large
@@ -298,10 +309,24 @@ def autocorrect_many(maps: list[OccupancyMap], model: str | os.PathLike | BAMode
     return results
 
 
+def _network(model, device: str):
+    """The network of ``model``: a loaded one as it is, ``"none"`` the
+    :class:`~map2map.learn.ba.null.NullNetwork` (no weights read), ``"thesis"``,
+    ``"pretrained"`` or None the shipped weights, else a run folder or weights file
+    (``map2map autocorrect --model``'s names)."""
+    if _is_network(model):
+        return model
+    if isinstance(model, str) and model == "none":
+        return NullNetwork()
+    if isinstance(model, str) and model == "thesis":
+        model = "pretrained"
+    return load_model(model, device)
+
+
 def _is_network(model) -> bool:
     """``model`` is a loaded network (a :class:`BAModel`, or a stand-in with its
     ``predict``, ``size``, ``data_size``, ``target_wall_px``, ``header`` and ``source``,
-    e.g. :class:`~map2map.learn.ba.correctors.NullNetwork`), not a name or path."""
+    e.g. :class:`~map2map.learn.ba.null.NullNetwork`), not a name or path."""
     return isinstance(model, BAModel) or (hasattr(model, "predict")
                                           and hasattr(model, "target_wall_px"))
 
@@ -408,9 +433,11 @@ def autocorrect(m: OccupancyMap, model: str | os.PathLike | BAModel | None = "pr
     ----------
     m : OccupancyMap
         The SLAM map (any size, resolution, origin).
-    model : "pretrained", run folder, weights file, BAModel or NullNetwork
-        Which Model_BA to use (:class:`~map2map.learn.ba.correctors.NullNetwork`: none,
-        the post-processing alone, ``map2map autocorrect --model none``).
+    model : "thesis", "none", run folder, weights file, BAModel or NullNetwork
+        Which Model_BA to use: ``"thesis"`` (or ``"pretrained"``, None) the shipped
+        weights; ``"none"`` (or a :class:`~map2map.learn.ba.null.NullNetwork`) no
+        network, the anchored post-processing alone, which needs ``anchor`` and
+        ``straighten`` (``map2map autocorrect --model none``).
     straighten : bool
         Post-processing steps 3-5 (straight walls); False keeps the snapped upsampling.
     deskew : bool

@@ -35,54 +35,19 @@ Examples
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
 
-import numpy as np
-
-from ...core.errors import InputError
-from ...core.grid import FREE, OccupancyMap
+from ...core.grid import OccupancyMap
+from .null import PLAN_WALL_PX, NullNetwork
 
 __all__ = ["NullNetwork", "NullCorrector", "ThesisCorrector", "PLAN_WALL_PX"]
-
-#: Thickness (pixels at the dataset's 256 px) of the training plans' walls, what the
-#: shipped weights' header says (``target_wall_px``, measured on gen6400's train plans):
-#: how thick :class:`NullNetwork` has the walls seen from one side drawn, as Model_BA does.
-PLAN_WALL_PX = 5.528186639013267
-
-
-@dataclass
-class NullNetwork:
-    """A stand-in for Model_BA's generator that draws no wall: every output cell free.
-
-    It has what :func:`~map2map.learn.ba.autocorrect.autocorrect_many` reads of a network
-    (``size``, ``data_size``, ``target_wall_px``, ``header``, ``source``, ``predict``)
-    and no weights; ``learnt`` is False, so no warning speaks of what a model learnt.
-
-    Examples
-    --------
-    >>> NullNetwork().predict(np.zeros((2, 256, 256), np.uint8)).shape
-    (2, 64, 64)
-    """
-
-    size: int = 64
-    data_size: int = 256
-    target_wall_px: float = PLAN_WALL_PX
-    header: dict = field(default_factory=lambda: {
-        "dataset": {"identity": {"resolution": 0.05}}})
-    source: str = "none"
-    learnt: bool = False
-
-    def predict(self, inputs: np.ndarray, batch: int = 256) -> np.ndarray:
-        """(N, ...) maps -> (N, size, size) float32 outputs, all free (255)."""
-        return np.full((len(inputs), self.size, self.size), float(FREE), np.float32)
-
 
 class NullCorrector:
     """``none``: the post-processing with :class:`NullNetwork` inside (module docstring).
 
     Only the anchored, straightened pipeline has a meaning without a network:
     ``anchor=False`` or ``straighten=False`` (which draw the network's walls only) raise
-    :class:`~map2map.core.errors.InputError`; ``device`` is ignored.
+    :class:`~map2map.core.errors.InputError` (in
+    :func:`~map2map.learn.ba.autocorrect.autocorrect_many`); ``device`` is ignored.
     """
 
     name = "none"
@@ -91,10 +56,6 @@ class NullCorrector:
     def correct_many(self, maps: list[OccupancyMap], **options) -> list[OccupancyMap]:
         from .autocorrect import autocorrect_many
 
-        if options.get("anchor", True) is False or options.get("straighten", True) is False:
-            raise InputError("model", "'none' is the anchored, straightened post-processing "
-                                      "alone: anchor=False and straighten=False "
-                                      "(--no-anchor, --no-straighten) need a network")
         options.pop("device", None)
         return [r.map for r in autocorrect_many(maps, NullNetwork(), **options)]
 
