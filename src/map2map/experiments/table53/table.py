@@ -156,15 +156,15 @@ class Table53:
         model's Error(gen); one row per model; the newest model's sign tests."""
         s, margin = self.summary, self.summary["margin_px"]
         names = [m.name for m in self.models]
-        short = [n if len(n) <= 12 else "..." + n[-9:] for n in names]
+        short = [n if len(n) <= 14 else _slug(n)[:14] for n in names]
         lines = [f"Table 5.3 on {s['n']} held-out maps ({self.source}); improved = "
                  f"Error(gen) < Error(sim) - {margin:g} px and wall recall not lower"]
         if per_map and self.models:
             lines.append("per map, Error px (matched points):")
-            lines.append(f"{'map':>4} {'input':>8} " + " ".join(f"{n:>12}" for n in short))
+            lines.append(f"{'map':>4} {'input':>8} " + " ".join(f"{n:>14}" for n in short))
             for i, r in enumerate(self.models[0].rows):
                 lines.append(f"{r['map']:>4} {r['error_sim']:>8.3f} " + " ".join(
-                    f"{m.rows[i]['error_gen']:>12.3f}" for m in self.models))
+                    f"{m.rows[i]['error_gen']:>14.3f}" for m in self.models))
         head = (f"{'model':<14} {'improved':>14} {'improved all':>14} {'Error px':>8} "
                 f"{'Error all':>9} {'recall':>6} {'F1':>5} {'Chamfer':>7} {'p vs input':>10}")
         lines += ["", "improved: matched points / every point (Algorithm 1 as written); "
