@@ -111,8 +111,8 @@ def test_the_default_output_is_the_shipped_models(slam_map):
 
 
 def test_none_draws_one_sided_walls_as_thick_as_the_shipped_model():
-    from map2map.learn.ba.null import PLAN_WALL_PX, NullNetwork
     from map2map.learn.ba.model import load_model
+    from map2map.learn.ba.null import PLAN_WALL_PX, NullNetwork
 
     net = load_model("pretrained")
     assert PLAN_WALL_PX == net.target_wall_px
