@@ -224,6 +224,14 @@ def test_a_broken_run_is_detected_and_a_continuous_one_is_not():
     assert broken_runs(m, out, RES) == (4, 0)
     out = np.roll(m, 2, axis=0)                  # moved by 2 px across: still there
     assert broken_runs(m, out, RES)[1] == 0
+    w = np.full((60, 200), FREE, np.uint8)
+    w[30:33, 20:180] = OCC
+    out = w.copy()
+    out[30:33, 160:180] = FREE                   # a wall cut back at its free end
+    assert broken_runs(w, out, RES, shortened=True) == (1, 0, 1)
+    out = m.copy()
+    out[20:23, 150:180] = UNK                    # up to the corner: the right wall is
+    assert broken_runs(m, out, RES)[1] == 1      # still there, so the top one is broken
 
 
 def test_short_runs_are_not_counted():

@@ -17,7 +17,9 @@ An auto-corrected map is compared with its input (the SLAM map) and its plan:
   ``min_run`` metres long (rows or columns of consecutive occupied pixels; one wall's
   runs, 8-connected, are one run) that the output breaks: somewhere along the run no
   output wall lies within ``across`` pixels for more than ``max_gap`` consecutive
-  pixels. Target: none.
+  pixels, with output wall along the run on both sides. Target: none. Runs whose output
+  only stops short of an end (the drawer cuts a wall that overshoots a corner back onto
+  the corner) are counted apart, as shortened.
 
 :func:`drawing_report` gives the four at once, with the targets met.
 
@@ -107,11 +109,15 @@ def _run_mask(w: np.ndarray, n: int, axis: int) -> np.ndarray:
 
 
 def broken_runs(inp: np.ndarray, out: np.ndarray, resolution: float, *,
-                min_run: float = 1.0, max_gap: int = 2, across: int = 3) -> tuple[int, int]:
+                min_run: float = 1.0, max_gap: int = 2, across: int = 3,
+                shortened: bool = False) -> tuple[int, ...]:
     """``(runs, broken)``: the input's straight wall runs at least ``min_run`` metres long
     (horizontal or vertical; the runs of one wall, 8-connected, count once) and how many
-    of them the output breaks (more than ``max_gap`` consecutive pixels along the run
-    without an output wall within ``across`` pixels across).
+    of them the output breaks: more than ``max_gap`` consecutive pixels along the run
+    without an output wall within ``across`` pixels across, with output wall along the
+    run on both sides of that gap. With ``shortened=True`` also the number of runs whose
+    output stops short of an end of the run by more than ``max_gap`` pixels (a corner
+    whose overshoot the drawer cut back, a wall end drawn shorter): not breaks.
 
     Examples
     --------
@@ -124,10 +130,13 @@ def broken_runs(inp: np.ndarray, out: np.ndarray, resolution: float, *,
     >>> out = inp.copy(); out[20:22, 40:42] = 255            # 2 px: not broken
     >>> broken_runs(inp, out, 0.05)
     (1, 0)
+    >>> out = inp.copy(); out[20:22, 85:95] = 255            # an end cut back
+    >>> broken_runs(inp, out, 0.05, shortened=True)
+    (1, 0, 1)
     """
     wi, wo = _walls(inp), _walls(out)
     n = max(2, int(round(min_run / float(resolution))))
-    runs, broken = 0, 0
+    runs, broken, short = 0, 0, 0
     for axis in (0, 1):
         r = _run_mask(wi, n, axis)
         if not r.any():
@@ -140,8 +149,17 @@ def broken_runs(inp: np.ndarray, out: np.ndarray, resolution: float, *,
                                        np.uint8)) > 0
         cnt, lab = cv2.connectedComponents(r.astype(np.uint8), connectivity=8)
         runs += cnt - 1
-        broken += len(np.unique(lab[gap]))
-    return int(runs), int(broken)
+        for i in np.unique(lab[gap]):               # the runs with a gap (a few)
+            rr, cc = np.nonzero(lab == i)
+            pos = cc if axis == 0 else rr
+            hit = near[rr, cc]
+            gp = np.unique(pos[gap[rr, cc]])
+            covered = np.unique(pos[hit])
+            inner = len(covered) and np.any((gp > covered.min()) & (gp < covered.max()))
+            broken += bool(inner)
+            short += bool(len(covered) == 0 or gp.min() < covered.min()
+                          or gp.max() > covered.max())
+    return (int(runs), int(broken), int(short)) if shortened else (int(runs), int(broken))
 
 
 def drawing_report(out: np.ndarray, inp: np.ndarray, plan: np.ndarray, resolution: float,
@@ -161,7 +179,8 @@ def drawing_report(out: np.ndarray, inp: np.ndarray, plan: np.ndarray, resolutio
     -------
     dict
         ``components``, ``components_input``, ``thickness_px``, ``thickness_plan_px``,
-        ``segments``, ``plan_walls``, ``segments_ratio``, ``runs``, ``broken`` and
+        ``segments``, ``plan_walls``, ``segments_ratio``, ``runs``, ``broken``,
+        ``shortened`` (runs whose output stops short of an end: reported, no target) and
         ``ok_components``, ``ok_thickness``, ``ok_segments``, ``ok_broken``,
         ``targets_met``.
     """
@@ -169,11 +188,11 @@ def drawing_report(out: np.ndarray, inp: np.ndarray, plan: np.ndarray, resolutio
     t_out, t_plan = median_wall_thickness(out), median_wall_thickness(plan)
     n_seg = int(len(segments)) if segments is not None else straight_wall_count(out)
     n_plan = straight_wall_count(plan)
-    runs, broken = broken_runs(inp, out, resolution)
+    runs, broken, short = broken_runs(inp, out, resolution, shortened=True)
     r = {"components": c_out, "components_input": c_in, "thickness_px": t_out,
          "thickness_plan_px": t_plan, "segments": n_seg, "plan_walls": n_plan,
          "segments_ratio": n_seg / n_plan if n_plan else float("inf"),
-         "runs": runs, "broken": broken}
+         "runs": runs, "broken": broken, "shortened": short}
     r["ok_components"] = c_out <= c_in
     r["ok_thickness"] = bool(abs(t_out - t_plan) <= TARGETS["thickness_px"])
     r["ok_segments"] = bool(r["segments_ratio"] <= TARGETS["segments_ratio"])

@@ -111,8 +111,13 @@ class DrawOptions:
         Corner and T-junction snapping distance.
     other_min : float
         Shortest wall drawn off the two dominant directions.
-    snap_deg : float
-        A dominant angle within this of 0 is 0.
+    snap_px : float
+        A dominant angle that turns a line across the map's longer side by at most this
+        many pixels is 0 (a map drawn along the grid has no one-pixel steps).
+    enclosed : float
+        A room's outline runs along walls for at least this share of its length; free
+        regions that do not (laser-ray fans outside the building, bounded by unknown)
+        lead through no door and become unknown in the drawn map.
     keep_faces : bool
         A wall seen from one side keeps its seen face (:func:`_place`); off for wall
         points that already lie on the walls' centre lines.
@@ -122,11 +127,12 @@ class DrawOptions:
     min_len: float = 0.35
     thickest: float = 0.35
     max_gap: float = 2.5
-    door_min: float = 0.2
+    door_min: float = 0.4
     min_room: float = 0.5
     reach: float = 0.35
     other_min: float = 1.0
-    snap_deg: float = 0.15
+    snap_px: float = 1.0
+    enclosed: float = 0.2
     keep_faces: bool = True
 
 
@@ -317,13 +323,14 @@ def _pieces(E: np.ndarray, u: np.ndarray, v: np.ndarray, w: np.ndarray, L: int,
     """Horizontal pieces of the canvas evidence ``E`` (uint8 0/1): rows ``(c, lo, hi,
     sw, swu, swv, swuu, swuv, npix)``, ``c`` the weighted mean ``v`` of the points in the
     piece, ``lo``/``hi`` the centres of its first and last pixel along, then the sums
-    of the points' weights (``sw``), moments (for a line fit) and its pixel count."""
+    of the points' weights (``sw``), moments (for a line fit) and its pixel count; and
+    each point's piece (-1: none)."""
     closed = cv2.morphologyEx(E, cv2.MORPH_CLOSE, np.ones((1, 3), np.uint8))
     closed |= E
     opened = cv2.morphologyEx(closed, cv2.MORPH_OPEN, np.ones((1, L), np.uint8))
     n, lab = cv2.connectedComponents(opened, connectivity=8)
     if n <= 1:
-        return np.zeros((0, 9))
+        return np.zeros((0, 9)), np.full(len(u), -1, np.int64)
     H, W = E.shape
     rr, cc = np.nonzero(lab)
     lv = lab[rr, cc]
@@ -338,8 +345,10 @@ def _pieces(E: np.ndarray, u: np.ndarray, v: np.ndarray, w: np.ndarray, L: int,
     st = [np.bincount(lp, x, n)[1:] for x in (w, w * u, w * v, w * u * u, w * u * v)]
     ok = st[0] >= min_w
     c = st[2][ok] / st[0][ok]
+    index = np.full(n, -1, np.int64)
+    index[1:][ok] = np.arange(int(ok.sum()))
     return np.stack([c, left[ok] + 0.5, right[ok] + 0.5] + [x[ok] for x in st]
-                    + [npix[ok]], axis=1)
+                    + [npix[ok]], axis=1), index[lp]
 
 
 def _lines(p: np.ndarray, tol: float) -> np.ndarray:
@@ -359,12 +368,13 @@ def _family(p: np.ndarray, free: np.ndarray, room: np.ndarray, tol: float, half:
             door_min: int, max_gap: float) -> tuple[np.ndarray, int, int]:
     """Join the horizontal pieces ``p`` of each line across gaps without a door; returns
     segments as rows like :func:`_pieces`' (sums added up, ``c`` their weighted mean)
-    plus the number of doors kept and gaps joined.
+    plus the number of doors kept and gaps joined and each piece's segment.
 
     ``free`` is the canvas's free mask; ``room`` marks free pixels of a room-sized
     region (every gap closed)."""
+    seg_of = np.full(len(p), -1, np.int64)
     if len(p) == 0:
-        return np.zeros((0, 9)), 0, 0
+        return np.zeros((0, 9)), 0, 0, seg_of
     H, W = free.shape
     line = _lines(p, tol)
     out, doors, joined = [], 0, 0
@@ -383,10 +393,12 @@ def _family(p: np.ndarray, free: np.ndarray, room: np.ndarray, tol: float, half:
             below = room[r1:min(H, r1 + 2)].any(axis=0) if r1 < H else np.zeros(W, bool)
             side = above & below
         cur = q[0].copy()
+        seg_of[g[0]] = len(out)
         for k in range(1, len(q)):
             gap0, gap1 = cur[2], q[k, 1]
             if gap1 - gap0 <= 1.0:                     # overlapping or touching
                 cur = _absorb(cur, q[k])
+                seg_of[g[k]] = len(out)
                 continue
             j0, j1 = int(math.floor(gap0)) + 1, int(math.ceil(gap1))
             j0, j1 = max(0, j0), min(W, j1)
@@ -402,8 +414,9 @@ def _family(p: np.ndarray, free: np.ndarray, room: np.ndarray, tol: float, half:
             else:
                 joined += 1
                 cur = _absorb(cur, q[k])
+            seg_of[g[k]] = len(out)
         out.append(cur)
-    return np.asarray(out, float).reshape(-1, 9), doors, joined
+    return np.asarray(out, float).reshape(-1, 9), doors, joined, seg_of
 
 
 def _absorb(cur: np.ndarray, piece: np.ndarray) -> np.ndarray:
@@ -558,33 +571,34 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
     door_min = max(1, int(round(opt.door_min / res)))
     half = int(math.ceil(t / 2)) + 1
     min_room = opt.min_room / res**2
-    angle = dominant_angle(pts, w, (H, W), opt.snap_deg) if len(pts) >= 3 else 0.0
+    snap = math.degrees(math.atan(opt.snap_px / max(H, W)))
+    angle = dominant_angle(pts, w, (H, W), snap) if len(pts) >= 3 else 0.0
     fr = _Frame(angle, (H, W))
     uv = fr.to(pts) if len(pts) else np.zeros((0, 2))
     Hr, Wr = fr.shape
     E = (_splat(uv, w, (Hr, Wr)) > 0).astype(np.uint8)
     free_c = fr.warp((occ == FREE).astype(np.uint8), 0) > 0
-    ph = _pieces(E, uv[:, 0], uv[:, 1], w, L, 1.0)
-    pv = _pieces(np.ascontiguousarray(E.T), uv[:, 1], uv[:, 0], w, L, 1.0)
+    ph, pt_h = _pieces(E, uv[:, 0], uv[:, 1], w, L, 1.0)
+    pv, pt_v = _pieces(np.ascontiguousarray(E.T), uv[:, 1], uv[:, 0], w, L, 1.0)
     # room-sized free regions with every gap closed (pieces joined regardless of doors)
     closed = np.zeros((Hr, Wr), np.uint8)
-    hc, _, _ = _family(ph, np.zeros((Hr, Wr), bool), np.zeros((Hr, Wr), bool), tol, half,
+    hc, _, _, _ = _family(ph, np.zeros((Hr, Wr), bool), np.zeros((Hr, Wr), bool), tol, half,
                        door_min, opt.max_gap / res)
-    vc, _, _ = _family(pv, np.zeros((Wr, Hr), bool), np.zeros((Wr, Hr), bool), tol, half,
+    vc, _, _, _ = _family(pv, np.zeros((Wr, Hr), bool), np.zeros((Wr, Hr), bool), tol, half,
                        door_min, opt.max_gap / res)
     _fill_rects(closed, hc[:, :3], vc[:, :3], max(t, 2 * half - 1))
-    region = (free_c & (closed == 0)).astype(np.uint8)
-    n, lab = cv2.connectedComponents(region, connectivity=4)
-    big = np.bincount(lab.ravel(), minlength=n) >= min_room
-    big[0] = False
-    room = big[lab] | (free_c & (closed > 0))      # the wall band itself counts
-    hs, d1, j1 = _family(ph, free_c, room, tol, half, door_min, opt.max_gap / res)
-    vs, d2, j2 = _family(pv, free_c.T, room.T, tol, half, door_min, opt.max_gap / res)
+    region = free_c & (closed == 0)
+    room = _rooms(region, (closed > 0) | (E > 0), min_room, opt.enclosed)
+    room |= free_c & (closed > 0)                  # the wall band itself counts
+    hs, d1, j1, sh = _family(ph, free_c, room, tol, half, door_min, opt.max_gap / res)
+    vs, d2, j2, sv = _family(pv, free_c.T, room.T, tol, half, door_min, opt.max_gap / res)
     hseg = np.stack([hs[:, 1], hs[:, 0], hs[:, 2], hs[:, 0]], 1).reshape(-1, 4)
     vseg = np.stack([vs[:, 0], vs[:, 1], vs[:, 0], vs[:, 2]], 1).reshape(-1, 4)
     hseg, vseg = _join(hseg, vseg, reach)
     kh, kv = _drop_stubs(hseg, vseg, max(tol, opt.thickest / res / 2), L)
-    hs, hseg, vs, vseg = hs[kh], hseg[kh], vs[kv], vseg[kv]
+    hs = _refit(hs, _kept(sh, kh, pt_h), uv[:, 0], uv[:, 1], w)[kh]
+    vs = _refit(vs, _kept(sv, kv, pt_v), uv[:, 1], uv[:, 0], w)[kv]
+    hseg, vseg = hseg[kh], vseg[kv]
     drawn = np.zeros((Hr, Wr), np.uint8)
     _fill_rects(drawn, np.stack([hseg[:, 1], hseg[:, 0], hseg[:, 2]], 1).reshape(-1, 3),
                 np.stack([vseg[:, 0], vseg[:, 1], vseg[:, 3]], 1).reshape(-1, 3), t + 2 * tol)
@@ -600,10 +614,51 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
     segs = np.concatenate([_order(hseg), _order(vseg), other]).reshape(-1, 4)
     if len(segs):
         segs = np.concatenate([fr.back(segs[:, :2]), fr.back(segs[:, 2:])], axis=1)
-    out = render_plan(segs, occ, t, res, min_room=opt.min_room)
+    out = render_plan(segs, occ, t, res, min_room=opt.min_room, enclosed=opt.enclosed)
     info = {"pieces": int(len(ph) + len(pv)), "doors": d1 + d2, "joined": j1 + j2,
             "other": int(len(other))}
     return PlanDrawing(segs, out, angle, t, info)
+
+
+def _kept(seg_of: np.ndarray, keep: np.ndarray, point_piece: np.ndarray) -> np.ndarray:
+    """Each point's segment (index among all of the family's segments; -1: none or a
+    segment not kept)."""
+    if len(seg_of) == 0:
+        return np.full(len(point_piece), -1, np.int64)
+    seg = np.where(point_piece >= 0, seg_of[np.maximum(point_piece, 0)], -1)
+    return np.where((seg >= 0) & keep[np.maximum(seg, 0)], seg, -1)
+
+
+def _line(st: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Weighted least-squares line ``v = vb + b (u - ub)`` of each row of sums."""
+    sw = np.maximum(st[:, 3], 1e-12)
+    ub, vb = st[:, 4] / sw, st[:, 5] / sw
+    var = st[:, 6] / sw - ub**2
+    cov = st[:, 7] / sw - ub * vb
+    return ub, vb, np.where(var > 1e-9, cov / np.maximum(var, 1e-9), 0.0)
+
+
+def _refit(st: np.ndarray, seg: np.ndarray, u: np.ndarray, v: np.ndarray, w: np.ndarray
+           ) -> np.ndarray:
+    """The sums of each segment again, from its points within a pixel plus half its seen
+    thickness of its first line only: blobs and ray ends beside a wall neither turn nor
+    move it."""
+    if len(st) == 0:
+        return st
+    ub, vb, b = _line(st)
+    k = np.maximum(seg, 0)
+    length = st[:, 2] - st[:, 1]
+    band = 1.0 + 0.5 * st[:, 8] / np.maximum(length + 1.0, 1.0)
+    inside = (seg >= 0) & (np.abs(v - vb[k] - b[k] * (u - ub[k])) <= band[k])
+    wi = np.where(inside, w, 0.0)
+    n = len(st)
+    new = [np.bincount(k, x, n) for x in (wi, wi * u, wi * v, wi * u * u, wi * u * v)]
+    out = st.copy()
+    ok = new[0] > 0
+    for j, x in enumerate(new):
+        out[ok, 3 + j] = x[ok]
+    out[ok, 0] = out[ok, 5] / out[ok, 3]
+    return out
 
 
 def _place(st: np.ndarray, lo: np.ndarray, hi: np.ndarray, free: np.ndarray, t: float,
@@ -623,11 +678,7 @@ def _place(st: np.ndarray, lo: np.ndarray, hi: np.ndarray, free: np.ndarray, t: 
     if n == 0:
         return np.zeros(0), np.zeros(0)
     H, W = free.shape
-    sw = st[:, 3]
-    ub, vb = st[:, 4] / sw, st[:, 5] / sw
-    var = st[:, 6] / sw - ub**2
-    cov = st[:, 7] / sw - ub * vb
-    b = np.where(var > 1e-9, cov / np.maximum(var, 1e-9), 0.0)
+    ub, vb, b = _line(st)
     length = hi - lo
     lean = (np.abs(b) * length >= slant[0]) & (length >= slant[1]) & (np.abs(b) < slant[2])
     b = np.where(lean, b, 0.0)
@@ -699,10 +750,12 @@ def _order(s: np.ndarray) -> np.ndarray:
 
 
 def render_plan(segments: np.ndarray, occupancy: np.ndarray, thickness: float,
-                resolution: float, *, min_room: float = 0.5) -> np.ndarray:
+                resolution: float, *, min_room: float = 0.5, enclosed: float = 0.2
+                ) -> np.ndarray:
     """The drawn map (step 7 of the module doc): free and unknown from ``occupancy``
     (its occupied pixels take their nearest non-occupied pixel's value; free regions
-    under ``min_room`` m^2 become unknown), walls ``thickness`` pixels thick along
+    under ``min_room`` m^2, or with less than ``enclosed`` of their outline along a wall,
+    become unknown), walls ``thickness`` pixels thick along
     ``segments`` (continuous pixel coordinates), nothing else occupied.
 
     Examples
@@ -745,12 +798,28 @@ def render_plan(segments: np.ndarray, occupancy: np.ndarray, thickness: float,
         for q in np.round(quads * 16).astype(np.int32):   # one call per wall: one call
             cv2.fillConvexPoly(wall, q, 1, cv2.LINE_8, shift=4)  # for all XORs overlaps
     free = (out == FREE) & (wall == 0)
-    n, lab = cv2.connectedComponents(free.astype(np.uint8), connectivity=4)
-    small = np.bincount(lab.ravel(), minlength=n) < min_room / resolution**2
-    small[0] = False
-    out = np.where(small[lab], np.uint8(UNKNOWN), out)
+    keep = _rooms(free, wall > 0, min_room / resolution**2, enclosed)
+    out = np.where(free & ~keep, np.uint8(UNKNOWN), out)
     out[wall > 0] = OCCUPIED
     return out
+
+
+def _rooms(free: np.ndarray, walls: np.ndarray, min_area: float, enclosed: float
+           ) -> np.ndarray:
+    """Free pixels of regions (4-connected) at least ``min_area`` pixels large whose
+    outline runs along ``walls`` (within a pixel) for at least ``enclosed`` of its length:
+    rooms, not the fans of laser rays that left the building (bounded by unknown)."""
+    n, lab = cv2.connectedComponents(free.astype(np.uint8), connectivity=4)
+    area = np.bincount(lab.ravel(), minlength=n)
+    f8 = free.astype(np.uint8)
+    edge = free & (cv2.erode(f8, np.ones((3, 3), np.uint8), borderValue=0) == 0)
+    near = cv2.dilate(walls.astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
+    le = lab[edge]
+    tot = np.bincount(le, minlength=n)
+    along = np.bincount(le[near[edge]], minlength=n)
+    ok = (area >= min_area) & (along >= enclosed * np.maximum(tot, 1))
+    ok[0] = False
+    return ok[lab]
 
 
 def save_plan_dxf(drawing: PlanDrawing | np.ndarray, path, resolution: float,
