@@ -253,3 +253,48 @@ def test_report_on_the_drawer_output():
     assert r["broken"] == 0 and r["targets_met"]
     r_in = drawing_report(slam, slam, plan, RES)
     assert not r_in["ok_thickness"]
+
+
+def _random_apartment(seed: int) -> np.ndarray:
+    """Rooms on a grid of walls (2-4 px), doors cut with free space through them, walls
+    wobbling by a pixel, pieces of walls missing (unknown), specks in the rooms."""
+    rng = np.random.default_rng(seed)
+    H, W = 200, 260
+    m = np.full((H, W), UNK, np.uint8)
+    y0, y1, x0, x1 = 20, 180, 20, 240
+    m[y0:y1, x0:x1] = FREE
+    ys = [y0] + sorted(rng.choice(np.arange(60, 150, 10), 1, replace=False).tolist()) + [y1 - 3]
+    xs = [x0] + sorted(rng.choice(np.arange(60, 200, 10), 2, replace=False).tolist()) + [x1 - 3]
+    for y in ys:
+        t = int(rng.integers(2, 5))
+        for a in range(x0, x1, 20):               # wobble: each 20 px, up to a pixel
+            dy = int(rng.integers(-1, 2)) if y not in (y0, y1 - 3) else 0
+            m[y + dy:y + dy + t, a:min(a + 20, x1)] = OCC
+    for x in xs:
+        t = int(rng.integers(2, 5))
+        m[y0:y1, x:x + t] = OCC
+    for y in ys[1:-1]:                             # a door in every interior wall line
+        a = int(rng.integers(x0 + 10, x1 - 30))
+        m[y - 2:y + 6, a:a + 14] = FREE
+    for x in xs[1:-1]:
+        a = int(rng.integers(y0 + 10, y1 - 30))
+        m[a:a + 14, x - 2:x + 6] = FREE
+    for _ in range(8):                             # holes in walls: unknown, not through
+        r, c = int(rng.integers(y0, y1)), int(rng.integers(x0, x1))
+        hole = m[r:r + 3, c:c + 3]
+        hole[hole == OCC] = UNK
+    for _ in range(10):                            # specks
+        r, c = int(rng.integers(y0 + 5, y1 - 5)), int(rng.integers(x0 + 5, x1 - 5))
+        if (m[r - 3:r + 5, c - 3:c + 5] == FREE).all():
+            m[r:r + 2, c:c + 2] = OCC
+    return m
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_continuous_walls_are_never_broken(seed):
+    m = _random_apartment(seed)
+    d = draw_plan(m == OCC, m, RES, 3)
+    runs, broken = broken_runs(m, d.map, RES)
+    assert runs > 0 and broken == 0
+    assert wall_components(d.map) <= wall_components(m)
+    assert median_wall_thickness(d.map) == 3

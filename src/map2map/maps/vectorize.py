@@ -7,11 +7,12 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
 1. **Evidence.** Wall points ``(x, y)`` in continuous pixel coordinates (the centre of
    pixel ``(r, c)`` is ``(c + 0.5, r + 0.5)``, :mod:`map2map.core.grid`), with optional
    weights; a boolean raster is handed over as its pixel centres (:func:`wall_points`).
-2. **Dominant direction** (:func:`dominant_angle`): the gradient orientations of the
-   evidence, folded modulo 90 degrees, give a coarse angle; the angle whose projections
-   of the points onto both axes are sharpest (sum of squared histogram counts, 0.1
-   degree steps) refines it. A map whose walls run at 20 degrees keeps them at 20: the
-   two orthogonal families are found in the frame turned by that angle.
+2. **Dominant direction** (:func:`dominant_angle`): the structure tensor's orientations
+   of the evidence, folded modulo 90 degrees, give a coarse angle; the angle whose
+   projections of the points onto both axes are sharpest (sum of squares of their
+   smoothed density, 0.1 degree steps) refines it. A map whose walls run at 20 degrees
+   keeps them at 20: the two orthogonal families are found in the frame turned by that
+   angle. An angle that turns a line across the map by at most ``snap_px`` is 0.
 3. **Wall pieces** of each family: the evidence, rasterised in the turned frame, closed
    along the family's direction (1 x 3) and opened with a line of
    ``L = max(thickest + 2, min_len / resolution)`` pixels, keeps only the pixels lying in
@@ -23,18 +24,28 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
    segment unless the input shows a **door** between them: a run of at least
    ``door_min`` positions in the gap where the input is free all across the wall band
    (``thickness / 2 + 1`` pixels either side of the line) and the free space on both
-   sides belongs to a room (a free region of at least ``min_room`` square metres once
-   every other gap is closed). Gaps longer than ``max_gap`` stay open.
+   sides belongs to a room (:func:`_rooms`: a free region of at least ``min_room``
+   square metres, once every other gap is closed, whose outline runs along walls for at
+   least ``enclosed`` of its length; a fan of laser rays beyond an outer wall is bounded
+   by unknown space, not walls). Gaps longer than ``max_gap`` stay open.
 5. **Corners and T-junctions** (:func:`map2map.maps.segments._join`): an end stopping
    short of, or overshooting, a perpendicular wall by at most ``reach`` moves onto it.
+   Segments that reach less than ``L`` beyond the perpendicular walls they cross
+   (ticks and blobs on a wall, pieces the snapping shrank to nothing) go.
 6. **Other directions**, only where evidence is strong: evidence that no family wall
    explains is thinned and cut by a probabilistic Hough transform; lines at least
-   ``other_min`` metres long, more than 10 degrees off both families, are kept.
-7. **Drawing** (:func:`render_plan`): free and unknown space come from the input map, its
+   ``other_min`` metres long, more than 4 degrees off both families, are kept.
+7. **Placing** (:func:`_place`): each wall's line is refitted to its own points near it
+   (:func:`_refit`); a long wall that SLAM drift turned a little follows its
+   least-squares line, and a wall seen from one side keeps its seen face (its thickness
+   grows away from the free side). Ends are then moved onto the lines they meet again
+   (:func:`_snap_ends`), so corners stay closed.
+8. **Drawing** (:func:`render_plan`): free and unknown space come from the input map, its
    occupied pixels taking the value of their nearest non-occupied pixel; free regions
-   smaller than ``min_room`` (ray fans beyond the walls) become unknown; then every
-   segment is drawn as a rectangle of exactly ``thickness`` pixels across, extended by
-   half the thickness at both ends so corners close. Nothing else is occupied.
+   that are not rooms (small ones, ray fans) become unknown; then every segment is drawn
+   as a rectangle of ``thickness`` pixels across (exactly along the grid, within 0.2 px
+   at other angles), extended by half the thickness at both ends so corners close.
+   Nothing else is occupied.
 
 :func:`save_plan_dxf` writes the same segments through the one DXF writer
 (:func:`map2map.maps.dxf.save_segments_dxf`), so raster and drawing agree.
