@@ -56,6 +56,18 @@ def test_a_dashed_wall_becomes_one_segment():
     assert wall_components(d.map) == 1
 
 
+@pytest.mark.parametrize("pattern", ["x.", "xx..", "x...", "xxx...."])
+def test_a_dotted_wall_is_one_wall(pattern):
+    m = room()
+    m[20:100, 99:102] = FREE
+    dots = np.array([c == "x" for c in pattern * 80])[:80]
+    m[20:100, 100][dots] = OCC                    # free between the dots: too narrow a door
+    d = draw_plan(m == OCC, m, RES, 3)
+    mid = vertical(d.segments, 100.5)
+    assert len(mid) == 1 and mid[0, 1] <= 22 and mid[0, 3] >= 98, d.segments
+    assert wall_components(d.map) == 1
+
+
 def test_a_door_stays_open():
     m = room()
     m[20:100, 99:102] = OCC                       # a wall between two rooms
@@ -171,6 +183,19 @@ def test_raster_and_dxf_agree(tmp_path):
             x = (x0 + f * (x1 - x0) - 1.0) / RES
             y = H - (y0 + f * (y1 - y0) - 2.0) / RES
             assert d.map[int(math.floor(y)), int(math.floor(x))] == OCC
+
+
+def test_the_map_form_and_the_dxf_give_the_same_world_segments(tmp_path):
+    from map2map.core.grid import OccupancyMap
+    from map2map.maps.vectorize import draw_plan_map
+
+    m = OccupancyMap(_rotated_room(12.0), resolution=RES, origin=(-3.0, 4.0, 0.3))
+    out, world = draw_plan_map(m)
+    d = draw_plan(m.occupied, m.data, RES)
+    assert np.array_equal(out.data, d.map) and out.origin == m.origin
+    assert out.meta["plan_drawer"]["segments_px"] == d.segments.tolist()
+    w2 = save_plan_dxf(d, tmp_path / "w.dxf", RES, origin=m.origin)
+    assert np.allclose(world, w2)
 
 
 def test_specks_and_ray_ends_are_removed():

@@ -14,8 +14,9 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
    keeps them at 20: the two orthogonal families are found in the frame turned by that
    angle. An angle that turns a line across the map by at most ``snap_px`` is 0.
 3. **Wall pieces** of each family: the evidence, rasterised in the turned frame, closed
-   along the family's direction (1 x 3) and opened with a line of
-   ``L = max(thickest + 2, min_len / resolution)`` pixels, keeps only the pixels lying in
+   along the family's direction (holes up to ``bridge`` long: a dotted wall) and opened
+   with a line of ``L = max(thickest + 2, min_len / resolution)`` pixels, keeps only the
+   pixels lying in
    a straight run at least ``L`` long along that direction (specks, ray-end blobs and the
    other family's walls go); each 8-connected component is a piece, its line the
    weighted mean of its points across (sub-pixel), its extent its first and last pixel.
@@ -71,11 +72,11 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from ..core.grid import FREE, OCCUPIED, UNKNOWN
+from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from .segments import _join
 
 __all__ = ["DrawOptions", "PlanDrawing", "default_wall_thickness", "wall_points",
-           "dominant_angle", "draw_plan", "render_plan", "save_plan_dxf",
+           "dominant_angle", "draw_plan", "draw_plan_map", "render_plan", "save_plan_dxf",
            "PLAN_WALL_M"]
 
 #: Wall thickness (metres) that :func:`default_wall_thickness` draws: the plans' convention.
@@ -108,6 +109,9 @@ class DrawOptions:
         Pieces whose lines lie this close across are one wall line.
     min_len : float
         Shortest straight wall piece kept.
+    bridge : float
+        Holes along a wall up to about this long are bridged before pieces are cut (a
+        dotted wall is one piece; doors are wider than ``door_min``).
     thickest : float
         Thickest wall of the input (the opening length exceeds it, so a thick wall is
         never read as a short wall across it).
@@ -136,6 +140,7 @@ class DrawOptions:
 
     tol: float = 0.12
     min_len: float = 0.35
+    bridge: float = 0.2
     thickest: float = 0.35
     max_gap: float = 2.5
     door_min: float = 0.4
@@ -330,13 +335,15 @@ class _Frame:
 
 
 def _pieces(E: np.ndarray, u: np.ndarray, v: np.ndarray, w: np.ndarray, L: int,
-            min_w: float) -> np.ndarray:
+            min_w: float, bridge: int = 3) -> np.ndarray:
     """Horizontal pieces of the canvas evidence ``E`` (uint8 0/1): rows ``(c, lo, hi,
     sw, swu, swv, swuu, swuv, npix)``, ``c`` the weighted mean ``v`` of the points in the
     piece, ``lo``/``hi`` the centres of its first and last pixel along, then the sums
     of the points' weights (``sw``), moments (for a line fit) and its pixel count; and
-    each point's piece (-1: none)."""
-    closed = cv2.morphologyEx(E, cv2.MORPH_CLOSE, np.ones((1, 3), np.uint8))
+    each point's piece (-1: none). Gaps along a run up to ``bridge - 1`` pixels long are
+    bridged first (a dotted wall is a wall); a piece whose own evidence covers less than
+    half of its length must be at least ``2 L`` long (a few specks in a row are not)."""
+    closed = cv2.morphologyEx(E, cv2.MORPH_CLOSE, np.ones((1, bridge), np.uint8))
     closed |= E
     opened = cv2.morphologyEx(closed, cv2.MORPH_OPEN, np.ones((1, L), np.uint8))
     n, lab = cv2.connectedComponents(opened, connectivity=8)
@@ -354,7 +361,11 @@ def _pieces(E: np.ndarray, u: np.ndarray, v: np.ndarray, w: np.ndarray, L: int,
     ri = np.clip(np.floor(v).astype(np.int64), 0, H - 1)
     lp = lab[ri, ci]
     st = [np.bincount(lp, x, n)[1:] for x in (w, w * u, w * v, w * u * u, w * u * v)]
-    ok = st[0] >= min_w
+    # share of each piece's positions along that hold evidence of its own
+    er, ec = np.nonzero(E & (lab > 0))
+    cols = np.unique(lab[er, ec].astype(np.int64) * W + ec)
+    cover = np.bincount(cols // W, minlength=n)[1:] / (right - left + 1.0)
+    ok = (st[0] >= min_w) & ((cover >= 0.5) | (right - left + 1 >= 2 * L))
     c = st[2][ok] / st[0][ok]
     index = np.full(n, -1, np.int64)
     index[1:][ok] = np.arange(int(ok.sum()))
@@ -589,8 +600,9 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
     Hr, Wr = fr.shape
     E = (_splat(uv, w, (Hr, Wr)) > 0).astype(np.uint8)
     free_c = fr.warp((occ == FREE).astype(np.uint8), 0) > 0
-    ph, pt_h = _pieces(E, uv[:, 0], uv[:, 1], w, L, 1.0)
-    pv, pt_v = _pieces(np.ascontiguousarray(E.T), uv[:, 1], uv[:, 0], w, L, 1.0)
+    bridge = 2 * int(math.ceil(opt.bridge / res / 2)) + 1
+    ph, pt_h = _pieces(E, uv[:, 0], uv[:, 1], w, L, 1.0, bridge)
+    pv, pt_v = _pieces(np.ascontiguousarray(E.T), uv[:, 1], uv[:, 0], w, L, 1.0, bridge)
     # room-sized free regions with every gap closed (pieces joined regardless of doors)
     closed = np.zeros((Hr, Wr), np.uint8)
     hc, _, _, _ = _family(ph, np.zeros((Hr, Wr), bool), np.zeros((Hr, Wr), bool), tol, half,
@@ -610,6 +622,9 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
     hs = _refit(hs, _kept(sh, kh, pt_h), uv[:, 0], uv[:, 1], w)[kh]
     vs = _refit(vs, _kept(sv, kv, pt_v), uv[:, 1], uv[:, 0], w)[kv]
     hseg, vseg = hseg[kh], vseg[kv]
+    sh = _seen(hs, hseg[:, 0], hseg[:, 2], free_c, opt.other_min / res)
+    sv = _seen(vs, vseg[:, 1], vseg[:, 3], free_c.T, opt.other_min / res)
+    hs, hseg, vs, vseg = hs[sh], hseg[sh], vs[sv], vseg[sv]
     drawn = np.zeros((Hr, Wr), np.uint8)
     _fill_rects(drawn, np.stack([hseg[:, 1], hseg[:, 0], hseg[:, 2]], 1).reshape(-1, 3),
                 np.stack([vseg[:, 0], vseg[:, 1], vseg[:, 3]], 1).reshape(-1, 3), t + 2 * tol)
@@ -670,6 +685,30 @@ def _refit(st: np.ndarray, seg: np.ndarray, u: np.ndarray, v: np.ndarray, w: np.
         out[ok, 3 + j] = x[ok]
     out[ok, 0] = out[ok, 5] / out[ok, 3]
     return out
+
+
+def _seen(st: np.ndarray, lo: np.ndarray, hi: np.ndarray, free: np.ndarray,
+          long: float, share: float = 0.3) -> np.ndarray:
+    """Which of a family's segments to keep: those at least ``long`` pixels long, and
+    shorter ones with free space within 3 pixels of their seen band, on one side or the
+    other, along at least ``share`` of their length (a laser saw them from the free
+    side); not the ray ends and blobs beyond the outer walls."""
+    keep = (hi - lo) >= long
+    H, W = free.shape
+    seen = st[:, 8] / np.maximum(hi - lo + 1.0, 1.0)
+    for i in np.flatnonzero(~keep):                 # the short ones: a few slices
+        j0, j1 = max(0, int(math.floor(lo[i]))), min(W, int(math.ceil(hi[i])) + 1)
+        a = int(math.floor(st[i, 0] - seen[i] / 2 - 0.5))
+        b = int(math.ceil(st[i, 0] + seen[i] / 2 + 0.5))
+        up = free[max(0, a - 3):max(0, a), j0:j1]
+        dn = free[min(H, b):min(H, b + 3), j0:j1]
+        f = np.zeros(max(j1 - j0, 0), bool)
+        if up.size:
+            f |= up.any(axis=0)
+        if dn.size:
+            f |= dn.any(axis=0)
+        keep[i] = f.size > 0 and f.mean() >= share
+    return keep
 
 
 def _place(st: np.ndarray, lo: np.ndarray, hi: np.ndarray, free: np.ndarray, t: float,
@@ -831,6 +870,34 @@ def _rooms(free: np.ndarray, walls: np.ndarray, min_area: float, enclosed: float
     ok = (area >= min_area) & (along >= enclosed * np.maximum(tot, 1))
     ok[0] = False
     return ok[lab]
+
+
+def draw_plan_map(m: OccupancyMap, evidence: np.ndarray | None = None,
+                  wall_thickness: float | None = None, *, weights: np.ndarray | None = None,
+                  options: DrawOptions | None = None) -> tuple[OccupancyMap, np.ndarray]:
+    """:func:`draw_plan` on a map: the drawn map (same grid, origin and meta, plus
+    ``meta["plan_drawer"]``: pixel segments, angle, thickness, counts) and the segments
+    in world metres (``x0, y0, x1, y1``), what :func:`save_plan_dxf` writes.
+
+    ``evidence`` defaults to the map's own occupied pixels (the classical path).
+
+    Examples
+    --------
+    >>> m = OccupancyMap(np.full((40, 60), 255, np.uint8), resolution=0.05)
+    >>> m.data[20:22, 5:55] = 0
+    >>> out, world = draw_plan_map(m, wall_thickness=2)
+    >>> out.shape == m.shape, world.round(3).tolist()
+    (True, [[0.275, 0.95, 2.725, 0.95]])
+    """
+    ev = m.occupied if evidence is None else evidence
+    d = draw_plan(ev, m.data, m.resolution, wall_thickness, weights=weights, options=options)
+    out = m.copy(d.map)
+    out.meta["plan_drawer"] = {"segments_px": d.segments.tolist(), "angle": d.angle,
+                               "thickness_px": d.thickness, **d.info}
+    s = d.segments
+    x0, y0 = m.pixel_to_world(s[:, 1] - 0.5, s[:, 0] - 0.5)
+    x1, y1 = m.pixel_to_world(s[:, 3] - 0.5, s[:, 2] - 0.5)
+    return out, np.stack([x0, y0, x1, y1], axis=1).reshape(-1, 4)
 
 
 def save_plan_dxf(drawing: PlanDrawing | np.ndarray, path, resolution: float,
