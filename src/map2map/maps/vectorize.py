@@ -240,12 +240,13 @@ def dominant_angle(points: np.ndarray, weights: np.ndarray | None = None,
         shape = tuple(int(v) for v in (np.ceil(pts.max(axis=0)) - lo + 3)[::-1])
     img = _splat(pts - lo, w, shape).astype(np.float32)
     # coarse: the structure tensor's orientation (gradient products averaged over a few
-    # pixels), folded modulo 90 degrees, weighted by its coherence; 0.5 degree bins
+    # pixels: a 9 x 9 box), folded modulo 90 degrees, weighted by its coherence; 0.5
+    # degree bins
     gx = cv2.Sobel(img, cv2.CV_32F, 1, 0, ksize=3)
     gy = cv2.Sobel(img, cv2.CV_32F, 0, 1, ksize=3)
-    jxx = cv2.GaussianBlur(gx * gx, (0, 0), 4.0)
-    jyy = cv2.GaussianBlur(gy * gy, (0, 0), 4.0)
-    jxy = cv2.GaussianBlur(gx * gy, (0, 0), 4.0)
+    jxx = cv2.blur(gx * gx, (9, 9))
+    jyy = cv2.blur(gy * gy, (9, 9))
+    jxy = cv2.blur(gx * gy, (9, 9))
     coh = np.hypot(jxx - jyy, 2 * jxy).ravel()
     sel = coh > 1e-3 * max(float(coh.max()), 1e-12)
     ang = np.degrees(0.5 * np.arctan2(2 * jxy.ravel()[sel], (jxx - jyy).ravel()[sel])) % 90.0
@@ -256,8 +257,8 @@ def dominant_angle(points: np.ndarray, weights: np.ndarray | None = None,
     # refine: the angle whose projections onto both axes are sharpest (linear binning
     # in half pixels, so that the score is smooth in the angle): +-3 degrees in steps of
     # 0.5, then +-0.4 in steps of 0.1 (a few angles, not pixels)
-    if len(pts) > 2500:                                     # every k-th point: enough
-        k = int(math.ceil(len(pts) / 2500))
+    if len(pts) > 2000:                                     # every k-th point: enough
+        k = int(math.ceil(len(pts) / 2000))
         pts, w = pts[::k], w[::k]
     best = coarse
     for step, span in ((0.5, 3.0), (0.1, 0.4)):
