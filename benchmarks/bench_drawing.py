@@ -16,7 +16,10 @@ pixels (the classical path, no network) and measures the output with
   ``plan.yaml``, 0.05 m/px): ``--demo`` names a demo output folder; without it the demo's
   plan (generated apartment, seed 0) is simulated here for the demo's five minutes. When
   the folder holds ``autocorrect/cad.yaml`` (Model_BA's output, as the demo wrote it), it
-  is measured too, for comparison.
+  is measured too, for comparison;
+* on the HouseExpo plans of the shared data (``--houseexpo``, default
+  ``../shared/data/houseexpo/json``; skipped when absent), each simulated here for five
+  minutes (rbpf, seed 0), at the plan's 0.05 m/px.
 
 Prints, per set, the medians of the four measurements, the share of maps meeting each
 target and all four, and the drawer's milliseconds per map (one OpenCV thread; target
@@ -90,12 +93,28 @@ def _demo(folder: Path | None) -> tuple[list, list]:
     return [("demo", plan.data, slam.data, plan.resolution)], extra
 
 
-def _measure(items, label: str, verbose: bool) -> None:
+def _houseexpo(folder: Path) -> list:
+    """HouseExpo plans (``json/*.json``) simulated here for five minutes (rbpf), each SLAM
+    map in its plan's frame."""
+    from map2map.jobs.simulate import SimulateSpec, simulate
+
+    out = []
+    for f in sorted(folder.glob("*.json")):
+        if f.stem.endswith("_trajectory"):
+            continue
+        with tempfile.TemporaryDirectory() as tmp:
+            r = simulate(SimulateSpec(f, Path(tmp) / "sim", seed=0, duration=300.0,
+                                      figures=False, progress=False)).result
+        out.append((f.stem[:8], r.plan.data, r.slam_map_plan.data, r.plan.resolution))
+    return out
+
+
+def _measure(items, label: str, verbose: bool, thickness: float | None = None) -> None:
     rows, ms, cpu = [], [], []
     for name, a, b, res in items:
-        draw_plan(b == 0, b, res)                                  # warm (first call)
+        draw_plan(b == 0, b, res, thickness)                       # warm (first call)
         t0, c0 = time.perf_counter(), time.process_time()
-        d = draw_plan(b == 0, b, res)
+        d = draw_plan(b == 0, b, res, thickness)
         ms.append(1e3 * (time.perf_counter() - t0))
         cpu.append(1e3 * (time.process_time() - c0))
         r = drawing_report(d.map, b, a, res, d.segments)
@@ -143,19 +162,30 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--demo", type=Path, default=None,
                     help="a `map2map demo --out` folder (default: simulate the demo's map)")
     ap.add_argument("--no-demo", action="store_true")
+    ap.add_argument("--houseexpo", type=Path,
+                    default=Path(__file__).resolve().parents[2] / "shared/data/houseexpo/json",
+                    help="HouseExpo JSON plans to simulate and draw (skipped when absent)")
     ap.add_argument("--verbose", "-v", action="store_true", help="one line per map")
+    ap.add_argument("--thickness", type=float, default=None,
+                    help="wall thickness in pixels (default: the drawer's, 0.30 m)")
     args = ap.parse_args(argv)
     cv2.setNumThreads(1)
     if (args.data / "manifest.sqlite").is_file():
-        _measure(_dataset(args.data, args.n), f"dataset {args.data} (256 px)", args.verbose)
+        _measure(_dataset(args.data, args.n), f"dataset {args.data} (256 px)", args.verbose,
+                 args.thickness)
     else:
         print(f"no dataset at {args.data}: skipped")
     if not args.no_demo:
         demo, extra = _demo(args.demo)
-        _measure(demo, "demo SLAM map (drawer)", True)
+        _measure(demo, "demo SLAM map (drawer)", True, args.thickness)
         for name, a, b, res, out in extra:
             r = drawing_report(out, b, a, res)
             _summary(name, [r], [])
+    if args.houseexpo.is_dir():
+        _measure(_houseexpo(args.houseexpo), f"HouseExpo plans simulated ({args.houseexpo})",
+                 True, args.thickness)
+    else:
+        print(f"no HouseExpo plans at {args.houseexpo}: skipped")
     return 0
 
 
