@@ -166,6 +166,16 @@ def test_walls_are_drawn_at_the_requested_thickness(t):
     assert median_wall_thickness(d.map) == t
 
 
+@pytest.mark.parametrize("t", [2, 3, 6])
+def test_walls_turned_by_half_a_degree_keep_the_thickness(t):
+    m = _rotated_room(0.6)
+    d = draw_plan(m == OCC, m, RES, t)
+    assert d.angle == pytest.approx(0.6, abs=0.2)
+    assert median_wall_thickness(d.map) == t
+    cols = (d.map[:, 60:180] == OCC).sum(axis=0)          # top and bottom walls only
+    assert set(cols.tolist()) == {2 * t}
+
+
 def test_raster_and_dxf_agree(tmp_path):
     ezdxf = pytest.importorskip("ezdxf")
     m = room()

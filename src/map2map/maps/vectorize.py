@@ -839,6 +839,13 @@ def render_plan(segments: np.ndarray, occupancy: np.ndarray, thickness: float,
     rest = segs[~(axis ^ vert)]
     if len(rest):
         d = rest[:, 2:] - rest[:, :2]
+        ang = np.degrees(np.arctan2(np.abs(d[:, 1]), np.abs(d[:, 0])))
+        xm, ym = ang <= _NEAR_AXIS_DEG, ang >= 90 - _NEAR_AXIS_DEG
+        _fill_columns(wall, rest[xm], thickness)
+        _fill_columns(wall.T, rest[ym][:, [1, 0, 3, 2]], thickness)
+        rest = rest[~xm & ~ym]
+    if len(rest):
+        d = rest[:, 2:] - rest[:, :2]
         n = np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9)[:, None]
         along = d / n * (thickness / 2)
         # OpenCV fills the pixels the outline touches: a quarter pixel less each side
@@ -853,6 +860,40 @@ def render_plan(segments: np.ndarray, occupancy: np.ndarray, thickness: float,
     out = np.where(free & ~keep, np.uint8(UNKNOWN), out)
     out[wall > 0] = OCCUPIED
     return out
+
+
+#: Segments within this of the grid axes are drawn column by column (:func:`_fill_columns`).
+_NEAR_AXIS_DEG = 10.0
+
+
+def _fill_columns(img: np.ndarray, segs: np.ndarray, t: float) -> None:
+    """Draw segments that run within 45 degrees of the rows, column by column: in every
+    column whose centre lies within the segment (extended by ``t / 2`` along), the
+    ``round(t / cos)`` pixels whose centres are nearest the segment's line, so a wall
+    turned by a fraction of a degree is ``t`` pixels thick everywhere (OpenCV's polygon
+    fill makes it ``t + 1`` along half its length). ``img`` may be a transposed view."""
+    H, W = img.shape
+    for x0, y0, x1, y1 in np.asarray(segs, float).reshape(-1, 4):   # walls, not pixels
+        if x1 < x0:
+            x0, y0, x1, y1 = x1, y1, x0, y0
+        dx, dy = x1 - x0, y1 - y0
+        length = math.hypot(dx, dy)
+        if length == 0:
+            continue
+        cosa = dx / length
+        n = max(1, int(round(t / cosa)))
+        e = t / 2 * cosa
+        c0 = max(0, math.ceil(x0 - e - 0.5))
+        c1 = min(W - 1, math.ceil(x1 + e - 0.5) - 1)
+        if c1 < c0:
+            continue
+        cols = np.arange(c0, c1 + 1)
+        yc = y0 + (cols + 0.5 - x0) * (dy / dx)
+        top = np.ceil(yc - n / 2 - 0.5).astype(np.int64)
+        rows = top[:, None] + np.arange(n)[None, :]
+        cc = np.broadcast_to(cols[:, None], rows.shape)
+        ok = (rows >= 0) & (rows < H)
+        img[rows[ok], cc[ok]] = 1
 
 
 def _rooms(free: np.ndarray, walls: np.ndarray, min_area: float, enclosed: float
