@@ -44,8 +44,9 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
 8. **Drawing** (:func:`render_plan`): free and unknown space come from the input map, its
    occupied pixels taking the value of their nearest non-occupied pixel; free regions
    that are not rooms (small ones, ray fans) become unknown; then every segment is drawn
-   as a rectangle of ``thickness`` pixels across (exactly along the grid, within 0.2 px
-   at other angles), extended by half the thickness at both ends so corners close.
+   as a rectangle of ``thickness`` pixels across (exactly within 10 degrees of the grid's
+   axes, drawn column by column; within half a pixel at other angles), extended by half
+   the thickness at both ends so corners close.
    Nothing else is occupied.
 
 :func:`save_plan_dxf` writes the same segments through the one DXF writer
