@@ -5,7 +5,9 @@ The model is chosen by name from :data:`MODELS` (``--model``; :data:`DEFAULT_MOD
 is a Model_BA weights file or training run; every choice is a :class:`Corrector`. The
 model is loaded once for all the maps; every output path is checked before any map is
 read; each file is written atomically. A folder input corrects every map in it into the
-output folder (same names).
+output folder (same names); an image that a ROS map yaml of the folder names is that
+map's image, not a map of its own, and two inputs that would write the same file are
+refused before anything is written.
 
 Examples
 --------
@@ -217,6 +219,8 @@ def _plan_paths(spec: AutocorrectSpec) -> tuple[list[Path], list[dict[str, Path]
     src = Path(spec.input)
     if src.is_dir():
         files = sorted(f for f in src.iterdir() if f.suffix.lower() in MAP_SUFFIXES)
+        images = _yaml_images(files)            # a yaml's image is not a map of its own
+        files = [f for f in files if f.resolve() not in images]
         if not files:
             raise InputError(src, "no maps in this folder")
         out = [{"map": Path(spec.out) / f.name} for f in files]
@@ -225,6 +229,7 @@ def _plan_paths(spec: AutocorrectSpec) -> tuple[list[Path], list[dict[str, Path]
                 o["dxf"] = Path(spec.dxf) / (f.stem + ".dxf")
             if spec.figure:
                 o["figure"] = Path(spec.figure) / (f.stem + ".png")
+        _refuse_shared_outputs(files, out)
         return files, out
     if not src.exists():
         raise InputError(src, "file not found")
@@ -234,6 +239,34 @@ def _plan_paths(spec: AutocorrectSpec) -> tuple[list[Path], list[dict[str, Path]
     if spec.figure:
         o["figure"] = Path(spec.figure)
     return [src], [o]
+
+
+def _yaml_images(files: list[Path]) -> set[Path]:
+    """The images that the ROS map yamls among ``files`` name (resolved paths)."""
+    from ..maps.ros import read_ros_yaml
+
+    out = set()
+    for f in files:
+        if f.suffix.lower() in (".yaml", ".yml"):
+            try:
+                out.add(Path(read_ros_yaml(f)["image"]).resolve())
+            except InputError:
+                pass                   # not a map yaml: reported when it is read
+    return out
+
+
+def _refuse_shared_outputs(files: list[Path], outs: list[dict[str, Path]]) -> None:
+    """One line (InputError) when two inputs would write the same file."""
+    seen: dict[Path, Path] = {}
+    for f, o in zip(files, outs, strict=True):
+        paths = list(o.values())
+        if o["map"].suffix.lower() in (".yaml", ".yml"):
+            paths.append(o["map"].with_suffix(".pgm"))
+        for p in paths:
+            other = seen.setdefault(p.resolve(), f)
+            if other != f:
+                raise InputError(f, f"would write {p}, as {other.name} does: rename one of "
+                                    "them or correct them apart")
 
 
 def autocorrect(spec: AutocorrectSpec) -> AutocorrectRun:

@@ -1,0 +1,79 @@
+"""``map2map autocorrect FOLDER``: which files are maps, and no two outputs on one file
+(issue #32, item 5). Only the planning of the paths is exercised (no model is run)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from map2map.core.errors import InputError
+from map2map.core.grid import OccupancyMap
+from map2map.jobs.autocorrect import AutocorrectSpec, _plan_paths
+from map2map.maps.formats import save_map
+
+
+def _map(path):
+    m = OccupancyMap(np.full((20, 30), 255, np.uint8), resolution=0.05)
+    save_map(m, path)
+
+
+def test_a_ros_map_in_a_folder_is_one_map(tmp_path):
+    src = tmp_path / "in"
+    src.mkdir()
+    _map(src / "map.yaml")                             # writes map.yaml + map.pgm
+    assert sorted(p.name for p in src.iterdir()) == ["map.pgm", "map.yaml"]
+    files, outs = _plan_paths(AutocorrectSpec(src, tmp_path / "out", dxf=tmp_path / "dxf"))
+    assert [f.name for f in files] == ["map.yaml"]
+    assert outs[0]["map"] == tmp_path / "out" / "map.yaml"
+    assert outs[0]["dxf"] == tmp_path / "dxf" / "map.dxf"
+
+
+def test_a_lone_image_beside_a_ros_map_is_still_a_map(tmp_path):
+    src = tmp_path / "in"
+    src.mkdir()
+    _map(src / "map.yaml")
+    _map(src / "other.png")
+    files, _ = _plan_paths(AutocorrectSpec(src, tmp_path / "out"))
+    assert [f.name for f in files] == ["map.yaml", "other.png"]
+
+
+def test_two_inputs_writing_one_file_are_refused_before_writing(tmp_path):
+    src = tmp_path / "in"
+    src.mkdir()
+    _map(src / "a.yaml")
+    (src / "a.pgm").rename(src / "img.pgm")             # a.yaml now names img.pgm
+    (src / "a.yaml").write_text((src / "a.yaml").read_text().replace("a.pgm", "img.pgm"))
+    _map(src / "a.png")                                  # and a.png: both write dxf/a.dxf
+    spec = AutocorrectSpec(src, tmp_path / "out", dxf=tmp_path / "dxf")
+    with pytest.raises(InputError, match="would write .*a.dxf"):
+        _plan_paths(spec)
+    assert not (tmp_path / "out").exists() and not (tmp_path / "dxf").exists()
+
+
+def test_a_yaml_output_and_a_pgm_input_of_the_same_name_collide(tmp_path):
+    src = tmp_path / "in"
+    src.mkdir()
+    _map(src / "b.yaml")
+    (src / "b.pgm").rename(src / "c.pgm")
+    (src / "b.yaml").write_text((src / "b.yaml").read_text().replace("b.pgm", "c.pgm"))
+    _map(src / "b.png")
+    _map(src / "b.pgm")                                  # out/b.yaml also writes out/b.pgm
+    with pytest.raises(InputError, match="would write"):
+        _plan_paths(AutocorrectSpec(src, tmp_path / "out"))
+
+
+def test_the_command_refuses_in_one_line(tmp_path, capsys):
+    pytest.importorskip("torch")
+    from map2map.cli.main import main
+
+    src = tmp_path / "in"
+    src.mkdir()
+    _map(src / "a.png")
+    _map(src / "a.pgm")                                  # both write dxf/a.dxf
+    rc = main(["autocorrect", str(src), "--out", str(tmp_path / "out"),
+               "--dxf", str(tmp_path / "dxf")])
+    err = capsys.readouterr().err
+    lines = err.strip().splitlines()
+    assert rc == 2 and len(lines) == 1, err
+    assert "would write" in lines[0] and "Traceback" not in err
+    assert not (tmp_path / "out").exists()

@@ -1,0 +1,335 @@
+"""The plan drawer (:mod:`map2map.maps.vectorize`) and the "drawn like a plan"
+measurements (:mod:`map2map.evaluate.drawing`) on hand-made maps (issue #32)."""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+from map2map.evaluate.drawing import (
+    broken_runs,
+    drawing_report,
+    median_wall_thickness,
+    wall_components,
+)
+from map2map.maps.vectorize import DrawOptions, draw_plan, save_plan_dxf, wall_points
+
+RES = 0.05
+FREE, UNK, OCC = 255, 127, 0
+
+
+def room(h=120, w=200, top=20, left=20, bottom=100, right=180, t=3) -> np.ndarray:
+    """A free room with ``t`` px walls, unknown outside."""
+    m = np.full((h, w), UNK, np.uint8)
+    m[top:bottom, left:right] = FREE
+    m[top:top + t, left:right] = OCC
+    m[bottom - t:bottom, left:right] = OCC
+    m[top:bottom, left:left + t] = OCC
+    m[top:bottom, right - t:right] = OCC
+    return m
+
+
+def horizontal(segs, y=None, tol=2.0):
+    s = segs[np.abs(segs[:, 1] - segs[:, 3]) < 1e-6]
+    return s if y is None else s[np.abs(s[:, 1] - y) <= tol]
+
+
+def vertical(segs, x=None, tol=2.0):
+    s = segs[np.abs(segs[:, 0] - segs[:, 2]) < 1e-6]
+    return s if x is None else s[np.abs(s[:, 0] - x) <= tol]
+
+
+def test_a_dashed_wall_becomes_one_segment():
+    m = room()
+    for x0 in range(30, 170, 20):                 # gaps of unknown, none of free through
+        m[20:23, x0:x0 + 4] = UNK
+    m[20:23, 100:104] = FREE                      # free inside the wall, not through it
+    m[19, 100:104] = UNK
+    d = draw_plan(m == OCC, m, RES, 3)
+    top = horizontal(d.segments, 21.5)
+    assert len(top) == 1, d.segments
+    assert top[0, 0] <= 22 and top[0, 2] >= 178
+    assert (d.map[20:23, 22:178] == OCC).all()    # drawn through every gap
+    assert wall_components(d.map) == 1
+
+
+@pytest.mark.parametrize("pattern", ["x.", "xx..", "x...", "xxx...."])
+def test_a_dotted_wall_is_one_wall(pattern):
+    m = room()
+    m[20:100, 99:102] = FREE
+    dots = np.array([c == "x" for c in pattern * 80])[:80]
+    m[20:100, 100][dots] = OCC                    # free between the dots: too narrow a door
+    d = draw_plan(m == OCC, m, RES, 3)
+    mid = vertical(d.segments, 100.5)
+    assert len(mid) == 1 and mid[0, 1] <= 22 and mid[0, 3] >= 98, d.segments
+    assert wall_components(d.map) == 1
+
+
+def test_a_door_stays_open():
+    m = room()
+    m[20:100, 99:102] = OCC                       # a wall between two rooms
+    m[50:64, 99:102] = FREE                       # a door: free through it
+    d = draw_plan(m == OCC, m, RES, 3)
+    mid = vertical(d.segments, 100.5)
+    assert len(mid) == 2, d.segments
+    ends = sorted([mid[0, 1], mid[0, 3], mid[1, 1], mid[1, 3]])
+    assert ends[1] <= 51 and ends[2] >= 63         # the gap is the door
+    assert (d.map[52:62, 99:102] == FREE).all()
+
+
+def test_a_gap_with_free_space_into_a_speck_only_is_closed():
+    m = room()
+    m[17:20, 60:70] = FREE                        # a sliver of free space outside
+    m[20:23, 60:70] = FREE                        # ... through a gap of the top wall
+    d = draw_plan(m == OCC, m, RES, 3)
+    assert len(horizontal(d.segments, 21.5)) == 1
+    assert (d.map[17:20, 60:70] != FREE).all()    # the sliver is not a room: unknown
+
+
+def test_a_t_junction_joins():
+    m = room()
+    m[23:95, 99:102] = OCC                        # stops 5 px short of the bottom wall
+    d = draw_plan(m == OCC, m, RES, 3)
+    mid = vertical(d.segments, 100.5)
+    assert len(mid) == 1
+    assert abs(max(mid[0, 1], mid[0, 3]) - 98.5) < 1e-6   # on the bottom wall's line
+    assert (d.map[90:100, 99:102] == OCC).all()
+    assert wall_components(d.map) == 1
+
+
+def test_an_l_corner_closes():
+    m = np.full((120, 200), FREE, np.uint8)
+    m[20:23, 20:150] = OCC                        # horizontal, ends at x = 150
+    m[27:100, 153:156] = OCC                      # vertical, starts 4 px below it
+    d = draw_plan(m == OCC, m, RES, 3)
+    h, v = horizontal(d.segments), vertical(d.segments)
+    assert len(h) == 1 and len(v) == 1
+    assert h[0, 2] == pytest.approx(v[0, 0]) and min(v[0, 1], v[0, 3]) == pytest.approx(h[0, 1])
+    assert wall_components(d.map) == 1
+    assert (d.map[20:23, 150:156] == OCC).all()   # the corner is filled
+
+
+def _rotated_room(angle_deg: float, t: int = 3) -> np.ndarray:
+    m = np.full((240, 240), UNK, np.uint8)
+    c, a = np.array([120.0, 120.0]), math.radians(angle_deg)
+    u, n = np.array([math.cos(a), math.sin(a)]), np.array([-math.sin(a), math.cos(a)])
+    corners = [c + sx * 70 * u + sy * 45 * n for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+    poly = np.round(np.array(corners) * 16).astype(np.int32)
+    cv2.fillPoly(m, [poly], FREE, cv2.LINE_8, shift=4)
+    cv2.polylines(m, [poly], True, OCC, t, cv2.LINE_8, shift=4)
+    return m
+
+
+def test_a_room_turned_20_degrees_keeps_its_angle():
+    m = _rotated_room(20.0)
+    d = draw_plan(m == OCC, m, RES, 3)
+    assert d.angle == pytest.approx(20.0, abs=0.5)
+    s = d.segments
+    ang = np.degrees(np.arctan2(s[:, 3] - s[:, 1], s[:, 2] - s[:, 0])) % 90
+    assert len(s) == 4, s
+    assert np.allclose(ang, 20.0, atol=0.8), ang
+    assert wall_components(d.map) == 1
+    assert median_wall_thickness(d.map) == pytest.approx(3.0, abs=0.5)
+
+
+def test_sub_pixel_points_with_weights():
+    rng = np.random.default_rng(0)
+    x = np.linspace(20, 180, 400)
+    pts = np.concatenate([np.stack([x, 30.3 + rng.normal(0, 0.3, x.size)], 1),
+                          np.stack([x, 90.7 + rng.normal(0, 0.3, x.size)], 1),
+                          np.stack([20.4 + rng.normal(0, 0.3, 150), np.linspace(30, 91, 150)], 1),
+                          np.stack([179.6 + rng.normal(0, 0.3, 150),
+                                    np.linspace(30, 91, 150)], 1)])
+    w = np.ones(len(pts))
+    junk = np.array([[100.0, 60.0], [101.0, 60.5]])       # weight 0: ignored
+    pts, w = np.concatenate([pts, junk]), np.concatenate([w, [0.0, 0.0]])
+    occ = np.full((120, 200), UNK, np.uint8)
+    occ[31:90, 21:179] = FREE
+    d = draw_plan(pts, occ, RES, 2, weights=w, options=DrawOptions(keep_faces=False))
+    h = horizontal(d.segments)
+    assert sorted(np.round(h[:, 1], 1).tolist()) == pytest.approx([30.3, 90.7], abs=0.15)
+    assert len(vertical(d.segments)) == 2
+    with pytest.raises(ValueError, match="weights"):
+        draw_plan(pts, occ, RES, 2, weights=w[:-1])
+
+
+@pytest.mark.parametrize("t", [2, 3, 5])
+def test_walls_are_drawn_at_the_requested_thickness(t):
+    m = room(t=4)
+    d = draw_plan(m == OCC, m, RES, t)
+    assert d.thickness == t
+    assert (d.map[:, 100] == OCC).sum() == 2 * t           # top and bottom walls
+    assert (d.map[60] == OCC).sum() == 2 * t               # left and right walls
+    assert median_wall_thickness(d.map) == t
+
+
+@pytest.mark.parametrize("t", [2, 3, 6])
+def test_walls_turned_by_half_a_degree_keep_the_thickness(t):
+    m = _rotated_room(0.6)
+    d = draw_plan(m == OCC, m, RES, t)
+    assert d.angle == pytest.approx(0.6, abs=0.2)
+    assert median_wall_thickness(d.map) == t
+    cols = (d.map[:, 60:180] == OCC).sum(axis=0)          # top and bottom walls only
+    assert set(cols.tolist()) == {2 * t}
+
+
+def test_raster_and_dxf_agree(tmp_path):
+    ezdxf = pytest.importorskip("ezdxf")
+    m = room()
+    m[20:100, 99:102] = OCC
+    m[50:64, 99:102] = FREE
+    d = draw_plan(m == OCC, m, RES, 3)
+    world = save_plan_dxf(d, tmp_path / "w.dxf", RES, origin=(1.0, 2.0, 0.0))
+    lines = ezdxf.readfile(tmp_path / "w.dxf").modelspace().query("LINE")
+    got = np.array([[e.dxf.start.x, e.dxf.start.y, e.dxf.end.x, e.dxf.end.y] for e in lines])
+    assert np.allclose(got, world)
+    # back to pixels: every line's points lie on drawn wall pixels
+    H = m.shape[0]
+    for x0, y0, x1, y1 in got:
+        for f in np.linspace(0, 1, 9):
+            x = (x0 + f * (x1 - x0) - 1.0) / RES
+            y = H - (y0 + f * (y1 - y0) - 2.0) / RES
+            assert d.map[int(math.floor(y)), int(math.floor(x))] == OCC
+
+
+def test_the_map_form_and_the_dxf_give_the_same_world_segments(tmp_path):
+    from map2map.core.grid import OccupancyMap
+    from map2map.maps.vectorize import draw_plan_map
+
+    m = OccupancyMap(_rotated_room(12.0), resolution=RES, origin=(-3.0, 4.0, 0.3))
+    out, world = draw_plan_map(m)
+    d = draw_plan(m.occupied, m.data, RES)
+    assert np.array_equal(out.data, d.map) and out.origin == m.origin
+    assert out.meta["plan_drawer"]["segments_px"] == d.segments.tolist()
+    w2 = save_plan_dxf(d, tmp_path / "w.dxf", RES, origin=m.origin)
+    assert np.allclose(world, w2)
+
+
+def test_specks_and_ray_ends_are_removed():
+    m = room()
+    for r, c in ((50, 60), (70, 140), (40, 100)):          # furniture legs in the room
+        m[r:r + 2, c:c + 2] = OCC
+    m[5:8, 60:63] = OCC                                     # ray ends outside
+    m[23:27, 130] = OCC                                     # a tick on the top wall
+    d = draw_plan(m == OCC, m, RES, 3)
+    assert len(d.segments) == 4
+    assert wall_components(d.map) == 1
+    assert (d.map[50:52, 60:62] == FREE).all()
+    assert (d.map[5:8, 60:63] == UNK).all()
+
+
+def test_determinism():
+    m = _rotated_room(7.0)
+    m[60:64, 100:104] = OCC
+    a = draw_plan(m == OCC, m, RES)
+    b = draw_plan(m.copy() == OCC, m.copy(), RES)
+    assert np.array_equal(a.segments, b.segments)
+    assert a.map.tobytes() == b.map.tobytes()
+
+
+def test_bad_evidence_is_refused():
+    m = room()
+    with pytest.raises(ValueError, match="boolean raster"):
+        draw_plan(np.zeros((5, 3)), m, RES)
+    with pytest.raises(ValueError, match="weights"):
+        draw_plan(m == OCC, m, RES, weights=np.ones(3))
+
+
+def test_wall_points_round_trip():
+    m = room() == OCC
+    p = wall_points(m)
+    back = np.zeros_like(m)
+    back[np.floor(p[:, 1]).astype(int), np.floor(p[:, 0]).astype(int)] = True
+    assert np.array_equal(back, m)
+
+
+# ------------------------------------------------------------ the measurements
+def test_a_broken_run_is_detected_and_a_continuous_one_is_not():
+    m = room()                                   # walls 160 px = 8 m long
+    runs, broken = broken_runs(m, m, RES)
+    assert runs == 4 and broken == 0
+    out = m.copy()
+    out[20:23, 90:94] = UNK                      # a 4 px gap in the top wall
+    assert broken_runs(m, out, RES) == (4, 1)
+    out = m.copy()
+    out[20:23, 90:92] = UNK                      # 2 px: within the tolerance
+    assert broken_runs(m, out, RES) == (4, 0)
+    out = np.roll(m, 2, axis=0)                  # moved by 2 px across: still there
+    assert broken_runs(m, out, RES)[1] == 0
+    w = np.full((60, 200), FREE, np.uint8)
+    w[30:33, 20:180] = OCC
+    out = w.copy()
+    out[30:33, 160:180] = FREE                   # a wall cut back at its free end
+    assert broken_runs(w, out, RES, shortened=True) == (1, 0, 1)
+    out = m.copy()
+    out[20:23, 150:180] = UNK                    # up to the corner: the right wall is
+    assert broken_runs(m, out, RES)[1] == 1      # still there, so the top one is broken
+
+
+def test_short_runs_are_not_counted():
+    m = np.full((60, 60), FREE, np.uint8)
+    m[30:32, 10:28] = OCC                        # 18 px = 0.9 m < 1 m
+    assert broken_runs(m, np.full_like(m, FREE), RES) == (0, 0)
+
+
+def test_report_on_the_drawer_output():
+    plan = room(t=4)
+    slam = room(t=2)
+    for x0 in range(30, 170, 15):
+        slam[20:22, x0:x0 + 3] = UNK             # a dashed SLAM wall
+    d = draw_plan(slam == OCC, slam, RES, 4)
+    r = drawing_report(d.map, slam, plan, RES, d.segments)
+    assert r["components"] == 1 < r["components_input"]
+    assert r["thickness_px"] == r["thickness_plan_px"] == 4
+    assert r["segments"] == 4 and r["plan_walls"] == 4
+    assert r["broken"] == 0 and r["targets_met"]
+    r_in = drawing_report(slam, slam, plan, RES)
+    assert not r_in["ok_thickness"]
+
+
+def _random_apartment(seed: int) -> np.ndarray:
+    """Rooms on a grid of walls (2-4 px), doors cut with free space through them, walls
+    wobbling by a pixel, pieces of walls missing (unknown), specks in the rooms."""
+    rng = np.random.default_rng(seed)
+    H, W = 200, 260
+    m = np.full((H, W), UNK, np.uint8)
+    y0, y1, x0, x1 = 20, 180, 20, 240
+    m[y0:y1, x0:x1] = FREE
+    ys = [y0] + sorted(rng.choice(np.arange(60, 150, 10), 1, replace=False).tolist()) + [y1 - 3]
+    xs = [x0] + sorted(rng.choice(np.arange(60, 200, 10), 2, replace=False).tolist()) + [x1 - 3]
+    for y in ys:
+        t = int(rng.integers(2, 5))
+        for a in range(x0, x1, 20):               # wobble: each 20 px, up to a pixel
+            dy = int(rng.integers(-1, 2)) if y not in (y0, y1 - 3) else 0
+            m[y + dy:y + dy + t, a:min(a + 20, x1)] = OCC
+    for x in xs:
+        t = int(rng.integers(2, 5))
+        m[y0:y1, x:x + t] = OCC
+    for y in ys[1:-1]:                             # a door in every interior wall line
+        a = int(rng.integers(x0 + 10, x1 - 30))
+        m[y - 2:y + 6, a:a + 14] = FREE
+    for x in xs[1:-1]:
+        a = int(rng.integers(y0 + 10, y1 - 30))
+        m[a:a + 14, x - 2:x + 6] = FREE
+    for _ in range(8):                             # holes in walls: unknown, not through
+        r, c = int(rng.integers(y0, y1)), int(rng.integers(x0, x1))
+        hole = m[r:r + 3, c:c + 3]
+        hole[hole == OCC] = UNK
+    for _ in range(10):                            # specks
+        r, c = int(rng.integers(y0 + 5, y1 - 5)), int(rng.integers(x0 + 5, x1 - 5))
+        if (m[r - 3:r + 5, c - 3:c + 5] == FREE).all():
+            m[r:r + 2, c:c + 2] = OCC
+    return m
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_continuous_walls_are_never_broken(seed):
+    m = _random_apartment(seed)
+    d = draw_plan(m == OCC, m, RES, 3)
+    runs, broken = broken_runs(m, d.map, RES)
+    assert runs > 0 and broken == 0
+    assert wall_components(d.map) <= wall_components(m)
+    assert median_wall_thickness(d.map) == 3
