@@ -11,7 +11,8 @@ on a three-level pyramid so that a 1585 x 1585 pair aligns in about a second:
    that lands inside the plan;
 2. *refine level* (about 400 px): the best hypotheses are refined by robust
    Gaussian-weighted least squares on distance-transform correspondences
-   (an annealed maximisation of eq. 8) and the best is kept;
+   (an annealed maximisation of eq. 8) and the best of both directions is kept,
+   the placement that fits both ways deciding between near ties (:func:`_two_way`);
 3. *full resolution*: the winner is refined again, then an affine refinement and
    the rigid variant (scale held at ``rigid_scale``, 1 when both maps share a
    resolution) are fitted the same way; last, against a line-drawn plan, the
@@ -110,6 +111,11 @@ class AlignParams:
     face-to-face refinement; ``direct_sigma`` (px, None to skip) is the width of
     the fitness map on which the final similarity is polished by maximising eq. 8
     directly (:func:`maximise_fitness`) when one map is line-drawn.
+
+    ``metric_scale`` (``res_source / res_target``, None when a resolution is unknown)
+    bounds the similarity's scale to within ``prior_tolerance`` (10 %) of it; when the
+    fit there scores under ``prior_recheck`` the scale is also searched blind, and a
+    far better fit elsewhere is reported as a warning, never taken.
     """
 
     scale_range: tuple[float, float] = (0.5, 2.0)
@@ -437,6 +443,9 @@ class _Search:
     faces: tuple[list[Face], list[Face]]
     levels: tuple[_Level, _Level]
     timings: dict[str, float]
+    refined: list[tuple[float, np.ndarray]] = field(default_factory=list)
+    level2: tuple[_Level, _Level, np.ndarray] | None = None
+    two_way: float = -1.0
 
 
 def _search(src: np.ndarray, tgt: np.ndarray, f1: int, f2: int, p: AlignParams) -> _Search:
@@ -517,8 +526,9 @@ def _search(src: np.ndarray, tgt: np.ndarray, f1: int, f2: int, p: AlignParams) 
     stats["refined"] = len(cands)
     timings["refine"] = time.perf_counter() - t1
     return _Search(
-        best, best_score, stats, (theta_s, theta_t), (faces_s, faces_t), (S1, T1), timings
-    )
+        best, best_score, stats, (theta_s, theta_t), (faces_s, faces_t), (S1, T1), timings,
+        refined, (S2, T2, Mf2),
+    )  # fmt: skip
 
 
 def _displacement(pts: np.ndarray, T: np.ndarray, U: np.ndarray) -> float:
@@ -566,10 +576,92 @@ def _prior_band(p: AlignParams) -> tuple[float, float]:
 
 
 def _search_both(src, tgt, f1, f2, p: AlignParams) -> tuple[_Search, _Search, bool]:
-    """The search source onto target and target onto source; whether the reverse won."""
+    """The search source onto target and target onto source; whether the reverse won.
+
+    The placement is chosen by :func:`_two_way` from the refined solutions of both.
+    """
     fwd = _search(src, tgt, f1, f2, p)
     bwd = _search(tgt, src, f1, f2, _invert_similarity_range(p))
-    reverse = bwd.T is not None and (fwd.T is None or bwd.score > fwd.score)
+    return _two_way(fwd, bwd, p.confidence.ambiguity)
+
+
+def _two_way(fwd: _Search, bwd: _Search, tie: float) -> tuple[_Search, _Search, bool]:
+    """The placement kept from both searches, and whether the reverse direction refines it.
+
+    Each refined solution (level 2, where both directions share the pixel grid) has
+    its *one-way* score, in its own search's direction (:func:`_score`: eq. 8 of the
+    walls times the share of free space on free space), and a *two-way* score, the
+    geometric mean of its scores in both directions. The one-way score decides, as it
+    always did, except between solutions it cannot tell apart: those scoring ``tie``
+    (0.85, the ambiguity of :mod:`.confidence`) of the best one-way score or more;
+    among these the two-way score decides.
+
+    Why not the one-way score alone: it rewards laying the larger map, shrunk, inside
+    the explored part of the smaller one, whose walls and free space then land on the
+    other's while the other map's walls land nowhere near its own. Halmstad HIH_01
+    against its layout (the layout read as ``map2map`` reads the picture): the layout
+    laid at scale 1/1.71 into the sensor map scores 0.258 one way, the right placement
+    0.236 (0.91 of it); the other way 0.023 and 0.097; two-way 0.077 and 0.151. Why not
+    the two-way score alone: it penalises a partial map for what it did not explore (a
+    quarter of a generated apartment scores 1.0 one way at the right placement and
+    about 0.06 the other way), so it prefers a wrong placement that half fits both ways.
+
+    The solutions within the distinct-placement distance (:func:`_distinct_px`) of the
+    chosen one are the same placement; of these, the best one-way one is kept and
+    refined in its direction (on E5_01 with its resolutions, a copy of the right
+    placement at a 5 % larger scale, refined by the reverse search, fits better both
+    ways but lands 41 px off; the forward copy, 9 px). ``score`` of each search becomes
+    the kept placement's score in its direction. The runner-up is the best other
+    placement by its one-way ratio to the kept one (what the search always reported),
+    or, for one scoring better one way than the kept one (which only the two-way score
+    put behind), by its two-way ratio: HIH_01's layout laid into the sensor map, at
+    1.09 of the kept placement one way, is a runner-up at 0.48, not a coin flip.
+    """
+    if fwd.level2 is None or bwd.level2 is None or not (fwd.refined or bwd.refined):
+        reverse = bwd.T is not None and (fwd.T is None or bwd.score > fwd.score)
+        return fwd, bwd, reverse
+    S2, T2, Mf_t = fwd.level2  # source and target levels, the target's fitness map
+    _, _, Mf_s = bwd.level2  # (target, source) levels, the source's fitness map
+
+    def scores(T):  # a source -> target placement scored both ways
+        sf = _score(T2, Mf_t, S2.pts, S2.free_pts, T)
+        sb = _score(S2, Mf_s, T2.pts, T2.free_pts, np.linalg.inv(T))
+        return sf, sb, math.sqrt(max(sf, 0.0) * max(sb, 0.0))
+
+    # (one-way, two-way, source -> target score, target -> source score, T, reverse)
+    pool = []
+    for rev, refined in ((False, fwd.refined), (True, bwd.refined)):
+        for own, T in refined:
+            T = np.linalg.inv(T) if rev else T
+            sf, sb, two = scores(T)
+            pool.append((own, two, sf, sb, T, rev))
+    best_own = max(c[0] for c in pool)
+    chosen = max((c for c in pool if c[0] >= tie * best_own), key=lambda c: c[1])
+    tol = _distinct_px(S2.pts)
+    same = [c for c in pool if _displacement(S2.pts, c[4], chosen[4]) <= tol]
+    own, _, s_f, s_b, T, reverse = max(same, key=lambda c: c[0])
+    two = max(c[1] for c in same)
+    fwd.T, fwd.score, bwd.T, bwd.score = T, s_f, np.linalg.inv(T), s_b
+    fwd.two_way = bwd.two_way = two
+    # the runner-up, in the kept direction's frame and points
+    pts = bwd.level2[0].pts if reverse else S2.pts
+    K = np.linalg.inv(T) if reverse else T
+    runner: dict[str, Any] = {"ratio": 0.0}
+    for c in pool:
+        U = np.linalg.inv(c[4]) if reverse else c[4]
+        if _displacement(pts, K, U) <= _distinct_px(pts):
+            continue
+        # judged by the score that decided between it and the kept placement: the
+        # one-way score, unless it scores better one way (then the two-way score did)
+        ratio = c[0] / max(own, 1e-9) if c[0] <= own else c[1] / max(two, 1e-9)
+        if ratio > runner["ratio"]:
+            sc, ang, _, _ = decompose_similarity(U @ np.linalg.inv(K))
+            runner = {"ratio": float(ratio), "rotation_deg": math.degrees(ang), "scale": sc,
+                      "displacement_px": _displacement(pts, K, U),
+                      "one_way_ratio": float(c[0] / max(own, 1e-9)),
+                      "two_way_ratio": float(c[1] / max(two, 1e-9))}  # fmt: skip
+    fwd.stats["runner_up"] = bwd.stats["runner_up"] = runner
+    fwd.stats["two_way_score"] = bwd.stats["two_way_score"] = two
     return fwd, bwd, reverse
 
 
@@ -601,24 +693,54 @@ class _Crop:
 
 
 def _coarse(src, tgt, f1: int, f2: int, p: AlignParams, warnings: list[str]):
-    """Hypothesis search both ways at the metric-scale prior, free scale if it fits far better."""
+    """Hypothesis search both ways, within ``prior_tolerance`` of the metric scale if known.
+
+    Given resolutions are a constraint, not a hint: the search never leaves their
+    scale band (the result stays within ``prior_tolerance``, 10 %, of their scale; see
+    :func:`_keep_scale`). When the fit there is poor, the scale is searched blind too,
+    and a far better fit elsewhere is reported as a warning (a resolution may be
+    wrong), never silently taken: until 2026-11-27 it was taken, so that HIH_01 with
+    both maps told 0.05 m/px (their true ratio is 1.17) still aligned at scale 1.71.
+    """
     prior = p.metric_scale
     band = _prior_band(p)
     fwd, bwd, reverse = _search_both(src, tgt, f1, f2, replace(p, scale_range=band))
     if prior is not None and max(fwd.score, bwd.score) < p.prior_recheck:
-        # a poor fit at the metric scale: is it the resolutions that are wrong?
+        # a poor fit at the metric scale: are the resolutions wrong?
         fwd2, bwd2, rev2 = _search_both(src, tgt, f1, f2, p)
         free_best = bwd2 if rev2 else fwd2
-        s_free = decompose_similarity(free_best.T)[0] if free_best.T is not None else prior
-        at_prior = max(fwd.score, bwd.score)
-        if free_best.score > 1.25 * max(at_prior, 1e-9) and not (band[0] <= s_free <= band[1]):
-            fwd, bwd, reverse = fwd2, bwd2, rev2
+        s_free = decompose_similarity(fwd2.T)[0] if fwd2.T is not None else prior
+        at_prior = max(fwd.two_way, 0.0)
+        if free_best.two_way > 1.25 * max(at_prior, 1e-9) and not band[0] <= s_free <= band[1]:
             warnings.append(
-                f"the maps fit far better at scale {s_free:.3f} (score {free_best.score:.2f}) "
+                f"the maps fit far better at scale {s_free:.3f} (score {free_best.two_way:.2f}) "
                 f"than at the scale {prior:.3f} their resolutions give (score {at_prior:.2f}): "
-                "check the resolutions"
+                "check the resolutions (the alignment keeps within "
+                f"{p.prior_tolerance:.0%} of their scale)"
             )
     return fwd, bwd, reverse
+
+
+def _keep_scale(T: np.ndarray, band: tuple[float, float], pts: np.ndarray) -> np.ndarray:
+    """``T`` with its scale brought into ``band`` (about the centroid of ``pts`` mapped).
+
+    The search keeps to the band of the metric scale; the full-resolution refinements
+    and anchoring after it are free, and could carry the scale a little beyond it. With
+    resolutions given the scale stays within ``prior_tolerance`` of theirs.
+
+    Examples
+    --------
+    >>> T = similarity_matrix(1.3, 0.2, 5.0, -3.0)
+    >>> round(decompose_similarity(_keep_scale(T, (0.9, 1.1), np.ones((3, 2))))[0], 6)
+    1.1
+    """
+    s = decompose_similarity(T)[0]
+    c = float(np.clip(s, *band))
+    if c == s or len(pts) == 0:
+        return T
+    centre = apply(T, pts).mean(0)
+    D = _shift(*centre) @ _scale(c / s) @ _shift(-centre[0], -centre[1])
+    return D @ T
 
 
 def _search_stats(fwd: _Search, bwd: _Search, reverse: bool, p: AlignParams) -> dict[str, Any]:
@@ -633,12 +755,15 @@ def _search_stats(fwd: _Search, bwd: _Search, reverse: bool, p: AlignParams) -> 
 
 
 def _full_resolution(srch: _Search, a, b, q: AlignParams, f1: int, f2: int, anchored: bool,
-                     warnings: list[str], notes: list[str]):
+                     warnings: list[str], notes: list[str],
+                     band: tuple[float, float] | None = None):
     """Refine the winning hypothesis (a -> b) at full resolution: similarity, affine, rigid.
 
     Returns ``(sim, aff, rig, passed, line_plan)``; when no hypothesis passes, all three
-    are the best rigid fit (with a warning).
+    are the best rigid fit (with a warning). ``band`` is the scale range searched,
+    source to target (for that warning).
     """
+    lo, hi = band or q.scale_range
     best = srch.T
     # full resolution starts from a passed hypothesis: all occupied cells, as tuned on
     # the Halmstad maps (their sensor walls are clouds whose inner cells carry the fit)
@@ -703,7 +828,7 @@ def _full_resolution(srch: _Search, a, b, q: AlignParams, f1: int, f2: int, anch
         if weak and not passed:
             warnings.append(
                 f"no alignment hypothesis passed (best score {srch.score:.3f} < {q.min_score}: "
-                f"the maps do not match at any scale in {q.scale_range}); {fallback}"
+                f"the maps do not match at any scale in {lo:.3g}-{hi:.3g}); {fallback}"
             )
         elif not passed:
             warnings.append(
@@ -843,7 +968,7 @@ def align_maps(
 
     t1 = time.perf_counter()
     sim, aff, rig, passed, line_plan = _full_resolution(
-        srch, a, b, q, f1, f2, anchors is not None, warnings, notes
+        srch, a, b, q, f1, f2, anchors is not None, warnings, notes, _prior_band(p)
     )
     if reverse:
         sim, aff, rig = (np.linalg.inv(T) for T in (sim, aff, rig))
@@ -870,6 +995,8 @@ def align_maps(
         source, target, sims, passed, anchors, p, score, timings
     )
 
+    if p.metric_scale is not None:
+        sim = _keep_scale(sim, _prior_band(p), S3f)
     stats["passed"] = bool(passed)
     quality = _quality(source, target, sim, p, crop.s)
     quality["runner_up_ratio"] = stats["runner_up"].get("ratio", 0.0)

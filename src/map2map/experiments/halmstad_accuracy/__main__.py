@@ -3,7 +3,8 @@
 Usage::
 
     python3 -m map2map.experiments.halmstad_accuracy [--data ../shared/data]
-        [--pairs E5_01,HIH_02] [--json OUT.json] [--no-wrong]
+        [--pairs E5_01,HIH_02] [--json OUT.json] [--no-wrong] [--one-way]
+        [--resolutions both|none|given] [--as-cli]
 
 For each sensor map and its layout, in both directions (36 pairs), the source's
 associated keypoints are mapped through the similarity and through the nonrigid
@@ -21,6 +22,19 @@ building's layout, skipped with ``--no-wrong``) are bad by construction: every o
 of them must warn. ``--json`` writes every figure, warning and transform (for a
 before/after comparison of a change: the transforms must not move unless meant to).
 
+Every keypoint pair runs twice (``--resolutions both``, the default): without
+resolutions (the scale searched blind, 0.5-2) and with them (the search keeps within
+10 % of their scale). The data gives no resolution; "with resolutions" means the
+layout at the placeholder 0.05 m/px and every sensor map of a building at 0.05 x
+that building's median annotated keypoint scale
+(:func:`map2map.maps.halmstad.annotated_scale`: E5 0.823, HIH 1.160), one figure
+per building as a user who knows the robot's map resolution would give. The summary
+counts the pairs within 1.5 x the floor (and 30 px), sensor map -> layout (the 18 of
+issue #34) and all, each way. ``--as-cli`` reads the pictures as ``map2map
+evaluate`` reads them (:func:`map2map.maps.formats.load_map`, ROS thresholds: the
+anti-aliased layout's walls come out thicker than the data README's threshold at
+128 makes them) instead of :func:`map2map.maps.halmstad.load_halmstad`.
+
 Measured 2026-11-23 (2.3 min for the 40 pairs on a loaded, shared 2-core machine):
 35 good pairs, 1 bad (E5_layout -> E5_01, 1.96 x the floor), 4 wrong maps. Before
 the recalibration of :mod:`map2map.evaluate.confidence` every good pair carried a
@@ -33,6 +47,9 @@ wrong-map pairs still warn (ambiguity 5, poor fit 3, free space 2, no shared wal
 Since 2026-11-27 one "doubtful alignment" warning (``p_correct``, calibrated by
 ``map2map.experiments.alignment_confidence``) replaces ambiguity, poor fit and free space:
 good pairs warned 3/35, bad or wrong-map pairs 5/5 (README.md).
+Measured 2026-11-27 (issue #34 item 1, 6.4 min for 76 pairs): sensor map -> layout within
+1.5 x the floor 18/18 without resolutions and 18/18 with them (scale at most 1.7 % from
+theirs); layout -> sensor map 17/18 both ways (E5_layout -> E5_01, 1.96 x).
 """
 
 from __future__ import annotations
@@ -47,7 +64,15 @@ import numpy as np
 
 from map2map.evaluate.pipeline import evaluate_maps
 from map2map.experiments._data import shared_data
-from map2map.maps.halmstad import halmstad_pairs, keypoint_residuals, load_halmstad
+from map2map.maps.formats import load_map
+from map2map.maps.halmstad import (
+    HALMSTAD_RESOLUTION,
+    annotated_scale,
+    halmstad_pairs,
+    keypoint_residuals,
+    load_halmstad,
+    map_path,
+)
 
 #: warning text -> the check that raised it (confidence.py, align.py)
 CHECKS = (
@@ -107,14 +132,27 @@ def short(fig: dict) -> str:
     )
 
 
-def run_pair(data: Path, src_name: str, tgt_name: str, keypoints: bool) -> dict:
-    src = load_halmstad(data, src_name)
-    tgt = load_halmstad(data, tgt_name)
+def load(data: Path, name: str, as_cli: bool):
+    """A Halmstad map, read by :func:`load_halmstad` or as ``map2map evaluate`` reads it."""
+    if as_cli:
+        return load_map(map_path(data, name), resolution=HALMSTAD_RESOLUTION)
+    return load_halmstad(data, name)
+
+
+def run_pair(data: Path, src_name: str, tgt_name: str, keypoints: bool,
+             rigid_scale: float | None = None, as_cli: bool = False) -> dict:
+    """One pair through ``evaluate_maps``; ``rigid_scale`` is the metric scale its
+    resolutions give (target pixels per source pixel), None: no resolutions."""
+    src = load(data, src_name, as_cli)
+    tgt = load(data, tgt_name, as_cli)
     t0 = time.perf_counter()
-    ev = evaluate_maps(src, tgt, names=(src_name, tgt_name))
+    ev = evaluate_maps(src, tgt, names=(src_name, tgt_name), rigid_scale=rigid_scale)
     dt = time.perf_counter() - t0
     res = ev.registration
-    row = {"pair": f"{src_name}->{tgt_name}", "time_s": dt, "wrong_map": not keypoints}
+    row = {"pair": f"{src_name}->{tgt_name}", "time_s": dt, "wrong_map": not keypoints,
+           "resolutions": rigid_scale is not None, "metric_scale": rigid_scale,
+           "to_layout": tgt_name.endswith("layout"),
+           "scale": ev.report["alignment"]["scale"]}  # fmt: skip
     if keypoints:
         floor, sim, nonrigid = keypoint_residuals(
             data, src_name, tgt_name, src, tgt, res.map_points
@@ -134,7 +172,40 @@ def run_pair(data: Path, src_name: str, tgt_name: str, keypoints: bool) -> dict:
     return row
 
 
+def good_counts(rows: list[dict]) -> str:
+    """Pairs within 1.5 x the floor (and 30 px), without and with resolutions."""
+    out = []
+    for label, sel in (("sensor map -> layout", lambda r: r["to_layout"]),
+                       ("layout -> sensor map", lambda r: not r["to_layout"])):  # fmt: skip
+        parts = []
+        for given in (False, True):
+            rs = [r for r in rows if not r["wrong_map"] and sel(r) and r["resolutions"] == given]
+            if not rs:
+                continue
+            txt = f"{sum(r['good'] for r in rs)}/{len(rs)} {'with' if given else 'without'}"
+            if given:
+                off = max(abs(r["scale"] / r["metric_scale"] - 1) for r in rs)
+                txt += f" (scale at most {off:.1%} from theirs)"
+            bad = [f"{r['pair']} {r['ratio']:.2f}x" for r in rs if not r["good"]]
+            parts.append(txt + (f" [bad: {', '.join(bad)}]" if bad else ""))
+        if parts:
+            out.append(f"{label} within 1.5 x floor: " + "; ".join(parts) + " resolutions")
+    return "\n".join(out)
+
+
 def summary(rows: list[dict]) -> str:
+    out = [good_counts(rows)] if any(not r["wrong_map"] for r in rows) else []
+    given = [r for r in rows if r["resolutions"]]
+    if given:
+        out.append(f"without resolutions ({len(rows) - len(given)} pairs):")
+    out.append(_summary([r for r in rows if not r["resolutions"]]))
+    if given:
+        out.append(f"with resolutions ({len(given)} pairs):")
+        out.append(_summary(given))
+    return "\n".join(out)
+
+
+def _summary(rows: list[dict]) -> str:
     kp = [r for r in rows if not r["wrong_map"]]
     good = [r for r in rows if r["good"]]
     bad = [r for r in rows if not r["good"]]
@@ -188,32 +259,44 @@ def main(argv=None) -> int:
     ap.add_argument("--one-way", action="store_true", help="only sensor -> layout")
     ap.add_argument("--no-wrong", action="store_true", help="skip the wrong-map pairs")
     ap.add_argument("--json", default=None, help="write every row (figures, transforms) here")
+    ap.add_argument("--resolutions", choices=("both", "none", "given"), default="both",
+                    help="run the keypoint pairs without resolutions, with them (the layout "
+                         "at 0.05 m/px, the sensor maps at 0.05 x their building's annotated "
+                         "scale), or both (default)")
+    ap.add_argument("--as-cli", action="store_true",
+                    help="read the pictures as `map2map evaluate` does (ROS thresholds)")
     args = ap.parse_args(argv)
     data = Path(args.data) / "halmstad"
     if not data.is_dir():
         print(f"no Halmstad data at {data} (--data, or $MAP2MAP_SHARED_DATA)")
         return 0
     wanted = {w for w in args.pairs.split(",") if w}
+    scale = {env: annotated_scale(data, env) for env in ("E5", "HIH")}
+    modes = {"both": (False, True), "none": (False,), "given": (True,)}[args.resolutions]
     jobs = []
-    for src_name, tgt_name in halmstad_pairs(data, both_ways=not args.one_way):
-        sensor = src_name if "layout" not in src_name else tgt_name
-        if not wanted or sensor in wanted:
-            jobs.append((src_name, tgt_name, True))
+    for given in modes:
+        for src_name, tgt_name in halmstad_pairs(data, both_ways=not args.one_way):
+            sensor = src_name if "layout" not in src_name else tgt_name
+            m = scale[sensor.split("_")[0]]
+            m = (m if src_name == sensor else 1.0 / m) if given else None
+            if not wanted or sensor in wanted:
+                jobs.append((src_name, tgt_name, True, m))
     if not args.no_wrong:
-        jobs += [(s, t, False) for s, t in WRONG if not wanted or s in wanted]
+        jobs += [(s, t, False, None) for s, t in WRONG if not wanted or s in wanted]
     rows = []
-    print(f"{'pair':<22s} {'floor':>6s} {'simil':>6s} {'ratio':>6s} {'nonrig':>6s} {'time':>5s}"
-          "   fit  free  r-up  iouF unmat  warnings")
-    for src_name, tgt_name, kp in jobs:
-        r = run_pair(data, src_name, tgt_name, kp)
+    print(f"{'pair':<22s} {'res':>5s} {'floor':>6s} {'simil':>6s} {'ratio':>6s} {'nonrig':>6s} "
+          f"{'scale':>6s} {'time':>5s}   fit  free  r-up  iouF unmat  warnings")
+    for src_name, tgt_name, kp, m in jobs:
+        r = run_pair(data, src_name, tgt_name, kp, m, args.as_cli)
         rows.append(r)
         nums = (
             f"{r['floor']:6.1f} {r['similarity']:6.1f} {r['ratio']:6.2f} {r['nonrigid']:6.1f}"
             if kp else f"{'wrong map':>27s}"
         )
+        res = "  -  " if m is None else f"{m:5.3f}"
         checks = ",".join(w["check"] for w in r["warnings"]) or "-"
-        print(f"{r['pair']:<22s} {nums} {r['time_s']:5.1f} {short(r['figures'])}  {checks}",
-              flush=True)
+        print(f"{r['pair']:<22s} {res} {nums} {r['scale']:6.3f} {r['time_s']:5.1f} "
+              f"{short(r['figures'])}  {checks}", flush=True)
     if not rows:
         return 0
     print()
