@@ -60,6 +60,8 @@ class SlamSpec:
     odom_topic: str | None = None
     figures: bool = True
     progress: bool = True
+    #: Largest peak memory to plan for, GiB (None: 4; 0: no limit).
+    max_memory: float | None = None
 
 
 @dataclass
@@ -96,7 +98,8 @@ def slam(spec: SlamSpec) -> SlamRun:
     from ..robotlog.logs import load_log
 
     check_seed(spec.seed)
-    kw = dict(particles=spec.particles, resolution=spec.resolution, max_range=spec.max_range)
+    kw = dict(particles=spec.particles, resolution=spec.resolution, max_range=spec.max_range,
+              max_memory=spec.max_memory)  # fmt: skip
     check_options(spec.backend, **kw)  # before reading the log: fail fast
     out = check_output_dir(spec.out, protect=(spec.log,))
     # every format problem is raised here, before output
@@ -110,6 +113,7 @@ def slam(spec: SlamSpec) -> SlamRun:
         max_range=spec.max_range,
         progress=spec.progress,
         source=spec.log,
+        max_memory=spec.max_memory,
     )
     with atomic_dir(out, protect=(spec.log,)) as tmp:
         paths = write_slam_outputs(
