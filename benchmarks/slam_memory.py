@@ -5,11 +5,12 @@ within 4 GiB. The largest, freiburg-campus, is about 300 m x 250 m of outdoor ca
 driven along a ~1.8 km path with an 80 m SICK scanner. This benchmark generates a log
 of that scale -- no data is copied: buildings, hedges and trees on a 300 m x 250 m
 campus, a robot driving a 1.9 km route through its streets at 1 m/s with five 180-beam
-scans a second (80 m range, no-returns beyond), odometry with 1 % scale and heading
-drift -- writes it as a CARMEN log, and runs ``map2map slam`` on it once per backend,
-each in a fresh process, reporting its peak resident memory (``getrusage`` of the
-child), its seconds, the map's size and the memory estimate ``map2map slam`` checks
-before it starts (:func:`map2map.slam.offline.memory_estimate`).
+scans a second (80 m range, no-returns beyond), odometry with 1 % scale error and a
+heading drift of 0.02 deg per metre -- writes it as a CARMEN log, and runs ``map2map
+slam`` on it once per backend, each in a fresh process, reporting its peak resident
+memory (``getrusage`` of the child), its seconds, the map's size and the memory
+estimate ``map2map slam`` checks before it starts
+(:func:`map2map.slam.offline.memory_estimate`).
 
 The graph backend spends its time on each keyframe's likelihood lookup tables, which
 span the last ten keyframes' 80 m readings (a 160 m square at 2.5 cm, rebuilt per
@@ -66,8 +67,9 @@ def campus(scale: float = 1.0, seed: int = 0):
     """Boxes ``(K, 4)`` = ``xmin, ymin, xmax, ymax`` of a campus, and the route's waypoints.
 
     Streets run along x = 10, 80, 150, 220, 290 m and y = 10, 90, 170, 240 m (times
-    ``scale``); each block between them holds one to three buildings set back from the
-    streets, and trees (0.6 m) line the streets every 12-18 m.
+    ``scale``); each block between them holds one to three buildings 5-7 m from the
+    streets' centre lines, trees (0.6 m) line the streets every 12-18 m, a hedge
+    closes the campus.
     """
     rng = np.random.default_rng(seed)
     xs = np.array([10.0, 80.0, 150.0, 220.0, 290.0]) * scale
@@ -75,8 +77,8 @@ def campus(scale: float = 1.0, seed: int = 0):
     boxes = []
     for i in range(len(xs) - 1):
         for j in range(len(ys) - 1):
-            x0, x1 = xs[i] + 9, xs[i + 1] - 9
-            y0, y1 = ys[j] + 9, ys[j + 1] - 9
+            x0, x1 = xs[i] + 5, xs[i + 1] - 5
+            y0, y1 = ys[j] + 5, ys[j + 1] - 5
             if x1 - x0 < 4 or y1 - y0 < 4:
                 continue
             n = int(rng.integers(1, 4))
@@ -85,19 +87,19 @@ def campus(scale: float = 1.0, seed: int = 0):
             for a, b in zip(edges[:-1], edges[1:], strict=True):
                 if b - a < 3:
                     continue
-                inset = rng.uniform(0, 3, 4)
+                inset = rng.uniform(0, 2, 4)
                 boxes.append((a + inset[0], y0 + inset[1], b - 1.5 - inset[2], y1 - inset[3]))
-    # trees along every street, 5 m off its centre line, alternating sides
+    # trees along every street, 3 m off its centre line, alternating sides
     for x in xs:
         for k, y in enumerate(np.arange(ys[0] + 6, ys[-1] - 6, rng.uniform(12, 18))):
-            cx = x + (5 if k % 2 else -5)
+            cx = x + (3 if k % 2 else -3)
             boxes.append((cx - 0.3, y - 0.3, cx + 0.3, y + 0.3))
     for y in ys:
         for k, x in enumerate(np.arange(xs[0] + 6, xs[-1] - 6, rng.uniform(12, 18))):
-            cy = y + (5 if k % 2 else -5)
+            cy = y + (3 if k % 2 else -3)
             boxes.append((x - 0.3, cy - 0.3, x + 0.3, cy + 0.3))
     # the outer edge: a hedge around the campus
-    x0, x1, y0, y1 = xs[0] - 8, xs[-1] + 8, ys[0] - 8, ys[-1] + 8
+    x0, x1, y0, y1 = xs[0] - 6, xs[-1] + 6, ys[0] - 6, ys[-1] + 6
     boxes += [
         (x0, y0, x1, y0 + 1),
         (x0, y1 - 1, x1, y1),
@@ -160,13 +162,13 @@ def write_campus_log(path, scale: float = 1.0, seed: int = 0) -> dict:
     boxes, route = campus(scale, seed)
     truth = drive(route)
     angles = np.deg2rad(np.arange(-90.0, 90.0, 1.0))
-    # odometry: 1 % scale error, heading drift of 0.2 deg per metre, small noise
+    # odometry: 1 % scale error, heading drift of 0.02 deg per metre, small noise
     step = np.diff(truth, axis=0)
     c, s = np.cos(truth[:-1, 2]), np.sin(truth[:-1, 2])
     fwd = c * step[:, 0] + s * step[:, 1]
     dth = (step[:, 2] + math.pi) % (2 * math.pi) - math.pi
     fwd_o = fwd * 1.01 + rng.normal(0, 0.002, fwd.size)
-    dth_o = dth * 1.005 + np.deg2rad(0.2) * fwd + rng.normal(0, 0.0005, fwd.size)
+    dth_o = dth * 1.005 + np.deg2rad(0.02) * fwd + rng.normal(0, 0.0005, fwd.size)
     odo = np.zeros_like(truth)
     odo[0] = truth[0]
     for k in range(fwd.size):  # integrate

@@ -141,3 +141,20 @@ def test_slam_refuses_past_max_memory_with_the_way_out(tmp_path, capsys):
     assert "--resolution" in err and "--particles" in err and "--backend graph" in err
     rc = main(["slam", str(log), "--out", str(out), "--max-memory", "0", "--quiet"])
     assert rc == 0 and (out / "map.pgm").is_file()
+
+
+def test_a_map_larger_than_the_figure_is_drawn_reduced(tmp_path, monkeypatch):
+    import map2map.jobs.slam as job
+    import map2map.maps.render as render
+    from map2map.core.grid import OccupancyMap
+    from map2map.slam.offline import SlamResult
+
+    seen = []
+    reduce = render.display_map
+    monkeypatch.setattr(job, "FIGURE_MAX_PIXELS", 100)
+    monkeypatch.setattr(render, "display_map", lambda m, n: seen.append(n) or reduce(m, n))
+    data = np.full((400, 300), 255, np.uint8)
+    data[:, 150] = 0
+    res = SlamResult(OccupancyMap(data, 0.05), np.zeros((1, 4)), np.zeros((1, 4)), None, "rbpf")
+    paths = job.write_slam_outputs(res, tmp_path)
+    assert seen == [100] and paths[-1].is_file()
