@@ -158,3 +158,14 @@ def test_a_map_larger_than_the_figure_is_drawn_reduced(tmp_path, monkeypatch):
     res = SlamResult(OccupancyMap(data, 0.05), np.zeros((1, 4)), np.zeros((1, 4)), None, "rbpf")
     paths = job.write_slam_outputs(res, tmp_path)
     assert seen == [100] and paths[-1].is_file()
+
+
+def test_an_unbounded_usable_range_maps_up_to_the_farthest_reading():
+    g = CountGrid.around(0.0, 0.0, 2.0, 0.05)
+    r = np.full(360, 2.0)
+    r[::7] = np.inf  # no returns, skipped (no_return_free off)
+    g.register_scan((0.0, 0.0, 0.0), r, ANGLES, np.inf, 5.0, False)
+    m = g.to_occupancy_map()
+    rows, cols = np.nonzero(m.data == 0)
+    wx, wy = m.pixel_to_world(rows, cols)
+    assert rows.size > 200 and np.all(np.abs(np.hypot(wx, wy) - 2.0) < 0.08)

@@ -229,12 +229,14 @@ def register_scan(
 
 @nb.njit(cache=True)
 def scan_tiles(
-    gx0, gy0, delta, lx, ly, lt, ranges, angles, usable_range, max_range, no_return_free
+    gx0, gy0, delta, lx, ly, lt, ranges, angles, usable_range, max_range, no_return_free, box
 ):
     """Global ``(ty, tx)`` of every tile :func:`register_scan` would write, sorted.
 
     The same beams and Bresenham lines as :func:`register_scan` (each line walked
-    to its end: a no-return beam that stops at a wall asks for a tile or two more).
+    to its end: a no-return beam that stops at a wall asks for a tile or two more),
+    within ``box`` metres of the laser (no beam reaches farther; cells past it are
+    not marked).
 
     Returns
     -------
@@ -242,7 +244,7 @@ def scan_tiles(
     """
     cx0 = int(math.floor((lx - gx0) / delta))
     cy0 = int(math.floor((ly - gy0) / delta))
-    reach = int(math.ceil(usable_range / delta)) + 2
+    reach = int(math.ceil(box / delta)) + 2
     bx0 = (cx0 - reach) >> TILE_SHIFT
     by0 = (cy0 - reach) >> TILE_SHIFT
     nbx = ((cx0 + reach) >> TILE_SHIFT) - bx0 + 1
@@ -263,7 +265,10 @@ def scan_tiles(
         err = dx + dy
         x, y = cx0, cy0
         while True:
-            mark[(y >> TILE_SHIFT) - by0, (x >> TILE_SHIFT) - bx0] = True
+            j = (y >> TILE_SHIFT) - by0
+            i = (x >> TILE_SHIFT) - bx0
+            if 0 <= j < nby and 0 <= i < nbx:
+                mark[j, i] = True
             if x == x1 and y == y1:
                 break
             e2 = 2 * err
@@ -881,7 +886,6 @@ class TilePool:
         n : int
             Free tiles needed.
         """
-        self.peak = max(self.peak, self.used)
         if int(self.n_free[0]) >= n:
             return
         old = self.capacity
@@ -1098,7 +1102,10 @@ class CountGrid:
         r = np.asarray(ranges, np.float64)
         a = np.asarray(angles, np.float64)
         args = (float(usable_range), float(max_range), bool(no_return_free))
-        coords = scan_tiles(self.x0, self.y0, self.delta, lx, ly, lt, r, a, *args)
+        box = float(usable_range)
+        if not math.isfinite(box):  # no beam reaches past the farthest finite reading
+            box = float(np.max(r[np.isfinite(r)], initial=0.0))
+        coords = scan_tiles(self.x0, self.y0, self.delta, lx, ly, lt, r, a, *args, box)
         if coords.shape[0] == 0:
             return
         lo = coords.min(0)
@@ -1110,6 +1117,7 @@ class CountGrid:
             self.table, self.tx0, self.ty0, coords, p.refs, p.free, p.n_free,
             p.hits, p.visits, p.sx, p.sy, p.mean,
         )  # fmt: skip
+        p.peak = max(p.peak, p.used)
         register_scan(*self.arrays(), lx, ly, lt, r, a, *args)
 
     def counts(self) -> tuple[np.ndarray, np.ndarray]:
