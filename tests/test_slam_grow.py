@@ -10,7 +10,13 @@ from map2map.cli.main import main
 from map2map.robotlog.base import LaserScan, OdometryReading
 from map2map.robotlog.carmen import CarmenLog, write_carmen
 from map2map.slam.gridmap import TILE, CountGrid, TilePool
-from map2map.slam.offline import map_tiles_estimate, memory_estimate, run_slam
+from map2map.slam.offline import (
+    BASE_BYTES,
+    backend_options,
+    map_tiles_estimate,
+    memory_estimate,
+    run_slam,
+)
 
 ANGLES = np.deg2rad(np.arange(0.0, 360.0, 1.0))
 
@@ -119,6 +125,9 @@ def test_a_log_far_beyond_the_first_grid_maps_whole_and_the_same_twice(backend):
     assert traj[:, 0].max() > 100.0  # the initial grid is 20 m wide
     r, c = a.map.world_to_pixel(traj[:, 0], traj[:, 1])
     assert (a.map.data[r, c] == 255).mean() > 0.95  # the whole path lies in mapped space
+    # the estimate checked before mapping covers the tiles the run allocated
+    planned = memory_estimate(log, backend, **backend_options(log, backend)) - BASE_BYTES
+    assert 0 < a.mapper.memory_bytes() <= planned
 
 
 def test_memory_estimate_grows_with_the_path_not_its_bounding_box():
