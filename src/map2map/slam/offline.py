@@ -484,7 +484,7 @@ def run_slam(
     bar = tqdm(log, total=len(log), desc=f"slam ({backend})", unit="scan", disable=not progress)
     for k, (odo, scan) in enumerate(bar):
         mapper.update(odo, scan)
-        if progress and k % 100 == 0 and hasattr(mapper, "memory_bytes"):
+        if progress and k % 100 == 0 and getattr(mapper, "memory_bytes", lambda: 0)():
             bar.set_postfix_str(f"map {mapper.memory_bytes() / 2**20:.0f} MiB", refresh=False)
     if hasattr(mapper, "optimize"):
         mapper.optimize()
