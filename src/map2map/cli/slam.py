@@ -67,7 +67,7 @@ def register(subparsers) -> None:
         metavar="GIB",
         help="largest peak memory to plan for, GiB; a log whose estimate (the map tiles "
         "within range of its path, docs/slam.md) exceeds it is refused before mapping "
-        "(default 4; 0: no limit)",
+        "(default 4, or the machine's RAM if less; 0: no limit)",
     )
     p.add_argument(
         "--max-pixels",

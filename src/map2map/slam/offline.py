@@ -27,6 +27,7 @@ Examples
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -47,6 +48,7 @@ __all__ = [
     "map_tiles_estimate",
     "memory_estimate",
     "check_memory",
+    "default_memory_limit",
 ]
 
 #: Peak memory of ``map2map slam`` besides the map tiles: interpreter, numba kernels,
@@ -349,6 +351,26 @@ def memory_estimate(
     return int(BASE_BYTES + 1.25 * (copies * tiles * TILE_BYTES + 2 * image))
 
 
+def default_memory_limit() -> int:
+    """The memory a ``slam`` run may plan for by default: 4 GiB, or the machine's RAM if less.
+
+    Returns
+    -------
+    int
+        Bytes.
+
+    Examples
+    --------
+    >>> default_memory_limit() <= 4 * 2**30
+    True
+    """
+    try:
+        ram = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):
+        ram = DEFAULT_BUDGET_BYTES
+    return int(min(DEFAULT_BUDGET_BYTES, ram if ram > 0 else DEFAULT_BUDGET_BYTES))
+
+
 def check_memory(need: float, max_memory: float | None, source, backend: str) -> None:
     """Refuse a run whose estimated peak memory ``need`` (bytes) exceeds ``max_memory`` GiB.
 
@@ -357,8 +379,8 @@ def check_memory(need: float, max_memory: float | None, source, backend: str) ->
     need : float
         Estimated peak memory, bytes (:func:`memory_estimate`).
     max_memory : float, optional
-        Limit in GiB; None: :data:`~map2map.core.limits.DEFAULT_BUDGET_BYTES` (4 GiB);
-        0: no limit.
+        Limit in GiB; None: :func:`default_memory_limit` (4 GiB, or the machine's RAM
+        if less); 0: no limit.
     source : str or path
         The log, named in the message.
     backend : str
@@ -377,7 +399,7 @@ def check_memory(need: float, max_memory: float | None, source, backend: str) ->
     ...
     map2map.core.errors.InputError: a.log: mapping it (rbpf) would need about 5.0 GiB, ...
     """
-    limit = DEFAULT_BUDGET_BYTES if max_memory is None else max_memory * 2**30
+    limit = default_memory_limit() if max_memory is None else max_memory * 2**30
     if not limit or need <= limit:
         return
     ways = "a coarser `resolution`"
@@ -438,7 +460,7 @@ def run_slam(
         The log file, named in a memory refusal.
     max_memory : float, optional
         Largest peak memory to plan for, GiB (default 4, the memory budget of
-        :mod:`map2map.core.limits`; 0: no limit).
+        :mod:`map2map.core.limits`, or the machine's RAM if less; 0: no limit).
     **options
         Backend parameters.
 
