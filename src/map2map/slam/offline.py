@@ -51,14 +51,20 @@ __all__ = [
     "default_memory_limit",
 ]
 
-#: Peak memory of ``map2map slam`` besides the map tiles: interpreter, numba kernels,
-#: log reader, figure (measured: 0.35-0.45 GiB on the Radish logs and the campus of
-#: ``benchmarks/slam_memory.py``).
+#: Peak memory of ``map2map slam`` besides the map tiles and the map image: interpreter,
+#: numba kernels, log reader, figure (measured: 0.25-0.45 GiB on the Radish logs and the
+#: campus of ``benchmarks/slam_memory.py``).
 BASE_BYTES = 500 * 2**20
-#: Tiles per particle beyond the best particle's map, as a share of it: a particle's
-#: own copies of the tiles written since its last common ancestor
-#: (``benchmarks/slam_memory.py``; the estimate takes about twice what was measured).
-PARTICLE_SHARE = 0.15
+#: What the graph backend holds besides: the likelihood lookup tables of its scan
+#: matcher (measured: 0.3-0.45 GiB more than the particle filter on aces and the campus).
+GRAPH_TABLES_BYTES = 300 * 2**20
+#: Tiles a particle holds on its own beyond the map it shares (its copies of the tiles
+#: written since its last common ancestor), in discs of the usable range: measured 0.4-0.7
+#: of a disc on aces (5 particles) and the benchmark's campus (5 and 30 particles).
+PARTICLE_DISCS = 1.5
+#: Bytes per pixel of the map image over the path's extent at the end: the map, its
+#: crop, the figure's reduction (measured: about 9 on the campus).
+IMAGE_BYTES_PER_PIXEL = 12
 
 
 @dataclass
@@ -166,14 +172,19 @@ def default_usable_range(sensor_max: float) -> float:
     return float(min(sensor_max, max(3.0, min(10.0, 0.8 * sensor_max))))
 
 
-def map_tiles_estimate(log: CarmenLog, resolution: float, reach: float) -> int:
-    """Map tiles (:data:`~map2map.slam.gridmap.TILE` cells square) within ``reach`` of the path.
+def map_tiles_estimate(
+    log: CarmenLog, resolution: float, reach: float, no_return_free: bool = True
+) -> int:
+    """Map tiles (:data:`~map2map.slam.gridmap.TILE` cells square) the log's beams cross.
 
     The grids grow as the robot goes (:class:`~map2map.slam.gridmap.CountGrid`): a
-    tile is allocated when a beam first reaches it, so the map holds at most the tiles
-    within ``reach`` metres of the odometry path -- the disc swept by the scanner,
-    whatever the extent of the building or campus. Odometry drift moves the path a
-    little, not the area it sweeps.
+    tile is allocated when a beam first reaches it. Here every beam of a scan taken
+    every quarter tile of travel (or 0.1 rad of turn) is followed from the odometry
+    pose, at quarter-tile steps, up to its reading or ``reach`` metres (a beam
+    without a return up to ``reach`` when ``no_return_free``, as the map update
+    does), and the tiles it passes are counted. Odometry drift moves the beams a
+    little, not the area they sweep; a tenth more is added for the tiles a beam only
+    clips.
 
     Parameters
     ----------
@@ -183,6 +194,8 @@ def map_tiles_estimate(log: CarmenLog, resolution: float, reach: float) -> int:
         Cell size, metres.
     reach : float
         How far from the robot the map is written, metres.
+    no_return_free : bool
+        Count beams without a return up to ``reach``.
 
     Returns
     -------
@@ -190,39 +203,59 @@ def map_tiles_estimate(log: CarmenLog, resolution: float, reach: float) -> int:
 
     Examples
     --------
-    >>> from map2map.robotlog.base import OdometryReading
-    >>> log = CarmenLog([OdometryReading(0, 0, 0, 0), OdometryReading(1, 9, 4, 0)], [])
-    >>> map_tiles_estimate(log, 0.05, 3.0)  # 9.8 m of path, a 3.2 m tile, 3 m each side
-    18
+    >>> from map2map.robotlog.base import LaserScan, OdometryReading
+    >>> scan = LaserScan(0.0, np.full(360, 3.0), -np.pi, np.pi / 180, 0.1, 3.5)
+    >>> log = CarmenLog([OdometryReading(0, 0, 0, 0)], [scan])
+    >>> map_tiles_estimate(log, 0.05, 10.0)  # a 3 m disc across 4 tiles of 3.2 m, + 10 %
+    5
     """
     from .gridmap import TILE
 
-    xy = np.array([(r.x, r.y) for r in log.odometry], float).reshape(-1, 2)
-    if not len(xy):
-        return 0
     tile_m = TILE * resolution
-    # the path at half-tile steps: every tile the robot passes through
-    seg = np.hypot(*np.diff(xy, axis=0).T) if len(xy) > 1 else np.zeros(0)
-    pts = [xy[:1]]
-    for k in np.flatnonzero(seg > 0.5 * tile_m):
-        n = int(np.ceil(seg[k] / (0.5 * tile_m)))
-        pts.append(xy[k] + np.outer(np.arange(1, n + 1) / n, xy[k + 1] - xy[k]))
-    pts.append(xy)
-    tiles = np.unique(np.floor(np.concatenate(pts) / tile_m).astype(np.int64), axis=0)
-    # tiles with a point within reach of some point of a path tile
-    k = int(np.ceil(reach / tile_m)) + 1
-    d = np.arange(-k, k + 1)
-    dy, dx = np.meshgrid(d, d, indexing="ij")
-    gap = np.maximum(np.abs(dy) - 1, 0) ** 2 + np.maximum(np.abs(dx) - 1, 0) ** 2
-    offs = np.column_stack([dy[gap * tile_m**2 <= reach**2], dx[gap * tile_m**2 <= reach**2]])
-    lo = tiles.min(0) - k
-    span = tiles.max(0) + k - lo + 1
-    if span[0] * span[1] > 2**28:  # a path of thousands of km: no cheap exact count
-        return int(len(tiles) * len(offs))
-    mark = np.zeros((span[1], span[0]), bool)
-    for oy, ox in offs:
-        mark[tiles[:, 1] - lo[1] + oy, tiles[:, 0] - lo[0] + ox] = True
-    return int(mark.sum())
+    step = tile_m / 4
+    keys = []
+    last = None
+    batch: list[tuple[np.ndarray, np.ndarray]] = []
+
+    def flush() -> None:
+        if not batch:
+            return
+        pts = np.concatenate([p for p, _ in batch])
+        keys.append(np.unique(np.floor(pts / tile_m).astype(np.int64) @ np.array([1, 1 << 32])))
+        batch.clear()
+
+    n_points = 0
+    for odo, scan in log:
+        pose = np.array([odo.x, odo.y, odo.theta], float)
+        if last is not None:
+            moved = math.hypot(*(pose[:2] - last[:2]))
+            turned = abs((pose[2] - last[2] + math.pi) % (2 * math.pi) - math.pi)
+            if moved < step and turned < 0.1:
+                continue
+        last = pose
+        r = np.asarray(scan.ranges, float)
+        no_return = ~np.isfinite(r) | (r >= scan.range_max)
+        ok = (r > 0) & ~no_return if not no_return_free else (r > 0) | no_return
+        r = np.minimum(np.where(no_return, reach, r), reach)[ok]
+        ang = np.asarray(scan.angles, float)[ok]
+        off = scan.sensor_offset
+        c, s = math.cos(pose[2]), math.sin(pose[2])
+        lx = pose[0] + c * off[0] - s * off[1]
+        ly = pose[1] + s * off[0] + c * off[1]
+        a = pose[2] + off[2] + ang
+        t = np.arange(0.0, reach + step, step)
+        tt = np.minimum(t[None, :], r[:, None])  # samples along each beam, up to its end
+        pts = np.stack([lx + tt * np.cos(a)[:, None], ly + tt * np.sin(a)[:, None]], -1)
+        batch.append((pts.reshape(-1, 2), r))
+        n_points += pts.shape[0] * pts.shape[1]
+        if n_points > 2_000_000:
+            flush()
+            keys = [np.unique(np.concatenate(keys))]
+            n_points = 0
+    flush()
+    if not keys:
+        return 0
+    return int(math.ceil(1.1 * np.unique(np.concatenate(keys)).size))
 
 
 def farthest_reading(log: CarmenLog) -> float:
@@ -298,11 +331,14 @@ def memory_estimate(
 ) -> int:
     """Peak memory (bytes) :func:`run_slam` plans for: the map tiles the path can reach.
 
-    ``BASE_BYTES`` plus :data:`~map2map.slam.gridmap.TILE_BYTES` per tile of
-    :func:`map_tiles_estimate` (within the backend's usable range of the path, and
-    no farther than the farthest reading), times ``1 + PARTICLE_SHARE (particles -
-    1)`` for ``rbpf`` (particles share the tiles of their common history), plus a
-    quarter for the tile pool's growth and the map image.
+    ``BASE_BYTES`` (and ``GRAPH_TABLES_BYTES`` for ``graph``), plus
+    :data:`~map2map.slam.gridmap.TILE_BYTES` per tile of :func:`map_tiles_estimate`
+    (the tiles the beams cross, up to the backend's usable range) and, for ``rbpf``,
+    ``PARTICLE_DISCS`` discs of the usable range per particle beyond the first
+    (particles share the tiles of their common history), a quarter more for the tile
+    pool's growth, plus
+    ``IMAGE_BYTES_PER_PIXEL`` per pixel of the path's extent widened by the range (the
+    map image written at the end is dense over the tiles' extent).
 
     Parameters
     ----------
@@ -342,13 +378,15 @@ def memory_estimate(
     else:
         reach = min(float(reach), farthest_reading(log))
     reach += 2 * resolution
-    tiles = map_tiles_estimate(log, resolution, reach)
-    copies = 1.0
+    tiles = float(map_tiles_estimate(log, resolution, reach, opts.get("no_return_free", True)))
     if backend == "rbpf":
         n = opts.get("particles") or GMappingParams().particles
-        copies += PARTICLE_SHARE * (int(n) - 1)
-    image = tiles * TILE * TILE  # the uint8 map and its crop
-    return int(BASE_BYTES + 1.25 * (copies * tiles * TILE_BYTES + 2 * image))
+        disc = math.pi * (reach / (TILE * resolution) + 1) ** 2
+        tiles += PARTICLE_DISCS * disc * (int(n) - 1)
+    xy = np.array([(r.x, r.y) for r in log.odometry], float).reshape(-1, 2)
+    span = (xy.max(0) - xy.min(0) + 2 * reach) / resolution + 2 * TILE
+    fixed = BASE_BYTES + (GRAPH_TABLES_BYTES if backend == "graph" else 0)
+    return int(fixed + 1.25 * tiles * TILE_BYTES + IMAGE_BYTES_PER_PIXEL * span.prod())
 
 
 def default_memory_limit() -> int:
