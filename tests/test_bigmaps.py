@@ -136,8 +136,8 @@ def test_slam_refuses_a_map_too_large_for_its_resolution(tmp_path, capsys, monke
     log = tmp_path / "far.log"
     log.write_text("\n".join(lines) + "\n")
     out = tmp_path / "out"
-    rc = main(["slam", str(log), "--out", str(out), "--resolution", "0.005", "--quiet"])
-    check_refused(rc, capsys, out, "far.log", "slam would need about", "coarser --resolution")
+    rc = main(["slam", str(log), "--out", str(out), "--resolution", "0.001", "--quiet"])
+    check_refused(rc, capsys, out, "far.log", "would need about", "coarser --resolution")
 
 
 def test_coherent_motion_takes_more_points_than_cv2_remap_rows():
@@ -158,10 +158,13 @@ def test_slam_budget_counts_the_readings_not_the_sensor_maximum():
     """A 50 m scanner whose readings reach 8 m: the map is estimated from the 8 m."""
     from map2map.robotlog.base import LaserScan, OdometryReading
     from map2map.robotlog.carmen import CarmenLog
-    from map2map.slam.offline import farthest_reading, map_shape_estimate
+    from map2map.slam.offline import farthest_reading, map_tiles_estimate, memory_estimate
 
     scans = [LaserScan(float(t), np.full(180, 8.0), -np.pi / 2, np.pi / 180, 0.1, 50.0)
              for t in range(3)]  # fmt: skip
     log = CarmenLog([OdometryReading(float(t), 20.0 * t, 0.0, 0.0) for t in range(3)], scans)
     assert farthest_reading(log) == 8.0
-    assert map_shape_estimate(log, 0.05, farthest_reading(log)) == (320, 1120)
+    # the tiles the beams cross: the readings, not the 50 m
+    assert map_tiles_estimate(log, 0.05, 8.1) == map_tiles_estimate(log, 0.05, 50.0)
+    full = memory_estimate(log, "graph", max_range=50.0)
+    assert full == memory_estimate(log, "graph", max_range=8.0)

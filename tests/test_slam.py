@@ -106,14 +106,23 @@ def test_low_variance_resampling_counts():
 
 def test_resampling_copies_grids_only_for_duplicates():
     f = GMappingRBPF(GMappingParams(particles=4, initial_size=4.0), seed=0)
-    f.grids = [CountGrid.around(0, 0, 1.0, 0.05) for _ in range(4)]
+    first = CountGrid.around(0, 0, 1.0, 0.05)
+    f.grids = [first] + [first.copy() for _ in range(3)]
+    angles = np.deg2rad(np.arange(360.0))
+    for k, g in enumerate(f.grids):  # each particle's own map
+        g.register_scan((0.1 * k, 0, 0), np.full(360, 1.0 + 0.1 * k), angles, usable_range=3.0)
     f.leaf = np.arange(4)
     originals = list(f.grids)
+    visits0 = originals[0].counts()[1]
     f._resample(np.array([0, 0, 2, 3]))
     assert f.grids[0] is originals[0]
     assert f.grids[1] is not originals[0]
-    assert np.array_equal(f.grids[1].visits, originals[0].visits)
+    assert np.array_equal(f.grids[1].counts()[1], visits0)
+    assert (f.grids[1].table == f.grids[0].table).all()  # shared tiles, not copied
     assert f.grids[2] is originals[2] and f.grids[3] is originals[3]
+    assert originals[1].n_tiles == 0  # the dropped particle gave its tiles back
+    pool = first.pool
+    assert pool.used == len({int(t) for g in f.grids for t in g.table[g.table >= 0]})
     assert f.leaf.tolist() == [0, 0, 2, 3]
     assert np.all(f.log_w == 0)
 
@@ -138,7 +147,7 @@ def test_count_grid_occupancy_rules():
     # beams beyond the usable range only clear space, and the grid grows to hold them
     g.register_scan((0, 0, 0), np.full(360, 5.0), angles, usable_range=3.0)
     m = g.to_occupancy_map()
-    r, c = m.world_to_pixel(np.array([2.5]), np.array([0.0]))
+    r, c = m.world_to_pixel(np.array([2.5]), np.array([0.01]))  # not on a cell border
     assert m.data[r, c].tolist() == [255]
     assert m.occupied.sum() > 0  # the 1 m ring (1 hit, 2 visits: 0.5 > occ_thresh) stays
 

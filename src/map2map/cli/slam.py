@@ -10,8 +10,7 @@ from pathlib import Path
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "slam",
-        help="build a map from a recorded run (CARMEN log, simulator run, BreezySLAM log, "
-        "ROS bag)",
+        help="build a map from a recorded run (CARMEN log, simulator run, BreezySLAM log, ROS bag)",
         description="Replay a recorded run through a SLAM backend (GMapping-style particle "
         "filter or Karto-style graph SLAM) and write the map (ROS yaml + pgm), the estimated "
         "trajectory (CSV) and a figure. Only odometry and scans are used, never ground truth. "
@@ -63,10 +62,18 @@ def register(subparsers) -> None:
     )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument(
+        "--max-memory",
+        type=float,
+        metavar="GIB",
+        help="largest peak memory to plan for, GiB; a log whose estimate (the map tiles "
+        "within range of its path, docs/slam.md) exceeds it is refused before mapping "
+        "(default 4, or the machine's RAM if less; 0: no limit)",
+    )
+    p.add_argument(
         "--max-pixels",
         type=int,
         metavar="N",
-        help="largest map (pixels) to build; "
+        help="largest map (pixels) a reader decodes (a simulator run's plan); "
         "default: the memory budget's (docs/memory.md); 0: no limit",
     )
     p.set_defaults(func=run)
@@ -88,6 +95,7 @@ def run(args: argparse.Namespace) -> int:
             scan_topic=args.scan_topic,
             odom_topic=args.odom_topic,
             progress=not args.quiet,
+            max_memory=args.max_memory,
         )
     )
     for note in run.notes:

@@ -93,8 +93,10 @@ class MemoryModel:
 #: Measured models (``benchmarks/bench_memory.py``: least-squares fit of the peak
 #: RSS over 0.25-16 MP, slopes rounded up ~10 %, bases to 20 MB; ``docs/memory.md``
 #: has the raw table). ``align`` shares ``evaluate``'s model (the same alignment);
-#: ``simulate``'s is its default 7-minute exploration, ``slam``'s per pixel of
-#: :func:`map2map.slam.offline.map_shape_estimate` with the default 30 particles.
+#: ``simulate``'s is its default 7-minute exploration, ``slam``'s was per pixel of the
+#: dense grids' extent with 30 particles: it now bounds only a map a ``slam`` run reads
+#: (a simulator run's plan); the run itself is checked against its own memory estimate
+#: (:func:`map2map.slam.offline.memory_estimate`, ``--max-memory``).
 MODELS: dict[str, MemoryModel] = {
     "convert": MemoryModel(60, 6),
     "prep": MemoryModel(60, 9),

@@ -60,6 +60,8 @@ class SlamSpec:
     odom_topic: str | None = None
     figures: bool = True
     progress: bool = True
+    #: Largest peak memory to plan for, GiB (None: 4; 0: no limit).
+    max_memory: float | None = None
 
 
 @dataclass
@@ -96,7 +98,8 @@ def slam(spec: SlamSpec) -> SlamRun:
     from ..robotlog.logs import load_log
 
     check_seed(spec.seed)
-    kw = dict(particles=spec.particles, resolution=spec.resolution, max_range=spec.max_range)
+    kw = dict(particles=spec.particles, resolution=spec.resolution, max_range=spec.max_range,
+              max_memory=spec.max_memory)  # fmt: skip
     check_options(spec.backend, **kw)  # before reading the log: fail fast
     out = check_output_dir(spec.out, protect=(spec.log,))
     # every format problem is raised here, before output
@@ -110,6 +113,7 @@ def slam(spec: SlamSpec) -> SlamRun:
         max_range=spec.max_range,
         progress=spec.progress,
         source=spec.log,
+        max_memory=spec.max_memory,
     )
     with atomic_dir(out, protect=(spec.log,)) as tmp:
         paths = write_slam_outputs(
@@ -192,6 +196,11 @@ def figure_frame(res: SlamResult, frame=None, plan: OccupancyMap | None = None):
     return m, traj, odom, "plan frame (map placed at the simulator's true start pose)"
 
 
+#: Largest side (px) of the map a figure draws; a larger map is reduced by whole blocks,
+#: walls kept (:func:`map2map.maps.render.display_map`). The figure is about 1000 px wide.
+FIGURE_MAX_PIXELS = 2400
+
+
 def _figure(
     res: SlamResult,
     path: Path,
@@ -204,8 +213,11 @@ def _figure(
     See :func:`figure_frame`; ``plan``'s walls are drawn faintly beneath the map.
     """
     from ..core.viz import draw_map, map_to_rgb, new_figure, save_figure
+    from ..maps.render import display_map
 
     m, traj, odom, frame_text = figure_frame(res, frame, plan)
+    if plan is None:  # a campus map (6000 px) drawn whole took 3.5 GB in matplotlib
+        m = display_map(m, FIGURE_MAX_PIXELS)
     fig, ax = new_figure(m, 1, panel_inches=7.0)
     draw_map(ax, m, title=f"{title}\n{frame_text}")
     if plan is not None:  # the plan's walls the map did not mark, faintly beneath

@@ -660,6 +660,15 @@ class GraphSLAM:
             kf.pose = q
         self._rendered = 0  # poses moved: render the map again from scratch
 
+    def memory_bytes(self) -> int:
+        """Bytes of the map's tiles (0 before the map is first drawn).
+
+        Returns
+        -------
+        int
+        """
+        return self._grid.pool.nbytes() if self._grid is not None else 0
+
     def optimize(self) -> None:
         """Run the back end once more (e.g. at the end of a log)."""
         if self.loop_closures:

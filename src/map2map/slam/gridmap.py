@@ -46,6 +46,8 @@ from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 
 __all__ = [
     "CountGrid",
+    "TilePool",
+    "scan_tiles",
     "register_scan",
     "gmapping_score",
     "hill_climb",
@@ -62,16 +64,36 @@ NULL_LIKELIHOOD = -0.5
 _FAST = {"nsz", "arcp", "contract", "afn", "reassoc"}
 
 
+#: Tiles are ``TILE x TILE`` cells; ``TILE = 2 ** TILE_SHIFT``.
+TILE_SHIFT = 6
+TILE = 1 << TILE_SHIFT
+_MASK = TILE - 1
+#: Bytes of one tile: hits, visits (int32), sx, sy (float32), mean (2 float32).
+TILE_BYTES = TILE * TILE * (4 + 4 + 4 + 4 + 8)
+
+
 # ----------------------------------------------------------------------------- kernels
+@nb.njit(cache=True, inline="always")
+def _tile_at(table, tx0, ty0, x, y):
+    """Tile id holding global cell ``(x, y)`` (-1: none); ``>>`` floors negative cells."""
+    ty = (y >> TILE_SHIFT) - ty0
+    tx = (x >> TILE_SHIFT) - tx0
+    if ty < 0 or tx < 0 or ty >= table.shape[0] or tx >= table.shape[1]:
+        return -1
+    return table[ty, tx]
+
+
 @nb.njit(cache=True)
-def _bresenham_update(hits, visits, sx, sy, mean, x0, y0, x1, y1, hit, hx, hy, stop_at_wall):
-    """Walk the Bresenham line (x0,y0)->(x1,y1); visit every cell but the last.
+def _bresenham_update(
+    table, tx0, ty0, hits, visits, sx, sy, mean, x0, y0, x1, y1, hit, hx, hy, stop_at_wall
+):
+    """Walk the Bresenham line (x0,y0)->(x1,y1) of global cells; visit every cell but the last.
 
     The last cell gets a hit (with the world endpoint ``hx, hy``) when ``hit``.
-    Cells outside the arrays are ignored. With ``stop_at_wall`` the walk ends at
-    the first occupied cell (a beam without a return cannot have passed a wall).
+    Cells without a tile are ignored (:meth:`CountGrid.register_scan` gives every
+    cell a scan reaches a tile of its own first). With ``stop_at_wall`` the walk ends
+    at the first occupied cell (a beam without a return cannot have passed a wall).
     """
-    ny, nx = visits.shape
     dx = abs(x1 - x0)
     dy = -abs(y1 - y0)
     stx = 1 if x0 < x1 else -1
@@ -81,12 +103,15 @@ def _bresenham_update(hits, visits, sx, sy, mean, x0, y0, x1, y1, hit, hx, hy, s
     while True:
         if x == x1 and y == y1:
             break
-        if 0 <= x < nx and 0 <= y < ny:
-            if stop_at_wall and mean[y, x, 0] == mean[y, x, 0]:
+        t = _tile_at(table, tx0, ty0, x, y)
+        if t >= 0:
+            lx = x & _MASK
+            ly = y & _MASK
+            if stop_at_wall and mean[t, ly, lx, 0] == mean[t, ly, lx, 0]:
                 return
-            visits[y, x] += 1
-            if hits[y, x] <= FULLNESS_THRESHOLD * visits[y, x]:
-                mean[y, x, 0] = np.nan
+            visits[t, ly, lx] += 1
+            if hits[t, ly, lx] <= FULLNESS_THRESHOLD * visits[t, ly, lx]:
+                mean[t, ly, lx, 0] = np.nan
         e2 = 2 * err
         if e2 >= dy:
             err += dy
@@ -94,21 +119,45 @@ def _bresenham_update(hits, visits, sx, sy, mean, x0, y0, x1, y1, hit, hx, hy, s
         if e2 <= dx:
             err += dx
             y += sty
-    if hit and 0 <= x1 < nx and 0 <= y1 < ny:
-        visits[y1, x1] += 1
-        hits[y1, x1] += 1
-        sx[y1, x1] += hx
-        sy[y1, x1] += hy
-        h = hits[y1, x1]
-        if h > FULLNESS_THRESHOLD * visits[y1, x1]:
-            mean[y1, x1, 0] = sx[y1, x1] / h
-            mean[y1, x1, 1] = sy[y1, x1] / h
+    t = _tile_at(table, tx0, ty0, x1, y1)
+    if hit and t >= 0:
+        lx = x1 & _MASK
+        ly = y1 & _MASK
+        visits[t, ly, lx] += 1
+        hits[t, ly, lx] += 1
+        sx[t, ly, lx] += hx
+        sy[t, ly, lx] += hy
+        h = hits[t, ly, lx]
+        if h > FULLNESS_THRESHOLD * visits[t, ly, lx]:
+            mean[t, ly, lx, 0] = sx[t, ly, lx] / h
+            mean[t, ly, lx, 1] = sy[t, ly, lx] / h
         else:
-            mean[y1, x1, 0] = np.nan
+            mean[t, ly, lx, 0] = np.nan
+
+
+@nb.njit(cache=True, inline="always")
+def _beam_end(lx, ly, lt, r, a, usable_range, max_range, no_return_free):
+    """``(ok, hit, hx, hy, no_return)`` of one beam, GMapping's ``registerScan`` rules."""
+    if not (r > 0.0):
+        return False, False, 0.0, 0.0, False
+    no_return = r > max_range
+    if no_return:
+        if not no_return_free:
+            return False, False, 0.0, 0.0, False
+        r = usable_range
+    hit = True
+    if r >= usable_range:
+        r = usable_range
+        hit = False
+    b = lt + a
+    return True, hit, lx + r * math.cos(b), ly + r * math.sin(b), no_return
 
 
 @nb.njit(cache=True)
 def register_scan(
+    table,
+    tx0,
+    ty0,
     hits,
     visits,
     sx,
@@ -137,11 +186,15 @@ def register_scan(
 
     Parameters
     ----------
-    hits, visits : (H, W) int arrays
-        Per-cell counts, updated in place.
-    sx, sy : (H, W) float arrays
+    table : (TY, TX) int32 array
+        Tile ids of the grid (-1: no tile), see :class:`CountGrid`.
+    tx0, ty0 : int
+        Tile coordinates of ``table[0, 0]``.
+    hits, visits : (P, TILE, TILE) int32 arrays
+        Per-cell counts of every tile, updated in place.
+    sx, sy : (P, TILE, TILE) float32 arrays
         Sums of the hit points' world x and y per cell, updated in place.
-    mean : (H, W, 2) float array
+    mean : (P, TILE, TILE, 2) float32 array
         Mean hit point of each cell (NaN where the cell is not occupied enough),
         updated in place.
     gx0, gy0 : float
@@ -162,24 +215,116 @@ def register_scan(
     cx0 = int(math.floor((lx - gx0) / delta))
     cy0 = int(math.floor((ly - gy0) / delta))
     for i in range(ranges.shape[0]):
-        r = ranges[i]
-        if not (r > 0.0):
+        ok, hit, hx, hy, no_return = _beam_end(
+            lx, ly, lt, ranges[i], angles[i], usable_range, max_range, no_return_free
+        )
+        if not ok:
             continue
-        no_return = r > max_range
-        if no_return:
-            if not no_return_free:
-                continue
-            r = usable_range
-        hit = True
-        if r >= usable_range:
-            r = usable_range
-            hit = False
-        a = lt + angles[i]
-        hx = lx + r * math.cos(a)
-        hy = ly + r * math.sin(a)
         cx1 = int(math.floor((hx - gx0) / delta))
         cy1 = int(math.floor((hy - gy0) / delta))
-        _bresenham_update(hits, visits, sx, sy, mean, cx0, cy0, cx1, cy1, hit, hx, hy, no_return)
+        _bresenham_update(
+            table, tx0, ty0, hits, visits, sx, sy, mean, cx0, cy0, cx1, cy1, hit, hx, hy, no_return
+        )
+
+
+@nb.njit(cache=True)
+def scan_tiles(
+    gx0, gy0, delta, lx, ly, lt, ranges, angles, usable_range, max_range, no_return_free, box
+):
+    """Global ``(ty, tx)`` of every tile :func:`register_scan` would write, sorted.
+
+    The same beams and Bresenham lines as :func:`register_scan` (each line walked
+    to its end: a no-return beam that stops at a wall asks for a tile or two more),
+    within ``box`` metres of the laser (no beam reaches farther; cells past it are
+    not marked).
+
+    Returns
+    -------
+    (K, 2) int64 array
+    """
+    cx0 = int(math.floor((lx - gx0) / delta))
+    cy0 = int(math.floor((ly - gy0) / delta))
+    reach = int(math.ceil(box / delta)) + 2
+    bx0 = (cx0 - reach) >> TILE_SHIFT
+    by0 = (cy0 - reach) >> TILE_SHIFT
+    nbx = ((cx0 + reach) >> TILE_SHIFT) - bx0 + 1
+    nby = ((cy0 + reach) >> TILE_SHIFT) - by0 + 1
+    mark = np.zeros((nby, nbx), np.bool_)
+    for i in range(ranges.shape[0]):
+        ok, hit, hx, hy, no_return = _beam_end(
+            lx, ly, lt, ranges[i], angles[i], usable_range, max_range, no_return_free
+        )
+        if not ok:
+            continue
+        x1 = int(math.floor((hx - gx0) / delta))
+        y1 = int(math.floor((hy - gy0) / delta))
+        dx = abs(x1 - cx0)
+        dy = -abs(y1 - cy0)
+        stx = 1 if cx0 < x1 else -1
+        sty = 1 if cy0 < y1 else -1
+        err = dx + dy
+        x, y = cx0, cy0
+        while True:
+            j = (y >> TILE_SHIFT) - by0
+            i = (x >> TILE_SHIFT) - bx0
+            if 0 <= j < nby and 0 <= i < nbx:
+                mark[j, i] = True
+            if x == x1 and y == y1:
+                break
+            e2 = 2 * err
+            if e2 >= dy:
+                err += dy
+                x += stx
+            if e2 <= dx:
+                err += dx
+                y += sty
+    n = 0
+    for j in range(nby):
+        for i in range(nbx):
+            n += mark[j, i]
+    out = np.empty((n, 2), np.int64)
+    k = 0
+    for j in range(nby):
+        for i in range(nbx):
+            if mark[j, i]:
+                out[k, 0] = j + by0
+                out[k, 1] = i + bx0
+                k += 1
+    return out
+
+
+@nb.njit(cache=True)
+def _own_tiles(table, tx0, ty0, coords, refs, free, n_free, hits, visits, sx, sy, mean):
+    """Give the grid of ``table`` a tile of its own at every ``coords`` (copy on write).
+
+    A missing tile is taken from the ``free`` stack (``n_free[0]`` entries) and
+    cleared; a tile shared with another grid (``refs > 1``) is copied into a fresh
+    one. The caller makes sure the table covers ``coords`` and that the stack holds
+    enough tiles.
+    """
+    for k in range(coords.shape[0]):
+        ty = coords[k, 0] - ty0
+        tx = coords[k, 1] - tx0
+        t = table[ty, tx]
+        if t >= 0 and refs[t] == 1:
+            continue
+        n_free[0] -= 1
+        u = free[n_free[0]]
+        if t < 0:
+            hits[u] = 0
+            visits[u] = 0
+            sx[u] = 0.0
+            sy[u] = 0.0
+            mean[u] = np.nan
+        else:
+            hits[u] = hits[t]
+            visits[u] = visits[t]
+            sx[u] = sx[t]
+            sy[u] = sy[t]
+            mean[u] = mean[t]
+            refs[t] -= 1
+        refs[u] = 1
+        table[ty, tx] = u
 
 
 @nb.njit(cache=True)
@@ -198,15 +343,16 @@ def _beam_vectors(ranges, angles, off):
 
 
 @nb.njit(cache=True, fastmath=_FAST, inline="always")
-def _nearest_hit(mean, gx0, gy0, inv, free_back, hx, hy, ca, sa, kernel):
+def _nearest_hit(table, tx0, ty0, mean, gx0, gy0, inv, free_back, hx, hy, ca, sa, kernel):
     """GMapping's kernel search for one endpoint ``(hx, hy)`` of a beam along ``(ca, sa)``.
 
     Among the ``(2 kernel + 1)^2`` cells around the endpoint, the occupied cell whose
     mean hit is nearest, provided the cell one step back along the beam
     (``delta * sqrt(2)``, GMapping's ``freeCellRatio``) is not occupied. Returns
-    ``(d^2, mean_x, mean_y)``, ``d^2 = 1e30`` when nothing matched.
+    ``(d^2, mean_x, mean_y)``, ``d^2 = 1e30`` when nothing matched. A cell without a
+    tile was never seen: not occupied. When the cells and their predecessors lie in
+    one tile (most endpoints) the tile is looked up once.
     """
-    ny, nx = mean.shape[0], mean.shape[1]
     ix = int(math.floor((hx - gx0) * inv))
     iy = int(math.floor((hy - gy0) * inv))
     fx = int(math.floor((hx - free_back * ca - gx0) * inv)) - ix
@@ -214,23 +360,48 @@ def _nearest_hit(mean, gx0, gy0, inv, free_back, hx, hy, ca, sa, kernel):
     best = 1e30
     bx = 0.0
     by = 0.0
+    xlo = ix - kernel + min(fx, 0)
+    xhi = ix + kernel + max(fx, 0)
+    ylo = iy - kernel + min(fy, 0)
+    yhi = iy + kernel + max(fy, 0)
+    if (xlo >> TILE_SHIFT) == (xhi >> TILE_SHIFT) and (ylo >> TILE_SHIFT) == (yhi >> TILE_SHIFT):
+        t = _tile_at(table, tx0, ty0, ix, iy)
+        if t < 0:
+            return best, bx, by
+        oy = (iy >> TILE_SHIFT) << TILE_SHIFT
+        ox = (ix >> TILE_SHIFT) << TILE_SHIFT
+        for yy in range(-kernel, kernel + 1):
+            cy = iy + yy - oy
+            cfy = cy + fy
+            for xx in range(-kernel, kernel + 1):
+                cx = ix + xx - ox
+                cfx = cx + fx
+                # branch-free (the occupancy pattern is unpredictable, a mispredicted
+                # branch costs more than the arithmetic): a cell that is not occupied
+                # has a NaN mean, so its d2 is NaN and never below best; an occupied
+                # predecessor (non-NaN) vetoes the cell
+                mux = mean[t, cy, cx, 0]
+                muy = mean[t, cy, cx, 1]
+                pred = mean[t, cfy, cfx, 0]
+                d2 = (hx - mux) * (hx - mux) + (hy - muy) * (hy - muy)
+                take = (d2 < best) & (pred != pred)
+                best = d2 if take else best
+                bx = mux if take else bx
+                by = muy if take else by
+        return best, bx, by
     for yy in range(-kernel, kernel + 1):
         cy = iy + yy
         cfy = cy + fy
-        if cy < 0 or cy >= ny or cfy < 0 or cfy >= ny:
-            continue
         for xx in range(-kernel, kernel + 1):
             cx = ix + xx
             cfx = cx + fx
-            if cx < 0 or cx >= nx or cfx < 0 or cfx >= nx:
+            t = _tile_at(table, tx0, ty0, cx, cy)
+            if t < 0:
                 continue
-            # branch-free (the occupancy pattern is unpredictable, a mispredicted branch
-            # costs more than the arithmetic): a cell that is not occupied has a NaN
-            # mean, so its d2 is NaN and never below best; an occupied predecessor
-            # (non-NaN) vetoes the cell
-            mux = mean[cy, cx, 0]
-            muy = mean[cy, cx, 1]
-            pred = mean[cfy, cfx, 0]
+            mux = mean[t, cy & _MASK, cx & _MASK, 0]
+            muy = mean[t, cy & _MASK, cx & _MASK, 1]
+            tf = _tile_at(table, tx0, ty0, cfx, cfy)
+            pred = mean[tf, cfy & _MASK, cfx & _MASK, 0] if tf >= 0 else np.nan
             d2 = (hx - mux) * (hx - mux) + (hy - muy) * (hy - muy)
             take = (d2 < best) & (pred != pred)
             best = d2 if take else best
@@ -240,7 +411,7 @@ def _nearest_hit(mean, gx0, gy0, inv, free_back, hx, hy, ca, sa, kernel):
 
 
 @nb.njit(cache=True, fastmath=_FAST)
-def _score_core(mean, gx0, gy0, delta, px, py, pt, beams, kernel, sigma, lsigma):
+def _score_core(table, tx0, ty0, mean, gx0, gy0, delta, px, py, pt, beams, kernel, sigma, lsigma):
     """GMapping ``ScanMatcher::likelihoodAndScore`` at robot pose ``(px, py, pt)``.
 
     ``beams`` comes from :func:`_beam_vectors` (usable beams only). Each endpoint is
@@ -261,7 +432,9 @@ def _score_core(mean, gx0, gy0, delta, px, py, pt, beams, kernel, sigma, lsigma)
         hy = py + st * ex + ct * ey
         ca = ct * ux - st * uy
         sa = st * ux + ct * uy
-        best = _nearest_hit(mean, gx0, gy0, inv, free_back, hx, hy, ca, sa, kernel)[0]
+        best = _nearest_hit(
+            table, tx0, ty0, mean, gx0, gy0, inv, free_back, hx, hy, ca, sa, kernel
+        )[0]
         if best < 1e29:
             s += math.exp(-best / sigma)
             lik += -best / lsigma
@@ -272,13 +445,21 @@ def _score_core(mean, gx0, gy0, delta, px, py, pt, beams, kernel, sigma, lsigma)
 
 
 @nb.njit(cache=True)
-def gmapping_score(mean, gx0, gy0, delta, px, py, pt, off, ranges, angles, kernel, sigma, lsigma):
+def gmapping_score(
+    table, tx0, ty0, mean, gx0, gy0, delta, px, py, pt, off, ranges, angles, kernel, sigma, lsigma
+):
     """GMapping's scan score and log-likelihood at one pose; see :func:`_score_core`.
 
     Parameters
     ----------
-    mean : (H, W, 2) float array
-        Mean hit point of each cell (NaN: none), GMapping's likelihood reference.
+    table : (TY, TX) int32 array
+        Tile ids of the grid (-1: no tile); tile ``table[ty, tx]`` holds the cells of
+        tile ``(ty + ty0, tx + tx0)``, see :class:`CountGrid`.
+    tx0, ty0 : int
+        Tile coordinates of ``table[0, 0]``.
+    mean : (P, TILE, TILE, 2) float array
+        Mean hit point of each cell of each tile (NaN: none), GMapping's likelihood
+        reference.
     gx0, gy0 : float
         World position of the grid's cell (0, 0).
     delta : float
@@ -300,6 +481,9 @@ def gmapping_score(mean, gx0, gy0, delta, px, py, pt, off, ranges, angles, kerne
     """
     beams = _beam_vectors(ranges, angles, off)
     return _score_core(
+        table,
+        tx0,
+        ty0,
         mean,
         gx0,
         gy0,
@@ -316,6 +500,9 @@ def gmapping_score(mean, gx0, gy0, delta, px, py, pt, off, ranges, angles, kerne
 
 @nb.njit(cache=True)
 def hill_climb(
+    table,
+    tx0,
+    ty0,
     mean,
     gx0,
     gy0,
@@ -351,8 +538,14 @@ def hill_climb(
 
     Parameters
     ----------
-    mean : (H, W, 2) float array
-        Mean hit point of each cell (NaN: none), GMapping's likelihood reference.
+    table : (TY, TX) int32 array
+        Tile ids of the grid (-1: no tile); tile ``table[ty, tx]`` holds the cells of
+        tile ``(ty + ty0, tx + tx0)``, see :class:`CountGrid`.
+    tx0, ty0 : int
+        Tile coordinates of ``table[0, 0]``.
+    mean : (P, TILE, TILE, 2) float array
+        Mean hit point of each cell of each tile (NaN: none), GMapping's likelihood
+        reference.
     gx0, gy0 : float
         World position of the grid's cell (0, 0).
     delta : float
@@ -380,9 +573,9 @@ def hill_climb(
     """
     beams = _beam_vectors(ranges, angles, off)
     cx, cy, ct = px, py, pt
-    cur = _score_core(mean, gx0, gy0, delta, cx, cy, ct, beams, kernel, sigma, 1.0)[
-        0
-    ] - _prior_penalty(prior, cx, cy, ct)
+    cur = _score_core(
+        table, tx0, ty0, mean, gx0, gy0, delta, cx, cy, ct, beams, kernel, sigma, 1.0
+    )[0] - _prior_penalty(prior, cx, cy, ct)
     best_score = -1.0
     ld, ad = lstep, astep
     refinement = 0
@@ -414,6 +607,9 @@ def hill_climb(
             else:
                 tt -= ad
             sc = _score_core(
+                table,
+                tx0,
+                ty0,
                 mean,
                 gx0,
                 gy0,
@@ -448,6 +644,9 @@ def _prior_penalty(prior, x, y, t):
 
 @nb.njit(cache=True)
 def sample_likelihood(
+    table,
+    tx0,
+    ty0,
     mean,
     gx0,
     gy0,
@@ -478,8 +677,14 @@ def sample_likelihood(
 
     Parameters
     ----------
-    mean : (H, W, 2) float array
-        Mean hit point of each cell (NaN: none), GMapping's likelihood reference.
+    table : (TY, TX) int32 array
+        Tile ids of the grid (-1: no tile); tile ``table[ty, tx]`` holds the cells of
+        tile ``(ty + ty0, tx + tx0)``, see :class:`CountGrid`.
+    tx0, ty0 : int
+        Tile coordinates of ``table[0, 0]``.
+    mean : (P, TILE, TILE, 2) float array
+        Mean hit point of each cell of each tile (NaN: none), GMapping's likelihood
+        reference.
     gx0, gy0 : float
         World position of the grid's cell (0, 0).
     delta : float
@@ -518,7 +723,9 @@ def sample_likelihood(
         hy = py + st * beams[0, b] + ct * beams[1, b]
         ca = ct * beams[2, b] - st * beams[3, b]
         sa = st * beams[2, b] + ct * beams[3, b]
-        d2, mx[b], my[b] = _nearest_hit(mean, gx0, gy0, inv, free_back, hx, hy, ca, sa, kernel)
+        d2, mx[b], my[b] = _nearest_hit(
+            table, tx0, ty0, mean, gx0, gy0, inv, free_back, hx, hy, ca, sa, kernel
+        )
         ok[b] = d2 < 1e29
     no_hit = NULL_LIKELIHOOD / lsigma
     nl = int(round(lrange / lstep_)) if lstep_ > 0 else 0
@@ -598,68 +805,166 @@ def occupancy_from_counts(hits, visits, occ_thresh):
 
 
 @nb.njit(cache=True)
-def _copy_tiles(src, dst, differ, th, tw):
-    """Copy the ``th x tw`` blocks of 2-D ``src`` flagged in ``differ`` to ``dst``."""
-    ny, nx = src.shape
-    for ty in range(differ.shape[0]):
-        for tx in range(differ.shape[1]):
-            if differ[ty, tx]:
-                y0, y1 = ty * th, min(ty * th + th, ny)
-                x0, x1 = tx * tw, min(tx * tw + tw, nx)
-                dst[y0:y1, x0:x1] = src[y0:y1, x0:x1]
+def _tiles_to_image(table, hits, visits, occ_thresh, out):
+    """Write every tile of ``table`` into the image-order map ``out`` (rows flipped).
 
-
-#: Side (cells) of the blocks that :meth:`CountGrid.copy` compares and copies.
-TILE = 32
-_next_tile_id = [1]  # ids are unique in the process: equal ids mean equal contents
-
-
-def _fresh_tile_ids(n_rows: int, n_cols: int) -> np.ndarray:
-    n = n_rows * n_cols
-    start = _next_tile_id[0]
-    _next_tile_id[0] += n
-    return np.arange(start, start + n, dtype=np.int64).reshape(n_rows, n_cols)
+    ``out`` is ``(TY * TILE, TX * TILE)``, all unknown; cells follow
+    :func:`occupancy_from_counts`.
+    """
+    h = out.shape[0]
+    for ty in range(table.shape[0]):
+        for tx in range(table.shape[1]):
+            t = table[ty, tx]
+            if t < 0:
+                continue
+            for ly in range(TILE):
+                r = h - 1 - (ty * TILE + ly)
+                for lx in range(TILE):
+                    v = visits[t, ly, lx]
+                    if v == 0:
+                        continue
+                    if hits[t, ly, lx] > occ_thresh * v:
+                        out[r, tx * TILE + lx] = 0
+                    else:
+                        out[r, tx * TILE + lx] = 255
 
 
 # ------------------------------------------------------------------------ containers
+class TilePool:
+    """Storage of ``TILE x TILE``-cell tiles shared by the grids of one mapper.
+
+    Tile ``t`` is ``hits[t]``, ``visits[t]``, ``sx[t]``, ``sy[t]`` and ``mean[t]``;
+    ``refs[t]`` counts the grids holding it (0: free, on the ``free`` stack). Grids
+    share tiles after a copy and take a tile of their own before writing into a
+    shared one (copy on write, as GMapping's ``HierarchicalArray2D`` shares its
+    patches between particles). The arrays grow in place (``ndarray.resize``, a
+    ``realloc``: the old contents are not copied into a second block).
+
+    Parameters
+    ----------
+    capacity : int
+        Tiles allocated at first.
+
+    Examples
+    --------
+    >>> pool = TilePool(4)
+    >>> pool.reserve(6); pool.capacity >= 6, pool.used
+    (True, 0)
+    """
+
+    def __init__(self, capacity: int = 64):
+        c = max(1, int(capacity))
+        self.hits = np.zeros((c, TILE, TILE), np.int32)
+        self.visits = np.zeros((c, TILE, TILE), np.int32)
+        self.sx = np.zeros((c, TILE, TILE), np.float32)
+        self.sy = np.zeros((c, TILE, TILE), np.float32)
+        self.mean = np.zeros((c, TILE, TILE, 2), np.float32)
+        self.refs = np.zeros(c, np.int32)
+        self.free = np.arange(c - 1, -1, -1, dtype=np.int32)  # popped from the end
+        self.n_free = np.array([c], np.int64)
+        #: Most tiles in use at once.
+        self.peak = 0
+
+    @property
+    def capacity(self) -> int:
+        return int(self.refs.shape[0])
+
+    @property
+    def used(self) -> int:
+        """Tiles held by some grid."""
+        return self.capacity - int(self.n_free[0])
+
+    def nbytes(self) -> int:
+        """Bytes of the tile arrays (allocated, used or not)."""
+        return self.capacity * TILE_BYTES
+
+    def reserve(self, n: int) -> None:
+        """Make sure ``n`` tiles are free (grow by at least a quarter when not).
+
+        Parameters
+        ----------
+        n : int
+            Free tiles needed.
+        """
+        if int(self.n_free[0]) >= n:
+            return
+        old = self.capacity
+        new = max(old + n - int(self.n_free[0]), old + old // 4, old + 16)
+        for name in ("hits", "visits", "sx", "sy", "mean"):
+            a = getattr(self, name)
+            a.resize((new, *a.shape[1:]), refcheck=False)  # realloc: no second copy
+        self.refs = np.concatenate([self.refs, np.zeros(new - old, np.int32)])
+        k = int(self.n_free[0])
+        free = np.empty(new, np.int32)
+        free[: new - old] = np.arange(new - 1, old - 1, -1, dtype=np.int32)
+        free[new - old : new - old + k] = self.free[:k]
+        self.free = free
+        self.n_free[0] = k + new - old
+
+    def release(self, table: np.ndarray) -> None:
+        """Drop one holder of every tile of ``table``; tiles nobody holds are freed.
+
+        Parameters
+        ----------
+        table : int array
+            A grid's tile ids (-1: none); each id appears once.
+        """
+        ids = table[table >= 0]
+        self.refs[ids] -= 1
+        gone = ids[self.refs[ids] == 0]
+        k = int(self.n_free[0])
+        self.free[k : k + gone.size] = gone[::-1]
+        self.n_free[0] = k + gone.size
+
+
 class CountGrid:
-    """One GMapping occupancy grid (hits, visits, accumulated hit positions) that grows.
+    """One GMapping occupancy grid (hits, visits, accumulated hit positions) that grows
+    as the robot goes: tiles of ``TILE x TILE`` cells allocated on first touch.
+
+    Cell ``(ix, iy)`` covers ``[x0 + ix delta, x0 + (ix + 1) delta)`` in x (likewise
+    in y); indices may be negative, the origin never moves. Tile ``(ty, tx)`` holds
+    cells ``ty * TILE <= iy < (ty + 1) * TILE`` (likewise in x); ``table[ty - ty0,
+    tx - tx0]`` is its id in the :class:`TilePool` (-1: never touched, all unknown).
+    Grids made by :meth:`copy` share their tiles until one of them writes (copy on
+    write), so the particles of a filter hold their common history once. Memory is
+    about :data:`TILE_BYTES` per tile touched, whatever the extent.
 
     Parameters
     ----------
     shape : (ny, nx)
+        Cells the tile table covers at first (it grows when a scan reaches past it).
     x0, y0 : float
         World corner of cell ``(0, 0)``.
     delta : float
         Cell size in metres (GMapping's ``delta``).
+    pool : TilePool, optional
+        Tile storage to share (default: a pool of its own).
     """
 
-    __slots__ = ("hits", "visits", "sx", "sy", "mean", "x0", "y0", "delta", "tile_id")
+    __slots__ = ("pool", "table", "tx0", "ty0", "x0", "y0", "delta")
 
-    def __init__(self, shape: tuple[int, int], x0: float, y0: float, delta: float):
-        self.hits = np.zeros(shape, np.int32)
-        self.visits = np.zeros(shape, np.int32)
-        self.sx = np.zeros(shape, np.float32)
-        self.sy = np.zeros(shape, np.float32)
-        self.mean = np.full((*shape, 2), np.nan, np.float32)
+    def __init__(
+        self,
+        shape: tuple[int, int],
+        x0: float,
+        y0: float,
+        delta: float,
+        pool: TilePool | None = None,
+    ):
+        ny, nx = (max(1, int(v)) for v in shape)
+        self.pool = pool if pool is not None else TilePool()
+        self.table = np.full((-(-ny // TILE), -(-nx // TILE)), -1, np.int32)
+        self.tx0 = 0
+        self.ty0 = 0
         self.x0 = float(x0)
         self.y0 = float(y0)
         self.delta = float(delta)
-        self._new_tile_ids()
-
-    def _new_tile_ids(self) -> None:
-        """Fresh content ids for every :data:`TILE` x :data:`TILE` block.
-
-        A block's id changes whenever a scan may have written into it, and is
-        handed on by copying, so two grids whose blocks carry the same id hold the
-        same contents there: :meth:`copy` copies only the blocks that differ.
-        """
-        ny, nx = self.shape
-        self.tile_id = _fresh_tile_ids(-(-ny // TILE), -(-nx // TILE))
 
     @classmethod
-    def around(cls, x: float, y: float, half_size: float, delta: float) -> CountGrid:
-        """A square grid of side ``2 * half_size`` metres centred on ``(x, y)``.
+    def around(
+        cls, x: float, y: float, half_size: float, delta: float, pool: TilePool | None = None
+    ) -> CountGrid:
+        """A grid whose origin puts ``(x, y)`` at the centre of a square of side ``2 * half_size``.
 
         Parameters
         ----------
@@ -669,72 +974,65 @@ class CountGrid:
             Half the side, metres.
         delta : float
             Cell size, metres.
+        pool : TilePool, optional
+            Tile storage to share.
 
         Returns
         -------
         CountGrid
         """
         n = int(math.ceil(2 * half_size / delta))
-        return cls((n, n), x - n * delta / 2, y - n * delta / 2, delta)
+        return cls((n, n), x - n * delta / 2, y - n * delta / 2, delta, pool)
 
-    def copy(self, out: CountGrid | None = None) -> CountGrid:
-        """A copy; with ``out`` (a grid no longer needed) into its arrays when the
-        shapes match, which saves allocating (and page-faulting) new ones.
-
-        Into ``out``, only the blocks whose content ids differ are copied: after a
-        resampling, a dropped particle and the one copied into its grid share most
-        of their history, and a scan touches only the blocks within the usable range
-        (measured: about a fifth of the blocks of a 7-minute run's grids differ).
-
-        Parameters
-        ----------
-        out : CountGrid, optional
-            A grid whose arrays may be reused.
+    def copy(self) -> CountGrid:
+        """A copy sharing every tile with this grid until either writes (copy on write).
 
         Returns
         -------
         CountGrid
         """
-        if out is self:
-            return self
-        if out is None or out.shape != self.shape or out.x0 != self.x0 or out.y0 != self.y0:
-            new = CountGrid.__new__(CountGrid)
-            new.hits = self.hits.copy()
-            new.visits = self.visits.copy()
-            new.sx = self.sx.copy()
-            new.sy = self.sy.copy()
-            new.mean = self.mean.copy()
-            new.tile_id = self.tile_id.copy()
-        else:
-            new = out
-            differ = new.tile_id != self.tile_id
-            for name in ("hits", "visits", "sx", "sy"):
-                _copy_tiles(getattr(self, name), getattr(new, name), differ, TILE, TILE)
-            ny, nx = self.shape  # (ny, nx, 2) seen as (ny, 2 nx)
-            _copy_tiles(
-                self.mean.reshape(ny, 2 * nx), new.mean.reshape(ny, 2 * nx), differ, TILE, 2 * TILE
-            )
-            new.tile_id[...] = self.tile_id
+        new = CountGrid.__new__(CountGrid)
+        new.pool = self.pool
+        new.table = self.table.copy()
+        ids = self.table[self.table >= 0]
+        self.pool.refs[ids] += 1
+        new.tx0, new.ty0 = self.tx0, self.ty0
         new.x0, new.y0, new.delta = self.x0, self.y0, self.delta
         return new
 
+    def release(self) -> None:
+        """Give the tiles back to the pool (the grid is empty afterwards)."""
+        self.pool.release(self.table)
+        self.table[...] = -1
+
     @property
     def shape(self) -> tuple[int, int]:
-        return self.visits.shape  # type: ignore[return-value]
+        """Cells the tile table spans, ``(ny, nx)``."""
+        return self.table.shape[0] * TILE, self.table.shape[1] * TILE
+
+    @property
+    def n_tiles(self) -> int:
+        """Tiles this grid holds (shared or not)."""
+        return int((self.table >= 0).sum())
 
     def arrays(self):
-        """``(hits, visits, sx, sy, mean, x0, y0, delta)``: leading arguments of the update.
+        """``(table, tx0, ty0, hits, visits, sx, sy, mean, x0, y0, delta)``: leading
+        arguments of :func:`register_scan`.
 
         Returns
         -------
         tuple
         """
-        return self.hits, self.visits, self.sx, self.sy, self.mean, self.x0, self.y0, self.delta
+        p = self.pool
+        return (
+            self.table, self.tx0, self.ty0, p.hits, p.visits, p.sx, p.sy, p.mean,
+            self.x0, self.y0, self.delta,
+        )  # fmt: skip
 
     def match_arrays(self):
-        """``(mean, x0, y0, delta)``: leading arguments of the scan-score kernels.
+        """``(table, tx0, ty0, mean, x0, y0, delta)``: leading arguments of the scan-score kernels.
 
-        ``mean[iy, ix]`` is the mean hit position of an occupied cell (hits/visits
+        ``mean[t, ly, lx]`` is the mean hit position of an occupied cell (hits/visits
         above GMapping's fullness threshold 0.1) and NaN elsewhere; it is kept up to
         date by the map update, so the matcher reads one compact array.
 
@@ -742,64 +1040,36 @@ class CountGrid:
         -------
         tuple
         """
-        return self.mean, self.x0, self.y0, self.delta
+        return self.table, self.tx0, self.ty0, self.pool.mean, self.x0, self.y0, self.delta
 
     def extent(self) -> tuple[float, float, float, float]:
-        """World ``(xmin, xmax, ymin, ymax)`` covered by the grid.
+        """World ``(xmin, xmax, ymin, ymax)`` spanned by the tile table.
 
         Returns
         -------
         (xmin, xmax, ymin, ymax) : float
         """
         ny, nx = self.shape
-        return self.x0, self.x0 + nx * self.delta, self.y0, self.y0 + ny * self.delta
+        d = self.delta
+        xmin = self.x0 + self.tx0 * TILE * d
+        ymin = self.y0 + self.ty0 * TILE * d
+        return xmin, xmin + nx * d, ymin, ymin + ny * d
 
-    def padding_for(self, xmin: float, xmax: float, ymin: float, ymax: float, margin: float):
-        """Cells to add ``(left, right, bottom, top)`` so the box plus ``margin`` fits, or None.
-
-        A side that must grow grows by at least a quarter of the grid's size, so
-        growth (a copy of every array) stays rare.
-
-        Parameters
-        ----------
-        xmin, xmax, ymin, ymax : float
-            Box to fit, metres.
-        margin : float
-            Extra room, metres.
-
-        Returns
-        -------
-        (left, right, bottom, top) or None
-        """
-        gx0, gx1, gy0, gy1 = self.extent()
-        need = (
-            gx0 - (xmin - margin),
-            xmax + margin - gx1,
-            gy0 - (ymin - margin),
-            ymax + margin - gy1,
-        )
-        if max(need) <= 0:
-            return None
-        step = max(2 * margin, 0.25 * max(gx1 - gx0, gy1 - gy0))
-        return tuple(int(math.ceil(max(n, step) / self.delta)) if n > 0 else 0 for n in need)
-
-    def pad(self, left: int, right: int, bottom: int, top: int) -> None:
-        """Grow in place by whole cells (rows ``iy`` grow upwards with y).
-
-        Parameters
-        ----------
-        left, right, bottom, top : int
-            Cells added on each side.
-        """
-        widths = ((bottom, top), (left, right))
-        self.hits = np.pad(self.hits, widths)
-        self.visits = np.pad(self.visits, widths)
-        self.sx = np.pad(self.sx, widths)
-        self.sy = np.pad(self.sy, widths)
-        self.mean = np.pad(self.mean, (*widths, (0, 0)), constant_values=np.nan)
-        self.x0 -= left * self.delta
-        self.y0 -= bottom * self.delta
-        self._new_tile_ids()  # the blocks moved
+    def _cover(self, ty_lo: int, ty_hi: int, tx_lo: int, tx_hi: int) -> None:
+        """Widen the tile table to tiles ``ty_lo..ty_hi`` x ``tx_lo..tx_hi`` (global)."""
+        nty, ntx = self.table.shape
+        if ty_lo >= self.ty0 and tx_lo >= self.tx0:
+            if ty_hi < self.ty0 + nty and tx_hi < self.tx0 + ntx:
+                return
+        step_y = max(4, nty // 4)
+        step_x = max(4, ntx // 4)
+        y0 = min(self.ty0, ty_lo - step_y) if ty_lo < self.ty0 else self.ty0
+        x0 = min(self.tx0, tx_lo - step_x) if tx_lo < self.tx0 else self.tx0
+        y1 = ty_hi + step_y if ty_hi >= self.ty0 + nty else self.ty0 + nty - 1
+        x1 = tx_hi + step_x if tx_hi >= self.tx0 + ntx else self.tx0 + ntx - 1
+        table = np.full((y1 - y0 + 1, x1 - x0 + 1), -1, np.int32)
+        table[self.ty0 - y0 : self.ty0 - y0 + nty, self.tx0 - x0 : self.tx0 - x0 + ntx] = self.table
+        self.table, self.ty0, self.tx0 = table, y0, x0
 
     def register_scan(
         self,
@@ -810,7 +1080,10 @@ class CountGrid:
         max_range: float = np.inf,
         no_return_free: bool = False,
     ) -> None:
-        """Integrate a scan from the world laser pose ``(x, y, theta)`` (grows if needed).
+        """Integrate a scan from the world laser pose ``(x, y, theta)``.
+
+        The tiles the beams reach (:func:`scan_tiles`) are allocated, or copied when
+        shared with another grid, before :func:`register_scan` writes into them.
 
         Parameters
         ----------
@@ -828,34 +1101,49 @@ class CountGrid:
         lx, ly, lt = (float(v) for v in laser_pose)
         r = np.asarray(ranges, np.float64)
         a = np.asarray(angles, np.float64)
-        fin = np.where(np.isfinite(r), r, usable_range if no_return_free else 0.0)
-        reach = min(usable_range, float(np.max(fin, initial=0.0)))
-        pad = self.padding_for(lx, lx, ly, ly, reach + 2 * self.delta)
-        if pad is not None:
-            self.pad(*pad)
-        register_scan(
-            *self.arrays(),
-            lx,
-            ly,
-            lt,
-            r,
-            a,
-            float(usable_range),
-            float(max_range),
-            bool(no_return_free),
-        )
-        # every cell written lies within ``reach`` of the laser: new ids for those blocks
-        k = reach / self.delta + 2
-        cx = (lx - self.x0) / self.delta
-        cy = (ly - self.y0) / self.delta
-        nty, ntx = self.tile_id.shape
-        tx0, tx1 = max(0, int((cx - k) // TILE)), min(ntx, int((cx + k) // TILE) + 1)
-        ty0, ty1 = max(0, int((cy - k) // TILE)), min(nty, int((cy + k) // TILE) + 1)
-        if tx1 > tx0 and ty1 > ty0:
-            self.tile_id[ty0:ty1, tx0:tx1] = _fresh_tile_ids(ty1 - ty0, tx1 - tx0)
+        args = (float(usable_range), float(max_range), bool(no_return_free))
+        box = float(usable_range)
+        if not math.isfinite(box):  # no beam reaches past the farthest finite reading
+            box = float(np.max(r[np.isfinite(r)], initial=0.0))
+        coords = scan_tiles(self.x0, self.y0, self.delta, lx, ly, lt, r, a, *args, box)
+        if coords.shape[0] == 0:
+            return
+        lo = coords.min(0)
+        hi = coords.max(0)
+        self._cover(int(lo[0]), int(hi[0]), int(lo[1]), int(hi[1]))
+        p = self.pool
+        p.reserve(coords.shape[0])
+        _own_tiles(
+            self.table, self.tx0, self.ty0, coords, p.refs, p.free, p.n_free,
+            p.hits, p.visits, p.sx, p.sy, p.mean,
+        )  # fmt: skip
+        p.peak = max(p.peak, p.used)
+        register_scan(*self.arrays(), lx, ly, lt, r, a, *args)
+
+    def counts(self) -> tuple[np.ndarray, np.ndarray]:
+        """Dense ``(hits, visits)`` over the tile table (row 0 = smallest y), for checks.
+
+        Returns
+        -------
+        hits, visits : (ny, nx) int32 arrays
+        """
+        ny, nx = self.shape
+        out = []
+        for name in ("hits", "visits"):
+            src = getattr(self.pool, name)
+            d = np.zeros((ny, nx), np.int32)
+            for ty, tx in zip(*np.nonzero(self.table >= 0), strict=True):
+                d[ty * TILE : (ty + 1) * TILE, tx * TILE : (tx + 1) * TILE] = src[
+                    self.table[ty, tx]
+                ]
+            out.append(d)
+        return out[0], out[1]
 
     def to_occupancy_map(self, occ_thresh: float = 0.25, meta: dict | None = None) -> OccupancyMap:
         """The ternary map (GMapping/slam_gmapping rule: occupied when hits/visits > occ_thresh).
+
+        The map spans the tiles touched plus one unknown tile on every side (ROS
+        origin: the world corner of its lower-left pixel).
 
         Parameters
         ----------
@@ -868,8 +1156,24 @@ class CountGrid:
         -------
         OccupancyMap
         """
-        data = occupancy_from_counts(self.hits, self.visits, float(occ_thresh))
-        return OccupancyMap(data, self.delta, (self.x0, self.y0, 0.0), dict(meta or {}))
+        rows, cols = np.nonzero(self.table >= 0)
+        if rows.size == 0:
+            rows = cols = np.zeros(1, int)
+        y0, y1 = int(rows.min()) - 1, int(rows.max()) + 2
+        x0, x1 = int(cols.min()) - 1, int(cols.max()) + 2
+        sub = np.full((y1 - y0, x1 - x0), -1, np.int32)
+        ys0, xs0 = max(y0, 0), max(x0, 0)
+        ys1, xs1 = min(y1, self.table.shape[0]), min(x1, self.table.shape[1])
+        sub[ys0 - y0 : ys1 - y0, xs0 - x0 : xs1 - x0] = self.table[ys0:ys1, xs0:xs1]
+        data = np.full(((y1 - y0) * TILE, (x1 - x0) * TILE), 127, np.uint8)
+        _tiles_to_image(sub, self.pool.hits, self.pool.visits, float(occ_thresh), data)
+        d = self.delta
+        origin = (
+            self.x0 + (self.tx0 + x0) * TILE * d,
+            self.y0 + (self.ty0 + y0) * TILE * d,
+            0.0,
+        )
+        return OccupancyMap(data, d, origin, dict(meta or {}))
 
 
 def likelihood_field(occupied: np.ndarray, delta: float, sigma: float) -> np.ndarray:

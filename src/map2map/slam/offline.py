@@ -26,13 +26,15 @@ Examples
 
 from __future__ import annotations
 
+import math
+import os
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..core.errors import InputError
 from ..core.grid import OccupancyMap
-from ..core.limits import check_map_size
+from ..core.limits import DEFAULT_BUDGET_BYTES
 from ..robotlog.base import Mapper
 from ..robotlog.carmen import CarmenLog
 
@@ -42,7 +44,27 @@ __all__ = [
     "run_slam",
     "odometry_in_map_frame",
     "default_usable_range",
+    "backend_options",
+    "map_tiles_estimate",
+    "memory_estimate",
+    "check_memory",
+    "default_memory_limit",
 ]
+
+#: Peak memory of ``map2map slam`` besides the map tiles and the map image: interpreter,
+#: numba kernels, log reader, figure (measured: 0.25-0.45 GiB on the Radish logs and the
+#: campus of ``benchmarks/slam_memory.py``).
+BASE_BYTES = 500 * 2**20
+#: What the graph backend holds besides: the likelihood lookup tables of its scan
+#: matcher (measured: 0.3-0.45 GiB more than the particle filter on aces and the campus).
+GRAPH_TABLES_BYTES = 300 * 2**20
+#: Tiles a particle holds on its own beyond the map it shares (its copies of the tiles
+#: written since its last common ancestor), in discs of the usable range: measured 0.4-0.7
+#: of a disc on aces (5 particles) and the benchmark's campus (5 and 30 particles).
+PARTICLE_DISCS = 1.5
+#: Bytes per pixel of the map image over the path's extent at the end: the map, its
+#: crop, the figure's reduction (measured: about 9 on the campus).
+IMAGE_BYTES_PER_PIXEL = 12
 
 
 @dataclass
@@ -82,6 +104,7 @@ def check_options(
     particles: int | None = None,
     resolution: float = 0.05,
     max_range: float | None = None,
+    max_memory: float | None = None,
 ) -> None:
     """Raise :class:`InputError` (naming the parameter) for options :func:`run_slam` refuses.
 
@@ -95,6 +118,8 @@ def check_options(
         Map cell size, metres.
     max_range : float, optional
         Usable laser range, metres.
+    max_memory : float, optional
+        Memory limit, GiB (0: none).
 
     Raises
     ------
@@ -117,6 +142,8 @@ def check_options(
         raise InputError("resolution", f"must be > 0, got {resolution}")
     if max_range is not None and not max_range > 0:
         raise InputError("max_range", f"must be > 0, got {max_range}")
+    if max_memory is not None and not max_memory >= 0:
+        raise InputError("max_memory", f"must be >= 0 GiB (0: no limit), got {max_memory}")
 
 
 def default_usable_range(sensor_max: float) -> float:
@@ -145,23 +172,90 @@ def default_usable_range(sensor_max: float) -> float:
     return float(min(sensor_max, max(3.0, min(10.0, 0.8 * sensor_max))))
 
 
-def map_shape_estimate(log: CarmenLog, resolution: float, reach: float) -> tuple[int, int]:
-    """Rows and columns of the map ``log`` would build: odometry extent +- ``reach`` metres.
+def map_tiles_estimate(
+    log: CarmenLog, resolution: float, reach: float, no_return_free: bool = True
+) -> int:
+    """Map tiles (:data:`~map2map.slam.gridmap.TILE` cells square) the log's beams cross.
 
-    The odometry's bounding box (the SLAM map frame differs from it only by the drift
-    the filter corrects), widened by the usable range on every side, at
-    ``resolution`` metres per pixel: what :func:`run_slam` checks against the memory
-    budget (:func:`map2map.core.limits.check_map_size`) before building anything.
+    The grids grow as the robot goes (:class:`~map2map.slam.gridmap.CountGrid`): a
+    tile is allocated when a beam first reaches it. Here every beam of a scan taken
+    every quarter tile of travel (or 0.1 rad of turn) is followed from the odometry
+    pose, at quarter-tile steps, up to its reading or ``reach`` metres (a beam
+    without a return up to ``reach`` when ``no_return_free``, as the map update
+    does), and the tiles it passes are counted. Odometry drift moves the beams a
+    little, not the area they sweep; a tenth more is added for the tiles a beam only
+    clips.
 
-    >>> from map2map.robotlog.base import OdometryReading
-    >>> log = CarmenLog([OdometryReading(0, 0, 0, 0), OdometryReading(1, 9, 4, 0)], [])
-    >>> map_shape_estimate(log, 0.05, 3.0)
-    (200, 300)
+    Parameters
+    ----------
+    log : CarmenLog
+        The recorded run.
+    resolution : float
+        Cell size, metres.
+    reach : float
+        How far from the robot the map is written, metres.
+    no_return_free : bool
+        Count beams without a return up to ``reach``.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> from map2map.robotlog.base import LaserScan, OdometryReading
+    >>> scan = LaserScan(0.0, np.full(360, 3.0), -np.pi, np.pi / 180, 0.1, 3.5)
+    >>> log = CarmenLog([OdometryReading(0, 0, 0, 0)], [scan])
+    >>> map_tiles_estimate(log, 0.05, 10.0)  # a 3 m disc across 4 tiles of 3.2 m, + 10 %
+    5
     """
-    xy = np.array([(r.x, r.y) for r in log.odometry], float).reshape(-1, 2)
-    span = (xy.max(0) - xy.min(0)) if len(xy) else np.zeros(2)
-    w, h = (np.ceil((span + 2 * reach) / resolution)).astype(int)
-    return int(h), int(w)
+    from .gridmap import TILE
+
+    tile_m = TILE * resolution
+    step = tile_m / 4
+    keys = []
+    last = None
+    batch: list[tuple[np.ndarray, np.ndarray]] = []
+
+    def flush() -> None:
+        if not batch:
+            return
+        pts = np.concatenate([p for p, _ in batch])
+        keys.append(np.unique(np.floor(pts / tile_m).astype(np.int64) @ np.array([1, 1 << 32])))
+        batch.clear()
+
+    n_points = 0
+    for odo, scan in log:
+        pose = np.array([odo.x, odo.y, odo.theta], float)
+        if last is not None:
+            moved = math.hypot(*(pose[:2] - last[:2]))
+            turned = abs((pose[2] - last[2] + math.pi) % (2 * math.pi) - math.pi)
+            if moved < step and turned < 0.1:
+                continue
+        last = pose
+        r = np.asarray(scan.ranges, float)
+        no_return = ~np.isfinite(r) | (r >= scan.range_max)
+        ok = (r > 0) & ~no_return if not no_return_free else (r > 0) | no_return
+        r = np.minimum(np.where(no_return, reach, r), reach)[ok]
+        ang = np.asarray(scan.angles, float)[ok]
+        off = scan.sensor_offset
+        c, s = math.cos(pose[2]), math.sin(pose[2])
+        lx = pose[0] + c * off[0] - s * off[1]
+        ly = pose[1] + s * off[0] + c * off[1]
+        a = pose[2] + off[2] + ang
+        t = np.arange(0.0, reach + step, step)
+        tt = np.minimum(t[None, :], r[:, None])  # samples along each beam, up to its end
+        pts = np.stack([lx + tt * np.cos(a)[:, None], ly + tt * np.sin(a)[:, None]], -1)
+        batch.append((pts.reshape(-1, 2), r))
+        n_points += pts.shape[0] * pts.shape[1]
+        if n_points > 2_000_000:
+            flush()
+            keys = [np.unique(np.concatenate(keys))]
+            n_points = 0
+    flush()
+    if not keys:
+        return 0
+    return int(math.ceil(1.1 * np.unique(np.concatenate(keys)).size))
 
 
 def farthest_reading(log: CarmenLog) -> float:
@@ -170,7 +264,7 @@ def farthest_reading(log: CarmenLog) -> float:
     A map reaches no farther from the path than this, whatever range the backend is
     allowed: the graph backend defaults to the sensor maximum (50 m on the Radish logs,
     whose no-returns read as invalid), which as a margin would inflate
-    :func:`map_shape_estimate` several times over.
+    :func:`map_tiles_estimate` several times over.
 
     >>> from map2map.robotlog.base import LaserScan
     >>> s = LaserScan(0.0, np.array([1.0, 7.5, np.inf]), 0.0, 0.1, 0.1, 50.0)
@@ -185,6 +279,179 @@ def farthest_reading(log: CarmenLog) -> float:
     return far
 
 
+def _has_no_returns(log: CarmenLog) -> bool:
+    """Whether some beam of ``log`` has no return (a reading at or past the maximum)."""
+    for scan in log.scans:
+        r = np.asarray(scan.ranges, float)
+        if (np.isinf(r) | (r >= scan.range_max)).any():
+            return True
+    return False
+
+
+def backend_options(
+    log: CarmenLog,
+    backend: str = "rbpf",
+    *,
+    particles: int | None = None,
+    max_range: float | None = None,
+    **options,
+) -> dict:
+    """The backend's options :func:`run_slam` uses for ``log`` (usable range, beams, particles).
+
+    Parameters
+    ----------
+    log : CarmenLog
+        The recorded run (its first scan names the sensor).
+    backend : str
+        Registered mapper name.
+    particles : int, optional
+        Particle count of ``rbpf``.
+    max_range : float, optional
+        Usable laser range, metres.
+    **options
+        Backend parameters given, kept.
+
+    Returns
+    -------
+    dict
+    """
+    sensor_max = float(log.scans[0].range_max)
+    if backend == "rbpf":
+        options.setdefault("particles", particles)
+        options.setdefault("max_urange", max_range or default_usable_range(sensor_max))
+        if log.scans[0].n_beams <= 200:
+            options.setdefault("lskip", 0)
+    elif backend == "graph":
+        options.setdefault("max_range", max_range or sensor_max)
+    return options
+
+
+def memory_estimate(
+    log: CarmenLog, backend: str = "rbpf", *, resolution: float = 0.05, **options
+) -> int:
+    """Peak memory (bytes) :func:`run_slam` plans for: the map tiles the path can reach.
+
+    ``BASE_BYTES`` (and ``GRAPH_TABLES_BYTES`` for ``graph``), plus
+    :data:`~map2map.slam.gridmap.TILE_BYTES` per tile of :func:`map_tiles_estimate`
+    (the tiles the beams cross, up to the backend's usable range) and, for ``rbpf``,
+    ``PARTICLE_DISCS`` discs of the usable range per particle beyond the first
+    (particles share the tiles of their common history), a quarter more for the tile
+    pool's growth, plus
+    ``IMAGE_BYTES_PER_PIXEL`` per pixel of the path's extent widened by the range (the
+    map image written at the end is dense over the tiles' extent).
+
+    Parameters
+    ----------
+    log : CarmenLog
+        The recorded run.
+    backend : str
+        Registered mapper name.
+    resolution : float
+        Cell size, metres.
+    **options
+        The backend's options (:func:`backend_options`).
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> from map2map.robotlog.base import LaserScan, OdometryReading
+    >>> scans = [LaserScan(float(t), np.full(180, 8.0), -1.5, 0.017, 0.1, 50.0) for t in range(3)]
+    >>> log = CarmenLog([OdometryReading(float(t), 20.0 * t, 0.0, 0.0) for t in range(3)], scans)
+    >>> memory_estimate(log, "rbpf", **backend_options(log, "rbpf")) < 2**30
+    True
+    """
+    from .gridmap import TILE, TILE_BYTES
+    from .rbpf import GMappingParams
+
+    if not len(log):
+        return BASE_BYTES
+    opts = dict(options)
+    if backend == "rbpf":
+        reach = opts.get("max_urange") or default_usable_range(float(log.scans[0].range_max))
+    else:
+        reach = opts.get("max_range") or float(log.scans[0].range_max)
+    if opts.get("no_return_free", True) and _has_no_returns(log):
+        reach = float(reach)  # no-return beams clear free space up to the usable range
+    else:
+        reach = min(float(reach), farthest_reading(log))
+    reach += 2 * resolution
+    tiles = float(map_tiles_estimate(log, resolution, reach, opts.get("no_return_free", True)))
+    if backend == "rbpf":
+        n = opts.get("particles") or GMappingParams().particles
+        disc = math.pi * (reach / (TILE * resolution) + 1) ** 2
+        tiles += PARTICLE_DISCS * disc * (int(n) - 1)
+    xy = np.array([(r.x, r.y) for r in log.odometry], float).reshape(-1, 2)
+    span = (xy.max(0) - xy.min(0) + 2 * reach) / resolution + 2 * TILE
+    fixed = BASE_BYTES + (GRAPH_TABLES_BYTES if backend == "graph" else 0)
+    return int(fixed + 1.25 * tiles * TILE_BYTES + IMAGE_BYTES_PER_PIXEL * span.prod())
+
+
+def default_memory_limit() -> int:
+    """The memory a ``slam`` run may plan for by default: 4 GiB, or the machine's RAM if less.
+
+    Returns
+    -------
+    int
+        Bytes.
+
+    Examples
+    --------
+    >>> default_memory_limit() <= 4 * 2**30
+    True
+    """
+    try:
+        ram = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):
+        ram = DEFAULT_BUDGET_BYTES
+    return int(min(DEFAULT_BUDGET_BYTES, ram if ram > 0 else DEFAULT_BUDGET_BYTES))
+
+
+def check_memory(need: float, max_memory: float | None, source, backend: str) -> None:
+    """Refuse a run whose estimated peak memory ``need`` (bytes) exceeds ``max_memory`` GiB.
+
+    Parameters
+    ----------
+    need : float
+        Estimated peak memory, bytes (:func:`memory_estimate`).
+    max_memory : float, optional
+        Limit in GiB; None: :func:`default_memory_limit` (4 GiB, or the machine's RAM
+        if less); 0: no limit.
+    source : str or path
+        The log, named in the message.
+    backend : str
+        The backend, named in the message.
+
+    Raises
+    ------
+    InputError
+        One line: the estimate, the limit and the ways out.
+
+    Examples
+    --------
+    >>> check_memory(2**30, None, "a.log", "rbpf")
+    >>> check_memory(5 * 2**30, None, "a.log", "rbpf")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    map2map.core.errors.InputError: a.log: mapping it (rbpf) would need about 5.0 GiB, ...
+    """
+    limit = default_memory_limit() if max_memory is None else max_memory * 2**30
+    if not limit or need <= limit:
+        return
+    ways = "a coarser `resolution`"
+    ways += ", fewer `particles` or `backend=graph`" if backend == "rbpf" else ""
+    ways += " or a shorter `max_range`" if backend == "graph" else ""
+    ask = math.ceil(need / 2**30 * 1.1 * 10) / 10
+    raise InputError(
+        source,
+        f"mapping it ({backend}) would need about {need / 2**30:.1f} GiB, over the "
+        f"{limit / 2**30:.1f} GiB `max_memory`; give {ways}, or pass `max_memory={ask}` "
+        "to try anyway",
+    )
+
+
 def run_slam(
     log: CarmenLog,
     backend: str = "rbpf",
@@ -195,6 +462,7 @@ def run_slam(
     max_range: float | None = None,
     progress: bool = False,
     source=None,
+    max_memory: float | None = None,
     **options,
 ) -> SlamResult:
     """Replay ``log`` through the backend registered as ``backend``; no ground truth is used.
@@ -205,9 +473,10 @@ def run_slam(
     Radish logs); the graph backend's ``max_range``, default the sensor maximum.
     ``rbpf`` matches every beam of a scanner of at most 200 beams (``lskip`` 0:
     the default ``lskip`` 1 is for the LDS-01's 360). Other keyword options go to
-    the backend's parameters. A map too large for the memory budget (its extent
-    from :func:`map_shape_estimate`) is refused before any grid is allocated, naming
-    ``source`` (the log file).
+    the backend's parameters. The grids grow as the robot goes (tiles allocated on
+    first touch, shared between particles until written); a run whose
+    :func:`memory_estimate` exceeds ``max_memory`` is refused before any grid is
+    allocated, naming ``source`` (the log file) and the way out.
 
     Parameters
     ----------
@@ -226,7 +495,10 @@ def run_slam(
     progress : bool
         Show a tqdm progress bar.
     source : str or path, optional
-        The log file, named in a size refusal.
+        The log file, named in a memory refusal.
+    max_memory : float, optional
+        Largest peak memory to plan for, GiB (default 4, the memory budget of
+        :mod:`map2map.core.limits`, or the machine's RAM if less; 0: no limit).
     **options
         Backend parameters.
 
@@ -238,7 +510,8 @@ def run_slam(
     Raises
     ------
     InputError
-        Options refused by :func:`check_options`, or a log without scans.
+        Options refused by :func:`check_options`, a log without scans, or a run
+        whose memory estimate exceeds ``max_memory``.
 
     Examples
     --------
@@ -255,32 +528,24 @@ def run_slam(
 
     from ..robotlog.mappers import make_mapper
 
-    check_options(backend, particles=particles, resolution=resolution, max_range=max_range)
+    check_options(
+        backend,
+        particles=particles,
+        resolution=resolution,
+        max_range=max_range,
+        max_memory=max_memory,
+    )
     if len(log) == 0:
         raise InputError(None, "log holds no scans")
-    sensor_max = float(log.scans[0].range_max)
-    if backend == "rbpf":
-        options.setdefault("particles", particles)
-        options.setdefault("max_urange", max_range or default_usable_range(sensor_max))
-        if log.scans[0].n_beams <= 200:
-            options.setdefault("lskip", 0)
-    elif backend == "graph":
-        options.setdefault("max_range", max_range or sensor_max)
-    reach = min(
-        float(options.get("max_urange", options.get("max_range", sensor_max))),
-        farthest_reading(log),
-    )
-    check_map_size(
-        map_shape_estimate(log, resolution, float(reach)),
-        source if source is not None else "log",
-        "slam",
-        way_out="give a coarser `resolution`",
-    )
+    options = backend_options(log, backend, particles=particles, max_range=max_range, **options)
+    need = memory_estimate(log, backend, resolution=resolution, **options)
+    check_memory(need, max_memory, source if source is not None else "log", backend)
     mapper = make_mapper(backend, resolution=resolution, seed=seed, **options)
-    for odo, scan in tqdm(
-        log, total=len(log), desc=f"slam ({backend})", unit="scan", disable=not progress
-    ):
+    bar = tqdm(log, total=len(log), desc=f"slam ({backend})", unit="scan", disable=not progress)
+    for k, (odo, scan) in enumerate(bar):
         mapper.update(odo, scan)
+        if progress and k % 100 == 0 and getattr(mapper, "memory_bytes", lambda: 0)():
+            bar.set_postfix_str(f"map {mapper.memory_bytes() / 2**20:.0f} MiB", refresh=False)
     if hasattr(mapper, "optimize"):
         mapper.optimize()
     traj = mapper.trajectory() if hasattr(mapper, "trajectory") else np.zeros((0, 4))

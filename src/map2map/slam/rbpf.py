@@ -21,7 +21,9 @@ One filter step, as in GMapping's ``GridSlamProcessor::processScan``:
    matching failed. Weights are smoothed as GMapping does (``ogain``).
 5. **Adaptive resampling** (sec. V): low-variance resampling when the effective
    sample size ``N_eff = 1 / sum w^2`` falls below ``resample_threshold * N``.
-   Grids are copied only for particles drawn more than once (copy on resample).
+   Particles share the tiles of their common history (copy on write,
+   :class:`~map2map.slam.gridmap.CountGrid`): a particle drawn twice gets a grid that
+   shares every tile, and a tile is copied only when one of them writes into it.
 6. **Map update**: every particle integrates the scan at its pose with GMapping's
    counting rules.
 
@@ -494,10 +496,11 @@ class GMappingRBPF:
             self._last_odom = o
             self._upd_odom = o
             self._last_t = scan.t
-            self.grids = [
-                CountGrid.around(0.0, 0.0, p.initial_size / 2, p.delta) for _ in range(p.particles)
-            ]
+            # every particle starts at the origin: one grid, shared (copy on write)
+            first = CountGrid.around(0.0, 0.0, p.initial_size / 2, p.delta)
+            self.grids = [first]
             self._register_all(ranges, angles, scan)
+            self.grids += [first.copy() for _ in range(p.particles - 1)]
             self._add_nodes(scan.t)
             self._map_cache = None
             self.n_updates += 1
@@ -575,7 +578,8 @@ class GMappingRBPF:
 
     def _register_all(self, ranges, angles, scan: LaserScan) -> None:
         off = self._laser_offset(scan)
-        lp = absolute_sum(self.poses, np.broadcast_to(off, self.poses.shape))
+        poses = self.poses[: len(self.grids)]  # one grid (shared) at the first scan
+        lp = absolute_sum(poses, np.broadcast_to(off, poses.shape))
         for g, q in zip(self.grids, lp, strict=True):
             g.register_scan(
                 q,
@@ -689,19 +693,18 @@ class GMappingRBPF:
         self._register_all(ranges, angles, scan)
 
     def _resample(self, idx: np.ndarray) -> None:
-        """Keep particles ``idx``; copy a grid only when its particle is drawn again.
-
-        A copy goes into the arrays of a particle that was not drawn (as many are
-        dropped as are drawn twice), so resampling allocates no new grid: fresh
-        multi-megabyte arrays cost page faults, which cost more than the copy.
+        """Keep particles ``idx``: a particle drawn again gets a copy of the grid that
+        shares every tile (copy on write), a particle not drawn gives its tiles back.
         """
         drawn = [int(j) for j in idx]
         kept = set(drawn)
-        spare = [g for j, g in enumerate(self.grids) if j not in kept]
+        for j, g in enumerate(self.grids):
+            if j not in kept:
+                g.release()
         taken: set[int] = set()
         grids = []
         for j in drawn:
-            grids.append(self.grids[j] if j not in taken else self.grids[j].copy(out=spare.pop()))
+            grids.append(self.grids[j] if j not in taken else self.grids[j].copy())
             taken.add(j)
         self.grids = grids
         self.poses = self.poses[idx].copy()
@@ -709,6 +712,15 @@ class GMappingRBPF:
         self.log_w_sum = self.log_w_sum[idx].copy()
         self.log_w = np.zeros_like(self.log_w)
         self.n_resamples += 1
+
+    def memory_bytes(self) -> int:
+        """Bytes of the particles' map tiles (the pool they share).
+
+        Returns
+        -------
+        int
+        """
+        return self.grids[0].pool.nbytes() if self.grids else 0
 
 
 def make_rbpf(
