@@ -93,10 +93,18 @@ def test_none_is_the_anchored_cleaning_alone(slam_map):
             none.correct_many([slam_map], **bad)
 
 
-def test_the_default_is_the_thesis_and_pretrained_its_alias():
-    assert DEFAULT_MODEL == "thesis" and set(MODELS) >= {"none", "thesis"}
-    assert corrector(None).name == "thesis" and corrector("pretrained").name == "thesis"
-    assert corrector("thesis").source == corrector(None).source
+def test_the_default_is_none_drawn_and_pretrained_the_thesis():
+    from map2map.learn.ba.correctors import DrawnCorrector, NullCorrector, ThesisCorrector
+
+    assert DEFAULT_MODEL == "none" and set(MODELS) >= {"none", "thesis"}
+    default = corrector(None)
+    assert default.name == "none" and isinstance(default, DrawnCorrector)
+    assert isinstance(default.base, NullCorrector)
+    assert isinstance(corrector("none", draw=False), NullCorrector)
+    assert isinstance(corrector("thesis"), ThesisCorrector)           # as it is
+    assert isinstance(corrector("thesis", draw=True), DrawnCorrector)
+    assert corrector("pretrained").name == "thesis"
+    assert corrector("thesis").source == corrector("pretrained").source
 
 
 def test_the_default_output_is_the_shipped_models(slam_map):
@@ -131,6 +139,42 @@ def test_the_library_takes_the_same_names(slam_map):
         thesis = autocorrect(slam_map, "thesis")
         assert np.array_equal(thesis.data, autocorrect(slam_map).data)
     none = autocorrect(slam_map, "none")
-    assert np.array_equal(none.data, corrector("none").correct_many([slam_map])[0].data)
+    undrawn = corrector("none", draw=False).correct_many([slam_map])[0]
+    assert np.array_equal(none.data, undrawn.data)     # the command line's draws it too
     with pytest.raises(InputError, match="need a network"):
         autocorrect(slam_map, "none", anchor=False)
+
+
+def test_the_default_output_is_drawn_like_a_plan_and_its_dxf_agrees(tmp_path, capsys,
+                                                                    slam_map):
+    """With no ``--model`` the output goes through the plan drawer: one thickness, and the
+    DXF holds the map's own segments; ``--no-draw`` is the classical cleaning as before;
+    ``--draw-thickness`` sets the walls' metres; a thickness <= 0 is one line, exit 2."""
+    import ezdxf
+
+    from map2map.evaluate.drawing import median_wall_thickness
+    from map2map.learn.ba.autocorrect import Correction
+
+    save_map(slam_map, tmp_path / "in.yaml")
+    args = ["autocorrect", str(tmp_path / "in.yaml")]
+    assert main([*args, "--out", str(tmp_path / "d.yaml"), "--dxf", str(tmp_path / "d.dxf")]) == 0
+    drawn = load_map(tmp_path / "d.yaml")
+    (ref,) = corrector(None).correct_many([slam_map])
+    assert np.array_equal(drawn.data, ref.data)
+    lines = [(e.dxf.start, e.dxf.end) for e in
+             ezdxf.readfile(tmp_path / "d.dxf").modelspace().query("LINE")]
+    world = Correction.of(ref).segments
+    assert len(lines) == len(world) > 0
+    got = np.array(sorted((s.x, s.y, e.x, e.y) for s, e in lines))
+    assert np.allclose(got, np.array(sorted(map(tuple, world))), atol=1e-6)
+    assert abs(median_wall_thickness(drawn.data) - 0.30 / 0.05) <= 1.0
+    assert main([*args, "--out", str(tmp_path / "n.yaml"), "--no-draw"]) == 0
+    (undrawn,) = corrector("none", draw=False).correct_many([slam_map])
+    assert np.array_equal(load_map(tmp_path / "n.yaml").data, undrawn.data)
+    assert not np.array_equal(undrawn.data, drawn.data)
+    assert main([*args, "--out", str(tmp_path / "t.yaml"), "--draw-thickness", "0.1"]) == 0
+    assert median_wall_thickness(load_map(tmp_path / "t.yaml").data) <= 3.0
+    capsys.readouterr()
+    assert main([*args, "--out", str(tmp_path / "x.yaml"), "--draw-thickness", "0"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "draw-thickness" in err[0] and not (tmp_path / "x.yaml").exists()

@@ -69,7 +69,7 @@ class DemoContext:
     slam_maps: dict[str, OccupancyMap] = field(default_factory=dict)  # in the plan frame
     evaluation: dict[str, dict] = field(default_factory=dict)  # name -> chosen chain errors
     ate: dict[str, float] = field(default_factory=dict)  # map name -> path ATE (m), plan frame
-    autocorrected: OccupancyMap | None = None  # Model_BA's plan from the simulated SLAM map
+    autocorrected: OccupancyMap | None = None  # the auto-corrected plan of the simulated SLAM map
     written: list[tuple[str, Path]] = field(default_factory=list)
     timings: dict[str, float] = field(default_factory=dict)
     #: The step running now (set by :func:`run_demo`); files and lines are filed under it.
@@ -352,12 +352,13 @@ def _known_errors(plan: OccupancyMap, seed: int) -> tuple[OccupancyMap, np.ndarr
 
 
 def stage_autocorrect(ctx: DemoContext) -> None:
-    """Auto-correct the simulated rbpf SLAM map into a CAD-like plan with Model_BA.
+    """Auto-correct the simulated rbpf SLAM map into a CAD-like plan, as ``map2map
+    autocorrect`` does by default (:data:`map2map.jobs.autocorrect.DEFAULT_MODEL`: the
+    classical cleaning drawn like a plan; ``--model thesis`` is the thesis's Model_BA).
 
-    Uses the shipped weights; writes ``autocorrect/cad.yaml`` (+ ``.pgm``),
-    ``autocorrect/walls.dxf`` (the walls as line segments) and
-    ``autocorrect/before_after.png``. Skipped, saying so, when PyTorch is not installed
-    (``pip install -e '.[learn]'``) or no SLAM map was made.
+    Writes ``autocorrect/cad.yaml`` (+ ``.pgm``), ``autocorrect/walls.dxf`` (the same walls
+    as line segments) and ``autocorrect/before_after.png``. Skipped, saying so, when
+    PyTorch is not installed (``pip install -e '.[learn]'``) or no SLAM map was made.
     """
     import warnings
 
@@ -366,22 +367,24 @@ def stage_autocorrect(ctx: DemoContext) -> None:
         ctx.say("autocorrect: no SLAM map in this demo run; skipped")
         return
     try:
-        from .learn.ba.autocorrect import autocorrect_many
+        from .learn.ba.autocorrect import Correction
         from .learn.training.figures import save_before_after
         from .maps.dxf import save_segments_dxf
     except ImportError:
         ctx.say("autocorrect: PyTorch not installed (pip install -e '.[learn]'); skipped")
         return
+    from .jobs.autocorrect import DEFAULT_MODEL, corrector
     from .maps.formats import save_map
 
     out = ctx.out / "autocorrect"
     out.mkdir(parents=True, exist_ok=True)
+    model = corrector(DEFAULT_MODEL)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        (res,) = autocorrect_many([slam])
+        res = Correction.of(model.correct_many([slam])[0])
     save_map(res.map, out / "cad.yaml")
-    ctx.wrote("auto-corrected plan (Model_BA, ROS map)", out / "cad.yaml")
-    ctx.wrote("auto-corrected plan (Model_BA, ROS map pixels)", out / "cad.pgm")
+    ctx.wrote(f"auto-corrected plan (--model {model.name}, ROS map)", out / "cad.yaml")
+    ctx.wrote(f"auto-corrected plan (--model {model.name}, ROS map pixels)", out / "cad.pgm")
     save_segments_dxf(res.segments, out / "walls.dxf")
     ctx.wrote("auto-corrected walls (DXF line segments)", out / "walls.dxf")
     save_before_after(
@@ -389,12 +392,13 @@ def stage_autocorrect(ctx: DemoContext) -> None:
         res.map,
         out / "before_after.png",
         res.map.meta["autocorrect"]["segments_px"],
-        title="Model_BA (shipped weights): rbpf SLAM map -> CAD-like plan",
+        title=f"autocorrect --model {model.name}: rbpf SLAM map -> CAD-like plan",
+        label=model.name,
     )
     ctx.wrote("auto-correct before/after figure", out / "before_after.png")
     ctx.say(
-        f"autocorrect: rbpf SLAM map -> CAD-like plan with Model_BA (shipped weights, "
-        f"trained on simulated maps): {len(res.segments)} wall segments"
+        f"autocorrect: rbpf SLAM map -> CAD-like plan (--model {model.name}, drawn like a "
+        f"plan): {len(res.segments)} wall segments"
     )
     for w in res.warnings:
         ctx.say(f"autocorrect: warning: {w}")

@@ -14,9 +14,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser(
         "autocorrect",
-        help="SLAM -> CAD auto-correct (Model_BA, or --model none)",
+        help="SLAM -> CAD auto-correct (classical, or --model thesis: Model_BA)",
         description="Auto-correct a SLAM map into a CAD-like plan (straight walls, no noise) "
-        "with Model_BA (--model), in the input's frame, resolution and origin. INPUT may be "
+        "(--model: the classical cleaning drawn like a plan by default, or the thesis's "
+        "Model_BA), in the input's frame, resolution and origin. INPUT may be "
         "a folder: "
         "every map in it is corrected into the --out folder (same names).",
     )
@@ -48,6 +49,15 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="maps more than 2.5x the training maps' size: resized whole, "
                         "corrected in overlapping tiles at the training scale, or returned "
                         "uncorrected (default: map2map.learn.ba.autocorrect.LARGE)")
+    p.add_argument("--draw", action=argparse.BooleanOptionalAction, default=None,
+                   help="draw the output like a plan: straight walls at the map's dominant "
+                        "angle, pieces of a wall joined unless free space passes through "
+                        "(a door), corners closed, one thickness, the same segments in the "
+                        "DXF (default: on for 'none', off for 'thesis' and weights files, "
+                        "the thesis's output as it is)")
+    p.add_argument("--draw-thickness", type=float, default=None, metavar="M",
+                   help="metres of every wall a drawn output draws (default: 0.30, the "
+                        "plans'; map2map.maps.vectorize.PLAN_WALL_M)")
     p.add_argument("--device", default="cpu", help="torch device (default cpu)")
     add_input_options(p)
     p.set_defaults(func=run)
@@ -60,7 +70,8 @@ def run(args: argparse.Namespace) -> int:
         args.input, args.out, model=args.model, dxf=args.dxf, figure=args.figure,
         straighten=not args.no_straighten, anchor=not args.no_anchor,
         thickness=args.thickness, open_frontiers=args.open_frontiers, large=args.large,
-        device=args.device, read_options=read_options_from_args(args)))
+        device=args.device, read_options=read_options_from_args(args), draw=args.draw,
+        draw_thickness=args.draw_thickness))
     for f, m in zip(run.sources, run.inputs, strict=True):
         say_how_read(f, m)
     for f, r in zip(run.sources, run.corrections, strict=True):

@@ -64,6 +64,8 @@ class ModelEntry:
 
     make: Callable[[str], Corrector]
     help: str
+    #: whether its output goes through the plan drawer unless told (``--draw/--no-draw``; ``--draw-thickness``)
+    drawn: bool = False
 
 
 def _none(device: str) -> Corrector:
@@ -81,12 +83,13 @@ def _thesis(device: str) -> Corrector:
 #: The models ``--model`` names (a new one is one entry here).
 MODELS: dict[str, ModelEntry] = {
     "none": ModelEntry(_none, "the classical cleaning alone, no network: the input's own "
-                              "walls straightened, specks and clutter removed"),
+                              "walls straightened, specks and clutter removed, drawn like a "
+                              "plan", drawn=True),
     "thesis": ModelEntry(_thesis, "the thesis's Model_BA (Model_32 + post-processing), "
                                   "shipped weights"),
 }
 #: What ``--model`` is when not given.
-DEFAULT_MODEL = "thesis"
+DEFAULT_MODEL = "none"
 #: Other names of :data:`MODELS` entries (``pretrained``: the shipped weights, as before).
 ALIASES = {"pretrained": "thesis"}
 
@@ -103,10 +106,17 @@ def model_names_help() -> str:
 
 
 def corrector(model: str | os.PathLike | Corrector | None = None,
-              device: str = "cpu") -> Corrector:
+              device: str = "cpu", *, draw: bool | None = None,
+              draw_thickness: float | None = None) -> Corrector:
     """The :class:`Corrector` of a ``--model`` value: a name of :data:`MODELS` (or an
     alias), a Model_BA training run folder or weights file, or a corrector (returned as
     it is); None is :data:`DEFAULT_MODEL`.
+
+    ``draw``: put the output through the plan drawer
+    (:class:`~map2map.learn.ba.correctors.DrawnCorrector`: straight walls at one
+    thickness, ``draw_thickness`` metres, the same segments in the DXF); None: the
+    model's own choice (:attr:`ModelEntry.drawn`: ``none`` is drawn, ``thesis`` and
+    weights files are the thesis's output as it is).
 
     Examples
     --------
@@ -123,14 +133,22 @@ def corrector(model: str | os.PathLike | Corrector | None = None,
         return model
     key = ALIASES.get(os.fspath(model), os.fspath(model))
     if key in MODELS:
-        return MODELS[key].make(device)
-    if not Path(model).exists():
+        made, drawn = MODELS[key].make(device), MODELS[key].drawn
+    elif not Path(model).exists():
         names = ", ".join(repr(k) for k in MODELS)
         raise InputError(model, f"not a model name ({names}) nor a Model_BA training run "
                                 "folder or weights file")
-    from ..learn.ba.correctors import ThesisCorrector
+    else:
+        from ..learn.ba.correctors import ThesisCorrector
 
-    return ThesisCorrector(model, device)
+        made, drawn = ThesisCorrector(model, device), False
+    if draw_thickness is not None and draw_thickness <= 0:
+        raise InputError("draw_thickness", f"must be > 0 metres, got {draw_thickness}")
+    if draw if draw is not None else drawn:
+        from ..learn.ba.correctors import DrawnCorrector
+
+        return DrawnCorrector(made, draw_thickness)
+    return made
 
 #: Files of a folder input that are read as maps.
 MAP_SUFFIXES = (".yaml", ".yml", ".png", ".pgm", ".jpg", ".jpeg", ".tif", ".tiff", ".json")
@@ -167,6 +185,10 @@ class AutocorrectSpec:
         Torch device.
     read_options : MapReadOptions or None
         How the input maps are read.
+    draw : bool or None
+        Draw the output like a plan (:func:`corrector`); None: the model's choice.
+    draw_thickness : float or None
+        Metres of every wall the plan drawer draws; None: the plans' 0.30 m.
     """
 
     input: str | os.PathLike
@@ -181,6 +203,8 @@ class AutocorrectSpec:
     large: str | None = None
     device: str = "cpu"
     read_options: Any = None
+    draw: bool | None = None
+    draw_thickness: float | None = None
 
 
 @dataclass
@@ -286,7 +310,8 @@ def autocorrect(spec: AutocorrectSpec) -> AutocorrectRun:
     for o in outs:
         check_output_path(o["map"])
     maps = [load_map(f, spec.read_options) for f in files]
-    model = corrector(spec.model, spec.device)
+    model = corrector(spec.model, spec.device, draw=spec.draw,
+                      draw_thickness=spec.draw_thickness)
     options = dict(straighten=spec.straighten, anchor=spec.anchor, thickness=thickness,
                    open_frontiers=spec.open_frontiers, large=spec.large)
     with warnings.catch_warnings():

@@ -6,7 +6,7 @@ the sign tests are documented there and in :mod:`map2map.experiments.table53.tab
 
     python3 -m map2map.experiments.table53                        # 100 generated held-out pairs
     python3 -m map2map.experiments.table53 --quick                # 12 pairs
-    python3 -m map2map.experiments.table53 --models none thesis field   # rows, newest last
+    python3 -m map2map.experiments.table53 --models thesis none       # rows, newest last
     python3 -m map2map.experiments.table53 --data DS --model RUN  # none, thesis and a run
     python3 -m map2map.experiments.table53 --data DS --ac open_frontiers=true  # autocorrect option
     python3 -m map2map.experiments.table53 --data DS1 --data DS2 --split test val \\

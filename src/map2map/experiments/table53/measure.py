@@ -66,7 +66,7 @@ __all__ = ["Table53", "ModelRows", "run_table53", "heldout_pairs_from_dataset",
 HELD_OUT_SEED = 100_000
 #: The rows measured when no model is named: the classical cleaning alone, then the
 #: thesis's Model_BA (``map2map autocorrect --model``'s names).
-DEFAULT_MODELS = ("none", "thesis")
+DEFAULT_MODELS = ("thesis", "none")
 
 
 def _digest(pairs: PackedPairs) -> str:
@@ -383,24 +383,27 @@ def _model_summary(rows: list[dict], margin: float, n_maps: int, dt: float) -> d
 
 
 def _newest_tests(models: list[ModelRows], margin: float) -> dict:
-    """The last model's sign tests against the input and against a ``none`` row."""
+    """The last model's sign tests against the input and against every earlier row
+    (``vs``: name -> tests; a ``none`` row also as ``vs_none``, ``beats_none``)."""
     if not models:
         return {}
     new = models[-1]
     out = {"model": new.name,
            "vs_input": sign_test([r["diff"] for r in new.rows]),
-           "vs_input_all": sign_test([r["diff_all"] for r in new.rows])}
-    none = next((m for m in models[:-1] if m.name == "none"), None)
-    if none is not None:
+           "vs_input_all": sign_test([r["diff_all"] for r in new.rows]), "vs": {}}
+    for other in models[:-1]:
         gain = np.array([q["error_gen"] - r["error_gen"]
-                         for q, r in zip(none.rows, new.rows, strict=True)], float)
+                         for q, r in zip(other.rows, new.rows, strict=True)], float)
         gain_all = [q["error_gen_all"] - r["error_gen_all"]
-                    for q, r in zip(none.rows, new.rows, strict=True)]
+                    for q, r in zip(other.rows, new.rows, strict=True)]
         ok = np.isfinite(gain)
         beats = int((gain[ok] > margin).sum())
-        out.update(vs_none=sign_test(gain), vs_none_all=sign_test(gain_all),
-                   beats_none=beats, n_vs_none=int(ok.sum()),
-                   share_beats_none=beats / ok.sum() if ok.any() else float("nan"))
+        t = {"matched": sign_test(gain), "all": sign_test(gain_all), "beats": beats,
+             "n": int(ok.sum()), "share_beats": beats / ok.sum() if ok.any() else float("nan")}
+        out["vs"][other.name] = t
+        if other.name == "none":
+            out.update(vs_none=t["matched"], vs_none_all=t["all"], beats_none=beats,
+                       n_vs_none=t["n"], share_beats_none=t["share_beats"])
     return out
 
 

@@ -193,14 +193,19 @@ class Table53:
         if t:
             lines.append(f"newest model ({self.newest.name}), one-sided sign tests, ties left "
                          "out:")
-            for key, what in (("vs_input", "vs input"), ("vs_none", "vs none")):
-                if key in t:
-                    a, b = t[key], t[key + "_all"]
-                    lines.append(f"  {what:<9} matched: better {a['better']}, worse "
-                                 f"{a['worse']}, ties {a['ties']}, p = {a['p']:.3g}; every "
-                                 f"point: better {b['better']}, worse {b['worse']}, ties "
-                                 f"{b['ties']}, p = {b['p']:.3g}")
-            if "beats_none" in t:
+            pairs = [("vs input", t["vs_input"], t["vs_input_all"])]
+            vs = t.get("vs") or ({"none": {"matched": t["vs_none"], "all": t["vs_none_all"]}}
+                                 if "vs_none" in t else {})
+            pairs += [(f"vs {k}", v["matched"], v["all"]) for k, v in vs.items()]
+            for what, a, b in pairs:
+                lines.append(f"  {what:<9} matched: better {a['better']}, worse "
+                             f"{a['worse']}, ties {a['ties']}, p = {a['p']:.3g}; every "
+                             f"point: better {b['better']}, worse {b['worse']}, ties "
+                             f"{b['ties']}, p = {b['p']:.3g}")
+            for k, v in (t.get("vs") or {}).items():
+                lines.append(f"  beats {k} by > {margin:g} px (matched) on {v['beats']}"
+                             f"/{v['n']} maps = {v['share_beats']:.1%}")
+            if "beats_none" in t and not t.get("vs"):
                 lines.append(f"  beats none by > {margin:g} px (matched) on {t['beats_none']}"
                              f"/{t['n_vs_none']} maps = {t['share_beats_none']:.1%}")
         return "\n".join(lines)
