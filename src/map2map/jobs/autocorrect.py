@@ -64,7 +64,7 @@ class ModelEntry:
 
     make: Callable[[str], Corrector]
     help: str
-    #: whether its output goes through the plan drawer unless told (``--draw/--no-draw``; ``--draw-thickness``)
+    #: whether its output goes through the plan drawer unless told (``--draw/--no-draw``)
     drawn: bool = False
 
 

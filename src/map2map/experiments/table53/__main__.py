@@ -29,6 +29,8 @@ import argparse
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from map2map.datasets.packed import save_packed
 from map2map.experiments.table53.measure import (
     DEFAULT_MODELS,
@@ -39,6 +41,23 @@ from map2map.experiments.table53.measure import (
     merge_pairs,
     run_table53,
 )
+
+
+def _covered(pairs, ds, min_coverage):
+    """The pairs of dataset folder ``ds`` whose coverage (``meta.json``) is at least
+    ``min_coverage`` (all of them when it is None or ``ds`` is a packed file)."""
+    from map2map.datasets.packed import PackedPairs
+    from map2map.datasets.pair import read_pair_meta
+    from map2map.datasets.pairfolder import pair_dir
+
+    idx = pairs.meta.get("heldout", {}).get("indices")
+    if min_coverage is None or idx is None or not Path(ds).is_dir():
+        return pairs
+    keep = [k for k, i in enumerate(idx)
+            if (read_pair_meta(pair_dir(ds, i)).get("coverage") or 0.0) >= min_coverage]
+    sel = np.array(keep, int)
+    return PackedPairs(pairs.a[sel], pairs.b[sel], pairs.plan_id[sel], pairs.split[sel],
+                       pairs.meta)
 
 
 def main(argv=None) -> int:
@@ -59,6 +78,9 @@ def main(argv=None) -> int:
                          f"(default {IMPROVED_MARGIN_PX}), and wall recall not lower")
     ap.add_argument("--n", type=int, default=None, help="at most N held-out pairs "
                     "(default: all of a dataset's split, 100 generated)")
+    ap.add_argument("--min-coverage", type=float, default=None, metavar="C",
+                    help="dataset folders: only pairs whose exploration covered at least "
+                         "this share of the plan (issue #32's test sets: 0.8)")
     ap.add_argument("--quick", action="store_true", help="12 pairs")
     ap.add_argument("--seed", type=int, default=0, help="metric seed")
     ap.add_argument("--out", default="table53_out")
@@ -73,8 +95,8 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     if args.data:
         keep = () if args.all else ("complete",)
-        pairs = merge_pairs(*(heldout_pairs_from_dataset(d, tuple(args.split), keep=keep,
-                                                         cleaner=args.cleaner)
+        pairs = merge_pairs(*(_covered(heldout_pairs_from_dataset(
+            d, tuple(args.split), keep=keep, cleaner=args.cleaner), d, args.min_coverage)
                               for d in args.data))
         pairs.meta["heldout"] = {"source": " + ".join(args.data) + f" ({'/'.join(args.split)}"
                                  f" split{'s' if len(args.split) > 1 else ''})"}

@@ -87,7 +87,8 @@ def run(ctx: Context, out: Output) -> None:
     out.table(["map", "Error(sim) px", "Error none px", "Error(gen) px", "sim - gen",
                "wall recall sim", "wall recall gen"], rows,
               caption=f"Our Table 5.3: {table.source}; Model_BA {Path(t.source).name}; "
-                      "'none' is the same post-processing with no network, drawn like a plan")  # fmt: skip
+                      "'none' is the same post-processing with no network, drawn like "
+                      "a plan")  # fmt: skip
     n, improved = int(s["n"]), int(s["improved"])
     d = np.array([r["diff"] for r in t.rows], float)
     ok = np.isfinite(d)
