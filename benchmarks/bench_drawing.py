@@ -3,6 +3,7 @@
 Usage::
 
     python3 -m benchmarks.bench_drawing [--data DS] [--n 200] [--demo DEMO_OUT]
+    python3 -m benchmarks.bench_drawing --data DS --model none   # what autocorrect outputs
 
 Runs :func:`map2map.maps.vectorize.draw_plan` directly on the input SLAM maps' wall
 pixels (the classical path, no network) and measures the output with
@@ -20,6 +21,10 @@ pixels (the classical path, no network) and measures the output with
 * on the HouseExpo plans of the shared data (``--houseexpo``, default
   ``../shared/data/houseexpo/json``; skipped when absent), each simulated here for five
   minutes (rbpf, seed 0), at the plan's 0.05 m/px.
+
+With ``--model NAME`` (a ``map2map autocorrect --model`` name: ``none``, the default,
+is the classical cleaning drawn like a plan; ``thesis``) each map is the whole corrector's
+output, its segments the ones its DXF holds, and the time is the corrector's per map.
 
 Prints, per set, the medians of the four measurements, the share of maps meeting each
 target and all four, and the drawer's milliseconds per map (one OpenCV thread; target
@@ -109,18 +114,36 @@ def _houseexpo(folder: Path) -> list:
     return out
 
 
-def _measure(items, label: str, verbose: bool, thickness: float | None = None) -> None:
+def _drawn(b: np.ndarray, res: float, thickness: float | None, model):
+    """(map, segments px, angle) of the drawer on ``b``'s walls, or of ``model``."""
+    if model is None:
+        d = draw_plan(b == 0, b, res, thickness)
+        return d.map, d.segments, d.angle
+    import warnings
+
+    from map2map.core.grid import OccupancyMap
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        (out,) = model.correct_many([OccupancyMap(b, res)])
+    ac = out.meta["autocorrect"]
+    return out.data, np.asarray(ac["segments_px"], float).reshape(-1, 4), \
+        ac.get("drawn", {}).get("angle", float("nan"))
+
+
+def _measure(items, label: str, verbose: bool, thickness: float | None = None,
+             model=None) -> None:
     rows, ms, cpu = [], [], []
     for name, a, b, res in items:
-        draw_plan(b == 0, b, res, thickness)                       # warm (first call)
+        _drawn(b, res, thickness, model)                            # warm (first call)
         t0, c0 = time.perf_counter(), time.process_time()
-        d = draw_plan(b == 0, b, res, thickness)
+        dmap, segs, angle = _drawn(b, res, thickness, model)
         ms.append(1e3 * (time.perf_counter() - t0))
         cpu.append(1e3 * (time.process_time() - c0))
-        r = drawing_report(d.map, b, a, res, d.segments)
+        r = drawing_report(dmap, b, a, res, segs)
         rows.append(r)
         if verbose:
-            print(f"  {name}: {res:.4f} m/px, angle {d.angle:+.1f}, comp {r['components']}/"
+            print(f"  {name}: {res:.4f} m/px, angle {angle:+.1f}, comp {r['components']}/"
                   f"{r['components_input']}, thick {r['thickness_px']:.1f}/"
                   f"{r['thickness_plan_px']:.1f}, seg {r['segments']}/{r['plan_walls']}, "
                   f"broken {r['broken']}/{r['runs']}, {ms[-1]:.1f} ms")
@@ -156,8 +179,11 @@ def _summary(label: str, rows: list[dict], ms: list[float], cpu: list[float] = (
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--data", type=Path, default=Path("/work/data/ds0"),
-                    help="dataset folder (pairs/NNNNNN/)")
+    ap.add_argument("--data", type=Path, default=None,
+                    help="dataset folder (pairs/NNNNNN/) built by `map2map dataset build`")
+    ap.add_argument("--model", default=None, metavar="NAME",
+                    help="measure `map2map autocorrect --model NAME`'s output (e.g. none, "
+                         "the default, or thesis) instead of the drawer on the input's walls")
     ap.add_argument("--n", type=int, default=None, help="at most this many pairs")
     ap.add_argument("--demo", type=Path, default=None,
                     help="a `map2map demo --out` folder (default: simulate the demo's map)")
@@ -170,20 +196,26 @@ def main(argv: list[str] | None = None) -> int:
                     help="wall thickness in pixels (default: the drawer's, 0.30 m)")
     args = ap.parse_args(argv)
     cv2.setNumThreads(1)
-    if (args.data / "manifest.sqlite").is_file():
-        _measure(_dataset(args.data, args.n), f"dataset {args.data} (256 px)", args.verbose,
-                 args.thickness)
+    model = None
+    if args.model:
+        from map2map.jobs.autocorrect import corrector
+
+        model = corrector(args.model)
+    what = f"autocorrect --model {args.model}" if model else "drawer"
+    if args.data is not None and (args.data / "manifest.sqlite").is_file():
+        _measure(_dataset(args.data, args.n), f"dataset {args.data} (256 px, {what})",
+                 args.verbose, args.thickness, model)
     else:
-        print(f"no dataset at {args.data}: skipped")
+        print(f"no dataset ({args.data}): skipped")
     if not args.no_demo:
         demo, extra = _demo(args.demo)
-        _measure(demo, "demo SLAM map (drawer)", True, args.thickness)
+        _measure(demo, f"demo SLAM map ({what})", True, args.thickness, model)
         for name, a, b, res, out in extra:
             r = drawing_report(out, b, a, res)
             _summary(name, [r], [])
     if args.houseexpo.is_dir():
-        _measure(_houseexpo(args.houseexpo), f"HouseExpo plans simulated ({args.houseexpo})",
-                 True, args.thickness)
+        _measure(_houseexpo(args.houseexpo), f"HouseExpo plans simulated ({args.houseexpo}, "
+                 f"{what})", True, args.thickness, model)
     else:
         print(f"no HouseExpo plans at {args.houseexpo}: skipped")
     return 0
