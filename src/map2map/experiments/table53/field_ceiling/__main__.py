@@ -35,36 +35,12 @@ import warnings
 
 import cv2
 import numpy as np
-from scipy import ndimage
 
-from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from map2map.core.grid import UNKNOWN, OccupancyMap
 from map2map.evaluate.align import AlignParams, align_maps
 from map2map.evaluate.pipeline import EvaluateParams, evaluate_maps
 from map2map.experiments.table53.measure import heldout_pairs_from_dataset
-
-#: Directions a face looks, in channel order (x = column, y = row).
-DIRECTIONS = ("+x", "-x", "+y", "-y")
-
-
-def face_sets(m: np.ndarray) -> np.ndarray:
-    """(4, H, W) bool: occupied pixels whose 4-neighbour in each of :data:`DIRECTIONS` is free.
-
-    >>> m = np.full((6, 6), 127, np.uint8); m[1:5, 2:5] = 255; m[1:5, 1] = 0
-    >>> f = face_sets(m); int(f[0].sum()), int(f[1].sum())
-    (4, 0)
-    """
-    fp = np.pad(m == FREE, 1)
-    nb = (fp[1:-1, 2:], fp[1:-1, :-2], fp[2:, 1:-1], fp[:-2, 1:-1])
-    return np.stack([(m == OCCUPIED) & n for n in nb])
-
-
-def face_distances(plan: np.ndarray, clip: float = 8.0) -> np.ndarray:
-    """(4, H, W) float32: distance to the nearest plan face looking each way, clipped."""
-    out = np.full((4, *plan.shape), clip, np.float32)
-    for k, f in enumerate(face_sets(plan)):
-        if f.any():
-            out[k] = np.minimum(ndimage.distance_transform_edt(~f), clip)
-    return out
+from map2map.learn.ba.field import face_sets, fit_field, warp
 
 
 def plan_in_slam_frame(plan: np.ndarray, slam: np.ndarray) -> np.ndarray:
@@ -74,49 +50,6 @@ def plan_in_slam_frame(plan: np.ndarray, slam: np.ndarray) -> np.ndarray:
     m_cv = np.linalg.inv(half) @ al.rigid @ half          # OpenCV: pixel centres at 0
     return cv2.warpAffine(plan, m_cv[:2], (slam.shape[1], slam.shape[0]),
                           flags=cv2.INTER_NEAREST | cv2.WARP_INVERSE_MAP, borderValue=UNKNOWN)
-
-
-def fit_field(slam: np.ndarray, plan_b: np.ndarray, grid: int, smooth: float,
-              steps: int = 150) -> np.ndarray:
-    """(2, H, W) field (x, y px) fitted to the plan (module docstring, 1)."""
-    import torch
-    import torch.nn.functional as F
-
-    torch.manual_seed(0)
-    H, W = slam.shape
-    d = torch.from_numpy(face_distances(plan_b))[None]
-    fb = torch.from_numpy(face_sets(slam))[None]
-    d0 = torch.where(fb, d, torch.full_like(d, 1e3)).amin(1)
-    w = ((fb.any(1)) & (d0 <= 4)).float()
-    ys, xs = torch.meshgrid(torch.arange(H, dtype=torch.float32),
-                            torch.arange(W, dtype=torch.float32), indexing="ij")
-    f = torch.zeros(1, 2, grid, grid, requires_grad=True)
-    opt = torch.optim.Adam([f], 0.05)
-    big = torch.full_like(d, 1e3)
-
-    def dense(f):
-        return F.interpolate(f, size=(H, W), mode="bicubic", align_corners=False)
-
-    for _ in range(steps):
-        u = dense(f)
-        g = torch.stack([(xs + u[:, 0] + 0.5) / W * 2 - 1, (ys + u[:, 1] + 0.5) / H * 2 - 1], -1)
-        dm = F.grid_sample(d, g, mode="bilinear", padding_mode="border", align_corners=False)
-        dd = torch.where(fb, dm, big).amin(1).clamp(max=6)
-        reg = ((torch.sqrt(dd ** 2 + 0.04) - 0.2) * w).sum() / w.sum().clamp(min=1)
-        sm = (((f[:, :, 1:] - f[:, :, :-1]) ** 2).mean()
-              + ((f[:, :, :, 1:] - f[:, :, :, :-1]) ** 2).mean())
-        opt.zero_grad()
-        (reg + smooth * sm).backward()
-        opt.step()
-    return dense(f.detach())[0].numpy()
-
-
-def warp(m: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """The map with every pixel moved by ``u`` (backward nearest-neighbour resampling)."""
-    H, W = m.shape
-    ys, xs = np.mgrid[0:H, 0:W].astype(np.float32)
-    return cv2.remap(m, xs - u[0], ys - u[1], cv2.INTER_NEAREST,
-                     borderMode=cv2.BORDER_CONSTANT, borderValue=UNKNOWN)
 
 
 def face_offsets(slam: np.ndarray, plan_b: np.ndarray, reach: int = 4) -> np.ndarray:
