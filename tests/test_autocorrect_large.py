@@ -211,7 +211,7 @@ def test_large_refuse_returns_the_map_with_a_warning():
 
 def test_cli_passes_the_new_options(tmp_path, capsys):
     """``map2map autocorrect --large refuse`` returns a large map as it is, with the
-    warning; ``--thickness`` and ``--open-frontiers`` reach the library."""
+    warning (drawn or not); ``--thickness`` and ``--open-frontiers`` reach the library."""
     from map2map.cli.main import main
     from map2map.maps.formats import load_map, save_map
 
@@ -225,7 +225,8 @@ def test_cli_passes_the_new_options(tmp_path, capsys):
     outs = {}
     for t in ("2", "9"):
         assert main(["autocorrect", str(tmp_path / "small.yaml"), "--out",
-                     str(tmp_path / f"s{t}.yaml"), "--thickness", t, "--open-frontiers"]) == 0
+                     str(tmp_path / f"s{t}.yaml"), "--thickness", t, "--open-frontiers",
+                     "--model", "thesis"]) == 0       # the thesis's output, not redrawn
         outs[t] = (load_map(tmp_path / f"s{t}.yaml").data == OCCUPIED).sum()
     assert outs["9"] > outs["2"]
     assert main(["autocorrect", str(tmp_path / "small.yaml"), "--out",

@@ -115,7 +115,8 @@ class DrawnCorrector:
     (an opening only where the input shows free space through the wall: ``base`` may
     have dropped a wall piece as clutter, which is no reason to open the wall). The
     output's ``meta["autocorrect"]["segments_px"]`` are the drawer's segments, so the map
-    and its DXF (``map2map autocorrect --dxf``) show the same walls.
+    and its DXF (``map2map autocorrect --dxf``) show the same walls. A map ``base``
+    returned as it is (``large="refuse"``, or nothing known) stays as it is.
 
     Parameters
     ----------
@@ -152,6 +153,10 @@ class DrawnCorrector:
 
         out = []
         for m, src in zip(self.base.correct_many(maps, **options), maps, strict=True):
+            ac0 = m.meta.get("autocorrect", {})
+            if "refused" in ac0:      # returned as it is (large="refuse", nothing known)
+                out.append(m)
+                continue
             t = None if self.wall_thickness is None else max(1.0, self.wall_thickness
                                                               / m.resolution)
             if self.input_weight > 0:
