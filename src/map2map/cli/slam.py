@@ -8,6 +8,8 @@ from pathlib import Path
 
 
 def register(subparsers) -> None:
+    from ..slam.offline import RECORDED_LOG_PARTICLES
+
     p = subparsers.add_parser(
         "slam",
         help="build a map from a recorded run (CARMEN log, simulator run, BreezySLAM log, ROS bag)",
@@ -30,7 +32,14 @@ def register(subparsers) -> None:
         default="rbpf",
         help="rbpf: GMapping-style particle filter (default); graph: Karto-style graph SLAM",
     )
-    p.add_argument("--particles", type=int, default=None, help="particle count of rbpf (default 5)")
+    p.add_argument(
+        "--particles",
+        type=int,
+        default=None,
+        help=f"particle count of rbpf (default {RECORDED_LOG_PARTICLES} for a recorded log: "
+        "CARMEN, BreezySLAM, ROS bag; 5 for a 'map2map simulate' run, the simulator's "
+        "speed default)",
+    )
     p.add_argument(
         "--resolution", type=float, default=0.05, help="map resolution in m/px (default 0.05)"
     )

@@ -45,6 +45,8 @@ __all__ = [
     "odometry_in_map_frame",
     "default_usable_range",
     "backend_options",
+    "default_particles",
+    "RECORDED_LOG_PARTICLES",
     "map_tiles_estimate",
     "memory_estimate",
     "check_memory",
@@ -65,6 +67,12 @@ PARTICLE_DISCS = 1.5
 #: Bytes per pixel of the map image over the path's extent at the end: the map, its
 #: crop, the figure's reduction (measured: about 9 on the campus).
 IMAGE_BYTES_PER_PIXEL = 12
+#: Particle count of ``rbpf`` for a recorded log (a real robot's: one without the start
+#: pose ``map2map simulate`` writes), where the simulator's speed default of 5 particles
+#: (:class:`map2map.slam.rbpf.GMappingParams`) leaves the Radish maps bent and doubled.
+#: Chosen on the two shared Radish logs (``aces``, ``fhw``), seeds 0-2; see docs/slam.md
+#: "Real data: Radish CARMEN logs" and ``python -m map2map.experiments.slam_accuracy carmen``.
+RECORDED_LOG_PARTICLES = 20
 
 
 @dataclass
@@ -288,6 +296,46 @@ def _has_no_returns(log: CarmenLog) -> bool:
     return False
 
 
+def default_particles(log: CarmenLog, backend: str = "rbpf") -> int | None:
+    """Particle count :func:`run_slam` uses for ``log`` when none is given.
+
+    A simulator run (a log carrying ``map2map simulate``'s start pose,
+    :meth:`~map2map.robotlog.carmen.CarmenLog.plan_start_pose`) keeps the simulator's
+    speed default (5, :class:`~map2map.slam.rbpf.GMappingParams`), so that a map built
+    from it is the one ``simulate`` and the datasets build; a recorded log (CARMEN,
+    BreezySLAM, ROS bag) gets :data:`RECORDED_LOG_PARTICLES`. None for a backend
+    without particles.
+
+    Parameters
+    ----------
+    log : CarmenLog
+        The run to map.
+    backend : str
+        Registered mapper name.
+
+    Returns
+    -------
+    int or None
+
+    Examples
+    --------
+    >>> from map2map.robotlog.carmen import CarmenLog
+    >>> default_particles(CarmenLog([], [])) == RECORDED_LOG_PARTICLES
+    True
+    >>> sim = CarmenLog([], [], params={"map2map_start_x": "0", "map2map_start_y": "0",
+    ...                                 "map2map_start_theta": "0"})
+    >>> default_particles(sim), default_particles(sim, "graph")
+    (5, None)
+    """
+    from .rbpf import GMappingParams
+
+    if backend != "rbpf":
+        return None
+    if log.plan_start_pose() is not None:
+        return GMappingParams().particles
+    return RECORDED_LOG_PARTICLES
+
+
 def backend_options(
     log: CarmenLog,
     backend: str = "rbpf",
@@ -297,6 +345,9 @@ def backend_options(
     **options,
 ) -> dict:
     """The backend's options :func:`run_slam` uses for ``log`` (usable range, beams, particles).
+
+    ``particles`` defaults to :func:`default_particles` (more for a recorded log than
+    for a simulator run); a given count is kept.
 
     Parameters
     ----------
@@ -317,6 +368,8 @@ def backend_options(
     """
     sensor_max = float(log.scans[0].range_max)
     if backend == "rbpf":
+        if particles is None:
+            particles = default_particles(log, backend)
         options.setdefault("particles", particles)
         options.setdefault("max_urange", max_range or default_usable_range(sensor_max))
         if log.scans[0].n_beams <= 200:
@@ -485,7 +538,8 @@ def run_slam(
     backend : str
         Registered mapper name (``"rbpf"``, ``"graph"``).
     particles : int, optional
-        Particle count of ``rbpf``.
+        Particle count of ``rbpf`` (default :func:`default_particles`:
+        :data:`RECORDED_LOG_PARTICLES` for a recorded log, 5 for a simulator run).
     resolution : float
         Map cell size, metres.
     seed : int

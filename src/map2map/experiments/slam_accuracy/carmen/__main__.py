@@ -2,8 +2,9 @@
 
 Usage::
 
-    python3 -m map2map.experiments.slam_accuracy.carmen  # both logs: oracle, rbpf, rbpf:30, graph
+    python3 -m map2map.experiments.slam_accuracy.carmen  # oracle, rbpf:5, rbpf, rbpf:30, graph
     python3 -m map2map.experiments.slam_accuracy.carmen --backends rbpf --logs aces
+    python3 -m map2map.experiments.slam_accuracy.carmen --backends rbpf,rbpf:5 --seeds 0-7
     python3 -m map2map.experiments.slam_accuracy.carmen --figure docs/carmen_real.png
 
 The logs are read from ``$MAP2MAP_SHARED_DATA/carmen`` or ``../shared/data/carmen``
@@ -31,6 +32,11 @@ paper's ``E_rigid,opt``). Printed per log and backend:
 * ``ATE``: RMSE (cm) of our trajectory against the corrected poses (rigidly aligned),
   and ``odo``: the same for the raw odometry;
 * ``cells``: occupied cells of our map, ``s``: CPU seconds of the SLAM run.
+
+``rbpf`` is ``map2map slam``'s default for a recorded log
+(:data:`map2map.slam.offline.RECORDED_LOG_PARTICLES` particles), ``rbpf:N`` N
+particles; ``--seeds 0-7`` repeats every rbpf run with each seed (the filter is
+stochastic: one seed is one draw).
 
 The floor of the metric -- the corrected poses' own map, made by the ``oracle``
 mapper through the same pipeline -- is printed as backend ``oracle``.
@@ -143,38 +149,68 @@ def figure(results, path: Path) -> None:
     plt.close(fig)
 
 
+def parse_seeds(text: str) -> list[int]:
+    """Seeds from ``"0,3"`` or ``"0-7"``.
+
+    Examples
+    --------
+    >>> parse_seeds("0-2"), parse_seeds("4,1")
+    ([0, 1, 2], [4, 1])
+    """
+    seeds: list[int] = []
+    for part in text.split(","):
+        a, sep, b = part.partition("-")
+        seeds += list(range(int(a), int(b) + 1)) if sep else [int(a)]
+    return seeds
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(
         prog="python3 -m map2map.experiments.slam_accuracy.carmen",
         description=__doc__.splitlines()[0],
     )
     ap.add_argument("--logs", default="aces,fhw")
-    ap.add_argument("--backends", default="oracle,rbpf,rbpf:30,graph", help="rbpf:N = N particles")
+    ap.add_argument(
+        "--backends",
+        default="oracle,rbpf:5,rbpf,rbpf:30,graph",
+        help="rbpf:N = N particles; rbpf = map2map slam's default for a recorded log",
+    )
     ap.add_argument("--particles", type=int, default=None)
     ap.add_argument("--max-range", type=float, default=None)
+    ap.add_argument(
+        "--seeds",
+        default="0",
+        help="seeds of the rbpf runs, comma-separated or a range A-B (default 0); "
+        "rbpf is stochastic: check a setting on several",
+    )
     ap.add_argument("--figure", type=Path, help="PNG of the maps over the references")
     args = ap.parse_args(argv)
+    seeds = parse_seeds(args.seeds)
     if not DATA.is_dir():
         print(f"no CARMEN data at {DATA} (set $MAP2MAP_SHARED_DATA)", file=sys.stderr)
         return 1
     print(
-        f"{'log':<5} {'backend':<7} {'mean':>6} {'median':>6} {'p90':>6} {'placed':>7} "
-        f"{'ATE':>6} {'odo':>6} {'cells':>6} {'s':>6}   (cm; s = CPU seconds)"
+        f"{'log':<5} {'backend':<7} {'seed':>4} {'mean':>6} {'median':>6} {'p90':>6} "
+        f"{'placed':>7} {'ATE':>6} {'odo':>6} {'cells':>6} {'s':>6}   (cm; s = CPU seconds)"
     )
     results = []
     for name in args.logs.split(","):
         for spec in args.backends.split(","):
             backend, _, count = spec.partition(":")  # rbpf:30 = 30 particles
-            r = evaluate_log(name, backend, int(count) if count else args.particles, args.max_range)
-            r[0]["backend"] = spec
-            results.append(r)
-            row = r[0]
-            print(
-                f"{row['log']:<5} {row['backend']:<7} {row['mean']:6.1f} {row['median']:6.1f} "
-                f"{row['p90']:6.1f} {row['placed']:7.1f} {row['ate']:6.1f} {row['odo']:6.1f} "
-                f"{row['cells']:6d} {row['cpu']:6.1f}",
-                flush=True,
-            )
+            # only rbpf draws random numbers: one run of the others
+            for seed in seeds if backend == "rbpf" else seeds[:1]:
+                n = int(count) if count else args.particles
+                r = evaluate_log(name, backend, n, args.max_range, seed)
+                r[0]["backend"] = spec
+                r[0]["seed"] = seed
+                results.append(r)
+                row = r[0]
+                print(
+                    f"{row['log']:<5} {row['backend']:<7} {seed:4d} {row['mean']:6.1f} "
+                    f"{row['median']:6.1f} {row['p90']:6.1f} {row['placed']:7.1f} "
+                    f"{row['ate']:6.1f} {row['odo']:6.1f} {row['cells']:6d} {row['cpu']:6.1f}",
+                    flush=True,
+                )
     if args.figure:
         figure([r for r in results if r[0]["backend"] != "oracle"], args.figure)
         print(f"wrote {args.figure}")
