@@ -622,7 +622,9 @@ def test_ctrl_c_stops_a_build_cleanly(plans, tmp_path):
     """Ctrl-C (SIGINT to the whole process group) while workers are mid-pair: one line,
     exit 130, no resource_tracker "leaked semaphore" noise, no lock file left."""
     ds = tmp_path / "DS"
-    args = _cli("dataset", "build", "--out", str(ds), "--plans", str(plans), "--count", "6",
+    # 40 pairs: the build must still be running when the signal lands (6 could all finish
+    # between the first done pair and the SIGINT once SLAM got faster)
+    args = _cli("dataset", "build", "--out", str(ds), "--plans", str(plans), "--count", "40",
                 "--seed", "5", "--source", "both", "--duration", "12", "--size", "32",
                 "--fov", "360", "--workers", "2", "--quiet", "--no-figures")  # fmt: skip
     proc = subprocess.Popen(args, env=_env(), start_new_session=True, text=True,
@@ -637,4 +639,4 @@ def test_ctrl_c_stops_a_build_cleanly(plans, tmp_path):
     assert "leaked" not in err and "Traceback" not in err, err
     assert err.strip().splitlines()[-1] == "map2map: interrupted"
     assert not (ds / ".build.lock").exists()
-    assert 1 <= _done(ds) < 6
+    assert 1 <= _done(ds) < 40
