@@ -627,8 +627,14 @@ def test_ctrl_c_stops_a_build_cleanly(plans, tmp_path):
     args = _cli("dataset", "build", "--out", str(ds), "--plans", str(plans), "--count", "40",
                 "--seed", "5", "--source", "both", "--duration", "12", "--size", "32",
                 "--fov", "360", "--workers", "2", "--quiet", "--no-figures")  # fmt: skip
+    # the build starts with Ctrl-C's default disposition, as from a terminal: a test
+    # process that ignores SIGINT (some runners do) would pass SIG_IGN on to it
+    def default_ctrl_c():
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+
     proc = subprocess.Popen(args, env=_env(), start_new_session=True, text=True,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)  # fmt: skip
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            preexec_fn=default_ctrl_c)  # fmt: skip
     deadline = time.monotonic() + 60
     while proc.poll() is None and _done(ds) < 1 and time.monotonic() < deadline:
         time.sleep(0.05)
