@@ -625,7 +625,7 @@ def test_ctrl_c_stops_a_build_cleanly(plans, tmp_path):
     # 40 pairs: the build must still be running when the signal lands (6 could all finish
     # between the first done pair and the SIGINT once SLAM got faster)
     args = _cli("dataset", "build", "--out", str(ds), "--plans", str(plans), "--count", "40",
-                "--seed", "5", "--source", "both", "--duration", "12", "--size", "32",
+                "--seed", "5", "--source", "both", "--duration", "30", "--size", "32",
                 "--fov", "360", "--workers", "2", "--quiet", "--no-figures")  # fmt: skip
     # the build starts with Ctrl-C's default disposition, as from a terminal: a test
     # process that ignores SIGINT (some runners do) would pass SIG_IGN on to it
