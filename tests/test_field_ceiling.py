@@ -23,7 +23,7 @@ def _room(shift: int = 0) -> np.ndarray:
 def test_face_sets_and_offsets_of_a_shifted_wall():
     plan, slam = _room(0), _room(2)
     f = field.face_sets(slam)
-    assert f[0][30, 14] and not f[1][30, 14]          # the west wall looks +x, into the room
+    assert f[0][30, 14] and not f[2][30, 14]          # the west wall looks +x, into the room
     off = fc.face_offsets(slam, plan)
     off = off[~np.isnan(off)]
     # x faces are 2 px off (the +x face towards the wall, the -x face away), y faces 0

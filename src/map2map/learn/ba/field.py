@@ -15,7 +15,7 @@ Examples
 --------
 >>> import numpy as np
 >>> m = np.full((6, 6), 127, np.uint8); m[1:5, 2:5] = 255; m[1:5, 1] = 0
->>> f = face_sets(m); int(f[0].sum()), int(f[1].sum())   # the wall at column 1 looks +x
+>>> f = face_sets(m); int(f[0].sum()), int(f[2].sum())   # the wall at column 1 looks +x
 (4, 0)
 >>> u = np.zeros((2, 6, 6), np.float32); u[0] = 1.0      # one pixel to the right
 >>> bool((warp(m, u)[1:5, 2] == 0).all())
@@ -26,35 +26,34 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
-from scipy import ndimage
 
-from ...core.grid import FREE, OCCUPIED, UNKNOWN
+from ...core.grid import UNKNOWN
+from ...evaluate.features import side_masks
+from ...evaluate.fitness import distance_map
 
 __all__ = ["DIRECTIONS", "face_sets", "face_distances", "fit_field", "warp"]
 
-#: Directions a face looks, in channel order (x = column, y = row).
-DIRECTIONS = ("+x", "-x", "+y", "-y")
+#: Directions a face looks, in channel order (x = column, y = row): the sides ``k pi/2``
+#: of :func:`map2map.evaluate.features.side_masks` on the grid's axes.
+DIRECTIONS = ("+x", "+y", "-x", "-y")
 
 
 def face_sets(m: np.ndarray) -> np.ndarray:
-    """(4, H, W) bool: occupied pixels whose 4-neighbour in each of :data:`DIRECTIONS` is free.
+    """(4, H, W) bool: occupied pixels whose 4-neighbour in each of :data:`DIRECTIONS` is
+    free -- the evaluation's wall surfaces (:func:`~map2map.evaluate.features.side_masks`)
+    at angle 0.
 
     >>> m = np.full((6, 6), 127, np.uint8); m[1:5, 2:5] = 255; m[1:5, 1] = 0
-    >>> f = face_sets(m); int(f[0].sum()), int(f[1].sum())
+    >>> f = face_sets(m); int(f[0].sum()), int(f[2].sum())
     (4, 0)
     """
-    fp = np.pad(m == FREE, 1)
-    nb = (fp[1:-1, 2:], fp[1:-1, :-2], fp[2:, 1:-1], fp[:-2, 1:-1])
-    return np.stack([(m == OCCUPIED) & n for n in nb])
+    return np.stack(side_masks(m, 0.0))
 
 
 def face_distances(plan: np.ndarray, clip: float = 8.0) -> np.ndarray:
     """(4, H, W) float32: distance to the nearest plan face looking each way, clipped."""
-    out = np.full((4, *plan.shape), clip, np.float32)
-    for k, f in enumerate(face_sets(plan)):
-        if f.any():
-            out[k] = np.minimum(ndimage.distance_transform_edt(~f), clip)
-    return out
+    return np.stack([np.minimum(distance_map(f), clip) for f in face_sets(plan)]
+                    ).astype(np.float32)
 
 
 def fit_field(slam: np.ndarray, plan_b: np.ndarray, grid: int, smooth: float,

@@ -65,7 +65,7 @@ def face_offsets(slam: np.ndarray, plan_b: np.ndarray, reach: int = 4) -> np.nda
     fs, fp = face_sets(slam), face_sets(plan_b)
     H, W = slam.shape
     out = []
-    for k, (step_y, step_x) in enumerate(((0, 1), (0, -1), (1, 0), (-1, 0))):
+    for k, (step_y, step_x) in enumerate(((0, 1), (1, 0), (0, -1), (-1, 0))):  # DIRECTIONS
         ys, xs = np.nonzero(fs[k])
         best = np.full(len(ys), np.nan)
         for s in sorted(range(-reach, reach + 1), key=abs):
