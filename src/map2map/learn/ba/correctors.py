@@ -149,7 +149,7 @@ class DrawnCorrector:
         self.name, self.source = base.name, base.source
 
     def correct_many(self, maps: list[OccupancyMap], **options) -> list[OccupancyMap]:
-        from ...maps.vectorize import draw_plan_map
+        from ...maps.vectorize import draw_plan_map, wall_points
 
         out = []
         for m, src in zip(self.base.correct_many(maps, **options), maps, strict=True):
@@ -160,8 +160,6 @@ class DrawnCorrector:
             t = None if self.wall_thickness is None else max(1.0, self.wall_thickness
                                                               / m.resolution)
             if self.input_weight > 0:
-                from ...maps.vectorize import wall_points
-
                 p0, p1 = wall_points(m.occupied), wall_points(src.occupied)
                 ev = np.concatenate([p0, p1])
                 w = np.concatenate([np.ones(len(p0)), np.full(len(p1), self.input_weight)])
