@@ -112,26 +112,6 @@ def campus(scale: float = 1.0, seed: int = 0):
     return np.asarray(boxes, float), route
 
 
-def drive(route, speed=1.0, turn=0.5, dt=0.2):
-    """True poses every ``dt`` seconds along the route (straight legs, turns in place)."""
-    poses = []
-    x, y = route[0]
-    th = math.atan2(route[1][1] - y, route[1][0] - x)
-    for wx, wy in route[1:]:
-        target = math.atan2(wy - y, wx - x)
-        while True:
-            d = (target - th + math.pi) % (2 * math.pi) - math.pi
-            if abs(d) < 1e-9:
-                break
-            th += max(-turn * dt, min(turn * dt, d))
-            poses.append((x, y, th))
-        n = int(math.hypot(wx - x, wy - y) / (speed * dt))
-        for k in range(1, n + 1):
-            poses.append((x + (wx - x) * k / n, y + (wy - y) * k / n, th))
-        x, y = wx, wy
-    return np.asarray(poses)
-
-
 def cast(boxes, pose, angles, max_range):
     """Ranges from ``pose`` along ``angles`` to the nearest box (``inf``: nothing in range)."""
     x, y, th = pose
@@ -157,10 +137,13 @@ def write_campus_log(path, scale: float = 1.0, seed: int = 0) -> dict:
     """Write the campus run as a CARMEN log; returns its path length, extent and scan count."""
     from map2map.robotlog.base import LaserScan, OdometryReading
     from map2map.robotlog.carmen import write_carmen
+    from map2map.trajectory.timing import time_waypoints
 
     rng = np.random.default_rng(seed)
     boxes, route = campus(scale, seed)
-    truth = drive(route)
+    # the true path: turn in place, then drive, through the route's corners
+    tr = time_waypoints(np.asarray(route, float), v_max=1.0, omega_max=0.5, dt=0.2)
+    truth = np.column_stack([tr.x, tr.y, tr.theta])
     angles = np.deg2rad(np.arange(-90.0, 90.0, 1.0))
     # odometry: 1 % scale error, heading drift of 0.02 deg per metre, small noise
     step = np.diff(truth, axis=0)
@@ -179,7 +162,7 @@ def write_campus_log(path, scale: float = 1.0, seed: int = 0) -> dict:
     for k, pose in enumerate(truth):
         r = cast(boxes, pose, angles, 80.0)
         r = np.where(np.isfinite(r), r + rng.normal(0, 0.02, r.size), np.inf)
-        t = 0.2 * k
+        t = float(tr.t[k])
         scan = LaserScan(t, r.astype(np.float32), float(angles[0]), math.radians(1.0), 0.0, 80.0)
         records.append((OdometryReading(t, *odo[k]), scan, None))
     write_carmen(path, records)
@@ -202,7 +185,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--scale", type=float, default=1.0, help="campus size factor (default 1)")
     ap.add_argument("--backend", choices=["rbpf", "graph", "both"], default="both")
-    ap.add_argument("--particles", type=int, default=None, help="rbpf particles (default 5)")
+    ap.add_argument("--particles", type=int, default=None,
+                    help="rbpf particles (default: map2map slam's for a recorded log, 20)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument(
         "--graph-keyframes",
