@@ -474,12 +474,14 @@ class References:
 
 
 def split_indices(ds: str | os.PathLike, split: str = "test") -> list[int]:
-    """Indices of the simulated pairs of ``split`` in dataset ``ds``, sorted."""
+    """Indices of the simulated pairs of ``split`` in dataset ``ds``, sorted (``"all"``:
+    every split, for a dataset whose plans no model was trained on)."""
     from ...datasets.build import open_dataset
 
     with open_dataset(ds) as man:
         rows = man.rows("done")
-    return sorted(int(r["idx"]) for r in rows if r["split"] == split and r["kind"] == "simulate")
+    return sorted(int(r["idx"]) for r in rows
+                  if split in ("all", r["split"]) and r["kind"] == "simulate")
 
 
 def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int | None = None,

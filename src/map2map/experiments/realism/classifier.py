@@ -1,0 +1,234 @@
+"""A classifier two-sample test of realism (issue #33): can a small CNN, shown a plan and a
+SLAM map of it, tell a generated map from a simulated one on plans it never saw?
+
+Per plan there are two maps, ``a`` (simulated, label 0) and ``b`` (label 1: generated, or
+for the floor another simulated run). The plans are split into ``folds`` groups; for each
+group a fresh CNN is trained on the other groups' plans and scores this group's maps
+(cross-fitting: every map is scored by a network that never saw its plan). Training
+shows both maps of a plan at the same random crop (``crop`` px; same flips and quarter
+turns), so the network can only use how the map renders the plan, not which plans are in
+which class. A map's score is the mean logit over a fixed grid of crops that hold plan
+walls. The result is the ROC AUC over all maps (0.5: indistinguishable; 1: always told
+apart) and the paired share of plans whose ``b`` scores above their ``a``.
+
+The same test on two simulated runs (run 3 against run 2) is its floor: a generator
+passes when its AUC is at most the floor + 0.05 (issue #33). Inputs are four channels:
+the plan's walls and free space, the map's occupied and free cells (unknown is neither).
+
+Deterministic per seed on CPU (same seed, same AUC): torch's deterministic algorithms,
+seeded crops, one seeded network per fold.
+
+Examples
+--------
+>>> rng = np.random.default_rng(0)
+>>> plans = np.full((24, 64, 64), 255, np.uint8); plans[:, :, 30:32] = 0
+>>> a = plans.copy(); b = plans.copy()
+>>> b[:, :, 33:35] = 0                      # every b map saves the wall twice
+>>> r = two_sample_auc(plans, a, b, crop=32, steps=60, seed=0)
+>>> r.auc > 0.9
+True
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from ...core.grid import FREE, OCCUPIED
+
+__all__ = ["ClassifierResult", "two_sample_auc", "encode"]
+
+
+@dataclass
+class ClassifierResult:
+    """:func:`two_sample_auc`'s result.
+
+    Attributes
+    ----------
+    auc : float
+        ROC AUC of the cross-fitted scores, every ``a`` map against every ``b`` map.
+    paired : float
+        Share of plans whose ``b`` map scores above its ``a`` map.
+    plans, folds, steps, crop, seed : int
+    seconds : float
+        Wall time of the whole test.
+    """
+
+    auc: float
+    paired: float
+    plans: int
+    folds: int
+    steps: int
+    crop: int
+    seed: int
+    seconds: float
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def encode(plans: np.ndarray, maps: np.ndarray) -> np.ndarray:
+    """(N, 4, S, S) float32: plan walls, plan free, map occupied, map free.
+
+    Examples
+    --------
+    >>> x = encode(np.array([[[0, 255]]], np.uint8), np.array([[[127, 0]]], np.uint8))
+    >>> x[0, :, 0].tolist()
+    [[1.0, 0.0], [0.0, 1.0], [0.0, 1.0], [0.0, 0.0]]
+    """
+    plans, maps = np.asarray(plans), np.asarray(maps)
+    return np.stack([plans == OCCUPIED, plans == FREE, maps == OCCUPIED, maps == FREE],
+                    axis=1).astype(np.float32)
+
+
+def _net(width: int = 16):
+    import torch.nn as nn
+
+    w = width
+    return nn.Sequential(
+        nn.Conv2d(4, w, 4, stride=2, padding=1), nn.LeakyReLU(0.2),
+        nn.Conv2d(w, 2 * w, 4, stride=2, padding=1), nn.LeakyReLU(0.2),
+        nn.Conv2d(2 * w, 4 * w, 4, stride=2, padding=1), nn.LeakyReLU(0.2),
+        nn.Conv2d(4 * w, 4 * w, 3, padding=1), nn.LeakyReLU(0.2),
+        nn.AdaptiveAvgPool2d(1), nn.Flatten(), nn.Linear(4 * w, 1))
+
+
+def _grid(plans: np.ndarray, crop: int) -> list[np.ndarray]:
+    """Per plan: the top-left corners (y, x) of the scoring crops (half-overlapping grid,
+    crops that hold a plan wall; the centre one if none does)."""
+    s = plans.shape[-1]
+    step = max(crop // 2, 1)
+    starts = np.arange(0, max(s - crop, 0) + 1, step)
+    yy, xx = np.meshgrid(starts, starts, indexing="ij")
+    yy, xx = yy.ravel(), xx.ravel()
+    walls = (plans == OCCUPIED).astype(np.int64)
+    ii = np.pad(walls.cumsum(1).cumsum(2), ((0, 0), (1, 0), (1, 0)))
+    n = (ii[:, yy + crop, xx + crop] - ii[:, yy, xx + crop] - ii[:, yy + crop, xx]
+         + ii[:, yy, xx])
+    out = []
+    for row in n:
+        keep = row > 0
+        if not keep.any():
+            c = (s - crop) // 2
+            out.append(np.array([[c, c]]))
+        else:
+            out.append(np.stack([yy[keep], xx[keep]], 1))
+    return out
+
+
+def _augment(x, k: int, flip: bool):
+    import torch
+
+    x = torch.rot90(x, k, dims=(-2, -1))
+    return torch.flip(x, dims=(-1,)) if flip else x
+
+
+def _train(xa, xb, corners, train_idx, *, crop, steps, batch, lr, seed):
+    import torch
+
+    torch.manual_seed(seed)
+    net = _net()
+    opt = torch.optim.Adam(net.parameters(), lr=lr, betas=(0.5, 0.999))
+    lossf = torch.nn.BCEWithLogitsLoss()
+    rng = np.random.default_rng(seed)
+    y = torch.cat([torch.zeros(batch), torch.ones(batch)])
+    for _ in range(steps):
+        pick = rng.choice(train_idx, batch)
+        cs = []
+        for i in pick:
+            cy, cx = corners[i][rng.integers(len(corners[i]))]
+            cy = int(np.clip(cy + rng.integers(-crop // 4, crop // 4 + 1), 0,
+                             xa.shape[-1] - crop))
+            cx = int(np.clip(cx + rng.integers(-crop // 4, crop // 4 + 1), 0,
+                             xa.shape[-1] - crop))
+            cs.append((i, cy, cx, int(rng.integers(4)), bool(rng.integers(2))))
+        ba = torch.stack([_augment(xa[i, :, cy:cy + crop, cx:cx + crop], k, f)
+                          for i, cy, cx, k, f in cs])
+        bb = torch.stack([_augment(xb[i, :, cy:cy + crop, cx:cx + crop], k, f)
+                          for i, cy, cx, k, f in cs])
+        opt.zero_grad()
+        loss = lossf(net(torch.cat([ba, bb])).squeeze(1), y)
+        loss.backward()
+        opt.step()
+    return net
+
+
+def _score(net, x, corners, idx, crop) -> np.ndarray:
+    import torch
+
+    out = np.empty(len(idx))
+    with torch.no_grad():
+        for j, i in enumerate(idx):
+            c = torch.stack([x[i, :, cy:cy + crop, cx:cx + crop] for cy, cx in corners[i]])
+            out[j] = float(net(c).mean())
+    return out
+
+
+def _auc(neg: np.ndarray, pos: np.ndarray) -> float:
+    """ROC AUC by the Mann-Whitney U (ties count one half)."""
+    from scipy.stats import rankdata
+
+    r = rankdata(np.r_[neg, pos])
+    n0, n1 = len(neg), len(pos)
+    return float((r[n0:].sum() - n1 * (n1 + 1) / 2) / (n0 * n1))
+
+
+def two_sample_auc(plans, a, b, *, folds: int = 2, crop: int = 64, steps: int = 600,
+                   batch: int = 32, lr: float = 1e-3, seed: int = 0, threads: int = 1
+                   ) -> ClassifierResult:
+    """Cross-fitted classifier two-sample test of maps ``b`` against maps ``a`` (module
+    doc).
+
+    Parameters
+    ----------
+    plans, a, b : (N, S, S) uint8
+        Plan ``i``'s two maps are ``a[i]`` (label 0) and ``b[i]`` (label 1).
+    folds : int
+        Plan groups; each is scored by a network trained on the others.
+    crop : int
+        Crop side (px), at most ``S``.
+    steps, batch, lr : int, int, float
+        Adam steps per fold, plans per step (each gives an ``a`` and a ``b`` crop).
+    seed : int
+    threads : int
+        torch CPU threads while it runs (default 1: the small convolutions gain little
+        from more, and lose much when the cores are busy).
+
+    Returns
+    -------
+    ClassifierResult
+    """
+    import torch
+
+    t0 = time.perf_counter()
+    plans, a, b = (np.asarray(x) for x in (plans, a, b))
+    n = len(plans)
+    if not (len(a) == len(b) == n) or n < 2 * folds:
+        raise ValueError(f"need as many a as b maps as plans, at least {2 * folds}: "
+                         f"{len(a)}, {len(b)}, {n}")
+    crop = min(crop, plans.shape[-1])
+    prev = torch.are_deterministic_algorithms_enabled(), torch.get_num_threads()
+    torch.use_deterministic_algorithms(True)
+    torch.set_num_threads(threads)
+    try:
+        xa, xb = torch.from_numpy(encode(plans, a)), torch.from_numpy(encode(plans, b))
+        corners = _grid(plans, crop)
+        group = np.random.default_rng(seed).permutation(n) % folds
+        sa, sb = np.empty(n), np.empty(n)
+        for f in range(folds):
+            test, train = np.flatnonzero(group == f), np.flatnonzero(group != f)
+            net = _train(xa, xb, corners, train, crop=crop, steps=steps, batch=batch, lr=lr,
+                         seed=seed * 1000 + f)
+            net.eval()
+            sa[test] = _score(net, xa, corners, test, crop)
+            sb[test] = _score(net, xb, corners, test, crop)
+    finally:
+        torch.use_deterministic_algorithms(prev[0])
+        torch.set_num_threads(prev[1])
+    auc = _auc(sa, sb)
+    paired = float(np.mean(sb > sa)) if n else math.nan
+    return ClassifierResult(auc, paired, n, folds, steps, crop, seed,
+                            time.perf_counter() - t0)

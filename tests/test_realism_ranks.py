@@ -1,0 +1,147 @@
+"""Realism judged per plan (issue #33): ranks among simulated runs, the classifier
+two-sample test, and the per-plan benchmark end to end on a small simulated dataset."""
+
+from __future__ import annotations
+
+import importlib
+import json
+
+import numpy as np
+import pytest
+
+from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from map2map.experiments.realism.ranks import (
+    EXTREME_MAX,
+    perfect_chance,
+    plan_ranks,
+    rank_table,
+    shuffled_runs,
+)
+
+
+def _runs(n, k, rng, *, integer=False):
+    """``k`` exchangeable runs of ``n`` plans whose statistics differ much more between
+    plans than between runs of a plan."""
+    plan = rng.normal(0, 10, n)
+    runs = [{"x": plan + rng.normal(0, 1, n), "y": rng.poisson(2 + plan.clip(0, 5), n)
+             if integer else plan * 2 + rng.normal(0, 1, n)} for _ in range(k)]
+    return runs
+
+
+@pytest.mark.parametrize("integer", [False, True])
+def test_ranks_of_a_perfect_generator_are_uniform(integer):
+    rng = np.random.default_rng(3)
+    gen, runs = shuffled_runs(_runs(3000, 4, rng, integer=integer), seed=5)
+    rows = rank_table(plan_ranks(gen, runs, stats=("x", "y"), seed=1), 3)
+    for r in rows:
+        assert r.plans == 3000
+        assert abs(r.extreme - 0.5) < 0.035, r     # 3.8 standard errors at 3,000 plans
+        assert abs(r.ends) < 0.045, r              # 3.5 standard errors
+        assert r.p_uniform > 1e-3 and r.p_extreme > 1e-3, r
+        assert r.met
+
+
+def test_ties_are_broken_at_random_not_towards_an_end():
+    """Equal values (a count statistic where every map scores 0) rank uniformly."""
+    zeros = {"x": np.zeros(4000)}
+    rows = rank_table(plan_ranks(zeros, [zeros] * 3, stats=("x",), seed=0), 3)
+    assert abs(rows[0].low - 0.25) < 0.03 and abs(rows[0].high - 0.25) < 0.03
+    again = plan_ranks(zeros, [zeros] * 3, stats=("x",), seed=0)["x"]
+    assert np.array_equal(again, plan_ranks(zeros, [zeros] * 3, stats=("x",), seed=0)["x"])
+
+
+def test_a_shifted_generator_is_caught_at_its_end():
+    rng = np.random.default_rng(4)
+    runs = _runs(600, 4, rng)
+    gen, runs = runs[0], runs[1:]
+    gen = {"x": gen["x"] + 1.0, "y": gen["y"] - 1.0}    # one within-plan sd up / down
+    rows = {r.statistic: r for r in rank_table(plan_ranks(gen, runs, stats=("x", "y")), 3)}
+    assert rows["x"].extreme > EXTREME_MAX and rows["x"].high > rows["x"].low + 0.2
+    assert rows["y"].low > rows["y"].high + 0.2
+    assert rows["x"].p_extreme < 1e-6 and rows["x"].p_ends < 1e-6 and not rows["x"].met
+
+
+def test_nan_values_leave_their_plan_out_of_that_statistic():
+    g = {"x": np.array([1.0, np.nan, 3.0])}
+    runs = [{"x": np.array([2.0, 2.0, np.nan])}]
+    rk = plan_ranks(g, runs, stats=("x",))["x"]
+    assert rk.tolist() == [1, 0, 0]
+    assert rank_table({"x": rk}, 1)[0].plans == 1
+
+
+def test_perfect_chance_of_the_issue_target_grows_with_the_plans():
+    one_600, all_600 = perfect_chance(600, 3, 12, draws=5000)
+    one_3000, _ = perfect_chance(3000, 3, 12, draws=5000)
+    assert 0.85 < one_600 < 0.95 and all_600 < 0.5 and one_3000 > 0.99
+
+
+def _maps(n, speckle_seed, doubled):
+    """16 plans (one wall each, the same for every call) and a map of each: the wall,
+    speckle drawn from ``speckle_seed``, and the wall saved a second time if ``doubled``."""
+    rng, speck = np.random.default_rng(0), np.random.default_rng(speckle_seed)
+    plans = np.full((n, 64, 64), FREE, np.uint8)
+    plans[:, :, :4] = UNKNOWN
+    maps = plans.copy()
+    for i, c in enumerate(rng.integers(16, 48, n)):
+        plans[i, :, c:c + 2] = OCCUPIED
+        maps[i, :, c:c + 2] = OCCUPIED
+        maps[i, speck.random(64) < 0.1, int(speck.integers(8, 60))] = OCCUPIED
+        if doubled:
+            maps[i, :, c + 4:c + 6] = OCCUPIED
+    return plans, maps
+
+
+def test_classifier_tells_a_generator_apart_and_is_deterministic_per_seed():
+    pytest.importorskip("torch")
+    from map2map.experiments.realism.classifier import two_sample_auc
+
+    plans, a = _maps(16, 1, False)
+    _, b = _maps(16, 2, True)                            # walls saved twice
+    r1 = two_sample_auc(plans, a, b, crop=32, steps=80, seed=2)
+    r2 = two_sample_auc(plans, a, b, crop=32, steps=80, seed=2)
+    assert r1.auc == r2.auc and r1.paired == r2.paired
+    assert r1.auc > 0.9 and r1.paired > 0.9
+    _, c = _maps(16, 3, False)                           # the same process: no signal
+    same = two_sample_auc(plans, a, c, crop=32, steps=80, seed=2)
+    assert same.auc < 0.8
+
+
+@pytest.fixture(scope="module")
+def small_dataset(tmp_path_factory):
+    from map2map.datasets.build import build_dataset
+    from map2map.datasets.pair import BuildParams
+    from map2map.maps.ros import save_ros_map
+
+    folder = tmp_path_factory.mktemp("plans")
+    d = np.full((50, 70), 127, np.uint8)
+    d[2:-2, 2:-2] = 0
+    d[4:-4, 4:-4] = 255
+    d[4:-4, 35] = 0
+    d[10:30, 35] = 255
+    save_ros_map(OccupancyMap(d, 0.05), folder / "room.yaml")
+    ds = tmp_path_factory.mktemp("ds") / "DS"
+    p = BuildParams(source="simulate", duration=8.0, size=32, fov=360.0)
+    build_dataset(ds, str(folder), 4, 7, p, workers=0, progress=False)
+    return ds
+
+
+def test_per_plan_benchmark_end_to_end(small_dataset, tmp_path, capsys):
+    pytest.importorskip("torch")
+    mod = importlib.import_module("map2map.experiments.realism.per_plan.__main__")
+    out_json, fig = tmp_path / "r.json", tmp_path / "f.png"
+    args = ["--data", str(small_dataset), "--split", "all", "--cache2",
+            str(tmp_path / "c2.npz"), "--cache3", str(tmp_path / "c3.npz"), "--model",
+            "--classifier-steps", "20", "--json", str(out_json), "--figure", str(fig)]
+    assert mod.main(args) == 0
+    out = capsys.readouterr().out
+    assert "4 plans ('all'" in out
+    assert "run 3 among run 1 and run 2" in out and "parametric: rank among 3" in out
+    assert "run 2 (floor)" in out and fig.stat().st_size > 1000
+    rep = json.loads(out_json.read_text())
+    assert rep["plans"] == 4 and set(rep["classifier"]) == {"run 2 (floor)", "parametric"}
+    assert all(r["plans"] <= 4 for r in rep["ranks"]["parametric"])
+    # the runs are cached: a second call simulates nothing and prints the same ranks
+    assert mod.main(args) == 0
+    rep2 = json.loads(out_json.read_text())
+    assert rep2["ranks"] == rep["ranks"] and rep2["classifier"]["parametric"]["auc"] == \
+        rep["classifier"]["parametric"]["auc"]
