@@ -209,3 +209,13 @@ def test_streaks_through_a_closed_wall():
     assert int(streak.sum()) == 3
     fo, _ = frontier(m)
     assert fo > 0.0                                          # the rays are open frontier
+
+
+def test_empty_maps_give_nan_not_errors():
+    unknown = np.full((40, 40), UNKNOWN, np.uint8)
+    free = np.full((40, 40), FREE, np.uint8)
+    s = slam_error_stats(unknown, free)                      # nothing mapped, no plan wall
+    assert all(math.isnan(v) for v in s.values())
+    s = slam_error_stats(free, free)     # all free: the square's edge borders the unknown
+    assert math.isnan(s["doubled"]) and math.isnan(s["room_rot"])
+    assert s["frontier_open"] == 1.0 and s["frontier_rough"] == 1.0 and s["streaks"] == 0.0
