@@ -395,6 +395,16 @@ def room_rotation(m: np.ndarray, plan: np.ndarray, rooms: np.ndarray | None = No
     """``room_rot`` of the module doc: the mean ``|angle|`` of :func:`room_rotations`,
     weighted by the rooms' occupied map cells (NaN if no room counts).
 
+    Parameters
+    ----------
+    m, plan, rooms
+        As for :func:`room_rotations`.
+
+    Returns
+    -------
+    float
+        Degrees, in [0, 45).
+
     Examples
     --------
     >>> plan = np.full((60, 60), 127, np.uint8)
@@ -416,6 +426,17 @@ def _open_border(free: np.ndarray, far: np.ndarray) -> np.ndarray:
 
 def frontier(m: np.ndarray) -> tuple[float, float]:
     """``(frontier_open, frontier_rough)`` of the module doc for map ``m``.
+
+    Parameters
+    ----------
+    m : (N, N) uint8
+        Ternary map (outside the square counts as unknown).
+
+    Returns
+    -------
+    (float, float)
+        The open share of the free border (NaN with no free border) and the open
+        frontier's roughness (NaN with no open frontier, or none after the closing).
 
     Examples
     --------
@@ -451,6 +472,11 @@ def frontier(m: np.ndarray) -> tuple[float, float]:
 
 def streak_components(m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The laser streaks of map ``m`` (module doc, ``streaks``).
+
+    Parameters
+    ----------
+    m : (N, N) uint8
+        Ternary map.
 
     Returns
     -------
@@ -497,6 +523,16 @@ def streak_components(m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def streaks(m: np.ndarray) -> float:
     """``streaks`` of the module doc: laser streaks per 10,000 free pixels of map ``m``.
+
+    Parameters
+    ----------
+    m : (N, N) uint8
+        Ternary map.
+
+    Returns
+    -------
+    float
+        NaN for a map without free pixels.
 
     Examples
     --------
