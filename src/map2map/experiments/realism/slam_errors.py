@@ -61,7 +61,7 @@ square counts as unknown. "Occupied" below is ``== 0``, "free" ``== 255``.
   one: the closing fills notches, bays and holes of unknown narrower than about 5 px.
   NaN with no open frontier, or none left after the closing (a frontier of small holes
   only). Measured: 1.00 for a straight cut, 1.25 / 1.83 / 2.09 for an edge whose every
-  row ends at a random column within +-1 / 2 / 3 px.
+  row ends at a random column within +-1 / 2 / 3 px (one random draw each).
 * ``streaks``: laser streaks: free pixels that a binary opening of the free mask with a
   disc of radius :data:`STREAK_RADIUS` px removes (thin free protrusions, at most 4 px
   wide), grouped into 8-connected components; a component counts when it has at least
