@@ -38,8 +38,14 @@ def _plan(n=48) -> np.ndarray:
 def test_map_stats_of_hand_made_maps():
     plan = _plan()
     s = map_stats(plan, plan)
+    assert list(s) == list(STATS) == ["wall_err", "wall_seen", "free_mapped", "unknown",
+                                      "spurious", "thickness", "bend", "doubled", "room_rot",
+                                      "frontier_open", "frontier_rough", "streaks"]
     assert s["wall_err"] == 0 and s["wall_seen"] == 1 and s["free_mapped"] == 1
     assert s["unknown"] == 0 and s["spurious"] == 0
+    # issue #33's SLAM errors (tests/test_realism_stats.py): none on the plan itself
+    assert s["doubled"] == s["room_rot"] == s["frontier_open"] == s["streaks"] == 0
+    assert math.isnan(s["frontier_rough"])
     m = plan.copy()
     m[:, 30:] = np.where(m[:, 30:] == FREE, UNKNOWN, m[:, 30:])
     m[10:12, 12:14] = OCCUPIED                      # a spurious blob 8 px from any wall
@@ -290,7 +296,7 @@ def test_null_ratios_are_a_perfect_generators_scatter_and_flag_a_shifted_one():
     med = np.median(null.ratios, 0)
     assert np.all((med > 0.75) & (med < 1.35))
     p = null.p_within()
-    assert 0.0 < p["worst"] < min(p[s] for s in STATS) <= 1.0  # all 7 at once: rarer
+    assert 0.0 < p["worst"] < min(p[s] for s in STATS) <= 1.0  # all at once: rarer
     q = null.quantiles()
     assert q["worst"][0] >= max(q[s][0] for s in STATS) and q["worst"][3] > TARGET_RATIO
     shifted = {s: plan_effect[s] + rng.normal(0, 0.3, n) + 0.1 for s in STATS}

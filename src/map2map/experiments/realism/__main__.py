@@ -90,6 +90,7 @@ from pathlib import Path
 import numpy as np
 
 from map2map.experiments.realism.measure import (
+    STAT_WIDTH,
     format_null,
     format_realism_table,
     null_ratios,
@@ -311,12 +312,13 @@ def _against_floor(rows: list, null=None) -> None:
     print("\nagainst the floor: each ratio beside a third simulated run's on the same plans"
           + ("; in brackets the share of a perfect generator's draws scoring lower"
              if null is not None else ""))
-    print(f"{'statistic':>11} {'run 3':>16} " + " ".join(f"{g[:28]:>28}" for g in others))
+    print(f"{'statistic':>{STAT_WIDTH}} {'run 3':>16} "
+          + " ".join(f"{g[:28]:>28}" for g in others))
     for st in stats:
-        print(f"{st:>11} {cell(ratio['simulated run 3', st], st, 16)} "
+        print(f"{st:>{STAT_WIDTH}} {cell(ratio['simulated run 3', st], st, 16)} "
               + " ".join(cell(ratio[g, st], st, 28) for g in others))
     worst = {g: max(ratio[g, st] for st in stats) for g in ["simulated run 3"] + others}
-    print(f"{'worst':>11} {cell(worst['simulated run 3'], 'worst', 16)} "
+    print(f"{'worst':>{STAT_WIDTH}} {cell(worst['simulated run 3'], 'worst', 16)} "
           + " ".join(cell(worst[g], "worst", 28) for g in others))
 
 

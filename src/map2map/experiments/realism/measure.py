@@ -22,6 +22,21 @@ per map, on the dataset's square (``N x N`` px, thesis 4.1 preprocessing):
   door jambs of the plan are left out, so only bending the map added counts; 0 for a
   straight wall).
 
+and five statistics of SLAM errors (issue #33; exact definitions in
+:mod:`map2map.experiments.realism.slam_errors`):
+
+* ``doubled``        share of the plan's observed straight wall centre-line pixels at
+  which the map shows two or more separate wall runs across the wall (a wall saved
+  twice);
+* ``room_rot``       per-room rotation of the map against the plan (degrees): mean
+  ``|angle|`` over the plan's rooms, weighted by their occupied map cells;
+* ``frontier_open``  share of the map's free border that ends in unknown more than 2 px
+  from every occupied cell;
+* ``frontier_rough`` that open frontier's length over its length after a closing of the
+  free mask (1: smooth);
+* ``streaks``        laser streaks (thin, elongated free protrusions into unknown) per
+  10,000 free pixels.
+
 Each statistic's distribution over the generated maps is compared with its distribution
 over simulated run 1 (the dataset's own SLAM maps) by the 1-D Wasserstein distance, and
 normalised by the same distance between simulated run 2 (:func:`map2map.datasets.rerun.
@@ -71,6 +86,7 @@ from scipy import ndimage
 from scipy.stats import wasserstein_distance
 
 from ...core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from .slam_errors import SLAM_ERROR_INFO, SLAM_ERROR_STATS, slam_error_stats
 
 __all__ = ["STATS", "STAT_INFO", "TARGET_RATIO", "map_stats", "stats_of", "RealismRow",
            "realism_table", "format_realism_table", "NullRatios", "null_ratios",
@@ -78,7 +94,8 @@ __all__ = ["STATS", "STAT_INFO", "TARGET_RATIO", "map_stats", "stats_of", "Reali
            "split_indices", "seen_on_square", "native_seen",
            "pair_square_resolution"]
 
-STATS = ("wall_err", "wall_seen", "free_mapped", "unknown", "spurious", "thickness", "bend")
+STATS = ("wall_err", "wall_seen", "free_mapped", "unknown", "spurious", "thickness", "bend",
+         *SLAM_ERROR_STATS)
 #: What each statistic is (units).
 STAT_INFO = {
     "wall_err": "mean distance of occupied cells to plan walls (px)",
@@ -88,7 +105,10 @@ STAT_INFO = {
     "spurious": "occupied fragments > 3 px from every plan wall (count)",
     "thickness": "wall thickness (px)",
     "bend": "bent-wall curvature: RMS px off a fragment's principal line",
+    **SLAM_ERROR_INFO,
 }
+#: Width of the statistic column of the printed tables (the longest name).
+STAT_WIDTH = max(11, *(len(s) for s in STATS))
 #: Issue #15's target for every statistic's Wasserstein ratio.
 TARGET_RATIO = 1.5
 #: :func:`format_realism_table` puts a longer generator name on a line of its own.
@@ -109,7 +129,8 @@ def map_stats(m: np.ndarray, plan: np.ndarray) -> dict[str, float]:
     -------
     dict
         One float per name of :data:`STATS` (``wall_err`` is NaN for a map without
-        occupied cells).
+        occupied cells; the SLAM-error statistics are NaN where
+        :mod:`~map2map.experiments.realism.slam_errors` says).
     """
     from ...learn.training.data import wall_thickness_px
 
@@ -136,6 +157,7 @@ def map_stats(m: np.ndarray, plan: np.ndarray) -> dict[str, float]:
         "spurious": float(spurious),
         "thickness": float(wall_thickness_px(m[None])) if occ.any() else 0.0,
         "bend": bend,
+        **slam_error_stats(m, plan),
     }
 
 
@@ -300,11 +322,12 @@ def format_realism_table(rows: list[RealismRow], name: str = "generated") -> str
         name = "generated"
     w = max(9, len(name))
     ci = any(math.isfinite(r.ratio_even) or math.isfinite(r.ratio_odd) for r in rows)
-    out.append(f"{'statistic':>11} {name:>{w}} {'sim 1':>8} {'sim 2':>8} {'W(gen,1)':>9} "
-               f"{'W(2,1)':>8} {'ratio':>7}" + (f" {'even / odd':>13}" if ci else ""))
+    out.append(f"{'statistic':>{STAT_WIDTH}} {name:>{w}} {'sim 1':>8} {'sim 2':>8} "
+               f"{'W(gen,1)':>9} {'W(2,1)':>8} {'ratio':>7}"
+               + (f" {'even / odd':>13}" if ci else ""))
     for r in rows:
-        out.append(f"{r.statistic:>11} {r.generated:>{w}.3f} {r.sim1:>8.3f} {r.sim2:>8.3f} "
-                   f"{r.w_generated:>9.3f} {r.w_sims:>8.3f} {r.ratio:>7.2f}"
+        out.append(f"{r.statistic:>{STAT_WIDTH}} {r.generated:>{w}.3f} {r.sim1:>8.3f} "
+                   f"{r.sim2:>8.3f} {r.w_generated:>9.3f} {r.w_sims:>8.3f} {r.ratio:>7.2f}"
                    + (f" {_halves(r):>13}" if ci else ""))
     valid = [r for r in rows if r.met is not None]
     if not valid:
@@ -387,8 +410,8 @@ def null_ratios(runs, *, draws: int = 2000, seed: int = 0) -> NullRatios:
     >>> rng = np.random.default_rng(1)
     >>> runs = [{s: rng.normal(0.0, 1.0, 200) for s in STATS} for _ in range(3)]
     >>> null = null_ratios(runs, draws=200)
-    >>> null.ratios.shape, 0.7 < float(np.median(null.ratios)) < 1.4
-    ((200, 7), True)
+    >>> null.ratios.shape == (200, len(STATS)), 0.7 < float(np.median(null.ratios)) < 1.4
+    (True, True)
     """
     runs = list(runs)
     if len(runs) < 3:
@@ -421,10 +444,11 @@ def format_null(null: NullRatios, target: float = TARGET_RATIO) -> str:
     """
     q = null.quantiles()
     p = null.p_within(target)
-    out = [f"{'statistic':>11} {'median':>6} {'90 %':>6} {'95 %':>6} {'99 %':>6} "
+    out = [f"{'statistic':>{STAT_WIDTH}} {'median':>6} {'90 %':>6} {'95 %':>6} {'99 %':>6} "
            f"{f'P(<={target:g})':>7}"]
     for s in (*STATS, "worst"):
-        out.append(f"{s:>11} " + " ".join(f"{x:>6.2f}" for x in q[s]) + f" {p[s]:>7.3f}")
+        out.append(f"{s:>{STAT_WIDTH}} " + " ".join(f"{x:>6.2f}" for x in q[s])
+                   + f" {p[s]:>7.3f}")
     return "\n".join(out)
 
 

@@ -10,7 +10,9 @@ The network runs once; each variant only redraws the drift.
 A variant with ``"rooms": true`` is a room-wise drift (:mod:`map2map.learn.ab.room_drift`;
 its other fields are ``RoomDriftParams``'), e.g. ``'{"rooms": true, "rot_deg": 1.5}'``.
 
-Prints, per variant, the seven ratios and the worst, then the generated maps' means.
+Prints, per variant, every statistic's ratio
+(:data:`~map2map.experiments.realism.measure.STATS`) and the worst, then the generated
+maps' means.
 """
 
 from __future__ import annotations
