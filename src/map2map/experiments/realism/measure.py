@@ -88,7 +88,8 @@ from scipy.stats import wasserstein_distance
 from ...core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from .slam_errors import SLAM_ERROR_INFO, SLAM_ERROR_STATS, slam_error_stats
 
-__all__ = ["STATS", "STAT_INFO", "TARGET_RATIO", "map_stats", "stats_of", "RealismRow",
+__all__ = ["STATS", "STAT_INFO", "TARGET_RATIO", "map_stats", "stats_of", "stats_of_sets",
+           "RealismRow",
            "realism_table", "format_realism_table", "NullRatios", "null_ratios",
            "format_null", "References", "simulated_references",
            "split_indices", "seen_on_square", "native_seen",
@@ -117,7 +118,8 @@ NAME_WIDTH = 24
 SAVE_EVERY_S = 60.0
 
 
-def map_stats(m: np.ndarray, plan: np.ndarray) -> dict[str, float]:
+def map_stats(m: np.ndarray, plan: np.ndarray, rooms: np.ndarray | None = None
+              ) -> dict[str, float]:
     """The statistics of the module doc for SLAM map ``m`` of ``plan`` (same square).
 
     Parameters
@@ -157,7 +159,7 @@ def map_stats(m: np.ndarray, plan: np.ndarray) -> dict[str, float]:
         "spurious": float(spurious),
         "thickness": float(wall_thickness_px(m[None])) if occ.any() else 0.0,
         "bend": bend,
-        **slam_error_stats(m, plan),
+        **slam_error_stats(m, plan, rooms),
     }
 
 
@@ -204,6 +206,28 @@ def stats_of(maps, plans) -> dict[str, np.ndarray]:
     """:func:`map_stats` of every ``(map, plan)``: ``{statistic: (N,) array}``."""
     rows = [map_stats(m, p) for m, p in zip(maps, plans, strict=True)]
     return {s: np.array([r[s] for r in rows], float) for s in STATS}
+
+
+def stats_of_sets(sets: dict, plans) -> dict[str, dict[str, np.ndarray]]:
+    """:func:`stats_of` of several map stacks of the same ``plans`` (``{name: (N, S, S)}``),
+    each plan's rooms segmented once for all of them (the same values).
+
+    Examples
+    --------
+    >>> plan = np.full((32, 32), 255, np.uint8); plan[:, 0] = plan[:, -1] = 0
+    >>> both = stats_of_sets({"a": plan[None], "b": plan[None]}, plan[None])
+    >>> both["a"]["wall_seen"].tolist() == stats_of(plan[None], plan[None])["wall_seen"].tolist()
+    True
+    """
+    from ...learn.ab.room_drift import segment_rooms
+
+    rows: dict[str, list] = {k: [] for k in sets}
+    for i, p in enumerate(plans):
+        rooms = segment_rooms(p, fill=False)   # as slam_errors.room_rotations does
+        for k, maps in sets.items():
+            rows[k].append(map_stats(maps[i], p, rooms))
+    return {k: {s: np.array([r[s] for r in v], float) for s in STATS}
+            for k, v in rows.items()}
 
 
 @dataclass

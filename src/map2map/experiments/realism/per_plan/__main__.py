@@ -7,9 +7,11 @@ three simulated SLAM maps: run 1 (the dataset's pair), runs 2 and 3 (the same pl
 start, other simulation seeds; :func:`map2map.experiments.realism.measure.
 simulated_references`, slow, cached in ``--cache2`` / ``--cache3``). Generators: the
 parametric model (thesis 3.2, along run 2's true path), and per ``--model`` the network
-alone (dropout off, no drift, no coverage, no traces, nearest-neighbour upsampling) and
-the whole ``map2map synthesize`` pipeline (its defaults: rooms drift, coverage of its own
-exploration at the plan's resolution, LIDAR traces).
+alone (on the pair's square as trained; dropout off, no drift, no coverage, no traces,
+nearest-neighbour upsampling) and the whole ``map2map synthesize`` (its defaults: dropout
+on, rooms drift, coverage of its own exploration, LIDAR traces) run on the pair's plan at
+its own resolution and cut with the pair's window, as the simulated runs are; its first
+of three hypotheses is the generated map.
 
 Printed, per generator:
 
@@ -22,13 +24,13 @@ Printed, per generator:
 2. **Classifier** (:mod:`map2map.experiments.realism.classifier`): cross-fitted AUC of a
    small CNN telling (plan, generated) from (plan, run 3), beside the same test on (plan,
    run 2) against (plan, run 3), the floor.
-3. **Diversity** (``--diversity-plans N``): mean pairwise disagreement of three
-   ``synthesize`` hypotheses of a plan over that of its three simulated runs (target 0.8 -
-   1.25), and the network's own share (dropout alone, everything else off).
+3. **Diversity**: mean pairwise disagreement of ``synthesize``'s three hypotheses of a
+   plan over that of its three simulated runs (target 0.8 - 1.25), and the network's own
+   share (three hypotheses with only its dropout, drift, coverage and traces off).
 
     python -m map2map.experiments.realism.per_plan --data DS --split all \\
         --cache2 refs2.npz --cache3 refs3.npz [--plans N] [--model pretrained ...] \\
-        [--classifier-steps 600] [--diversity-plans 100] [--figure F.png] [--json F]
+        [--classifier-steps 600] [--figure F.png] [--json F]
 """
 
 from __future__ import annotations
@@ -56,14 +58,12 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0, help="seed of everything drawn here")
     ap.add_argument("--classifier-steps", type=int, default=600,
                     help="Adam steps per fold of the classifier (0: no classifier test)")
-    ap.add_argument("--diversity-plans", type=int, default=0, metavar="N",
-                    help="measure the diversity of 3 hypotheses on the first N plans")
     ap.add_argument("--figure", help="PNG: plan, runs 1-3 and each generator on 6 plans")
     ap.add_argument("--json", help="write every figure printed here")
     args = ap.parse_args(argv)
 
     from map2map.experiments.realism.classifier import two_sample_auc
-    from map2map.experiments.realism.measure import simulated_references, stats_of
+    from map2map.experiments.realism.measure import simulated_references, stats_of_sets
     from map2map.experiments.realism.ranks import (
         format_rank_table,
         perfect_chance,
@@ -80,12 +80,14 @@ def main(argv=None) -> int:
     plans = r2.a
     runs = {"run 1": r2.sim1, "run 2": r2.sim2, "run 3": r3.sim2}
     gens = {"parametric": r2.parametric}
+    hyps = {}
     for m in args.model:
-        gens.update(_model_maps(m, args, r2))
+        g, hyps[m] = _model_maps(m, args, r2)
+        gens.update(g)
     print(f"{len(plans)} plans ('{args.split}' of {args.data}, {plans.shape[-1]} px); "
           f"maps made in {time.perf_counter() - t0:.0f} s")
     t1 = time.perf_counter()
-    st = {k: stats_of(v, plans) for k, v in {**runs, **gens}.items()}
+    st = stats_of_sets({**runs, **gens}, plans)
     print(f"statistics of {len(st)} x {len(plans)} maps: {time.perf_counter() - t1:.0f} s")
     report: dict = {"data": str(args.data), "split": args.split, "plans": len(plans),
                     "indices": [int(i) for i in both], "seed": args.seed, "ranks": {},
@@ -123,22 +125,20 @@ def main(argv=None) -> int:
             print(f"  {name}: AUC {auc:.3f} - floor {floor:.3f} = {auc - floor:+.3f} "
                   f"(target <= +0.05: {'met' if auc - floor <= 0.05 else 'NOT met'})")
 
-    if args.diversity_plans and args.model:
-        n = min(args.diversity_plans, len(plans))
-        sims = _sim_diversity(plans[:n], [v[:n] for v in runs.values()])
-        print(f"\nDiversity on the first {n} plans: mean pairwise disagreement (share of the "
-              f"plan's known pixels); simulated runs 1-3: {np.mean(sims):.2%}")
-        report["diversity"]["simulated"] = float(np.mean(sims))
-        for m in args.model:
-            full, net_only = _model_diversity(m, plans[:n], r2.resolution[:n], args.seed)
-            ratio = float(np.mean(full) / np.mean(sims))
-            share = float(np.mean(net_only) / np.mean(full))
-            print(f"{m}: synthesize {np.mean(full):.2%} (ratio {ratio:.2f}, target "
-                  f"0.8-1.25: {'met' if 0.8 <= ratio <= 1.25 else 'NOT met'}); the network "
-                  f"alone (dropout) {np.mean(net_only):.2%}, {share:.0%} of it")
-            report["diversity"][m] = {"synthesize": float(np.mean(full)), "ratio": ratio,
-                                      "network": float(np.mean(net_only)),
-                                      "network_share": share}
+    if hyps:
+        sims = _diversity(np.stack(list(runs.values()), 1), plans)
+        print(f"\nDiversity: mean pairwise disagreement of a plan's 3 maps (share of its "
+              f"known pixels), mean over {len(plans)} plans; simulated runs 1-3: "
+              f"{sims.mean():.2%}")
+        report["diversity"]["simulated"] = float(sims.mean())
+        for m, h in hyps.items():
+            full, drop = _diversity(h["synthesize"], plans), _diversity(h["dropout"], plans)
+            ratio, share = float(full.mean() / sims.mean()), float(drop.mean() / full.mean())
+            print(f"{m}: synthesize {full.mean():.2%}, ratio {ratio:.2f} (target 0.8-1.25: "
+                  f"{'met' if 0.8 <= ratio <= 1.25 else 'NOT met'}); the network's dropout "
+                  f"alone {drop.mean():.2%}, {share:.0%} of it")
+            report["diversity"][m] = {"synthesize": float(full.mean()), "ratio": ratio,
+                                      "network": float(drop.mean()), "network_share": share}
     if args.figure:
         _figure(args.figure, plans, runs, gens, args.seed)
         print(f"\nfigure: {args.figure}")
@@ -148,54 +148,60 @@ def main(argv=None) -> int:
     return 0
 
 
-def _model_maps(model: str, args, refs) -> dict:
-    """The network alone and the whole ``synthesize`` pipeline on every plan's square."""
-    from map2map.experiments.realism.measure import native_seen
+def _model_maps(model: str, args, refs) -> tuple[dict, dict]:
+    """The network alone on every plan's square, and ``map2map synthesize`` (its defaults,
+    3 hypotheses, and 3 with only the network's dropout) on every plan at its own
+    resolution, cut to the pair's square as its simulated runs are. Returns the
+    generators' maps (the pipeline's first hypothesis) and the hypotheses."""
     from map2map.learn.ab.model import load_ab_model
     from map2map.learn.ab.synthesize import synthesize_squares
 
     net = load_ab_model(model)
     base = "Model_AB" if model == "pretrained" else f"AB:{Path(model).name}"
-    plans = refs.a
-    alone = synthesize_squares(net, plans, seed=args.seed, render="plain", drift="none",
+    alone = synthesize_squares(net, refs.a, seed=args.seed, render="plain", drift="none",
                                coverage="none", traces="none")
-    seen = native_seen(args.data, refs.indices, plans.shape[-1], seed=args.seed)
+    hyp = _native_hypotheses(args.data, refs.indices, net, args.seed, refs.a.shape[-1])
+    return ({f"{base} network alone": alone, f"{base} synthesize": hyp["synthesize"][:, 0]},
+            hyp)
+
+
+def _native_hypotheses(ds, indices, net, seed: int, size: int) -> dict:
+    """Per pair: ``synthesize`` (3 hypotheses, its defaults) and the same with drift,
+    coverage and traces off (the network's dropout alone) of the pair's plan (``A.yaml``,
+    its own resolution), cut with the pair's window to its ``size`` px square."""
+    from tqdm.auto import tqdm
+
+    from map2map.datasets.pair import crop_box, preprocess_pair
+    from map2map.datasets.pairfolder import PLAN_YAML, SLAM_YAML, pair_dir
+    from map2map.learn.ab.synthesize import synthesize
+    from map2map.maps.formats import load_map
+
+    out = {"synthesize": [], "dropout": []}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        whole = synthesize_squares(net, plans, seed=args.seed, render="slam", drift="rooms",
-                                   resolution=refs.resolution, coverage="explore",
-                                   traces="lidar", seen=seen)
-    return {f"{base} network alone": alone, f"{base} synthesize": whole}
+        for i in tqdm(indices, desc="synthesize", unit="plan"):
+            folder = pair_dir(ds, int(i))
+            a, b = load_map(folder / PLAN_YAML), load_map(folder / SLAM_YAML)
+            box = crop_box(a, b)
+            for key, kw in (("synthesize", {}),
+                            ("dropout", {"drift": "none", "coverage": "none",
+                                         "traces": "none"})):
+                res = synthesize(a, net, samples=3, seed=seed + int(i), **kw)
+                out[key].append(np.stack([preprocess_pair(a, h, size, 0, box)[1]
+                                          for h in res.maps]))
+    return {k: np.stack(v) for k, v in out.items()}
 
 
-def _sim_diversity(plans, runs) -> list[float]:
+def _diversity(maps, plans) -> np.ndarray:
+    """Per plan: mean pairwise disagreement of its maps ((N, K, S, S)) on its plan's known
+    pixels (:func:`map2map.learn.ab.synthesize.pairwise_disagreement`)."""
     from map2map.core.grid import UNKNOWN
     from map2map.learn.ab.synthesize import pairwise_disagreement
 
-    out = []
-    for i, p in enumerate(plans):
-        pw = pairwise_disagreement(np.stack([r[i] for r in runs]), p != UNKNOWN)
-        out.append(float(pw[~np.eye(len(runs), dtype=bool)].mean()))
-    return out
-
-
-def _model_diversity(model, plans, resolution, seed) -> tuple[list, list]:
-    """Per plan: the diversity of 3 ``synthesize`` hypotheses (its defaults) and of 3 with
-    only the network's dropout."""
-    from map2map.core.grid import OccupancyMap
-    from map2map.learn.ab.model import load_ab_model
-    from map2map.learn.ab.synthesize import synthesize
-
-    net = load_ab_model(model)
-    full, alone = [], []
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        for a, r in zip(plans, resolution, strict=True):
-            m = OccupancyMap(a, float(r))
-            full.append(synthesize(m, net, samples=3, seed=seed).diversity)
-            alone.append(synthesize(m, net, samples=3, seed=seed, drift="none",
-                                    coverage="none", traces="none").diversity)
-    return full, alone
+    k = maps.shape[1]
+    off = ~np.eye(k, dtype=bool)
+    return np.array([pairwise_disagreement(m, p != UNKNOWN)[off].mean()
+                     for m, p in zip(maps, plans, strict=True)])
 
 
 def _figure(path, plans, runs, gens, seed) -> None:
