@@ -112,6 +112,31 @@ def test_an_l_corner_closes():
     assert (d.map[20:23, 150:156] == OCC).all()   # the corner is filled
 
 
+@pytest.mark.parametrize("over, top", [(8, 21.5), (10, 21.5), (16, 4.5)])
+def test_an_end_poking_out_of_a_corner_is_cut_back_unless_it_is_a_wall(over, top):
+    """Evidence running on past a corner (laser hits outside the building) by less than
+    the shortest wall drawn plus its band is cut back to the corner (the demo's 0.37 m
+    stub); a longer run stays a wall."""
+    m = room()
+    m[20 - over:20, 20:23] = OCC                  # the west wall runs on above the top wall
+    d = draw_plan(m == OCC, m, RES, 3)
+    v = vertical(d.segments, 21.5)
+    assert len(v) == 1 and min(v[0, 1], v[0, 3]) == pytest.approx(top)
+    poke = (d.map[:20, 15:30] == OCC).any()
+    assert poke == (top < 20)
+
+
+def test_a_jamb_beside_a_junction_stays():
+    """A wall running 10 px on past a junction, rooms on both sides (a door's jamb), is
+    not cut back as an end poking out of a corner is."""
+    m = room()
+    m[59:62, 20:110] = OCC                        # ends 8.5 px past the stem's far face
+    m[60:100, 99:102] = OCC
+    d = draw_plan(m == OCC, m, RES, 3)
+    bar = horizontal(d.segments, 60.5)
+    assert len(bar) == 1 and max(bar[0, 0], bar[0, 2]) == pytest.approx(109.5)
+
+
 def _rotated_room(angle_deg: float, t: int = 3) -> np.ndarray:
     m = np.full((240, 240), UNK, np.uint8)
     c, a = np.array([120.0, 120.0]), math.radians(angle_deg)

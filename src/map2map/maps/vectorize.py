@@ -620,7 +620,8 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
     hseg = np.stack([hs[:, 1], hs[:, 0], hs[:, 2], hs[:, 0]], 1).reshape(-1, 4)
     vseg = np.stack([vs[:, 0], vs[:, 1], vs[:, 0], vs[:, 2]], 1).reshape(-1, 4)
     hseg, vseg = _join(hseg, vseg, reach)
-    kh, kv = _drop_stubs(hseg, vseg, max(tol, opt.thickest / res / 2), L)
+    band = max(tol, opt.thickest / res / 2)
+    kh, kv = _drop_stubs(hseg, vseg, band, L)
     hs = _refit(hs, _kept(sh, kh, pt_h), uv[:, 0], uv[:, 1], w)[kh]
     vs = _refit(vs, _kept(sv, kv, pt_v), uv[:, 1], uv[:, 0], w)[kv]
     hseg, vseg = hseg[kh], vseg[kv]
@@ -639,6 +640,8 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
     a = _place(vs, vseg[:, 1], vseg[:, 3], free_c.T, faces, half, slant)
     vseg = np.stack([a[0], vseg[:, 1], a[1], vseg[:, 3]], 1)
     hseg, vseg, other = _snap_ends([hseg, vseg, other], reach)
+    hseg, vseg, other = _trim_overshoots([hseg, vseg, other], L + band, reach, free_c,
+                                         t / 2 + 2)
     segs = np.concatenate([_order(hseg), _order(vseg), other]).reshape(-1, 4)
     if len(segs):
         segs = np.concatenate([fr.back(segs[:, :2]), fr.back(segs[:, 2:])], axis=1)
@@ -789,6 +792,57 @@ def _snap_ends(groups: list[np.ndarray], reach: float) -> list[np.ndarray]:
     res, i = [], 0
     for n in sizes:
         res.append(out[i:i + n][keep[i:i + n]])
+        i += n
+    return res
+
+
+def _trim_overshoots(groups: list[np.ndarray], max_len: float, reach: float,
+                     free: np.ndarray, side: float) -> list[np.ndarray]:
+    """Cut every segment end that runs on past a wall it crosses (one more than 30 degrees
+    off its own, the crossing within ``reach`` of that wall's extent) by less than
+    ``max_len`` back to the crossing, unless the part beyond borders free space (cells
+    ``side`` px either side of it, more than half of them free in ``free``, (rows, cols)
+    of the segments' frame): a plan's wall does not poke out of a corner into the
+    outside by less than the shortest wall drawn (``_drop_stubs``' rule for whole
+    segments: ``max_len`` is its ``min_len`` plus its band), while a door's jamb beside
+    a junction, with rooms on both sides, stays. Such ends come from a wall's evidence
+    running on along laser hits outside the building, left beyond ``_snap_ends``' reach
+    when the crossing wall moved onto its face."""
+    sizes = [len(g) for g in groups]
+    s = np.concatenate([np.asarray(g, float).reshape(-1, 4) for g in groups])
+    if len(s) < 2:
+        return [np.asarray(g, float).reshape(-1, 4) for g in groups]
+    p0, d = s[:, :2], s[:, 2:] - s[:, :2]
+    ln = np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9)
+    u = d / ln[:, None]
+    cross = u[:, None, 0] * u[None, :, 1] - u[:, None, 1] * u[None, :, 0]
+    base = np.abs(cross) > 0.5
+    np.fill_diagonal(base, False)
+    den = np.where(base, cross, 1.0)
+    out = s.copy()
+    for e, inward in ((0, 1.0), (2, -1.0)):
+        P = s[:, e:e + 2]
+        dx = p0[None, :, :] - P[:, None, :]
+        ti = (dx[..., 0] * u[None, :, 1] - dx[..., 1] * u[None, :, 0]) / den * inward
+        sj = (dx[..., 0] * u[:, None, 1] - dx[..., 1] * u[:, None, 0]) / den
+        # the crossing lies inside this segment, under max_len from its end, on the other
+        ok = base & (ti > 1e-6) & (ti < max_len) & (ti < ln[:, None] - max_len) & \
+            (sj >= -reach) & (sj <= ln[None, :] + reach)
+        dist = np.where(ok, ti, np.inf)
+        k = np.argmin(dist, axis=1)
+        t_hit = dist[np.arange(len(s)), k]
+        for i in np.flatnonzero(np.isfinite(t_hit)):     # a few ends per map
+            a = np.arange(0.5, t_hit[i], 1.0)
+            along = P[i] + inward * a[:, None] * u[i]
+            n = np.array([-u[i, 1], u[i, 0]])
+            pts = np.concatenate([along + side * n, along - side * n])
+            r = np.clip(np.round(pts[:, 1]).astype(int), 0, free.shape[0] - 1)
+            c = np.clip(np.round(pts[:, 0]).astype(int), 0, free.shape[1] - 1)
+            if len(pts) and free[r, c].mean() <= 0.5:
+                out[i, e:e + 2] = P[i] + inward * t_hit[i] * u[i]
+    res, i = [], 0
+    for n in sizes:
+        res.append(out[i:i + n])
         i += n
     return res
 
