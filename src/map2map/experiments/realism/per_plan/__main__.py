@@ -30,7 +30,7 @@ Printed, per generator:
 
     python -m map2map.experiments.realism.per_plan --data DS --split all \\
         --cache2 refs2.npz --cache3 refs3.npz [--plans N] [--model pretrained ...] \\
-        [--classifier-steps 600] [--figure F.png] [--json F]
+        [--classifier-steps 600] [--maps-cache maps.npz] [--figure F.png] [--json F]
 """
 
 from __future__ import annotations
@@ -58,6 +58,7 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0, help="seed of everything drawn here")
     ap.add_argument("--classifier-steps", type=int, default=600,
                     help="Adam steps per fold of the classifier (0: no classifier test)")
+    ap.add_argument("--maps-cache", help=".npz keeping synthesize's hypotheses of every plan")
     ap.add_argument("--figure", help="PNG: plan, runs 1-3 and each generator on 6 plans")
     ap.add_argument("--json", help="write every figure printed here")
     args = ap.parse_args(argv)
@@ -81,8 +82,11 @@ def main(argv=None) -> int:
     runs = {"run 1": r2.sim1, "run 2": r2.sim2, "run 3": r3.sim2}
     gens = {"parametric": r2.parametric}
     hyps = {}
-    for m in args.model:
-        g, hyps[m] = _model_maps(m, args, r2)
+    for j, m in enumerate(args.model):
+        cache = args.maps_cache
+        if cache and len(args.model) > 1:       # one cache a model
+            cache = str(Path(cache).with_suffix(f".{j}.npz"))
+        g, hyps[m] = _model_maps(m, args, r2, cache)
         gens.update(g)
     print(f"{len(plans)} plans ('{args.split}' of {args.data}, {plans.shape[-1]} px); "
           f"maps made in {time.perf_counter() - t0:.0f} s")
@@ -148,7 +152,7 @@ def main(argv=None) -> int:
     return 0
 
 
-def _model_maps(model: str, args, refs) -> tuple[dict, dict]:
+def _model_maps(model: str, args, refs, cache=None) -> tuple[dict, dict]:
     """The network alone on every plan's square, and ``map2map synthesize`` (its defaults,
     3 hypotheses, and 3 with only the network's dropout) on every plan at its own
     resolution, cut to the pair's square as its simulated runs are. Returns the
@@ -160,36 +164,65 @@ def _model_maps(model: str, args, refs) -> tuple[dict, dict]:
     base = "Model_AB" if model == "pretrained" else f"AB:{Path(model).name}"
     alone = synthesize_squares(net, refs.a, seed=args.seed, render="plain", drift="none",
                                coverage="none", traces="none")
-    hyp = _native_hypotheses(args.data, refs.indices, net, args.seed, refs.a.shape[-1])
+    hyp = _native_hypotheses(args.data, refs.indices, net, args.seed, refs.a.shape[-1],
+                             cache)
     return ({f"{base} network alone": alone, f"{base} synthesize": hyp["synthesize"][:, 0]},
             hyp)
 
 
-def _native_hypotheses(ds, indices, net, seed: int, size: int) -> dict:
+def _native_hypotheses(ds, indices, net, seed: int, size: int, cache=None) -> dict:
     """Per pair: ``synthesize`` (3 hypotheses, its defaults) and the same with drift,
     coverage and traces off (the network's dropout alone) of the pair's plan (``A.yaml``,
-    its own resolution), cut with the pair's window to its ``size`` px square."""
+    its own resolution), cut with the pair's window to its ``size`` px square.
+
+    ``cache`` (an ``.npz``, optional) keeps them between calls, tied to the dataset's
+    folder, the weights, ``seed`` and ``size`` (rewritten at most every minute and at the
+    end): pairs already there are not synthesized again."""
     from tqdm.auto import tqdm
 
+    from map2map.core._io import atomic_path
     from map2map.datasets.pair import crop_box, preprocess_pair
     from map2map.datasets.pairfolder import PLAN_YAML, SLAM_YAML, pair_dir
     from map2map.learn.ab.synthesize import synthesize
     from map2map.maps.formats import load_map
 
-    out = {"synthesize": [], "dropout": []}
+    key = {"dataset": str(Path(ds).resolve()), "model": str(net.source), "seed": int(seed),
+           "size": int(size), "version": 1}
+    have: dict[int, tuple] = {}
+    if cache is not None and Path(cache).is_file():
+        with np.load(cache, allow_pickle=False) as z:
+            if json.loads(str(z["key"])) == key:
+                syn, drop = z["synthesize"], z["dropout"]
+                have = {int(i): (syn[j], drop[j]) for j, i in enumerate(z["indices"])}
+
+    def save():
+        if cache is None or not have:
+            return
+        ks = sorted(have)
+        with atomic_path(cache) as tmp, open(tmp, "wb") as fh:
+            np.savez_compressed(fh, key=json.dumps(key), indices=np.array(ks, int),
+                                synthesize=np.stack([have[i][0] for i in ks]),
+                                dropout=np.stack([have[i][1] for i in ks]))
+
+    todo = [int(i) for i in indices if int(i) not in have]
+    last = time.monotonic()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        for i in tqdm(indices, desc="synthesize", unit="plan"):
-            folder = pair_dir(ds, int(i))
+        for n, i in enumerate(tqdm(todo, desc="synthesize", unit="plan"), 1):
+            folder = pair_dir(ds, i)
             a, b = load_map(folder / PLAN_YAML), load_map(folder / SLAM_YAML)
             box = crop_box(a, b)
-            for key, kw in (("synthesize", {}),
-                            ("dropout", {"drift": "none", "coverage": "none",
-                                         "traces": "none"})):
-                res = synthesize(a, net, samples=3, seed=seed + int(i), **kw)
-                out[key].append(np.stack([preprocess_pair(a, h, size, 0, box)[1]
-                                          for h in res.maps]))
-    return {k: np.stack(v) for k, v in out.items()}
+            got = []
+            for kw in ({}, {"drift": "none", "coverage": "none", "traces": "none"}):
+                res = synthesize(a, net, samples=3, seed=seed + i, **kw)
+                got.append(np.stack([preprocess_pair(a, h, size, 0, box)[1]
+                                     for h in res.maps]))
+            have[i] = tuple(got)
+            if time.monotonic() - last > 60.0 or n == len(todo):
+                save()
+                last = time.monotonic()
+    return {"synthesize": np.stack([have[int(i)][0] for i in indices]),
+            "dropout": np.stack([have[int(i)][1] for i in indices])}
 
 
 def _diversity(maps, plans) -> np.ndarray:
