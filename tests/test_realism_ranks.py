@@ -145,6 +145,10 @@ def test_per_plan_benchmark_end_to_end(small_dataset, tmp_path, capsys):
     assert all(r["plans"] <= 4 for r in rep["ranks"]["parametric"])
     div = rep["diversity"]["pretrained"]
     assert 0 < div["network"] <= div["synthesize"] and div["ratio"] > 0
+    from map2map.experiments.realism.per_plan.summary import sentences
+
+    said = sentences(rep)      # ranks and classifier per Model_AB generator, diversity
+    assert len(said) == 5 and all(line.endswith(".") for line in said)
     # runs and hypotheses are cached: a second call simulates and synthesizes nothing and
     # prints the same figures
     assert mod.main(args) == 0

@@ -83,8 +83,27 @@ def run(ctx: Context, out: Output) -> None:
                    ", unlike the thesis (its parametric map was the closer).")
                 + " Model_AB's shipped weights are provisional (docs/synthesize.md).")
     out.comparison_table()
+    _per_plan(out)
     fig = f.figure()
     out.figure(png_of(fig), "Fig. 5.14: plan | simulated SLAM map | parametric model on the "
                "same trajectory | Model_AB, per held-out plan (error and wall recall in the "
                "titles)", alt="plans with three kinds of SLAM map")  # fmt: skip
+
+
+def _per_plan(out: Output) -> None:
+    """Issue #33's per-plan realism tests, as last measured (too slow to re-run here:
+    three simulations of each of >= 600 plans): one sentence each, with their command."""
+    import json
+
+    from map2map.experiments.realism.per_plan import RESULTS
+    from map2map.experiments.realism.per_plan.summary import sentences
+
+    if not RESULTS.is_file():
+        return
+    rep = json.loads(RESULTS.read_text())
+    said = sentences(rep)
+    if said:
+        out.note("Realism per plan (issue #33), last measured " + rep.get("date", "?") + " with `"
+                 + rep.get("command", "python -m map2map.experiments.realism.per_plan") + "`: "
+                 + " ".join(said))
 
