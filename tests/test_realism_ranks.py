@@ -93,7 +93,7 @@ def _maps(n, speckle_seed, doubled):
 
 def test_classifier_tells_a_generator_apart_and_is_deterministic_per_seed():
     pytest.importorskip("torch")
-    from map2map.experiments.realism.classifier import two_sample_auc
+    from map2map.learn.two_sample import two_sample_auc
 
     plans, a = _maps(16, 1, False)
     _, b = _maps(16, 2, True)                            # walls saved twice

@@ -21,7 +21,7 @@ Printed, per generator:
    with no preference for either end. Two checks of the test itself come first: run 3
    ranked among runs 1 and 2, and run 1 among runs 2 and 3 (three exchangeable runs: the
    extreme share is 2/3); run 1 passed the dataset's cleaner, the others did not.
-2. **Classifier** (:mod:`map2map.experiments.realism.classifier`): cross-fitted AUC of a
+2. **Classifier** (:mod:`map2map.learn.two_sample`): cross-fitted AUC of a
    small CNN telling (plan, generated) from (plan, run 3), beside the same test on (plan,
    run 2) against (plan, run 3), the floor.
 3. **Diversity**: mean pairwise disagreement of ``synthesize``'s three hypotheses of a
@@ -63,7 +63,6 @@ def main(argv=None) -> int:
     ap.add_argument("--json", help="write every figure printed here")
     args = ap.parse_args(argv)
 
-    from map2map.experiments.realism.classifier import two_sample_auc
     from map2map.experiments.realism.measure import simulated_references, stats_of_sets
     from map2map.experiments.realism.ranks import (
         format_rank_table,
@@ -71,6 +70,7 @@ def main(argv=None) -> int:
         plan_ranks,
         rank_table,
     )
+    from map2map.learn.two_sample import two_sample_auc
 
     t0 = time.perf_counter()
     r2 = simulated_references(args.data, split=args.split, n=args.plans, cache=args.cache2)

@@ -37,7 +37,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ...core.grid import FREE, OCCUPIED
+from ..core.grid import FREE, OCCUPIED
 
 __all__ = ["ClassifierResult", "two_sample_auc", "encode"]
 
