@@ -91,6 +91,8 @@ class LoopClosureParams:
     link_half_width: float = 0.25
     link_coarse_resolution: float = 0.05
     link_min_response: float = 0.1
+    reoptimize_distance: float = 0.05
+    reoptimize_angle: float = 0.01
 
 
 def scan_points(ranges, angles, offset, usable_range: float, max_points: int) -> np.ndarray:
@@ -219,6 +221,14 @@ def gauss_newton_pose_graph(
     return p
 
 
+def _near(points: np.ndarray, scan: np.ndarray, margin: float) -> np.ndarray:
+    """``points`` inside the bounding box of ``scan`` widened by ``margin`` (all if none)."""
+    lo = scan.min(0) - margin
+    hi = scan.max(0) + margin
+    keep = np.all((points >= lo) & (points <= hi), axis=1)
+    return points[keep] if keep.any() else points
+
+
 def _sqrt_info(cov: np.ndarray) -> np.ndarray:
     return np.linalg.cholesky(np.linalg.inv(cov)).T
 
@@ -323,7 +333,12 @@ def close_loops(
             half = min(p.half_width, math.ceil(gate / p.coarse_resolution) * p.coarse_resolution)
             sub = np.concatenate([_world(est[i], points[i]) for i in chain])
             coarse = LookupTable(sub, p.coarse_resolution, p.coarse_smear, half)
-            fine = LookupTable(sub, p.fine_resolution, p.fine_smear, 1.0)
+            fine = LookupTable(
+                _near(sub, _world(est[k], points[k]), half + 0.5),
+                p.fine_resolution,
+                p.fine_smear,
+                1.0,
+            )
             res, coarse_resp = correlative_match(
                 points[k],
                 est[k],
@@ -355,8 +370,13 @@ def close_loops(
             ej.append(k)
             ew.append(math.hypot(z[0], z[1]) + 1e-3)
             closures.append((j, k))
-            closed = True
+            # optimise now only if the closure moves this node: a closure that agrees
+            # with the estimate waits for the next one, or the end
+            turn = abs(wrap_angle(res.pose[2] - est[k, 2]))
+            closed |= correction > p.reoptimize_distance or turn > p.reoptimize_angle
         if closed:
             sub_edges = [e for e in edges if e[1] <= k]
             est[: k + 1] = gauss_newton_pose_graph(est[: k + 1], sub_edges, p.huber_scale)
+    if closures:
+        est = gauss_newton_pose_graph(est, edges, p.huber_scale)
     return est, closures

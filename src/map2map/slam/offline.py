@@ -73,7 +73,7 @@ IMAGE_BYTES_PER_PIXEL = 12
 #: (:class:`map2map.slam.rbpf.GMappingParams`) leaves the Radish maps bent and doubled.
 #: Chosen on the two shared Radish logs (``aces``, ``fhw``), seeds 0-2; see docs/slam.md
 #: "Real data: Radish CARMEN logs" and ``python -m map2map.experiments.slam_accuracy carmen``.
-RECORDED_LOG_PARTICLES = 20
+RECORDED_LOG_PARTICLES = 10
 
 
 @dataclass
