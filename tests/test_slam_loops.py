@@ -142,3 +142,13 @@ def test_close_loops_is_the_default_for_a_recorded_log_only():
     res = run_slam(recorded)
     assert res.mapper.params.close_loops and len(res.trajectory) >= 1
     assert not run_slam(simulated).mapper.params.close_loops
+
+
+def test_slam_help_describes_loop_closure(capsys):
+    from map2map.cli.main import main
+
+    with pytest.raises(SystemExit):
+        main(["slam", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "--close-loops, --no-close-loops" in text
+    assert "on for a recorded log, off for a 'map2map simulate' run" in text

@@ -412,8 +412,11 @@ def backend_options(
         options.setdefault("max_urange", max_range or default_usable_range(sensor_max))
         if log.scans[0].n_beams <= 200:
             options.setdefault("lskip", 0)
-    elif backend == "graph":
-        options.setdefault("max_range", max_range or sensor_max)
+    else:
+        if options.pop("close_loops", None):
+            raise InputError("close_loops", f"is an rbpf option; {backend} does not take it")
+        if backend == "graph":
+            options.setdefault("max_range", max_range or sensor_max)
     return options
 
 
