@@ -71,8 +71,11 @@ IMAGE_BYTES_PER_PIXEL = 12
 #: Particle count of ``rbpf`` for a recorded log (a real robot's: one without the start
 #: pose ``map2map simulate`` writes), where the simulator's speed default of 5 particles
 #: (:class:`map2map.slam.rbpf.GMappingParams`) leaves the Radish maps bent and doubled.
-#: Chosen on the two shared Radish logs (``aces``, ``fhw``), seeds 0-2; see docs/slam.md
-#: "Real data: Radish CARMEN logs" and ``python -m map2map.experiments.slam_accuracy carmen``.
+#: The filter is followed by loop closure (:func:`default_close_loops`,
+#: :mod:`map2map.slam.loops`); 10 particles + closure meet issue #35's target on seeds
+#: 0-7 of both shared Radish logs within the time bound, where 20 + closure does not fit
+#: it. See docs/slam.md "Defaults for a recorded log" and
+#: ``python -m map2map.experiments.slam_accuracy carmen``.
 RECORDED_LOG_PARTICLES = 10
 
 
