@@ -152,3 +152,15 @@ def test_slam_help_describes_loop_closure(capsys):
     text = " ".join(capsys.readouterr().out.split())
     assert "--close-loops, --no-close-loops" in text
     assert "on for a recorded log, off for a 'map2map simulate' run" in text
+
+
+def test_scans_without_returns_in_range_are_skipped(wrong_turn):
+    """A stretch of empty scans (no reading within range) neither matches nor fails."""
+    true, _, front, odo, pts = wrong_turn
+    pts = list(pts)
+    for k in range(100, 115):  # across the wrong turn and the chains before it
+        pts[k] = np.zeros((0, 2))
+    for k in range(30, 45):
+        pts[k] = np.zeros((0, 2))
+    est, _ = close_loops(front, pts, odometry=odo)
+    assert np.isfinite(est).all() and est.shape == front.shape

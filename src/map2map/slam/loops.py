@@ -312,6 +312,8 @@ def close_loops(
             gate = p.max_correction + p.max_drift_rate * path
             half = min(p.half_width, math.ceil(gate / p.coarse_resolution) * p.coarse_resolution)
             sub = np.concatenate([_world(est[i], points[i]) for i in chain])
+            if len(sub) < 10:  # scans without returns in range: nothing to match
+                continue
             coarse = LookupTable(sub, p.coarse_resolution, p.coarse_smear, half)
             fine = LookupTable(
                 _near(sub, _world(est[k], points[k]), half + 0.5),
@@ -367,22 +369,25 @@ def close_loops(
                 guess = absolute_sum(est[k - 1], ro)
                 lo = max(0, k - p.link_buffer)
                 sub = np.concatenate([_world(est[i], points[i]) for i in range(lo, k)])
-                coarse = LookupTable(sub, p.link_coarse_resolution, p.coarse_smear, 1.0)
-                fine = LookupTable(sub, p.fine_resolution, p.fine_smear, 1.0)
-                res, _ = correlative_match(
-                    points[k],
-                    guess,
-                    coarse,
-                    fine,
-                    p.link_half_width,
-                    p.link_half_angle,
-                    p.link_coarse_resolution,
-                    p.coarse_angle_step,
-                    p.fine_resolution,
-                    p.fine_angle_step,
-                    penalize=True,
-                )
-                new = res.pose if res.response >= p.link_min_response else guess
+                new = guess  # the odometry's step, unless the scan matches
+                if len(sub) >= 10:
+                    coarse = LookupTable(sub, p.link_coarse_resolution, p.coarse_smear, 1.0)
+                    fine = LookupTable(sub, p.fine_resolution, p.fine_smear, 1.0)
+                    res, _ = correlative_match(
+                        points[k],
+                        guess,
+                        coarse,
+                        fine,
+                        p.link_half_width,
+                        p.link_half_angle,
+                        p.link_coarse_resolution,
+                        p.coarse_angle_step,
+                        p.fine_resolution,
+                        p.fine_angle_step,
+                        penalize=True,
+                    )
+                    if res.response >= p.link_min_response:
+                        new = res.pose
                 rel[k - 1] = absolute_difference(new, est[k - 1])
                 i, j, _, info = edges[k - 1]
                 edges[k - 1] = (i, j, rel[k - 1], info)
