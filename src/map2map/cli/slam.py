@@ -30,15 +30,26 @@ def register(subparsers) -> None:
         "--backend",
         choices=["rbpf", "graph"],
         default="rbpf",
-        help="rbpf: GMapping-style particle filter (default); graph: Karto-style graph SLAM",
+        help="rbpf: GMapping-style particle filter (default; for a recorded log followed by "
+        "loop closure, see --close-loops); graph: Karto-style graph SLAM",
     )
     p.add_argument(
         "--particles",
         type=int,
         default=None,
         help=f"particle count of rbpf (default {RECORDED_LOG_PARTICLES} for a recorded log: "
-        "CARMEN, BreezySLAM, ROS bag; 5 for a 'map2map simulate' run, the simulator's "
-        "speed default)",
+        "CARMEN, BreezySLAM, ROS bag, with loop closure, see --close-loops; 5 for a "
+        "'map2map simulate' run, the simulator's speed default)",
+    )
+    p.add_argument(
+        "--close-loops",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="rbpf: after the filter, close the loops of its best trajectory with a pose "
+        "graph (filter steps that disagree with the odometry re-matched, earlier places "
+        "found again by scan matching, the graph optimised) and draw the map again from "
+        "the corrected poses (default: on for a recorded log, off for a 'map2map "
+        "simulate' run; docs/slam.md)",
     )
     p.add_argument(
         "--resolution", type=float, default=0.05, help="map resolution in m/px (default 0.05)"
@@ -97,6 +108,7 @@ def run(args: argparse.Namespace) -> int:
             out=args.out,
             backend=args.backend,
             particles=args.particles,
+            close_loops=args.close_loops,
             resolution=args.resolution,
             max_range=args.max_range,
             seed=args.seed,

@@ -51,6 +51,8 @@ class SlamSpec:
     out: str | os.PathLike
     backend: str = "rbpf"
     particles: int | None = None
+    #: rbpf: close the loops after the filter (None: on for a recorded log).
+    close_loops: bool | None = None
     resolution: float = 0.05
     max_range: float | None = None
     seed: int = 0
@@ -110,6 +112,7 @@ def slam(spec: SlamSpec) -> SlamRun:
         particles=spec.particles,
         resolution=spec.resolution,
         seed=spec.seed,
+        close_loops=spec.close_loops,
         max_range=spec.max_range,
         progress=spec.progress,
         source=spec.log,

@@ -154,27 +154,35 @@ def _correlate(table, tx0, ty0, res, pts, cx, cy, dxs, dys, thetas):
     """Mean lookup response for every ``(theta, dx, dy)``: shape ``(nth, ndx, ndy)``.
 
     Points ``pts`` (robot frame) are rotated by each ``theta`` then shifted to
-    ``(cx + dx, cy + dy)``; a point outside the table scores 0.
+    ``(cx + dx, cy + dy)``; a point outside the table scores 0. The cell indices of
+    each shift are computed once per angle (the same arithmetic, so the same cells).
     """
     ny, nx = table.shape
     nth, ndx, ndy = thetas.shape[0], dxs.shape[0], dys.shape[0]
     k = pts.shape[0]
     out = np.zeros((nth, ndx, ndy))
+    wx = np.empty(k)
+    wy = np.empty(k)
+    ix = np.empty(k, np.int64)
+    iy = np.empty((ndy, k), np.int64)
     for a in range(nth):
         c, s = math.cos(thetas[a]), math.sin(thetas[a])
-        wx = np.empty(k)
-        wy = np.empty(k)
         for p in range(k):
             wx[p] = c * pts[p, 0] - s * pts[p, 1] + cx
             wy[p] = s * pts[p, 0] + c * pts[p, 1] + cy
+        for j in range(ndy):
+            for p in range(k):
+                iy[j, p] = int(math.floor((wy[p] + dys[j] - ty0) / res))
         for i in range(ndx):
+            for p in range(k):
+                ix[p] = int(math.floor((wx[p] + dxs[i] - tx0) / res))
             for j in range(ndy):
                 acc = 0.0
                 for p in range(k):
-                    ix = int(math.floor((wx[p] + dxs[i] - tx0) / res))
-                    iy = int(math.floor((wy[p] + dys[j] - ty0) / res))
-                    if 0 <= ix < nx and 0 <= iy < ny:
-                        acc += table[iy, ix]
+                    xi = ix[p]
+                    yi = iy[j, p]
+                    if 0 <= xi < nx and 0 <= yi < ny:
+                        acc += table[yi, xi]
                 out[a, i, j] = acc / max(k, 1)
     return out
 

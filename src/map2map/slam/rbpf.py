@@ -128,6 +128,12 @@ class GMappingParams:
     On the 20 plans of ``map2map.experiments.slam_accuracy.simulated``, motion_prior
     0 / 1 / 4: ATE mean 13.4 / 9.5 / 5.1 cm, map error mean 10.3 / 8.9 / 7.2 cm,
     coverage 0.75 / 0.71 / 0.76.
+
+    ``close_loops`` (default False; ``map2map slam`` turns it on for a recorded log)
+    keeps every processed scan and the odometry at it, and :meth:`GMappingRBPF.optimize`
+    (called by :func:`map2map.slam.offline.run_slam` at the end of the log) closes the
+    loops of the best particle's trajectory with a pose graph and draws the map again
+    from the corrected poses (:mod:`map2map.slam.loops`).
     """
 
     particles: int = 5
@@ -160,6 +166,7 @@ class GMappingParams:
     motion_prior: float = 4.0
     no_return_free: bool = True
     sigma_is_std: bool = True
+    close_loops: bool = False
 
     def __post_init__(self) -> None:
         if self.particles < 1:
@@ -473,6 +480,12 @@ class GMappingRBPF:
         self.n_resamples = 0
         self.n_match_failures = 0
         self.neff_history: list[float] = []
+        # close_loops: every processed scan (ranges, angles, laser offset, range_max) and
+        # the odometry at it, in the order of the trajectory's nodes
+        self._scans: list[tuple[np.ndarray, np.ndarray, np.ndarray, float]] = []
+        self._odoms: list[np.ndarray] = []
+        self._closed: tuple[np.ndarray, OccupancyMap] | None = None
+        self.loop_closures: list[tuple[int, int]] = []
         # denominators of the endpoint Gaussians exp(-d^2 / den), see GMappingParams
         p = self.params
         self._sig = 2 * p.sigma**2 if p.sigma_is_std else p.sigma
@@ -490,6 +503,8 @@ class GMappingRBPF:
             The scan.
         """
         p = self.params
+        if self._closed is not None:
+            raise RuntimeError("optimize() has closed the loops: the filter has ended")
         o = self._frame.accept(odom, scan)  # odometry in the map frame
         ranges, angles = prepare_scan(scan)
         if self._last_odom is None:
@@ -501,6 +516,7 @@ class GMappingRBPF:
             self.grids = [first]
             self._register_all(ranges, angles, scan)
             self.grids += [first.copy() for _ in range(p.particles - 1)]
+            self._keep_scan(ranges, angles, scan, o)
             self._add_nodes(scan.t)
             self._map_cache = None
             self.n_updates += 1
@@ -522,17 +538,21 @@ class GMappingRBPF:
         self._lin = self._ang = 0.0
         self._last_t = scan.t
         self._process(ranges, angles, scan, o)
+        self._keep_scan(ranges, angles, scan, o)
         self._add_nodes(scan.t)
         self._map_cache = None
         self.n_updates += 1
 
     def pose(self) -> np.ndarray:
-        """Pose of the best particle (highest accumulated log weight).
+        """Pose of the best particle (highest accumulated log weight); after
+        :meth:`optimize`, the last corrected pose.
 
         Returns
         -------
         (3,) ndarray
         """
+        if self._closed is not None:
+            return self._closed[0][-1, 1:4].copy()
         return self.poses[self.best_index()].copy()
 
     def get_map(self) -> OccupancyMap:
@@ -542,6 +562,8 @@ class GMappingRBPF:
         -------
         OccupancyMap
         """
+        if self._closed is not None:
+            return self._closed[1]
         if self._map_cache is None:
             if not self.grids:
                 raise RuntimeError("no scan integrated yet")
@@ -560,6 +582,8 @@ class GMappingRBPF:
         -------
         (T, 4) ndarray
         """
+        if self._closed is not None:
+            return self._closed[0].copy()
         if not self._node_pose:
             return np.zeros((0, 4))
         poses = np.concatenate(self._node_pose)
@@ -572,7 +596,40 @@ class GMappingRBPF:
             k = int(parents[k])
         return np.asarray(rows[::-1], float)
 
+    def optimize(self) -> None:
+        """With ``close_loops``: close the loops of the best particle's trajectory and draw
+        its map again from the corrected poses (:func:`map2map.slam.loops.close_loops`);
+        otherwise nothing.
+
+        The particles' grids are given back first (the peak memory stays that of the
+        filter); :meth:`get_map`, :meth:`trajectory` and :meth:`pose` give the corrected
+        map and poses afterwards, and the filter takes no more scans. Deterministic.
+        """
+        if not self.params.close_loops or self._closed is not None or not self._scans:
+            return
+        from .loops import LoopClosureParams, close_loops, scan_points
+
+        p = self.params
+        traj = self.trajectory()
+        lc = LoopClosureParams()
+        pts = [scan_points(r, a, off, p.max_urange, lc.max_points) for r, a, off, _ in self._scans]
+        poses, self.loop_closures = close_loops(traj[:, 1:4], pts, lc, np.array(self._odoms))
+        for g in self.grids:
+            g.release()
+        grid = CountGrid.around(0.0, 0.0, p.initial_size / 2, p.delta)
+        laser = absolute_sum(poses, np.array([off for _, _, off, _ in self._scans]))
+        for q, (r, a, _, rmax) in zip(laser, self._scans, strict=True):
+            grid.register_scan(q, r, a, p.max_urange, rmax, p.no_return_free)
+        out = np.column_stack([traj[:, 0], poses])
+        self._closed = (out, grid.to_occupancy_map(p.occ_thresh, {"mapper": self.name}))
+        self._scans = []
+
     # ---------------------------------------------------------------- internals
+    def _keep_scan(self, ranges, angles, scan: LaserScan, o: np.ndarray) -> None:
+        if self.params.close_loops:
+            self._scans.append((ranges, angles, self._laser_offset(scan), float(scan.range_max)))
+            self._odoms.append(np.asarray(o, float).copy())
+
     def _laser_offset(self, scan: LaserScan) -> np.ndarray:
         return np.asarray(scan.sensor_offset, np.float64)
 

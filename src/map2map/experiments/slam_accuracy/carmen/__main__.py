@@ -4,7 +4,8 @@ Usage::
 
     python3 -m map2map.experiments.slam_accuracy.carmen  # oracle, rbpf:5, rbpf, rbpf:30, graph
     python3 -m map2map.experiments.slam_accuracy.carmen --backends rbpf --logs aces
-    python3 -m map2map.experiments.slam_accuracy.carmen --backends rbpf,rbpf:5 --seeds 0-7
+    python3 -m map2map.experiments.slam_accuracy.carmen --backends rbpf --seeds 0-7
+    python3 -m map2map.experiments.slam_accuracy.carmen --backends rbpf:20 --no-close-loops
     python3 -m map2map.experiments.slam_accuracy.carmen --figure docs/carmen_real.png
 
 The logs are read from ``$MAP2MAP_SHARED_DATA/carmen`` or ``../shared/data/carmen``
@@ -34,8 +35,9 @@ paper's ``E_rigid,opt``). Printed per log and backend:
 * ``cells``: occupied cells of our map, ``s``: CPU seconds of the SLAM run.
 
 ``rbpf`` is ``map2map slam``'s default for a recorded log
-(:data:`map2map.slam.offline.RECORDED_LOG_PARTICLES` particles), ``rbpf:N`` N
-particles; ``--seeds 0-7`` repeats every rbpf run with each seed (the filter is
+(:data:`map2map.slam.offline.RECORDED_LOG_PARTICLES` particles, then loop closure,
+:mod:`map2map.slam.loops`), ``rbpf:N`` N particles (with loop closure too;
+``--no-close-loops``: without); ``--seeds 0-7`` repeats every rbpf run with each seed (the filter is
 stochastic: one seed is one draw).
 
 The floor of the metric -- the corrected poses' own map, made by the ``oracle``
@@ -183,6 +185,13 @@ def main(argv=None) -> int:
         help="seeds of the rbpf runs, comma-separated or a range A-B (default 0); "
         "rbpf is stochastic: check a setting on several",
     )
+    ap.add_argument(
+        "--close-loops",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="rbpf: loop closure after the filter (default: map2map slam's for a recorded "
+        "log, on); --no-close-loops: the filter's own map",
+    )
     ap.add_argument("--figure", type=Path, help="PNG of the maps over the references")
     args = ap.parse_args(argv)
     seeds = parse_seeds(args.seeds)
@@ -200,7 +209,8 @@ def main(argv=None) -> int:
             # only rbpf draws random numbers: one run of the others
             for seed in seeds if backend == "rbpf" else seeds[:1]:
                 n = int(count) if count else args.particles
-                r = evaluate_log(name, backend, n, args.max_range, seed)
+                opts = {"close_loops": args.close_loops} if backend == "rbpf" else {}
+                r = evaluate_log(name, backend, n, args.max_range, seed, **opts)
                 r[0]["backend"] = spec
                 r[0]["seed"] = seed
                 results.append(r)
