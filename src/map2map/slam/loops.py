@@ -58,9 +58,8 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 from scipy.sparse.linalg import spsolve
 
-from ..core.geometry import wrap_angle
-from .graph import LookupTable, _se2_residual, correlative_match
-from .rbpf import absolute_difference, absolute_sum
+from ..core.geometry import compose_pose, relative_pose, wrap_angle
+from .posegraph import LookupTable, _se2_residual, correlative_match
 
 __all__ = ["LoopClosureParams", "close_loops", "scan_points", "gauss_newton_pose_graph"]
 
@@ -273,7 +272,7 @@ def close_loops(
     n = len(front)
     if n < 2:
         return front.copy(), []
-    rel = absolute_difference(front[1:], front[:-1])  # node k+1 in the frame of node k
+    rel = relative_pose(front[:-1], front[1:])  # node k+1 in the frame of node k
     step = np.hypot(rel[:, 0], rel[:, 1])
     sxy = p.seq_sigma_xy + p.seq_sigma_per_m * step
     sth = (
@@ -346,7 +345,7 @@ def close_loops(
                 continue
             cp = est[chain]
             j = int(chain[np.argmin(np.hypot(cp[:, 0] - res.pose[0], cp[:, 1] - res.pose[1]))])
-            z = absolute_difference(res.pose, est[j])
+            z = relative_pose(est[j], res.pose)
             edge = (j, k, z, _sqrt_info(res.covariance))
             turn = abs(wrap_angle(res.pose[2] - est[k, 2]))
             edges.append(edge)
@@ -361,12 +360,12 @@ def close_loops(
 
     for k in range(1, n):
         if odo is not None and len(points[k]) >= 10:
-            ro = absolute_difference(odo[k], odo[k - 1])
+            ro = relative_pose(odo[k - 1], odo[k])
             if (
                 abs(wrap_angle(rel[k - 1, 2] - ro[2])) > p.jump_angle
                 or math.hypot(rel[k - 1, 0] - ro[0], rel[k - 1, 1] - ro[1]) > p.jump_distance
             ):
-                guess = absolute_sum(est[k - 1], ro)
+                guess = compose_pose(est[k - 1], ro)
                 lo = max(0, k - p.link_buffer)
                 sub = np.concatenate([_world(est[i], points[i]) for i in range(lo, k)])
                 new = guess  # the odometry's step, unless the scan matches
@@ -388,10 +387,10 @@ def close_loops(
                     )
                     if res.response >= p.link_min_response:
                         new = res.pose
-                rel[k - 1] = absolute_difference(new, est[k - 1])
+                rel[k - 1] = relative_pose(est[k - 1], new)
                 i, j, _, info = edges[k - 1]
                 edges[k - 1] = (i, j, rel[k - 1], info)
-        est[k] = absolute_sum(est[k - 1], rel[k - 1])
+        est[k] = compose_pose(est[k - 1], rel[k - 1])
         travel += step[k - 1]
         if travel < p.attempt_travel or len(points[k]) < 10:
             continue
