@@ -39,7 +39,10 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default="table53_real_out")
     ap.add_argument("--data", default=str(SHARED))
     ap.add_argument("--maps", default="", help="comma-separated sensor maps (default: all)")
-    ap.add_argument("--model", default="pretrained")
+    ap.add_argument("--model", default="pretrained",
+                    help="pretrained (the thesis's Model_BA, the default here), or a name of "
+                         "map2map autocorrect's registry as that command runs it: none (its "
+                         "default, drawn like a plan), thesis")
     ap.add_argument("--no-anchor", action="store_true", help="auto-correct with anchor=False")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--figures", default=None, help="folder of the two PNGs (default: OUT)")
@@ -55,7 +58,12 @@ def main(argv=None) -> int:
         print(f"no Halmstad data at {root}; nothing to do")
         return 0
     names = [n for n in args.maps.split(",") if n] or None
-    t = run_table53_real(root, names, args.model, seed=args.seed, anchor=not args.no_anchor,
+    model = args.model
+    if model in ("none", "thesis"):
+        from map2map.jobs.autocorrect import corrector
+
+        model = corrector(model)
+    t = run_table53_real(root, names, model, seed=args.seed, anchor=not args.no_anchor,
                          autocorrect_kw=ac_options(args.ac))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -493,6 +493,8 @@ def run_table53_real(root: str | os.PathLike, names: list[str] | None = None,
     names : list of str, optional
         Sensor maps (``E5_01``, ``HIH_03``, ...); default all 18.
     model : "pretrained", run folder, weights file, BAModel, or a corrector
+        (:func:`map2map.jobs.autocorrect.corrector`: ``correct_many``, as ``map2map
+        autocorrect --model NAME`` runs it; or the older ``correct`` form)
         As :func:`~map2map.experiments.table53.measure.run_table53`: the Model_BA to measure, or an
         object with ``correct(list of uint8 maps) -> list of maps`` and ``source``.
     seed : int
@@ -534,7 +536,13 @@ def run_table53_real(root: str | os.PathLike, names: list[str] | None = None,
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        if hasattr(model, "correct"):
+        if hasattr(model, "correct_many"):       # a corrector of the autocorrect registry
+            outs = model.correct_many(maps, **(autocorrect_kw or {}))
+            extra = [{"deskew_deg": o.meta.get("autocorrect", {}).get("deskew_deg")}
+                     for o in outs]
+            name = model.name
+            data_size = 256
+        elif hasattr(model, "correct"):
             gen = model.correct([m.data for m in maps])
             outs = [m.copy(data=np.asarray(g, np.uint8)) for m, g in zip(maps, gen, strict=True)]
             extra = [{} for _ in maps]
