@@ -20,12 +20,14 @@ from dataclasses import dataclass, field
 import numba as nb
 import numpy as np
 from scipy.optimize import least_squares
-from scipy.sparse import csr_matrix
+from scipy.sparse import coo_matrix, csr_matrix
+from scipy.sparse.linalg import spsolve
 
 from ..core.geometry import relative_pose, wrap_angle
 from .gridmap import likelihood_field
 
-__all__ = ["MatchResult", "LookupTable", "correlative_match", "optimize_pose_graph"]
+__all__ = ["MatchResult", "LookupTable", "correlative_match", "optimize_pose_graph",
+           "gauss_newton_pose_graph"]
 
 
 @dataclass
@@ -243,6 +245,23 @@ def _se2_residual(pi: np.ndarray, pj: np.ndarray, z: np.ndarray) -> np.ndarray:
     return d
 
 
+def _se2_jacobian(pi: np.ndarray, pj: np.ndarray) -> np.ndarray:
+    """(m, 3, 6) Jacobian of :func:`_se2_residual` ``Xi^-1 Xj - z`` with respect to
+    ``(x_i, y_i, theta_i, x_j, y_j, theta_j)``, per edge (unwhitened)."""
+    c, s = np.cos(pi[:, 2]), np.sin(pi[:, 2])
+    dx, dy = pj[:, 0] - pi[:, 0], pj[:, 1] - pi[:, 1]
+    j = np.zeros((len(pi), 3, 6))
+    # d e / d node i
+    j[:, 0, 0], j[:, 0, 1], j[:, 0, 2] = -c, -s, -s * dx + c * dy
+    j[:, 1, 0], j[:, 1, 1], j[:, 1, 2] = s, -c, -c * dx - s * dy
+    j[:, 2, 2] = -1.0
+    # d e / d node j
+    j[:, 0, 3], j[:, 0, 4] = c, s
+    j[:, 1, 3], j[:, 1, 4] = -s, c
+    j[:, 2, 5] = 1.0
+    return j
+
+
 def optimize_pose_graph(
     poses: np.ndarray,
     edges: list[tuple[int, int, np.ndarray, np.ndarray]],
@@ -312,19 +331,7 @@ def optimize_pose_graph(
     def jac(x):
         """Analytic Jacobian of the whitened residuals ``L (Xi^-1 Xj - z)``."""
         p = np.vstack([p0, x.reshape(-1, 3)])
-        pi, pj = p[ii], p[jj]
-        c, s = np.cos(pi[:, 2]), np.sin(pi[:, 2])
-        dx, dy = pj[:, 0] - pi[:, 0], pj[:, 1] - pi[:, 1]
-        j = np.zeros((m, 3, 6))
-        # d e / d node i
-        j[:, 0, 0], j[:, 0, 1], j[:, 0, 2] = -c, -s, -s * dx + c * dy
-        j[:, 1, 0], j[:, 1, 1], j[:, 1, 2] = s, -c, -c * dx - s * dy
-        j[:, 2, 2] = -1.0
-        # d e / d node j
-        j[:, 0, 3], j[:, 0, 4] = c, s
-        j[:, 1, 3], j[:, 1, 4] = -s, c
-        j[:, 2, 5] = 1.0
-        j = np.einsum("kab,kbc->kac", ll, j)
+        j = np.einsum("kab,kbc->kac", ll, _se2_jacobian(p[ii], p[jj]))
         return csr_matrix((j[keep], (rows[keep], cols[keep])), shape=(3 * m, 3 * (n - 1)))
 
     sol = least_squares(
@@ -341,6 +348,95 @@ def optimize_pose_graph(
     out = np.vstack([p0, sol.x.reshape(-1, 3)])
     out[:, 2] = wrap_angle(out[:, 2])
     return out
+
+
+def gauss_newton_pose_graph(
+    poses: np.ndarray,
+    edges: list[tuple[int, int, np.ndarray, np.ndarray]],
+    f_scale: float = 3.0,
+    iterations: int = 20,
+    tol: float = 1e-6,
+) -> np.ndarray:
+    """Optimise SE(2) poses, the first fixed: Gauss-Newton with Huber weights (IRLS) and
+    a sparse direct solve of the normal equations.
+
+    The same problem as :func:`map2map.slam.graph.optimize_pose_graph` (residuals
+    ``L (Xi^-1 Xj - z)`` whitened by the square root ``L`` of each edge's information,
+    the same analytic Jacobian) with the Huber weight ``min(1, f_scale / |r|)`` on each
+    edge's whitened residual norm; the normal equations are sparse (block
+    tridiagonal plus the closures) and solved directly (SuperLU), which on a few
+    hundred nodes takes milliseconds where the trust-region LSMR solver takes about a
+    second.
+
+    Parameters
+    ----------
+    poses : (N, 3) float array
+        Initial poses; ``poses[0]`` stays fixed.
+    edges : list of (i, j, z_ij, sqrt_info)
+        Relative constraints: the pose of ``j`` in the frame of ``i`` and the 3x3
+        square root of its information.
+    f_scale : float
+        Huber scale (whitened residual units).
+    iterations : int
+        Most Gauss-Newton steps.
+    tol : float
+        Stop when no pose moves more than this (metres or radians).
+
+    Returns
+    -------
+    (N, 3) float array
+
+    Examples
+    --------
+    >>> p = np.array([[0, 0, 0], [1.2, 0, 0], [2.1, 0.3, 0.0]])
+    >>> e = [(0, 1, np.array([1.0, 0, 0]), np.eye(3)), (1, 2, np.array([1.0, 0, 0]), np.eye(3)),
+    ...      (0, 2, np.array([2.0, 0, 0]), np.eye(3))]
+    >>> (np.round(gauss_newton_pose_graph(p, e), 3)[:, :2] + 0.0).tolist()
+    [[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]]
+    """
+    p = np.array(poses, float)
+    n = len(p)
+    if n < 2 or not edges:
+        return p
+    ii = np.array([e[0] for e in edges])
+    jj = np.array([e[1] for e in edges])
+    zz = np.array([e[2] for e in edges])
+    ll = np.array([e[3] for e in edges])
+    m = len(edges)
+    # block (a, b) of edge k sits at rows 3*node_a.., cols 3*node_b..
+    nodes = np.stack([ii, jj], 1)  # (m, 2)
+    ra = np.arange(3)
+    rows = 3 * nodes[:, :, None, None, None] + ra[None, None, None, :, None]  # (m,2,1,3,1)
+    cols = 3 * nodes[:, None, :, None, None] + ra[None, None, None, None, :]  # (m,1,2,1,3)
+    rows = np.broadcast_to(rows, (m, 2, 2, 3, 3)).ravel()
+    cols = np.broadcast_to(cols, (m, 2, 2, 3, 3)).ravel()
+    free = slice(3, 3 * n)
+    for _ in range(iterations):
+        pi, pj = p[ii], p[jj]
+        r = _se2_residual(pi, pj, zz)
+        jw = np.einsum("kab,kbc->kac", ll, _se2_jacobian(pi, pj))  # whitened (m, 3, 6)
+        rw = np.einsum("kab,kb->ka", ll, r)
+        norm = np.sqrt((rw * rw).sum(1))
+        w = np.where(norm <= f_scale, 1.0, f_scale / np.maximum(norm, 1e-300))
+        jb = jw.reshape(m, 3, 2, 3).transpose(0, 2, 1, 3)  # (m, 2 nodes, 3 res, 3 vars)
+        blocks = np.einsum("k,kari,kbrj->kabij", w, jb, jb)  # (m, 2, 2, 3, 3)
+        h = coo_matrix((blocks.ravel(), (rows, cols)), shape=(3 * n, 3 * n)).tocsc()
+        g = np.zeros(3 * n)
+        np.add.at(
+            g, (3 * nodes[:, :, None] + ra).ravel(), np.einsum("k,kari,kr->kai", w, jb, rw).ravel()
+        )
+        hf = h[free, free]
+        hf = (
+            hf
+            + 1e-9
+            * coo_matrix((np.ones(3 * n - 3), (np.arange(3 * n - 3), np.arange(3 * n - 3)))).tocsc()
+        )
+        step = -spsolve(hf, g[free])
+        p[1:] += step.reshape(-1, 3)
+        p[:, 2] = wrap_angle(p[:, 2])
+        if np.max(np.abs(step)) < tol:
+            break
+    return p
 
 
 def _sqrt_info(cov: np.ndarray) -> np.ndarray:
