@@ -759,41 +759,56 @@ def _place(st: np.ndarray, lo: np.ndarray, hi: np.ndarray, free: np.ndarray, t: 
     return a0, a1
 
 
+def _stack(groups: list[np.ndarray]):
+    """The segments of ``groups`` as one array ``s`` with their starts, unit directions
+    and lengths, and the group sizes; None with fewer than two segments."""
+    s = np.concatenate([np.asarray(g, float).reshape(-1, 4) for g in groups])
+    if len(s) < 2:
+        return None
+    d = s[:, 2:] - s[:, :2]
+    ln = np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9)
+    return s, s[:, :2], d / ln[:, None], ln, [len(g) for g in groups]
+
+
+def _crossings(P: np.ndarray, p0: np.ndarray, u: np.ndarray):
+    """Where the line through each point ``P[i]`` along ``u[i]`` meets segment ``j``'s
+    line (``P_i + t u_i = p0_j + s u_j``): ``(t, s, ok)``, (n, n) each, ``ok`` where the
+    two lines are more than 30 degrees apart (never ``i == j``)."""
+    cross = u[:, None, 0] * u[None, :, 1] - u[:, None, 1] * u[None, :, 0]
+    ok = np.abs(cross) > 0.5
+    np.fill_diagonal(ok, False)
+    den = np.where(ok, cross, 1.0)
+    dx = p0[None, :, :] - P[:, None, :]
+    t = (dx[..., 0] * u[None, :, 1] - dx[..., 1] * u[None, :, 0]) / den
+    s = (dx[..., 0] * u[:, None, 1] - dx[..., 1] * u[:, None, 0]) / den
+    return t, s, ok
+
+
+def _split(out: np.ndarray, sizes: list[int]) -> list[np.ndarray]:
+    return np.split(out, np.cumsum(sizes)[:-1])
+
+
 def _snap_ends(groups: list[np.ndarray], reach: float) -> list[np.ndarray]:
     """Move every segment end onto the intersection with another segment's line (one
     more than 30 degrees off its own) when that point lies within ``reach`` of the end
     and within ``reach`` of the other segment: corners and T-junctions stay closed
     after walls are leaned or moved onto their faces."""
-    sizes = [len(g) for g in groups]
-    s = np.concatenate([np.asarray(g, float).reshape(-1, 4) for g in groups])
-    if len(s) < 2:
+    st = _stack(groups)
+    if st is None:
         return [np.asarray(g, float).reshape(-1, 4) for g in groups]
-    p0, d = s[:, :2], s[:, 2:] - s[:, :2]
-    ln = np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9)
-    u = d / ln[:, None]
+    s, p0, u, ln, sizes = st
     out = s.copy()
+    rows = np.arange(len(s))
     for e in (0, 2):                           # each end: all other segments at once
         P = s[:, e:e + 2]
-        cross = u[:, None, 0] * u[None, :, 1] - u[:, None, 1] * u[None, :, 0]
-        ok = np.abs(cross) > 0.5
-        # intersection: P + t u_i = p0_j + s u_j
-        dx = p0[None, :, :] - P[:, None, :]
-        den = np.where(ok, cross, 1.0)
-        ti = (dx[..., 0] * u[None, :, 1] - dx[..., 1] * u[None, :, 0]) / den
-        sj = (dx[..., 0] * u[:, None, 1] - dx[..., 1] * u[:, None, 0]) / den
+        ti, sj, ok = _crossings(P, p0, u)
         ok &= (np.abs(ti) <= reach) & (sj >= -reach) & (sj <= ln[None, :] + reach)
-        np.fill_diagonal(ok, False)
         dist = np.where(ok, np.abs(ti), np.inf)
         k = np.argmin(dist, axis=1)
-        hit = np.isfinite(dist[np.arange(len(s)), k])
-        t_hit = ti[np.arange(len(s)), k]
-        out[hit, e:e + 2] = P[hit] + t_hit[hit, None] * u[hit]
+        hit = np.isfinite(dist[rows, k])
+        out[hit, e:e + 2] = P[hit] + ti[rows, k][hit, None] * u[hit]
     keep = np.hypot(out[:, 2] - out[:, 0], out[:, 3] - out[:, 1]) > 1e-6
-    res, i = [], 0
-    for n in sizes:
-        res.append(out[i:i + n][keep[i:i + n]])
-        i += n
-    return res
+    return [g[k] for g, k in zip(_split(out, sizes), _split(keep, sizes), strict=True)]
 
 
 def _trim_overshoots(groups: list[np.ndarray], max_len: float, reach: float,
@@ -808,23 +823,15 @@ def _trim_overshoots(groups: list[np.ndarray], max_len: float, reach: float,
     a junction, with rooms on both sides, stays. Such ends come from a wall's evidence
     running on along laser hits outside the building, left beyond ``_snap_ends``' reach
     when the crossing wall moved onto its face."""
-    sizes = [len(g) for g in groups]
-    s = np.concatenate([np.asarray(g, float).reshape(-1, 4) for g in groups])
-    if len(s) < 2:
+    st = _stack(groups)
+    if st is None:
         return [np.asarray(g, float).reshape(-1, 4) for g in groups]
-    p0, d = s[:, :2], s[:, 2:] - s[:, :2]
-    ln = np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9)
-    u = d / ln[:, None]
-    cross = u[:, None, 0] * u[None, :, 1] - u[:, None, 1] * u[None, :, 0]
-    base = np.abs(cross) > 0.5
-    np.fill_diagonal(base, False)
-    den = np.where(base, cross, 1.0)
+    s, p0, u, ln, sizes = st
     out = s.copy()
     for e, inward in ((0, 1.0), (2, -1.0)):
         P = s[:, e:e + 2]
-        dx = p0[None, :, :] - P[:, None, :]
-        ti = (dx[..., 0] * u[None, :, 1] - dx[..., 1] * u[None, :, 0]) / den * inward
-        sj = (dx[..., 0] * u[:, None, 1] - dx[..., 1] * u[:, None, 0]) / den
+        ti, sj, base = _crossings(P, p0, u)
+        ti = ti * inward                        # distance from the end, inwards
         # the crossing lies inside this segment, under max_len from its end, on the other
         ok = base & (ti > 1e-6) & (ti < max_len) & (ti < ln[:, None] - max_len) & \
             (sj >= -reach) & (sj <= ln[None, :] + reach)
@@ -840,11 +847,7 @@ def _trim_overshoots(groups: list[np.ndarray], max_len: float, reach: float,
             c = np.clip(np.round(pts[:, 0]).astype(int), 0, free.shape[1] - 1)
             if len(pts) and free[r, c].mean() <= 0.5:
                 out[i, e:e + 2] = P[i] + inward * t_hit[i] * u[i]
-    res, i = [], 0
-    for n in sizes:
-        res.append(out[i:i + n])
-        i += n
-    return res
+    return _split(out, sizes)
 
 
 def _order(s: np.ndarray) -> np.ndarray:
