@@ -7,9 +7,9 @@ import math
 
 import numpy as np
 import pytest
+from _realism_data import room_dataset
 
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
-from map2map.datasets.build import build_dataset
 from map2map.datasets.pair import BuildParams, read_pair_meta
 from map2map.datasets.pairfolder import pair_dir
 from map2map.datasets.rerun import rerun_pair
@@ -24,7 +24,6 @@ from map2map.experiments.realism.measure import (
     realism_table,
     simulated_references,
 )
-from map2map.maps.ros import save_ros_map
 
 
 def _plan(n=48) -> np.ndarray:
@@ -85,17 +84,8 @@ def test_realism_table_ratios():
 
 @pytest.fixture(scope="module")
 def tiny_dataset(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("plans")
-    d = np.full((50, 70), 127, np.uint8)
-    d[2:-2, 2:-2] = 0
-    d[4:-4, 4:-4] = 255
-    d[4:-4, 35] = 0
-    d[10:30, 35] = 255
-    save_ros_map(OccupancyMap(d, 0.05), folder / "room.yaml")
-    ds = tmp_path_factory.mktemp("ds") / "DS"
-    p = BuildParams(source="simulate", duration=8.0, size=32, fov=360.0)
-    build_dataset(ds, str(folder), 2, 3, p, workers=0, progress=False)
-    return ds
+    return room_dataset(tmp_path_factory.mktemp("plans"), tmp_path_factory.mktemp("ds") / "DS",
+                        2, 3)
 
 
 def test_rerun_reproduces_run_1_and_run_2_is_another_run_on_the_same_pixels(tiny_dataset):

@@ -8,8 +8,9 @@ import json
 
 import numpy as np
 import pytest
+from _realism_data import room_dataset
 
-from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from map2map.core.grid import FREE, OCCUPIED, UNKNOWN
 from map2map.experiments.realism.ranks import (
     EXTREME_MAX,
     perfect_chance,
@@ -108,21 +109,8 @@ def test_classifier_tells_a_generator_apart_and_is_deterministic_per_seed():
 
 @pytest.fixture(scope="module")
 def small_dataset(tmp_path_factory):
-    from map2map.datasets.build import build_dataset
-    from map2map.datasets.pair import BuildParams
-    from map2map.maps.ros import save_ros_map
-
-    folder = tmp_path_factory.mktemp("plans")
-    d = np.full((50, 70), 127, np.uint8)
-    d[2:-2, 2:-2] = 0
-    d[4:-4, 4:-4] = 255
-    d[4:-4, 35] = 0
-    d[10:30, 35] = 255
-    save_ros_map(OccupancyMap(d, 0.05), folder / "room.yaml")
-    ds = tmp_path_factory.mktemp("ds") / "DS"
-    p = BuildParams(source="simulate", duration=8.0, size=32, fov=360.0)
-    build_dataset(ds, str(folder), 4, 7, p, workers=0, progress=False)
-    return ds
+    return room_dataset(tmp_path_factory.mktemp("plans"), tmp_path_factory.mktemp("ds") / "DS",
+                        4, 7)
 
 
 def test_per_plan_benchmark_end_to_end(small_dataset, tmp_path, capsys):
