@@ -33,6 +33,7 @@ Examples
 from __future__ import annotations
 
 import csv
+import gc
 import io
 import json
 import math
@@ -201,6 +202,7 @@ class Dist:
 
             if dist.is_initialized():
                 dist.barrier()
+                gc.collect()  # the DDP wrappers the caller dropped, in cycles or not
                 dist.destroy_process_group()
 
     def mean(self, values: dict[str, float]) -> dict[str, float]:
@@ -582,6 +584,10 @@ class GANRun:
                 signal.signal(signal.SIGINT, old_handler)
             if bar is not None:
                 bar.close()
+        # DDP's wrappers hold the process group: dropped here, the group is freed by
+        # dist.close() while the interpreter is alive; freed at exit instead, a gloo
+        # worker can die taking the GIL in a barrier's destructor (SIGABRT)
+        self.g_run = self.dd_run = self.dr_run = self.static = None
         dist.close()
         el = time.perf_counter() - t_start
         return TrainResult(out, epoch, history, images / el if el > 0 else float("nan"),
