@@ -14,6 +14,7 @@ from map2map.learn.ab.coverage import (
     coverage_options,
     explore_plan,
     explore_rng,
+    free_from_rays,
     hide_unseen,
 )
 
@@ -63,6 +64,33 @@ def test_hide_unseen_keeps_a_band_and_checks_shapes():
         coverage_options("none", "roadmap")
     with pytest.raises(InputError):
         ExploreParams(duration=0.0)
+
+
+def test_free_from_rays_takes_the_rays_free_space_and_keeps_the_network_walls():
+    # the network: a room 2..9 x 1..8 with a wall at column 9, its corner rounded off
+    # (unknown) and a cloud of free space past the rays at row 8
+    m = np.full((10, 12), UNKNOWN, np.uint8)
+    m[1:9, 1:9] = FREE
+    m[1, 1] = m[1, 2] = m[2, 1] = UNKNOWN
+    m[:, 9] = OCCUPIED
+    # the rays crossed rows 1-7, columns 1-8, and hit the wall (column 9) and the top row
+    free = np.zeros_like(m, bool)
+    free[1:8, 1:9] = True
+    seen = free.copy()
+    seen[1:8, 9] = True
+    seen[0, 1:9] = True
+    out = free_from_rays(m, seen, free, margin_px=1, reach_px=0, hits_px=1.5)
+    assert np.all(out[1:3, 1:3] == FREE)                       # the rounded corner: free
+    assert np.all(out[8, 1:9] == UNKNOWN)                      # the cloud past the rays
+    assert np.all(out[0:9, 9] == OCCUPIED)                      # the network's wall, near seen
+    assert np.all(out[9, 9] == UNKNOWN)                         # ... not far from any
+    assert np.all(out[0, 1:8] == OCCUPIED)                     # a face it missed: drawn
+    assert out[0, 8] == UNKNOWN                               # next to its wall: not doubled
+    # reach: the network's free kept a pixel past the rays; no hits drawn
+    out2 = free_from_rays(m, seen, free, margin_px=1, reach_px=1, hits_px=None)
+    assert np.all(out2[8, 1:9] == FREE) and np.all(out2[0, 1:8] == UNKNOWN)
+    with pytest.raises(ValueError):
+        free_from_rays(m, seen[:, :3], free, 1)
 
 
 @pytest.fixture(scope="module")
@@ -124,6 +152,25 @@ def test_synthesize_coverage_hides_the_unseen_room_and_route_is_separable(drawer
     assert not np.array_equal(route.maps[0].data, drift.maps[0].data)
     with pytest.raises(InputError, match="coverage"):
         synthesize(plan, drawer, coverage="all")
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+def test_synthesize_rays_takes_free_space_from_each_hypothesis_exploration(drawer):
+    from map2map.learn.ab.synthesize import synthesize
+
+    plan = _plan()
+    kw = {"samples": 2, "seed": 4, "drift": "none", "traces": "none", "explore": SHORT}
+    base = synthesize(plan, drawer, coverage="none", **kw)
+    rays = synthesize(plan, drawer, coverage="rays", **kw)
+    again = synthesize(plan, drawer, coverage="rays", **kw)
+    margin = SHORT.margin(2.0 * 44 / 64)
+    for k, (b, r, a) in enumerate(zip(base.maps, rays.maps, again.maps, strict=True)):
+        assert np.array_equal(r.data, a.data)                     # same seed, same bytes
+        ex = explore_plan(plan, explore_rng(4, k), SHORT)
+        assert np.array_equal(r.data, free_from_rays(b.data, ex.seen, ex.free, margin,
+                                                     SHORT.reach_px, SHORT.hits_px))
+        assert np.all(r.data[ex.free & (b.data != OCCUPIED)] == FREE)
+        assert r.meta["synthesize"]["coverage"] == "rays"
 
 
 @pytest.mark.filterwarnings("ignore::UserWarning")

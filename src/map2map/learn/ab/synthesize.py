@@ -90,7 +90,14 @@ from ...core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from ...maps.preprocess import square_resize, thicken
 from ..training.data import content_square
 from . import render as slam_render
-from .coverage import ExploreParams, coverage_options, explore_plan, explore_rng, hide_unseen
+from .coverage import (
+    ExploreParams,
+    coverage_options,
+    explore_plan,
+    explore_rng,
+    free_from_rays,
+    hide_unseen,
+)
 from .drift import (
     DEFAULT_SQUARE_RESOLUTION,
     DriftParams,
@@ -264,9 +271,12 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
                 warns.append(f"hypothesis {k + 1}: no exploration ({exc.problem})")
             else:
                 explored[k] = ex.stats()
-                if hide:
-                    data = hide_unseen(data, ex.seen, ep.margin(
-                        wall_px + (tp.inset_px if tp is not None else 0.0)))
+                margin = ep.margin(wall_px + (tp.inset_px if tp is not None else 0.0))
+                if coverage == "rays":
+                    data = free_from_rays(data, ex.seen, ex.free, margin, ep.reach_px,
+                                          ep.hits_px)
+                elif hide:
+                    data = hide_unseen(data, ex.seen, margin)
         if tp is not None:
             data = stray_hits(data, trng, plan.resolution, tp)
         if dp is not None:
