@@ -31,8 +31,13 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
    by unknown space, not walls). Gaps longer than ``max_gap`` stay open.
 5. **Corners and T-junctions** (:func:`map2map.maps.segments._join`): an end stopping
    short of, or overshooting, a perpendicular wall by at most ``reach`` moves onto it.
-   Segments that reach less than ``L`` beyond the perpendicular walls they cross
-   (ticks and blobs on a wall, pieces the snapping shrank to nothing) go.
+   Segments without a stretch of ``L`` beyond the perpendicular walls they cross (ticks
+   and blobs on a wall, also across a wall a real map shows as two faces, sticking out
+   of both; pieces the snapping shrank to nothing) go, and so do segments with less
+   than ``main_min`` of main evidence (the weight-1 points: with an input's own wall
+   pixels handed over at a lower weight beside a corrector's walls, a line only the
+   input shows is clutter the corrector dropped; those pixels still join the
+   corrector's walls).
 6. **Other directions**, only where evidence is strong: evidence that no family wall
    explains is thinned and cut by a probabilistic Hough transform; lines at least
    ``other_min`` metres long, more than 4 degrees off both families, are kept.
@@ -40,10 +45,17 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
    (:func:`_refit`); a long wall that SLAM drift turned a little follows its
    least-squares line, and a wall seen from one side keeps its seen face (its thickness
    grows away from the free side). Ends are then moved onto the lines they meet again
-   (:func:`_snap_ends`), so corners stay closed.
+   (:func:`_snap_ends`), so corners stay closed. Where a segment's centre line runs over
+   the input's free space more than ``tol`` plus a quarter of the thickness from any
+   evidence (for more than ``reach`` at an end, where corners close across free
+   space), with no speck of free space on either side, it is cut there
+   (:func:`_cut_free`): the input saw through the drawn wall (a tick's ends beyond its
+   evidence, a line joined across a corridor whose sides are no rooms by their
+   outline).
 8. **Drawing** (:func:`render_plan`): free and unknown space come from the input map, its
    occupied pixels taking the value of their nearest non-occupied pixel; free regions
-   that are not rooms (small ones, ray fans) become unknown; then every segment is drawn
+   that are not rooms (small ones, ray fans; the largest free region always counts as a
+   room) become unknown; then every segment is drawn
    as a rectangle of ``thickness`` pixels across (exactly within 10 degrees of the grid's
    axes, drawn column by column; within half a pixel at other angles), extended by half
    the thickness at both ends so corners close.
@@ -137,6 +149,12 @@ class DrawOptions:
     keep_faces : bool
         A wall seen from one side keeps its seen face (:func:`_place`); off for wall
         points that already lie on the walls' centre lines.
+    cut_free : bool
+        Cut segments where the input's free space runs through them, away from any
+        evidence (:func:`_cut_free`).
+    main_min : float
+        A segment needs at least ``main_min / resolution`` main-evidence points (those of
+        at least half the largest weight; with equal weights every point is main).
     """
 
     tol: float = 0.12
@@ -151,6 +169,8 @@ class DrawOptions:
     snap_px: float = 1.0
     enclosed: float = 0.2
     keep_faces: bool = True
+    cut_free: bool = True
+    main_min: float = 0.5
 
 
 @dataclass
@@ -169,7 +189,8 @@ class PlanDrawing:
         Wall thickness drawn (pixels).
     info : dict
         Counts: ``pieces`` (straight pieces found), ``doors`` (gaps kept open), ``joined``
-        (gaps closed), ``other`` (segments off the dominant directions).
+        (gaps closed), ``other`` (segments off the dominant directions), ``cut`` (segments
+        more (or fewer) after :func:`_cut_free`).
     """
 
     segments: np.ndarray
@@ -337,12 +358,13 @@ class _Frame:
 
 
 def _pieces(E: np.ndarray, u: np.ndarray, v: np.ndarray, w: np.ndarray, L: int,
-            min_w: float, bridge: int = 3) -> np.ndarray:
+            min_w: float, bridge: int = 3, main: np.ndarray | None = None) -> np.ndarray:
     """Horizontal pieces of the canvas evidence ``E`` (uint8 0/1): rows ``(c, lo, hi,
-    sw, swu, swv, swuu, swuv, npix)``, ``c`` the weighted mean ``v`` of the points in the
-    piece, ``lo``/``hi`` the centres of its first and last pixel along, then the sums
-    of the points' weights (``sw``), moments (for a line fit) and its pixel count; and
-    each point's piece (-1: none). Gaps along a run up to ``bridge - 1`` pixels long are
+    sw, swu, swv, swuu, swuv, npix, nmain)``, ``c`` the weighted mean ``v`` of the points
+    in the piece, ``lo``/``hi`` the centres of its first and last pixel along, then the
+    sums of the points' weights (``sw``), moments (for a line fit), its pixel count and
+    how many of its points are ``main`` (1 or 0 per point; default all); and each
+    point's piece (-1: none). Gaps along a run up to ``bridge - 1`` pixels long are
     bridged first (a dotted wall is a wall); a piece whose own evidence covers less than
     half of its length must be at least ``2 L`` long (a few specks in a row are not)."""
     closed = cv2.morphologyEx(E, cv2.MORPH_CLOSE, np.ones((1, bridge), np.uint8))
@@ -350,7 +372,7 @@ def _pieces(E: np.ndarray, u: np.ndarray, v: np.ndarray, w: np.ndarray, L: int,
     opened = cv2.morphologyEx(closed, cv2.MORPH_OPEN, np.ones((1, L), np.uint8))
     n, lab = cv2.connectedComponents(opened, connectivity=8)
     if n <= 1:
-        return np.zeros((0, 9)), np.full(len(u), -1, np.int64)
+        return np.zeros((0, 10)), np.full(len(u), -1, np.int64)
     H, W = E.shape
     rr, cc = np.nonzero(lab)
     lv = lab[rr, cc]
@@ -362,7 +384,9 @@ def _pieces(E: np.ndarray, u: np.ndarray, v: np.ndarray, w: np.ndarray, L: int,
     ci = np.clip(np.floor(u).astype(np.int64), 0, W - 1)
     ri = np.clip(np.floor(v).astype(np.int64), 0, H - 1)
     lp = lab[ri, ci]
+    main = np.ones(len(u)) if main is None else main
     st = [np.bincount(lp, x, n)[1:] for x in (w, w * u, w * v, w * u * u, w * u * v)]
+    nmain = np.bincount(lp, main, n)[1:]
     # share of each piece's positions along that hold evidence of its own
     er, ec = np.nonzero(E & (lab > 0))
     cols = np.unique(lab[er, ec].astype(np.int64) * W + ec)
@@ -372,7 +396,7 @@ def _pieces(E: np.ndarray, u: np.ndarray, v: np.ndarray, w: np.ndarray, L: int,
     index = np.full(n, -1, np.int64)
     index[1:][ok] = np.arange(int(ok.sum()))
     return np.stack([c, left[ok] + 0.5, right[ok] + 0.5] + [x[ok] for x in st]
-                    + [npix[ok]], axis=1), index[lp]
+                    + [npix[ok], nmain[ok]], axis=1), index[lp]
 
 
 def _lines(p: np.ndarray, tol: float) -> np.ndarray:
@@ -398,7 +422,7 @@ def _family(p: np.ndarray, free: np.ndarray, room: np.ndarray, tol: float, half:
     region (every gap closed)."""
     seg_of = np.full(len(p), -1, np.int64)
     if len(p) == 0:
-        return np.zeros((0, 9)), 0, 0, seg_of
+        return np.zeros((0, 10)), 0, 0, seg_of
     H, W = free.shape
     line = _lines(p, tol)
     out, doors, joined = [], 0, 0
@@ -440,7 +464,7 @@ def _family(p: np.ndarray, free: np.ndarray, room: np.ndarray, tol: float, half:
                 cur = _absorb(cur, q[k])
             seg_of[g[k]] = len(out)
         out.append(cur)
-    return np.asarray(out, float).reshape(-1, 9), doors, joined, seg_of
+    return np.asarray(out, float).reshape(-1, 10), doors, joined, seg_of
 
 
 def _absorb(cur: np.ndarray, piece: np.ndarray) -> np.ndarray:
@@ -459,10 +483,11 @@ def _longest_run(b: np.ndarray) -> int:
 
 def _drop_stubs(h: np.ndarray, v: np.ndarray, band: float, min_len: float
                 ) -> tuple[np.ndarray, np.ndarray]:
-    """Which segments to keep (two boolean masks): not those whose length outside the
-    bands (``band`` either side) of the perpendicular segments they cross or touch is
-    under ``min_len``: ticks and blobs on a wall, and pieces that the corner snapping
-    shrank to nothing.
+    """Which segments to keep (two boolean masks): not those without a stretch of at least
+    ``min_len`` outside the bands (``band`` either side) of the perpendicular segments
+    they cross or touch: ticks and blobs on a wall (also a tick across a wall seen as
+    two faces, sticking out of both), and pieces that the corner snapping shrank to
+    nothing.
 
     ``h`` rows ``(x0, y, x1, y)``, ``v`` rows ``(x, y0, x, y1)``."""
     def keep(a, b, ax):
@@ -476,10 +501,19 @@ def _drop_stubs(h: np.ndarray, v: np.ndarray, band: float, min_len: float
             return length >= min_len
         blo, bhi = np.minimum(b[:, j0], b[:, j1]), np.maximum(b[:, j0], b[:, j1])
         cross = (blo[None] - band <= a[:, ic, None]) & (a[:, ic, None] <= bhi[None] + band)
-        s0 = np.maximum(lo[:, None], b[None, :, jc] - band)
-        s1 = np.minimum(hi[:, None], b[None, :, jc] + band)
-        covered = np.where(cross, np.clip(s1 - s0, 0, None), 0).sum(axis=1)
-        return length - covered >= min_len
+        # the bands of the crossing segments along a, sorted; the longest stretch of a
+        # outside all of them (a tick across a wall seen as two faces sticks out on both
+        # sides: its parts add up to more than min_len, but none is that long)
+        s0 = np.where(cross, np.clip(b[None, :, jc] - band, lo[:, None], hi[:, None]),
+                      hi[:, None])
+        s1 = np.where(cross, np.clip(b[None, :, jc] + band, lo[:, None], hi[:, None]),
+                      hi[:, None])
+        o = np.argsort(s0, axis=1)
+        s0, s1 = np.take_along_axis(s0, o, 1), np.take_along_axis(s1, o, 1)
+        end = np.maximum.accumulate(s1, axis=1)
+        before = np.concatenate([lo[:, None], end[:, :-1]], axis=1)
+        longest = np.maximum((s0 - before).max(axis=1), hi - end[:, -1])
+        return longest >= min_len
     return keep(h, v, 0), keep(v, h, 1)
 
 
@@ -603,8 +637,10 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
     E = (_splat(uv, w, (Hr, Wr)) > 0).astype(np.uint8)
     free_c = fr.warp((occ == FREE).astype(np.uint8), 0) > 0
     bridge = 2 * int(math.ceil(opt.bridge / res / 2)) + 1
-    ph, pt_h = _pieces(E, uv[:, 0], uv[:, 1], w, L, 1.0, bridge)
-    pv, pt_v = _pieces(np.ascontiguousarray(E.T), uv[:, 1], uv[:, 0], w, L, 1.0, bridge)
+    main = (w >= 0.5 * float(w.max())).astype(float) if len(w) else w
+    ph, pt_h = _pieces(E, uv[:, 0], uv[:, 1], w, L, 1.0, bridge, main)
+    pv, pt_v = _pieces(np.ascontiguousarray(E.T), uv[:, 1], uv[:, 0], w, L, 1.0, bridge,
+                       main)
     # room-sized free regions with every gap closed (pieces joined regardless of doors)
     closed = np.zeros((Hr, Wr), np.uint8)
     hc, _, _, _ = _family(ph, np.zeros((Hr, Wr), bool), np.zeros((Hr, Wr), bool), tol, half,
@@ -622,6 +658,8 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
     hseg, vseg = _join(hseg, vseg, reach)
     band = max(tol, opt.thickest / res / 2)
     kh, kv = _drop_stubs(hseg, vseg, band, L)
+    kh &= hs[:, 9] >= opt.main_min / res
+    kv &= vs[:, 9] >= opt.main_min / res
     hs = _refit(hs, _kept(sh, kh, pt_h), uv[:, 0], uv[:, 1], w)[kh]
     vs = _refit(vs, _kept(sv, kv, pt_v), uv[:, 1], uv[:, 0], w)[kv]
     hseg, vseg = hseg[kh], vseg[kv]
@@ -645,10 +683,86 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
     segs = np.concatenate([_order(hseg), _order(vseg), other]).reshape(-1, 4)
     if len(segs):
         segs = np.concatenate([fr.back(segs[:, :2]), fr.back(segs[:, 2:])], axis=1)
+    n0 = len(segs)
+    if opt.cut_free and len(segs):
+        segs = _cut_free(segs, occ == FREE, _splat(pts, w, (H, W)) > 0, tol + t / 4,
+                         max(2, int(round(tol))), L, t, min_room, reach)
     out = render_plan(segs, occ, t, res, min_room=opt.min_room, enclosed=opt.enclosed)
     info = {"pieces": int(len(ph) + len(pv)), "doors": d1 + d2, "joined": j1 + j2,
-            "other": int(len(other))}
+            "other": int(len(other)), "cut": int(len(segs) - n0)}
     return PlanDrawing(segs, out, angle, t, info)
+
+
+def _samples(segs: np.ndarray):
+    """One sample a pixel along each segment: the samples' segment, their fraction of
+    the way from the segment's start, their points, and the samples per segment."""
+    d = segs[:, 2:] - segs[:, :2]
+    n = np.ceil(np.hypot(d[:, 0], d[:, 1])).astype(np.int64) + 1
+    idx = np.repeat(np.arange(len(segs)), n)
+    start = np.repeat(np.cumsum(n) - n, n)
+    f = (np.arange(len(idx)) - start) / np.maximum(n[idx] - 1, 1)
+    return idx, f, segs[idx, :2] + f[:, None] * d[idx], n
+
+
+def _cut_free(segs: np.ndarray, free: np.ndarray, ev: np.ndarray, r: float, min_run: int,
+              min_len: float, t: float, min_area: float, reach: float) -> np.ndarray:
+    """Segments (image frame) cut where their centre line runs over the input's free space
+    farther than ``r`` pixels from any wall evidence ``ev``, with free space of at least
+    ``min_area`` pixels on both sides of the drawn walls (``t`` thick) unless a side
+    is not free at all, for ``min_run``
+    samples or more (more than ``reach`` at an end of the segment, where corners are
+    closed across free space): the input saw through the drawn wall there (a tick's ends
+    beyond the wall it crosses, a line joined across a corridor), and not into a speck. Pieces
+    of a cut segment shorter than ``min_len`` go; segments not cut are returned as
+    they are."""
+    segs = np.asarray(segs, float).reshape(-1, 4)
+    H, W = free.shape
+    dist = cv2.distanceTransform((~ev).astype(np.uint8), cv2.DIST_L2, 3)
+    idx, f, p, n = _samples(segs)
+
+    def at(q):
+        return (np.clip(np.floor(q[:, 1]).astype(np.int64), 0, H - 1),
+                np.clip(np.floor(q[:, 0]).astype(np.int64), 0, W - 1))
+    bad = free[at(p)] & (dist[at(p)] > r)
+    if bad.any():
+        open_ = free & ~_near_segments(segs, (H, W), t / 2)
+        nl, lab, stats, _ = cv2.connectedComponentsWithStats(open_.astype(np.uint8),
+                                                             connectivity=4)
+        speck = stats[:, cv2.CC_STAT_AREA] < min_area
+        speck[0] = False
+        d = segs[idx, 2:] - segs[idx, :2]
+        nrm = np.stack([-d[:, 1], d[:, 0]], 1) / np.maximum(
+            np.hypot(d[:, 0], d[:, 1]), 1e-9)[:, None] * (t / 2 + 2)
+        bad &= ~speck[lab[at(p + nrm)]] & ~speck[lab[at(p - nrm)]]
+    same = np.r_[False, idx[1:] == idx[:-1]]            # sample continues a segment
+    run = np.cumsum(bad & ~(same & np.r_[False, bad[:-1]])) * bad
+    # a run at an end must be longer than ``reach``: corners closed across free space
+    end = np.zeros(run.max() + 1, bool)
+    end[run[(f == 0) | (f == 1)]] = True
+    cut = bad & (np.bincount(run)[run] >= np.where(end[run], reach + 1, min_run))
+    if not cut.any():
+        return segs
+    keep = ~cut
+    piece = np.cumsum(keep & ~(same & np.r_[False, keep[:-1]]))[keep] - 1
+    k = np.flatnonzero(keep)
+    f0 = np.minimum.reduceat(f[k], np.flatnonzero(np.r_[True, np.diff(piece) > 0]))
+    f1 = np.maximum.reduceat(f[k], np.flatnonzero(np.r_[True, np.diff(piece) > 0]))
+    seg = idx[k][np.r_[True, np.diff(piece) > 0]]
+    d = segs[seg, 2:] - segs[seg, :2]
+    out = np.concatenate([segs[seg, :2] + f0[:, None] * d, segs[seg, :2] + f1[:, None] * d], 1)
+    was_cut = np.bincount(idx, cut, len(segs)) > 0
+    ok = ~was_cut[seg] | (np.hypot(*(out[:, 2:] - out[:, :2]).T) >= min_len)
+    return out[ok]
+
+
+def _near_segments(segs: np.ndarray, shape: tuple[int, int], r: float) -> np.ndarray:
+    """Pixels within about ``r`` of the segments (image frame)."""
+    img = np.zeros(shape, np.uint8)
+    th = max(1, int(round(2 * r)))
+    for x0, y0, x1, y1 in np.round((np.asarray(segs, float).reshape(-1, 4) - 0.5) * 16
+                                   ).astype(np.int64):     # segments, not pixels
+        cv2.line(img, (int(x0), int(y0)), (int(x1), int(y1)), 1, th, cv2.LINE_8, 4)
+    return img > 0
 
 
 def _kept(seg_of: np.ndarray, keep: np.ndarray, point_piece: np.ndarray) -> np.ndarray:
@@ -958,7 +1072,10 @@ def _rooms(free: np.ndarray, walls: np.ndarray, min_area: float, enclosed: float
            ) -> np.ndarray:
     """Free pixels of regions (4-connected) at least ``min_area`` pixels large whose
     outline runs along ``walls`` (within a pixel) for at least ``enclosed`` of its length:
-    rooms, not the fans of laser rays that left the building (bounded by unknown)."""
+    rooms, not the fans of laser rays that left the building (bounded by unknown). The
+    largest region is a room whatever its outline: on a real map the building's free
+    space is bounded by unknown along most of its ragged outline, and a few walls more
+    or less must not turn all of it unknown."""
     n, lab = cv2.connectedComponents(free.astype(np.uint8), connectivity=4)
     area = np.bincount(lab.ravel(), minlength=n)
     f8 = free.astype(np.uint8)
@@ -968,6 +1085,8 @@ def _rooms(free: np.ndarray, walls: np.ndarray, min_area: float, enclosed: float
     tot = np.bincount(le, minlength=n)
     along = np.bincount(le[near[edge]], minlength=n)
     ok = (area >= min_area) & (along >= enclosed * np.maximum(tot, 1))
+    if n > 1:            # the largest region is the building, however ragged its outline
+        ok[1 + int(np.argmax(area[1:]))] |= bool(area[1:].max() >= min_area)
     ok[0] = False
     return ok[lab]
 

@@ -44,6 +44,9 @@ def main(argv=None) -> int:
                          "map2map autocorrect's registry as that command runs it: none (its "
                          "default, drawn like a plan), thesis")
     ap.add_argument("--no-anchor", action="store_true", help="auto-correct with anchor=False")
+    ap.add_argument("--no-draw", action="store_true",
+                    help="with --model none or thesis: not through the plan drawer "
+                         "(map2map autocorrect --no-draw)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--figures", default=None, help="folder of the two PNGs (default: OUT)")
     ap.add_argument("--overlay-maps", default="",
@@ -62,7 +65,7 @@ def main(argv=None) -> int:
     if model in ("none", "thesis"):
         from map2map.jobs.autocorrect import corrector
 
-        model = corrector(model)
+        model = corrector(model, draw=False if args.no_draw else None)
     t = run_table53_real(root, names, model, seed=args.seed, anchor=not args.no_anchor,
                          autocorrect_kw=ac_options(args.ac))
     out = Path(args.out)
