@@ -61,7 +61,7 @@ class SynthesizeSpec:
     drift: str = "rooms"
     drift_method: str = "additive"
     drift_scale: float | None = None
-    coverage: str = "explore"
+    coverage: str = "rays"
     drift_route: str = "tour"
     traces: str | None = None
     device: str = "cpu"

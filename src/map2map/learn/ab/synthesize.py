@@ -24,7 +24,8 @@ unknown outside.
 **Defaults** (session 11, issue #15's realism rule on the gen900 validation plans:
 docs/synthesize.md, "Rendering what a LIDAR leaves"): :func:`synthesize` draws the
 room-wise drift (``drift="rooms"``), hides what each hypothesis's own exploration did not
-see (``coverage="explore"``) and draws the LIDAR traces (``traces="lidar"`` with
+see (``coverage="explore"``; since 2026-11-27 ``coverage="rays"``, the free space being
+what that exploration's rays crossed, issue #33) and draws the LIDAR traces (``traces="lidar"`` with
 ``render="slam"``). The previous defaults are ``drift="parametric", coverage="none",
 traces="none"`` (bit for bit). :func:`synthesize_squares`, the evaluation helper, keeps
 those previous defaults: its callers (the benchmarks) name what they measure.
@@ -186,7 +187,7 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
                *, samples: int = 4, seed: int = 0, device: str = "cpu",
                render: str = "slam", drift: str | DriftParams = "rooms",
                drift_method: str | None = None, drift_scale: float | None = None,
-               coverage: str = "explore", drift_route: str = "tour",
+               coverage: str = "rays", drift_route: str = "tour",
                explore: ExploreParams | None = None,
                traces: str | TraceParams | None = None) -> SynthesisResult:
     """``samples`` SLAM-map hypotheses of ``plan`` (module doc), in its frame.
@@ -214,10 +215,12 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
         3.54-3.80).
     drift_scale : float, optional
         Replaces the drift's final factor on its field.
-    coverage : {"explore", "none"}
-        ``"explore"`` (default): unknown wherever hypothesis ``k``'s own exploration of
+    coverage : {"rays", "explore", "none"}
+        ``"explore"``: unknown wherever hypothesis ``k``'s own exploration of
         the plan did not see (module doc, :func:`~map2map.learn.ab.coverage.hide_unseen`;
-        about 0.5 s a hypothesis on gen900's plans); ``"none"``: every room drawn.
+        about 0.5 s a hypothesis on gen900's plans); ``"rays"`` (default since
+        2026-11-27): the same exploration, and free space where its rays crossed
+        (:func:`~map2map.learn.ab.coverage.free_from_rays`); ``"none"``: every room drawn.
     drift_route : {"tour", "explore"}
         The drift's path: the roadmap tour, or hypothesis ``k``'s exploration (no effect
         with ``drift="none"``).
@@ -433,6 +436,9 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
         if not hide or along:
             raise ValueError("seen= needs coverage='explore' and a drift route other than "
                              "'explore' (no trajectory comes with it)")
+        if coverage == "rays":
+            raise ValueError("seen= cannot serve coverage='rays' (it needs the rays' free "
+                             "cells): let the squares be explored")
         for i in range(len(plans)):
             out[i] = hide_unseen(out[i], seen[i], ep.margin(walls[i] + inset))
     elif hide or along:
@@ -443,7 +449,10 @@ def synthesize_squares(model: str | os.PathLike | ABModel | None, plans: np.ndar
             except InputError as exc:
                 warnings.warn(f"map {i}: no exploration ({exc.problem})", stacklevel=2)
                 continue
-            if hide:
+            if coverage == "rays":
+                out[i] = free_from_rays(out[i], ex.seen, ex.free,
+                                        ep.margin(walls[i] + inset), ep.reach_px, ep.hits_px)
+            elif hide:
                 out[i] = hide_unseen(out[i], ex.seen, ep.margin(walls[i] + inset))
             if along:
                 trajs[i] = ex.trajectory
