@@ -147,3 +147,22 @@ def test_per_plan_benchmark_end_to_end(small_dataset, tmp_path, capsys):
         for c in r["classifier"].values():
             c.pop("seconds")
     assert rep2 == rep
+
+
+def test_per_plan_variants_ranks_each_synthesize_variant(small_dataset, tmp_path, capsys):
+    pytest.importorskip("torch")
+    mod = importlib.import_module("map2map.experiments.realism.per_plan.__main__")
+    caches = ["--cache2", str(tmp_path / "c2.npz"), "--cache3", str(tmp_path / "c3.npz")]
+    assert mod.main(["--data", str(small_dataset), "--split", "all", *caches,
+                     "--classifier-steps", "0"]) == 0       # runs 2 and 3 cached
+    capsys.readouterr()
+    from map2map.experiments.realism.per_plan.variants import main
+
+    assert main(["--data", str(small_dataset), *caches, "--plans", "3",
+                 "--variant", "explore", '{"coverage": "explore"}',
+                 "--variant", "rays", '{"coverage": "rays", "traces": {"floor_px": 0.8}, '
+                 '"explore": {"duration": 30.0}}']) == 0
+    out = capsys.readouterr().out
+    assert "explore: 3 plans" in out and "rays: 3 plans" in out
+    assert "rays: rank among 3 simulated runs of its plan, 3 plans" in out
+    assert "frontier_rough" in out

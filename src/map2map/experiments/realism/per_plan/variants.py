@@ -1,0 +1,92 @@
+"""Tuning ``synthesize`` on a dev set: its options' effect on the per-plan ranks.
+
+For the first ``--plans`` plans of a dataset whose runs 2 and 3 are cached (as
+:mod:`map2map.experiments.realism.per_plan` leaves them), each ``--variant`` (a name and
+the keyword arguments of :func:`map2map.learn.ab.synthesize.synthesize` as JSON; nested
+``explore`` and ``traces`` objects become :class:`~map2map.learn.ab.coverage.ExploreParams`
+and :class:`~map2map.learn.ab.render.TraceParams`) makes three hypotheses per plan (seed
+``--seed`` + the pair's index, as ``per_plan``), cut with the pair's window; the first is
+ranked among the plan's runs 1-3 per statistic. Tune on a set that is not the final test
+(docs/synthesize.md, "Tuning ``--coverage rays``")::
+
+    python -m map2map.experiments.realism.per_plan.variants --data HELD --cache2 refs2.npz \\
+        --cache3 refs3.npz --plans 120 --variant before '{"coverage": "explore",
+        "traces": {"floor_px": 1.05}}' --variant rays '{"coverage": "rays"}'
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import warnings
+
+import numpy as np
+
+
+def _kwargs(text: str) -> dict:
+    from map2map.learn.ab.coverage import ExploreParams
+    from map2map.learn.ab.render import TraceParams
+
+    kw = json.loads(text)
+    if isinstance(kw.get("explore"), dict):
+        kw["explore"] = ExploreParams(**kw["explore"])
+    if isinstance(kw.get("traces"), dict):
+        kw["traces"] = TraceParams(**kw["traces"])
+    return kw
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m map2map.experiments.realism.per_plan.variants",
+                                 description=__doc__.split("\n\n")[0])
+    ap.add_argument("--data", required=True, help="a 'map2map dataset build' folder")
+    ap.add_argument("--split", default="all", help="which plans (default all)")
+    ap.add_argument("--plans", type=int, default=120, help="the first N plans (default 120)")
+    ap.add_argument("--cache2", required=True, help=".npz keeping run 2 of every plan")
+    ap.add_argument("--cache3", required=True, help=".npz keeping run 3 of every plan")
+    ap.add_argument("--model", default="pretrained", help="Model_AB weights")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--variant", nargs=2, action="append", required=True,
+                    metavar=("NAME", "JSON"), help="a name and synthesize's keyword arguments")
+    args = ap.parse_args(argv)
+
+    from map2map.datasets.pair import crop_box, preprocess_pair
+    from map2map.datasets.pairfolder import PLAN_YAML, SLAM_YAML, pair_dir
+    from map2map.experiments.realism.measure import simulated_references, stats_of_sets
+    from map2map.experiments.realism.ranks import format_rank_table, plan_ranks, rank_table
+    from map2map.learn.ab.model import load_ab_model
+    from map2map.learn.ab.synthesize import synthesize
+    from map2map.maps.formats import load_map
+
+    variants = {name: _kwargs(text) for name, text in args.variant}
+    r2 = simulated_references(args.data, split=args.split, cache=args.cache2, progress=False)
+    r3 = simulated_references(args.data, split=args.split, cache=args.cache3, run=3,
+                              progress=False)
+    both = np.intersect1d(r2.indices, r3.indices)[:args.plans]
+    r2, r3 = r2.only(both), r3.only(both)
+    net = load_ab_model(args.model)
+    size = r2.a.shape[-1]
+    gens = {}
+    for name, kw in variants.items():
+        t0, maps = time.perf_counter(), []
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            for i in both:
+                folder = pair_dir(args.data, int(i))
+                a, b = load_map(folder / PLAN_YAML), load_map(folder / SLAM_YAML)
+                res = synthesize(a, net, samples=3, seed=args.seed + int(i), **kw)
+                maps.append(preprocess_pair(a, res.maps[0], size, 0, crop_box(a, b))[1])
+        gens[name] = np.stack(maps)
+        print(f"{name}: {len(both)} plans in {time.perf_counter() - t0:.0f} s")
+    runs = {"run 1": r2.sim1, "run 2": r2.sim2, "run 3": r3.sim2}
+    st = stats_of_sets({**runs, **gens}, r2.a)
+    for name in gens:
+        rows = rank_table(plan_ranks(st[name], [st[r] for r in runs], seed=args.seed), 3)
+        print()
+        print(format_rank_table(rows, name))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
