@@ -26,6 +26,14 @@ import numpy as np
 
 
 def _kwargs(text: str) -> dict:
+    """``synthesize``'s keyword arguments from a variant's JSON.
+
+    Examples
+    --------
+    >>> kw = _kwargs('{"coverage": "rays", "traces": {"floor_px": 0.8}}')
+    >>> kw["coverage"], kw["traces"].floor_px, kw["traces"].wall_m == 0.055
+    ('rays', 0.8, True)
+    """
     from map2map.learn.ab.coverage import ExploreParams
     from map2map.learn.ab.render import TraceParams
 
