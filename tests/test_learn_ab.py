@@ -566,7 +566,7 @@ def test_cli_synthesize_writes_maps_summary_and_figure(tiny_run, tmp_path, capsy
                  "--drift", "rooms", "--drift-scale", "0.5"]) == 0
     r = json.loads((tmp_path / "r" / "plan_synthesize.json").read_text())
     assert r["drift"] == "rooms" and r["drift_params"]["scale"] == 0.5
-    assert r["coverage"] == "rays" and "traces" in r  # defaults; rays since 2026-11-27
+    assert r["coverage"] == "explore" and "traces" in r     # the defaults since session 11
     assert sorted(p.name for p in (tmp_path / "p").iterdir()) == \
         ["plan_hyp00.png", "plan_hyp01.png", "plan_synthesize.json"]
     err = capsys.readouterr().err

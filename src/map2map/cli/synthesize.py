@@ -48,14 +48,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--drift-scale", type=float, default=d.drift_scale,
                    help="factor on the drift field (default 1: the parametric model's "
                    "own error magnitudes; docs/synthesize.md)")
-    p.add_argument("--coverage", choices=("rays", "explore", "none"), default=d.coverage,
-                   help="rays: the simulator's robot explores the plan for each "
+    p.add_argument("--coverage", choices=("explore", "rays", "none"), default=d.coverage,
+                   help="explore: the simulator's robot explores the plan for each "
                    "hypothesis (oracle mapper, 275 s, 180 degree LIDAR, seeded; about 0.5 s "
-                   "a hypothesis) and the free space is what its rays crossed, with the "
-                   "network's walls (frontiers as a SLAM run leaves them); explore: the same "
-                   "exploration only turns unknown what it did not see, as a 7-minute run "
-                   "leaves rooms unseen; none: every room the network draws (default "
-                   "%(default)s)")
+                   "a hypothesis) and what it did not see becomes unknown, as a 7-minute run "
+                   "leaves rooms unseen; rays: the same exploration, and the free space is "
+                   "what its rays crossed, with the network's walls (use --traces with "
+                   "floor_px 0.85 in the library; docs/synthesize.md); none: every room the "
+                   "network draws (default %(default)s)")
     p.add_argument("--traces", choices=("lidar", "none"), default=d.traces,
                    help="lidar (default with --render slam): what a LIDAR + SLAM leaves "
                    "beyond the faces, a wall band of metric width with a ragged back edge "

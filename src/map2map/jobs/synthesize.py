@@ -61,7 +61,7 @@ class SynthesizeSpec:
     drift: str = "rooms"
     drift_method: str = "additive"
     drift_scale: float | None = None
-    coverage: str = "rays"
+    coverage: str = "explore"
     drift_route: str = "tour"
     traces: str | None = None
     device: str = "cpu"

@@ -20,7 +20,7 @@ statistic: W(generated, run 1) / W(run 2, run 1); target every ratio <= 1.5.
         [--as-synthesize] [--third-run refs3.npz]
 
 ``--as-synthesize`` measures what ``map2map synthesize`` makes by default (session 13:
-``--drift rooms --coverage rays --traces lidar --explore-at native``).
+``--drift rooms --coverage explore --traces lidar --explore-at native``).
 
 ``--third-run CACHE`` (session 14) adds a third simulation + SLAM of every plan (seed of
 run 3) as one more generator: W(run 3, run 1) / W(run 2, run 1) is what a generator as
@@ -129,8 +129,8 @@ def main(argv=None) -> int:
                     default=["none"],
                     help="Model_AB's coverage(s): none (the network's extent, default), "
                     "explore (unknown where its own exploration of the plan did not see; "
-                    "map2map synthesize's default from session 11) or rays (free space "
-                    "where that exploration's rays crossed; the default since 2026-11-27)")
+                    "map2map synthesize's default since session 11) or rays (free space "
+                    "where that exploration's rays crossed)")
     ap.add_argument("--drift-route", nargs="+", choices=("tour", "explore"), default=["tour"],
                     help="the drift's route(s): tour (roadmap tour, default) or explore (the "
                     "exploration's true path)")
@@ -165,11 +165,11 @@ def main(argv=None) -> int:
                     "drawn for the perfect generator's ratios (default 2000)")
     ap.add_argument("--as-synthesize", action="store_true",
                     help="measure map2map synthesize's defaults: --drift rooms --coverage "
-                    "rays --traces lidar --explore-at native")
+                    "explore --traces lidar --explore-at native")
     args = ap.parse_args(argv)
     if args.as_synthesize:
         args.drift, args.coverage, args.traces, args.explore_at = \
-            ["rooms"], ["rays"], ["lidar"], "native"
+            ["rooms"], ["explore"], ["lidar"], "native"
     t0 = time.perf_counter()
     refs = simulated_references(args.data, split=args.split, n=args.plans, cache=args.cache)
     run3 = None

@@ -109,10 +109,10 @@ class TraceParams:
         weights while the room drift's parametric field squeezed walls by ~15 %; with
         :class:`~map2map.learn.ab.room_drift.RoomDriftParams` ``conserve=True`` 0.85 draws
         the simulated thickness (session 12); 1.05 for the weights shipped in session
-        13, whose network walls are ~0.15 px thicker (docs/synthesize.md); 0.85 since
-        ``coverage="rays"`` became the default (2026-11-27: on 120 dev plans the
-        ``thickness`` ranks' P(low) / P(high) were 0.10 / 0.67 at 1.05, 0.28 / 0.45 at
-        0.9 and 0.46 / 0.30 at 0.8; 0.85 is the midpoint, not itself measured there).
+        13, whose network walls are ~0.15 px thicker (docs/synthesize.md). With
+        ``coverage="rays"`` 0.85 (2026-11-27: on 120 dev plans the ``thickness`` ranks'
+        P(low) / P(high) were 0.10 / 0.67 at 1.05, 0.28 / 0.45 at 0.9 and 0.46 / 0.30
+        at 0.8; on the frozen test 0.35 / 0.33 at 0.85).
     wall_m : float
         Metric part of the band [m]: ``floor_px + wall_m / resolution`` px.
     rough_px : float
@@ -137,7 +137,7 @@ class TraceParams:
         Share of the stray hits 2-3 px large (the rest single pixels).
     """
 
-    floor_px: float = 0.85
+    floor_px: float = 1.05
     wall_m: float = 0.055
     rough_px: float = 1.0
     rough_sigma_px: float = 4.0

@@ -24,8 +24,9 @@ unknown outside.
 **Defaults** (session 11, issue #15's realism rule on the gen900 validation plans:
 docs/synthesize.md, "Rendering what a LIDAR leaves"): :func:`synthesize` draws the
 room-wise drift (``drift="rooms"``), hides what each hypothesis's own exploration did not
-see (``coverage="explore"``; since 2026-11-27 ``coverage="rays"``, the free space being
-what that exploration's rays crossed, issue #33) and draws the LIDAR traces (``traces="lidar"`` with
+see (``coverage="explore"``; ``coverage="rays"`` takes the free space from what that
+exploration's rays crossed, issue #33, measured and not made the default) and draws the
+LIDAR traces (``traces="lidar"`` with
 ``render="slam"``). The previous defaults are ``drift="parametric", coverage="none",
 traces="none"`` (bit for bit). :func:`synthesize_squares`, the evaluation helper, keeps
 those previous defaults: its callers (the benchmarks) name what they measure.
@@ -187,7 +188,7 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
                *, samples: int = 4, seed: int = 0, device: str = "cpu",
                render: str = "slam", drift: str | DriftParams = "rooms",
                drift_method: str | None = None, drift_scale: float | None = None,
-               coverage: str = "rays", drift_route: str = "tour",
+               coverage: str = "explore", drift_route: str = "tour",
                explore: ExploreParams | None = None,
                traces: str | TraceParams | None = None) -> SynthesisResult:
     """``samples`` SLAM-map hypotheses of ``plan`` (module doc), in its frame.
@@ -216,11 +217,12 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     drift_scale : float, optional
         Replaces the drift's final factor on its field.
     coverage : {"rays", "explore", "none"}
-        ``"explore"``: unknown wherever hypothesis ``k``'s own exploration of
+        ``"explore"`` (default): unknown wherever hypothesis ``k``'s own exploration of
         the plan did not see (module doc, :func:`~map2map.learn.ab.coverage.hide_unseen`;
-        about 0.5 s a hypothesis on gen900's plans); ``"rays"`` (default since
-        2026-11-27): the same exploration, and free space where its rays crossed
-        (:func:`~map2map.learn.ab.coverage.free_from_rays`); ``"none"``: every room drawn.
+        about 0.5 s a hypothesis on gen900's plans); ``"rays"``: the same exploration,
+        and free space where its rays crossed
+        (:func:`~map2map.learn.ab.coverage.free_from_rays`; docs/synthesize.md: its
+        frozen test, not the default); ``"none"``: every room drawn.
     drift_route : {"tour", "explore"}
         The drift's path: the roadmap tour, or hypothesis ``k``'s exploration (no effect
         with ``drift="none"``).
