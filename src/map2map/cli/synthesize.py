@@ -53,9 +53,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "hypothesis (oracle mapper, 275 s, 180 degree LIDAR, seeded; about 0.5 s "
                    "a hypothesis) and what it did not see becomes unknown, as a 7-minute run "
                    "leaves rooms unseen; rays: the same exploration, and the free space is "
-                   "what its rays crossed, with the network's walls (use --traces with "
-                   "floor_px 0.85 in the library; docs/synthesize.md); none: every room the "
-                   "network draws (default %(default)s)")
+                   "what its rays crossed, with the network's walls (measured, not the "
+                   "default: docs/synthesize.md); none: every room the network draws "
+                   "(default %(default)s)")
     p.add_argument("--traces", choices=("lidar", "none"), default=d.traces,
                    help="lidar (default with --render slam): what a LIDAR + SLAM leaves "
                    "beyond the faces, a wall band of metric width with a ragged back edge "

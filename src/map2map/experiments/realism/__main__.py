@@ -125,12 +125,11 @@ def main(argv=None) -> int:
                     "own magnitudes)")
     ap.add_argument("--diversity", type=int, default=0, metavar="K",
                     help="also the mean pairwise disagreement of K hypotheses per plan")
-    ap.add_argument("--coverage", nargs="+", choices=("none", "explore", "rays"),
-                    default=["none"],
-                    help="Model_AB's coverage(s): none (the network's extent, default), "
+    ap.add_argument("--coverage", nargs="+", choices=("none", "explore"), default=["none"],
+                    help="Model_AB's coverage(s): none (the network's extent, default) or "
                     "explore (unknown where its own exploration of the plan did not see; "
-                    "map2map synthesize's default since session 11) or rays (free space "
-                    "where that exploration's rays crossed)")
+                    "map2map synthesize's default since session 11); synthesize's rays is "
+                    "ranked per plan by realism.per_plan.variants")
     ap.add_argument("--drift-route", nargs="+", choices=("tour", "explore"), default=["tour"],
                     help="the drift's route(s): tour (roadmap tour, default) or explore (the "
                     "exploration's true path)")
