@@ -25,7 +25,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--samples", type=int, default=d.samples,
                    help="number of hypotheses K (default %(default)s)")
     p.add_argument("--model", default=d.model,
-                   help="'pretrained' (shipped weights), a 'train ab' run folder or weights file")
+                   help="'pretrained' (shipped weights), a 'train ab' run folder or weights "
+                   "file, or 'scans': no network, the robot's own exploration mapped at "
+                   "drifted poses (the rendering, drift, coverage and traces options do not "
+                   "apply) (default %(default)s)")
     p.add_argument("--seed", type=int, default=d.seed,
                    help="seed of the dropout masks (default %(default)s)")
     p.add_argument("--format", choices=("ros", "png"), default=d.format,

@@ -116,19 +116,28 @@ def synthesize(spec: SynthesizeSpec) -> SynthesizeRun:
         if suffix == ".yaml":
             written[f"hyp{k:02d}_pgm"] = path.with_suffix(".pgm")
     meta = res.maps[0].meta["synthesize"]
-    summary = {"plan": str(src), "seed": spec.seed, "render": spec.render,
-               "drift": spec.drift,
-               **({"coverage": spec.coverage, "drift_route": spec.drift_route}
-                  if (spec.coverage, spec.drift_route) != ("none", "tour") else {}),
-               "drift_params": meta.get("drift_params"),
-               **({"traces": meta["traces"]} if "traces" in meta else {}),
-               "files": [p.name for p in names], **res.summary()}
+    if meta["model"] == "scans":          # no network: its own settings, per hypothesis
+        summary = {"plan": str(src), "seed": spec.seed, "scans": meta["scans"],
+                   "hypotheses": [m.meta["synthesize"]["hypothesis"] for m in res.maps],
+                   "files": [p.name for p in names], **res.summary()}
+    else:
+        summary = _network_summary(spec, src, names, meta, res)
     written["summary"] = out / f"{src.stem}_synthesize.json"
     with atomic_path(written["summary"]) as tmp:
         tmp.write_text(json.dumps(summary, indent=2))
     if spec.figure:
         written["figure"] = out / f"{src.stem}_synthesize.png"
+        what = "Model_AB hypotheses" if meta["model"] != "scans" else "hypotheses (scans)"
         save_synthesis_figure(plan, res, written["figure"],
-                              title=f"{src.name}: {spec.samples} Model_AB hypotheses "
-                              f"(seed {spec.seed})")
+                              title=f"{src.name}: {spec.samples} {what} (seed {spec.seed})")
     return SynthesizeRun(written, plan, res)
+
+
+def _network_summary(spec: SynthesizeSpec, src: Path, names, meta: dict, res) -> dict:
+    """The JSON summary of a Model_AB network's hypotheses."""
+    return {"plan": str(src), "seed": spec.seed, "render": spec.render, "drift": spec.drift,
+            **({"coverage": spec.coverage, "drift_route": spec.drift_route}
+               if (spec.coverage, spec.drift_route) != ("none", "tour") else {}),
+            "drift_params": meta.get("drift_params"),
+            **({"traces": meta["traces"]} if "traces" in meta else {}),
+            "files": [p.name for p in names], **res.summary()}

@@ -120,8 +120,12 @@ from .render import (
     trace_rng,
 )
 from .room_drift import RoomDriftParams
+from .scans import ScanMapParams, scan_map
 
-__all__ = ["SynthesisResult", "synthesize", "synthesize_squares", "snap",
+#: ``model`` name of the generator without a network (:mod:`map2map.learn.ab.scans`).
+SCANS = "scans"
+
+__all__ = ["SCANS", "SynthesisResult", "synthesize", "synthesize_squares", "snap",
            "pairwise_disagreement", "save_synthesis_figure", "dataset_thicken"]
 
 
@@ -190,14 +194,19 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
                drift_method: str | None = None, drift_scale: float | None = None,
                coverage: str = "explore", drift_route: str = "tour",
                explore: ExploreParams | None = None,
-               traces: str | TraceParams | None = None) -> SynthesisResult:
+               traces: str | TraceParams | None = None,
+               scans: ScanMapParams | None = None) -> SynthesisResult:
     """``samples`` SLAM-map hypotheses of ``plan`` (module doc), in its frame.
 
     Parameters
     ----------
     plan : OccupancyMap
         The CAD plan (internal convention; any size and resolution).
-    model : "pretrained", run folder, weights file or ABModel
+    model : "pretrained", run folder, weights file, ABModel, or "scans"
+        ``"scans"`` (:data:`SCANS`): no network; each hypothesis is the robot's own
+        exploration mapped at drifted poses (:mod:`map2map.learn.ab.scans`, settings
+        ``scans``); ``render``, ``drift``, ``coverage``, ``traces`` and their options do
+        not apply and are refused when changed.
     samples : int
         Number of hypotheses ``K`` (1: dropout off, the thesis's single output).
     seed : int
@@ -229,6 +238,8 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     explore : ExploreParams, optional
         The exploration's settings (default :class:`~map2map.learn.ab.coverage.ExploreParams`:
         275 s, 180 degree LIDAR, ``oracle``, band = rendered wall thickness).
+    scans : ScanMapParams, optional
+        With ``model="scans"``: the exploration, pose error and mapping settings.
     traces : {"lidar", "none"}, TraceParams or None
         ``"lidar"`` (the default, ``None``, with ``render="slam"``; ``None`` with
         ``render="plain"`` is ``"none"``): what a LIDAR + SLAM leaves beyond the faces
@@ -243,6 +254,20 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     """
     if samples < 1:
         raise InputError("samples", f"must be >= 1, got {samples}")
+    if isinstance(model, str) and model == SCANS:
+        changed = [n for n, v, d in (("render", render, "slam"), ("drift", drift, "rooms"),
+                                     ("drift_method", drift_method, (None, "additive")),
+                                     ("drift_scale", drift_scale, None),
+                                     ("coverage", coverage, "explore"),
+                                     ("drift_route", drift_route, "tour"),
+                                     ("explore", explore, None), ("traces", traces, None))
+                   if not (v in d if isinstance(d, tuple) else v == d)]
+        if changed:
+            raise InputError(changed[0], "does not apply to model 'scans' (the robot's own "
+                             "scans mapped at drifted poses, no network)")
+        return _synthesize_scans(plan, samples, seed, scans or ScanMapParams())
+    if scans is not None:
+        raise InputError("scans", "settings for model 'scans' only")
     if render not in RENDERS:
         raise InputError("render", f"must be one of {', '.join(RENDERS)}, got {render!r}")
     dp, tp, hide, along, ep = _options(drift, drift_method, drift_scale, traces, render,
@@ -334,6 +359,28 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
             if k in explored:
                 m.meta["synthesize"]["exploration"] = explored[k]
     return SynthesisResult(maps, div, pw, warns, net.source)
+
+
+def _synthesize_scans(plan: OccupancyMap, samples: int, seed: int,
+                      params: ScanMapParams) -> SynthesisResult:
+    """:func:`synthesize` with ``model="scans"``: hypothesis ``k`` is
+    :func:`~map2map.learn.ab.scans.scan_map` ``(plan, seed, k)``."""
+    if not (plan.data == FREE).any():
+        raise InputError(None, "the plan has no free space; nothing to explore")
+    maps, warns = [], []
+    for k in range(samples):
+        h = scan_map(plan, seed, k, params)
+        m = h.map
+        m.meta["synthesize"] = {"model": SCANS, "seed": seed, "samples": samples,
+                                "scans": params.to_dict(), "hypothesis": h.info}
+        maps.append(m)
+    pw = pairwise_disagreement(np.stack([m.data for m in maps]), plan.data != UNKNOWN)
+    div = float(pw[~np.eye(samples, dtype=bool)].mean()) if samples > 1 else 0.0
+    if samples > 1 and div < 0.005:
+        warns.append(f"the {samples} hypotheses differ in only {div:.2%} of the plan's pixels")
+    for w in warns:
+        warnings.warn(w, stacklevel=3)
+    return SynthesisResult(maps, div, pw, warns, SCANS)
 
 
 def _options(drift, drift_method, drift_scale, traces, render, coverage, drift_route,

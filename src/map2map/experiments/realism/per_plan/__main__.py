@@ -11,7 +11,9 @@ alone (on the pair's square as trained; dropout off, no drift, no coverage, no t
 nearest-neighbour upsampling) and the whole ``map2map synthesize`` (its defaults: dropout
 on, rooms drift, coverage of its own exploration, LIDAR traces) run on the pair's plan at
 its own resolution and cut with the pair's window, as the simulated runs are; its first
-of three hypotheses is the generated map.
+of three hypotheses is the generated map. ``--model scans`` is ``synthesize --model
+scans`` (no network: the robot's own exploration mapped at drifted poses,
+:mod:`map2map.learn.ab.scans`), one generator.
 
 Printed, per generator:
 
@@ -54,7 +56,8 @@ def main(argv=None) -> int:
     ap.add_argument("--cache2", required=True, help=".npz keeping run 2 of every plan")
     ap.add_argument("--cache3", required=True, help=".npz keeping run 3 of every plan")
     ap.add_argument("--model", nargs="*", default=["pretrained"],
-                    help="Model_AB weights (none: the parametric model only)")
+                    help="Model_AB weights, or scans (synthesize --model scans); none: "
+                    "the parametric model only")
     ap.add_argument("--seed", type=int, default=0, help="seed of everything drawn here")
     ap.add_argument("--classifier-steps", type=int, default=600,
                     help="Adam steps per fold of the classifier (0: no classifier test)")
@@ -136,7 +139,14 @@ def main(argv=None) -> int:
               f"{sims.mean():.2%}")
         report["diversity"]["simulated"] = float(sims.mean())
         for m, h in hyps.items():
-            full, drop = _diversity(h["synthesize"], plans), _diversity(h["dropout"], plans)
+            full = _diversity(h["synthesize"], plans)
+            if m == "scans":
+                ratio = float(full.mean() / sims.mean())
+                print(f"{m}: synthesize {full.mean():.2%}, ratio {ratio:.2f} (target 0.8-1.25: "
+                      f"{'met' if 0.8 <= ratio <= 1.25 else 'NOT met'}); no network")
+                report["diversity"][m] = {"synthesize": float(full.mean()), "ratio": ratio}
+                continue
+            drop = _diversity(h["dropout"], plans)
             ratio, share = float(full.mean() / sims.mean()), float(drop.mean() / full.mean())
             print(f"{m}: synthesize {full.mean():.2%}, ratio {ratio:.2f} (target 0.8-1.25: "
                   f"{'met' if 0.8 <= ratio <= 1.25 else 'NOT met'}); the network's dropout "
@@ -158,8 +168,12 @@ def _model_maps(model: str, args, refs, cache=None) -> tuple[dict, dict]:
     resolution, cut to the pair's square as its simulated runs are. Returns the
     generators' maps (the pipeline's first hypothesis) and the hypotheses."""
     from map2map.learn.ab.model import load_ab_model
-    from map2map.learn.ab.synthesize import synthesize_squares
+    from map2map.learn.ab.synthesize import SCANS, synthesize_squares
 
+    if model == SCANS:                   # no network: the pipeline is all there is
+        hyp = _native_hypotheses(args.data, refs.indices, SCANS, args.seed,
+                                 refs.a.shape[-1], cache)
+        return {"scans synthesize": hyp["synthesize"][:, 0]}, hyp
     net = load_ab_model(model)
     base = "Model_AB" if model == "pretrained" else f"AB:{Path(model).name}"
     alone = synthesize_squares(net, refs.a, seed=args.seed, render="plain", drift="none",
@@ -186,13 +200,15 @@ def _native_hypotheses(ds, indices, net, seed: int, size: int, cache=None) -> di
     from map2map.learn.ab.synthesize import synthesize
     from map2map.maps.formats import load_map
 
-    key = {"dataset": str(Path(ds).resolve()), "model": str(net.source), "seed": int(seed),
-           "size": int(size), "version": 1}
+    scans = isinstance(net, str)
+    key = {"dataset": str(Path(ds).resolve()), "model": net if scans else str(net.source),
+           "seed": int(seed), "size": int(size), "version": 1}
     have: dict[int, tuple] = {}
     if cache is not None and Path(cache).is_file():
         with np.load(cache, allow_pickle=False) as z:
             if json.loads(str(z["key"])) == key:
-                syn, drop = z["synthesize"], z["dropout"]
+                syn = z["synthesize"]
+                drop = z["dropout"] if "dropout" in z.files else syn
                 have = {int(i): (syn[j], drop[j]) for j, i in enumerate(z["indices"])}
 
     def save():
@@ -200,9 +216,9 @@ def _native_hypotheses(ds, indices, net, seed: int, size: int, cache=None) -> di
             return
         ks = sorted(have)
         with atomic_path(cache) as tmp, open(tmp, "wb") as fh:
+            more = {} if scans else {"dropout": np.stack([have[i][1] for i in ks])}
             np.savez_compressed(fh, key=json.dumps(key), indices=np.array(ks, int),
-                                synthesize=np.stack([have[i][0] for i in ks]),
-                                dropout=np.stack([have[i][1] for i in ks]))
+                                synthesize=np.stack([have[i][0] for i in ks]), **more)
 
     todo = [int(i) for i in indices if int(i) not in have]
     last = time.monotonic()
@@ -213,11 +229,12 @@ def _native_hypotheses(ds, indices, net, seed: int, size: int, cache=None) -> di
             a, b = load_map(folder / PLAN_YAML), load_map(folder / SLAM_YAML)
             box = crop_box(a, b)
             got = []
-            for kw in ({}, {"drift": "none", "coverage": "none", "traces": "none"}):
+            for kw in ({},) if scans else ({}, {"drift": "none", "coverage": "none",
+                                                "traces": "none"}):
                 res = synthesize(a, net, samples=3, seed=seed + i, **kw)
                 got.append(np.stack([preprocess_pair(a, h, size, 0, box)[1]
                                      for h in res.maps]))
-            have[i] = tuple(got)
+            have[i] = (got[0], got[-1])
             if time.monotonic() - last > 60.0 or n == len(todo):
                 save()
                 last = time.monotonic()

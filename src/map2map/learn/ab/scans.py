@@ -1,0 +1,263 @@
+"""SLAM-map hypotheses of a plan mapped from the robot's own scans at drifted poses
+(issue #33: ``synthesize --model scans``, a generator with no network).
+
+Model_AB's network draws a 64 px map; upsampled, its walls come out wobbly, its corners
+round and its free space in blobs, and a small CNN tells its maps from simulated ones
+(docs/synthesize.md). What a SLAM run's map looks like is set by how it was made: a LIDAR's
+beams, cropped at the usable range, counted into a grid at poses that err. This module
+makes a hypothesis the same way, without a particle filter:
+
+1. **exploration** (:func:`map2map.sim.runner.simulate`, ``oracle`` mapper): the simulator's
+   robot explores the plan (frontier exploration on a perfect map, ``duration`` simulated
+   seconds, 180 degree LIDAR with its range noise), recording its true poses and scans;
+2. **pose error** (:func:`drifted_poses`): every scan's pose is moved by the room-wise
+   rigid drift of :mod:`map2map.learn.ab.room_drift` (the transform of the room the robot
+   is in: rooms reached late are off the most, and a wall seen from two rooms can be saved
+   twice), a rotation of the whole run about its start (``global_deg``), an independent
+   jitter per scan (the scan matcher's error: walls a few cm thick and ragged) and, with
+   probability ``outlier_share`` per scan, a heading error of ``outlier_deg`` (a scan
+   matched wrong: laser streaks through walls);
+3. **mapping** (:func:`map_scans`): the scans at those poses counted into GMapping's grid
+   exactly as the datasets' ``rbpf`` mapper does (:class:`map2map.slam.gridmap.CountGrid`:
+   beams cropped at ``maxUrange``, no-return beams clearing, occupied where hits / visits >
+   ``occ_thresh``; one scan every ``temporal_update`` seconds), in the run's own frame,
+   then put on the plan's grid at the true start pose, as a run's map is.
+
+A hypothesis costs the exploration (0.1-5 s of CPU a plan) plus the mapping; K hypotheses
+differ in start, route, drift and jitter. The settings (:class:`ScanMapParams`) were chosen
+on 160 plans of a dev set by the per-plan ranks and the classifier test
+(``python -m map2map.experiments.realism.per_plan``; docs/synthesize.md).
+
+Examples
+--------
+>>> from map2map.maps.floorplan import generate_floorplan
+>>> plan = generate_floorplan(3, size=(10, 8))
+>>> h = scan_map(plan, 0, 0, ScanMapParams(duration=30.0))
+>>> h.map.shape == plan.shape, bool(h.map.free.sum() > 1000), bool(h.map.occupied.sum() > 100)
+(True, True, True)
+>>> bool((scan_map(plan, 0, 0, ScanMapParams(duration=30.0)).map.data == h.map.data).all())
+True
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from ...core.errors import InputError
+from ...core.geometry import compose_pose, relative_pose
+from ...core.grid import OccupancyMap
+from .room_drift import RoomDrift, RoomDriftParams, room_drift_field
+
+__all__ = ["ScanMapParams", "ScanHypothesis", "scan_rng", "drifted_poses", "map_scans",
+           "scan_map"]
+
+#: Stream of :func:`scan_rng` (apart from the exploration's, the drift's and the traces').
+_STREAM = 0x5CA75
+
+
+def _rooms_default() -> RoomDriftParams:
+    return RoomDriftParams(rot_deg=1.0, parametric=False)
+
+
+@dataclass(frozen=True)
+class ScanMapParams:
+    """How a hypothesis is explored, drifted and mapped (module doc).
+
+    Parameters
+    ----------
+    duration : float
+        Simulated seconds of exploration (the datasets' runs: 420 with ``rbpf``; this
+        robot plans on a perfect map).
+    fov : float
+        LIDAR field of view [deg] (the datasets': 180).
+    jitter_m, jitter_deg : float
+        Standard deviation of each scan's independent position (per axis) and heading
+        error.
+    global_deg : float
+        Standard deviation of the rotation of the whole run about its start pose.
+    outlier_share, outlier_deg : float
+        Share of scans given an extra heading error, and its standard deviation.
+    rooms : RoomDriftParams
+        The room-wise rigid drift (its ``parametric`` field is not used here; 1 degree a
+        step, 0.02 of the step's length).
+
+    The defaults were chosen on 160 plans of the seed-20261127 dev set among eight
+    settings by the per-plan ranks and the classifier AUC (docs/synthesize.md).
+    """
+
+    duration: float = 400.0
+    fov: float = 180.0
+    jitter_m: float = 0.0175
+    jitter_deg: float = 0.45
+    global_deg: float = 2.5
+    outlier_share: float = 0.02
+    outlier_deg: float = 3.0
+    rooms: RoomDriftParams = field(default_factory=_rooms_default)
+
+    def __post_init__(self):
+        for name in ("duration", "fov", "jitter_m", "jitter_deg", "global_deg",
+                     "outlier_deg"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise InputError(name, f"must be finite and >= 0, got {v!r}")
+        if not 0.0 <= self.outlier_share <= 1.0:
+            raise InputError("outlier_share", f"must be in [0, 1], got {self.outlier_share!r}")
+        if self.duration <= 0:
+            raise InputError("duration", f"must be > 0, got {self.duration!r}")
+
+    def to_dict(self) -> dict:
+        """The settings as plain JSON values."""
+        return asdict(self)
+
+
+@dataclass
+class ScanHypothesis:
+    """One hypothesis of :func:`scan_map`.
+
+    Attributes
+    ----------
+    map : OccupancyMap
+        In the plan's grid (shape, resolution, origin).
+    poses : (N, 3) float
+        The drifted poses of the scans mapped (plan frame).
+    true_poses : (N, 3) float
+        Their true poses.
+    drift : RoomDrift
+    info : dict
+        Exploration and drift figures for a summary.
+    """
+
+    map: OccupancyMap
+    poses: np.ndarray
+    true_poses: np.ndarray
+    drift: RoomDrift
+    info: dict
+
+
+def scan_rng(seed: int, k: int) -> np.random.Generator:
+    """The generator of hypothesis ``k``'s pose error under ``seed`` (its own stream).
+
+    Examples
+    --------
+    >>> float(scan_rng(0, 1).random()) == float(scan_rng(0, 1).random())
+    True
+    >>> float(scan_rng(0, 1).random()) == float(scan_rng(0, 2).random())
+    False
+    """
+    return np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(_STREAM, int(k))))
+
+
+def drifted_poses(plan: OccupancyMap, poses: np.ndarray, start, drift: RoomDrift,
+                  rng: np.random.Generator, params: ScanMapParams) -> np.ndarray:
+    """Poses ``(N, 3)`` (plan frame, metres and radians) moved by the pose error of the
+    module doc, step 2: each by the rigid transform of the room it lies in, then the
+    whole run turned about ``start``, then per-scan jitter and outliers (drawn from
+    ``rng`` in that order).
+
+    The room transforms act on pixel coordinates ``(column, row)``, rows pointing down,
+    so a room turned by ``phi`` there turns the poses in it by ``-phi`` in the world.
+
+    Examples
+    --------
+    >>> from map2map.maps.floorplan import generate_floorplan
+    >>> plan = generate_floorplan(3, size=(10, 8))
+    >>> d = room_drift_field(plan.data, np.random.default_rng(0), RoomDriftParams(scale=0))
+    >>> p = np.array([[3.0, 2.0, 0.5], [6.0, 4.0, -1.0]])
+    >>> still = ScanMapParams(jitter_m=0, jitter_deg=0, global_deg=0, outlier_share=0)
+    >>> bool(np.allclose(drifted_poses(plan, p, p[0], d, np.random.default_rng(0), still), p))
+    True
+    """
+    P = np.asarray(poses, float).reshape(-1, 3)
+    out = P.copy()
+    H, W = plan.shape
+    rows, cols = plan.world_to_pixel_float(P[:, 0], P[:, 1])
+    T = drift.transforms
+    if len(T):
+        lab = drift.rooms[np.clip(np.rint(rows).astype(int), 0, H - 1),
+                          np.clip(np.rint(cols).astype(int), 0, W - 1)]
+        A = np.where((lab >= 1)[:, None, None], T[np.maximum(lab, 1) - 1],
+                     np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]))
+        qc = A[:, 0, 0] * cols + A[:, 0, 1] * rows + A[:, 0, 2]
+        qr = A[:, 1, 0] * cols + A[:, 1, 1] * rows + A[:, 1, 2]
+        out[:, 0], out[:, 1] = plan.pixel_to_world(qr, qc)
+        out[:, 2] = P[:, 2] - np.arctan2(A[:, 1, 0], A[:, 0, 0])
+    n = len(P)
+    g = math.radians(params.global_deg) * float(rng.standard_normal())
+    sx, sy = float(start[0]), float(start[1])
+    c, s = math.cos(g), math.sin(g)
+    dx, dy = out[:, 0] - sx, out[:, 1] - sy
+    out[:, 0], out[:, 1] = sx + c * dx - s * dy, sy + s * dx + c * dy
+    out[:, 2] += g
+    z = rng.standard_normal((n, 3))
+    out[:, :2] += params.jitter_m * z[:, :2]
+    out[:, 2] += math.radians(params.jitter_deg) * z[:, 2]
+    hit = rng.random(n) < params.outlier_share
+    out[:, 2] += np.where(hit, math.radians(params.outlier_deg) * rng.standard_normal(n), 0.0)
+    return out
+
+
+def map_scans(scans, times, poses, start, plan: OccupancyMap) -> OccupancyMap:
+    """Count ``scans`` taken at ``poses`` (plan frame) into GMapping's grid as the datasets'
+    ``rbpf`` mapper does (module doc, step 3; :class:`~map2map.slam.rbpf.GMappingParams`
+    defaults: ``max_urange``, ``occ_thresh``, ``temporal_update``, ``no_return_free``),
+    in the run's frame (``start`` at the origin), and put the map on ``plan``'s grid.
+
+    Examples
+    --------
+    >>> from map2map.robotlog.base import LaserScan
+    >>> plan = OccupancyMap(np.full((80, 80), 255, np.uint8), 0.05)
+    >>> scan = LaserScan(0.0, np.full(180, 1.0, np.float32), -math.pi / 2, math.pi / 179, 0.12, 3.5)
+    >>> m = map_scans([scan], [0.0], [(2.0, 2.0, 0.0)], (2.0, 2.0, 0.0), plan)
+    >>> m.shape, bool(m.free[40, 45]), bool(m.occupied[40, 59]), int(m.data[40, 61])
+    ((80, 80), True, True, 127)
+    """
+    from ...sim.mapping import resample_to_frame
+    from ...slam.gridmap import CountGrid
+    from ...slam.rbpf import GMappingParams, prepare_scan
+
+    gp = GMappingParams()
+    grid = CountGrid.around(0.0, 0.0, gp.initial_size / 2, plan.resolution)
+    last = -math.inf
+    for scan, t, pose in zip(scans, times, poses, strict=True):
+        if float(t) - last < gp.temporal_update:
+            continue
+        last = float(t)
+        r, a = prepare_scan(scan)
+        laser = compose_pose(relative_pose(start, pose), scan.sensor_offset)
+        grid.register_scan(laser, r, a, gp.max_urange, float(scan.range_max),
+                           gp.no_return_free)
+    return resample_to_frame(grid.to_occupancy_map(gp.occ_thresh), start, plan)
+
+
+def scan_map(plan: OccupancyMap, seed: int, k: int,
+             params: ScanMapParams | None = None) -> ScanHypothesis:
+    """Hypothesis ``k`` of ``plan`` under ``seed`` (module doc): explored with the
+    simulation seed of :func:`~map2map.learn.ab.coverage.explore_rng` ``(seed, k)``, its
+    pose error drawn from :func:`scan_rng` ``(seed, k)``.
+
+    Raises
+    ------
+    InputError
+        A plan without free space or too small for the robot.
+    """
+    from ...sim.runner import simulate
+    from .coverage import explore_rng
+
+    sp = params or ScanMapParams()
+    sim_seed = int(explore_rng(seed, k).integers(1 << 32))
+    res = simulate(plan, seed=sim_seed, duration=sp.duration, fov=sp.fov, mapper="oracle",
+                   progress=False)
+    rng = scan_rng(seed, k)
+    drift = room_drift_field(plan.data, rng, sp.rooms)
+    poses = drifted_poses(plan, res.true_poses, res.start, drift, rng, sp)
+    m = map_scans(res.scans, res.times, poses, res.start, plan)
+    err = np.hypot(*(poses[:, :2] - res.true_poses[:, :2]).T)
+    info = {"seed": sim_seed, "coverage": round(float(res.coverage), 4),
+            "sim_seconds": round(float(res.sim_seconds), 1), "scans": len(res.scans),
+            "pose_error_m": {"mean": round(float(err.mean()), 4) if len(err) else 0.0,
+                             "max": round(float(err.max()), 4) if len(err) else 0.0},
+            "drift": {k2: round(float(v), 3) for k2, v in drift.stats().items()}}
+    return ScanHypothesis(m, poses, res.true_poses, drift, info)

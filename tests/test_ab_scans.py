@@ -1,0 +1,126 @@
+"""``synthesize --model scans`` (issue #33): the robot's own scans mapped at drifted poses."""
+
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+pytest.importorskip("torch")
+
+from map2map.core.errors import InputError  # noqa: E402
+from map2map.core.geometry import compose_pose, relative_pose  # noqa: E402
+from map2map.learn.ab.room_drift import RoomDriftParams, room_drift_field  # noqa: E402
+from map2map.learn.ab.scans import ScanMapParams, drifted_poses, scan_map  # noqa: E402
+from map2map.learn.ab.synthesize import SCANS, synthesize  # noqa: E402
+from map2map.maps.floorplan import generate_floorplan  # noqa: E402
+
+STILL = dict(jitter_m=0.0, jitter_deg=0.0, global_deg=0.0, outlier_share=0.0)
+
+
+@pytest.fixture(scope="module")
+def plan():
+    return generate_floorplan(3, size=(10, 8))
+
+
+def test_a_scan_taken_in_a_drifted_room_maps_its_points_where_the_room_transform_puts_them(plan):
+    """The pose error moves what a scan sees exactly as the room's rigid transform moves
+    the plan's pixels (the sign of the rotation: pixel rows point down)."""
+    d = room_drift_field(plan.data, np.random.default_rng(3), RoomDriftParams(rot_deg=4.0,
+                                                                             lin=0.05))
+    rot = np.degrees(np.arctan2(d.transforms[:, 1, 0], d.transforms[:, 0, 0]))
+    assert np.abs(rot).max() > 0.5                       # some room really turns
+    free = np.argwhere(plan.data == 255)
+    rng = np.random.default_rng(0)
+    pick = free[rng.choice(len(free), 40, replace=False)]
+    x, y = plan.pixel_to_world(pick[:, 0].astype(float), pick[:, 1].astype(float))
+    poses = np.column_stack([x, y, rng.uniform(-math.pi, math.pi, 40)])
+    moved = drifted_poses(plan, poses, poses[0], d, np.random.default_rng(0),
+                          ScanMapParams(**STILL))
+    for p, q, (r, c) in zip(poses, moved, pick, strict=True):
+        A = d.transforms[d.rooms[r, c] - 1]
+        # a world point 0.8 m ahead and 0.3 m left of the robot
+        w = compose_pose(tuple(p), (0.8, 0.3, 0.0))
+        wr, wc = plan.world_to_pixel_float(np.array([w[0]]), np.array([w[1]]))
+        want_c = A[0, 0] * wc[0] + A[0, 1] * wr[0] + A[0, 2]
+        want_r = A[1, 0] * wc[0] + A[1, 1] * wr[0] + A[1, 2]
+        got = compose_pose(tuple(q), relative_pose(tuple(p), w))
+        gr, gc = plan.world_to_pixel_float(np.array([got[0]]), np.array([got[1]]))
+        assert abs(gr[0] - want_r) < 1e-6 and abs(gc[0] - want_c) < 1e-6
+
+
+def test_the_whole_run_turns_about_its_start_and_jitter_has_its_size(plan):
+    d = room_drift_field(plan.data, np.random.default_rng(0), RoomDriftParams(scale=0.0))
+    free = np.argwhere(plan.data == 255)[::50]
+    x, y = plan.pixel_to_world(free[:, 0].astype(float), free[:, 1].astype(float))
+    poses = np.column_stack([x, y, np.zeros(len(x))])
+    turned = drifted_poses(plan, poses, poses[0], d, np.random.default_rng(1),
+                           ScanMapParams(jitter_m=0.0, jitter_deg=0.0, global_deg=5.0,
+                                         outlier_share=0.0))
+    g = turned[:, 2]
+    assert np.allclose(g, g[0]) and abs(g[0]) > 0
+    assert np.allclose(turned[0, :2], poses[0, :2])     # the start does not move
+    dist0 = np.hypot(*(poses[:, :2] - poses[0, :2]).T)
+    dist1 = np.hypot(*(turned[:, :2] - turned[0, :2]).T)
+    assert np.allclose(dist0, dist1)                     # rigid
+    jit = drifted_poses(plan, np.repeat(poses[:1], 4000, 0), poses[0], d,
+                        np.random.default_rng(2),
+                        ScanMapParams(jitter_m=0.02, jitter_deg=0.5, global_deg=0.0,
+                                      outlier_share=0.0))
+    assert abs(np.std(jit[:, 0] - poses[0, 0]) - 0.02) < 0.002
+    assert abs(np.degrees(np.std(jit[:, 2])) - 0.5) < 0.05
+
+
+def test_scan_maps_are_seeded_and_differ_between_hypotheses(plan):
+    sp = ScanMapParams(duration=40.0)
+    a, b = scan_map(plan, 5, 0, sp), scan_map(plan, 5, 0, sp)
+    c = scan_map(plan, 5, 1, sp)
+    assert np.array_equal(a.map.data, b.map.data)
+    assert not np.array_equal(a.map.data, c.map.data)
+    assert a.map.shape == plan.shape and a.map.resolution == plan.resolution
+    assert a.info["scans"] > 10 and a.info["pose_error_m"]["max"] > 0
+    # without pose error the scans' walls are the plan's: occupied cells within 1 px of a
+    # plan wall; the drift moves them off
+    from scipy import ndimage
+    near = ndimage.distance_transform_edt(plan.data != 0) <= 1
+    exact = scan_map(plan, 5, 0, ScanMapParams(duration=40.0, **STILL,
+                                               rooms=RoomDriftParams(parametric=False,
+                                                                     scale=0.0)))
+    assert exact.info["pose_error_m"]["max"] == 0.0
+    assert near[exact.map.occupied].mean() > 0.97
+    assert near[a.map.occupied].mean() < near[exact.map.occupied].mean() - 0.05
+
+
+def test_synthesize_scans_gives_k_hypotheses_and_refuses_network_options(plan):
+    res = synthesize(plan, SCANS, samples=2, seed=0, scans=ScanMapParams(duration=30.0))
+    assert len(res.maps) == 2 and res.model == SCANS and 0.0 < res.diversity < 1.0
+    meta = res.maps[1].meta["synthesize"]
+    assert meta["model"] == SCANS and meta["scans"]["duration"] == 30.0
+    for kw in ({"render": "plain"}, {"drift": "none"}, {"coverage": "rays"},
+               {"traces": "none"}, {"drift_scale": 2.0}):
+        with pytest.raises(InputError) as e:
+            synthesize(plan, SCANS, samples=1, **kw)
+        assert e.value.source == next(iter(kw))
+    with pytest.raises(InputError, match="model 'scans' only"):
+        synthesize(plan, "pretrained", samples=1, scans=ScanMapParams())
+
+
+def test_cli_synthesize_scans_writes_maps_and_its_summary(tmp_path, plan):
+    from map2map.maps.formats import save_map
+
+    src = tmp_path / "apt.yaml"
+    save_map(plan, src)
+    out = tmp_path / "hyp"
+    cmd = [sys.executable, "-m", "map2map", "synthesize", str(src), "--out", str(out),
+           "--model", "scans", "--samples", "2", "--no-figure"]
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    summary = json.loads((out / "apt_synthesize.json").read_text())
+    assert summary["model"] == "scans" and len(summary["hypotheses"]) == 2
+    assert (out / "apt_hyp01.pgm").is_file()
+    bad = subprocess.run(cmd[:-1] + ["--render", "plain", "--out", str(tmp_path / "x")],
+                         capture_output=True, text=True, timeout=600)
+    assert bad.returncode == 2 and "render" in bad.stderr and "Traceback" not in bad.stderr
+    assert not (tmp_path / "x").exists()
