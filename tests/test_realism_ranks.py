@@ -166,3 +166,32 @@ def test_per_plan_variants_ranks_each_synthesize_variant(small_dataset, tmp_path
     assert "explore: 3 plans" in out and "rays: 3 plans" in out
     assert "rays: rank among 3 simulated runs of its plan, 3 plans" in out
     assert "frontier_rough" in out
+
+
+def test_per_plan_benchmark_measures_synthesize_scans(small_dataset, tmp_path, capsys):
+    """``--model scans``: one generator (no network alone), its diversity without a
+    network's share, and the sentences for ``reproduce``."""
+    pytest.importorskip("torch")
+    mod = importlib.import_module("map2map.experiments.realism.per_plan.__main__")
+    out_json = tmp_path / "r.json"
+    args = ["--data", str(small_dataset), "--split", "all", "--cache2",
+            str(tmp_path / "c2.npz"), "--cache3", str(tmp_path / "c3.npz"), "--model", "scans",
+            "--maps-cache", str(tmp_path / "maps.npz"), "--classifier-steps", "20",
+            "--json", str(out_json)]
+    assert mod.main(args) == 0
+    out = capsys.readouterr().out
+    assert "scans synthesize: rank among 3" in out and "network alone" not in out
+    rep = json.loads(out_json.read_text())
+    assert set(rep["classifier"]) == {"run 2 (floor)", "parametric", "scans synthesize"}
+    assert rep["diversity"]["scans"]["ratio"] > 0 and "network" not in rep["diversity"]["scans"]
+    from map2map.experiments.realism.per_plan.summary import sentences
+
+    said = sentences(rep)
+    assert len(said) == 3 and "no network" in said[-1]
+    # the hypotheses are cached: the second call synthesizes nothing, same figures
+    assert mod.main(args) == 0
+    rep2 = json.loads(out_json.read_text())
+    for r in (rep, rep2):
+        for c in r["classifier"].values():
+            c.pop("seconds")
+    assert rep2 == rep

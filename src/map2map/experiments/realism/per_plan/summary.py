@@ -3,7 +3,10 @@ carries them with one sentence each")."""
 
 from __future__ import annotations
 
-__all__ = ["sentences"]
+__all__ = ["sentences", "GENERATORS"]
+
+#: Report names of the generators summarised (Model_AB's, and ``synthesize --model scans``).
+GENERATORS = ("Model_AB", "AB:", "scans")
 
 
 def sentences(report: dict) -> list[str]:
@@ -28,7 +31,7 @@ def sentences(report: dict) -> list[str]:
     out = []
     n = report.get("plans")
     for name, rows in report.get("ranks", {}).items():
-        if not name.startswith(("Model_AB", "AB:")):
+        if not name.startswith(GENERATORS):
             continue
         valid = [r for r in rows if r.get("met") is not None]
         if not valid:
@@ -42,14 +45,16 @@ def sentences(report: dict) -> list[str]:
     cl = report.get("classifier", {})
     floor = cl.get("run 2 (floor)", {}).get("auc")
     for name, c in cl.items():
-        if name.startswith(("Model_AB", "AB:")) and floor is not None:
+        if name.startswith(GENERATORS) and floor is not None:
             out.append(f"A CNN tells {name}'s maps from simulated ones with AUC "
                        f"{c['auc']:.2f} on plans it never saw (two simulated runs: "
                        f"{floor:.2f}; target: at most 0.05 above).")
     for m, d in report.get("diversity", {}).items():
         if m == "simulated":
             continue
-        out.append(f"Three synthesize hypotheses of a plan differ {d['ratio']:.2f} times as "
-                   f"much as three simulated runs (target 0.8-1.25); the network's dropout "
-                   f"makes {100 * d['network_share']:.0f} % of that spread.")
+        what = (f"the network's dropout makes {100 * d['network_share']:.0f} % of that spread"
+                if "network_share" in d else "no network is involved")
+        out.append(f"Three synthesize{' --model scans' if m == 'scans' else ''} hypotheses "
+                   f"of a plan differ {d['ratio']:.2f} times as much as three simulated runs "
+                   f"(target 0.8-1.25); {what}.")
     return out
