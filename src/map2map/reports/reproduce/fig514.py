@@ -95,15 +95,16 @@ def _per_plan(out: Output) -> None:
     three simulations of each of >= 600 plans): one sentence each, with their command."""
     import json
 
-    from map2map.experiments.realism.per_plan import RESULTS
+    from map2map.experiments.realism.per_plan import RESULTS, RESULTS_SCANS
     from map2map.experiments.realism.per_plan.summary import sentences
 
-    if not RESULTS.is_file():
-        return
-    rep = json.loads(RESULTS.read_text())
-    said = sentences(rep)
-    if said:
-        out.note("Realism per plan (issue #33), last measured " + rep.get("date", "?") + " with `"
-                 + rep.get("command", "python -m map2map.experiments.realism.per_plan") + "`: "
-                 + " ".join(said))
+    for path in (RESULTS, RESULTS_SCANS):
+        if not path.is_file():
+            continue
+        rep = json.loads(path.read_text())
+        said = sentences(rep)
+        if said:
+            out.note("Realism per plan (issue #33), last measured " + rep.get("date", "?")
+                     + " with `" + rep.get("command", "python -m map2map.experiments.realism."
+                                           "per_plan") + "`: " + " ".join(said))
 
