@@ -195,3 +195,21 @@ def test_per_plan_benchmark_measures_synthesize_scans(small_dataset, tmp_path, c
         for c in r["classifier"].values():
             c.pop("seconds")
     assert rep2 == rep
+
+
+def test_per_plan_variants_takes_a_model_per_variant_and_the_classifier(small_dataset,
+                                                                       tmp_path, capsys):
+    pytest.importorskip("torch")
+    mod = importlib.import_module("map2map.experiments.realism.per_plan.__main__")
+    caches = ["--cache2", str(tmp_path / "c2.npz"), "--cache3", str(tmp_path / "c3.npz")]
+    assert mod.main(["--data", str(small_dataset), "--split", "all", *caches,
+                     "--classifier-steps", "0"]) == 0
+    capsys.readouterr()
+    from map2map.experiments.realism.per_plan.variants import main
+
+    assert main(["--data", str(small_dataset), *caches, "--plans", "4",
+                 "--classifier-steps", "10", "--variant", "scans",
+                 '{"model": "scans", "scans": {"duration": 60, "rooms": {"rot_deg": 2}}}']) == 0
+    out = capsys.readouterr().out
+    assert "scans: 4 plans" in out and "scans: rank among 3 simulated runs" in out
+    assert "scans: classifier AUC" in out

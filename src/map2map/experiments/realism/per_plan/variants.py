@@ -12,6 +12,16 @@ ranked among the plan's runs 1-3 per statistic. Tune on a set that is not the fi
     python -m map2map.experiments.realism.per_plan.variants --data HELD --cache2 refs2.npz \\
         --cache3 refs3.npz --plans 120 --variant before '{"coverage": "explore",
         "traces": {"floor_px": 1.05}}' --variant rays '{"coverage": "rays"}'
+
+A variant may name its own ``"model"`` (``"scans"``: ``synthesize --model scans``, its
+settings under ``"scans"`` as :class:`~map2map.learn.ab.scans.ScanMapParams` fields, the
+room drift under ``"rooms"``); ``--classifier-steps`` adds the classifier's AUC. The
+comparison that chose ``--model scans``'s settings (docs/synthesize.md; run then by a
+script outside the package, with other seeds) reads::
+
+    python -m map2map.experiments.realism.per_plan.variants --data HELD --cache2 refs2.npz \\
+        --cache3 refs3.npz --plans 160 --classifier-steps 600 --variant default '{}' \\
+        --variant scans '{"model": "scans"}'
 """
 
 from __future__ import annotations
@@ -33,15 +43,25 @@ def _kwargs(text: str) -> dict:
     >>> kw = _kwargs('{"coverage": "rays", "traces": {"floor_px": 0.8}}')
     >>> kw["coverage"], kw["traces"].floor_px, kw["traces"].wall_m == 0.055
     ('rays', 0.8, True)
+    >>> kw = _kwargs('{"model": "scans", "scans": {"global_deg": 1, "rooms": {"rot_deg": 2}}}')
+    >>> kw["model"], kw["scans"].global_deg, kw["scans"].rooms.rot_deg, kw["scans"].rooms.parametric
+    ('scans', 1, 2, False)
     """
     from map2map.learn.ab.coverage import ExploreParams
     from map2map.learn.ab.render import TraceParams
+    from map2map.learn.ab.room_drift import RoomDriftParams
+    from map2map.learn.ab.scans import ScanMapParams
 
     kw = json.loads(text)
     if isinstance(kw.get("explore"), dict):
         kw["explore"] = ExploreParams(**kw["explore"])
     if isinstance(kw.get("traces"), dict):
         kw["traces"] = TraceParams(**kw["traces"])
+    if isinstance(kw.get("scans"), dict):
+        sc = dict(kw["scans"])
+        if isinstance(sc.get("rooms"), dict):
+            sc["rooms"] = RoomDriftParams(**{"parametric": False, **sc["rooms"]})
+        kw["scans"] = ScanMapParams(**sc)
     return kw
 
 
@@ -56,7 +76,11 @@ def main(argv=None) -> int:
     ap.add_argument("--model", default="pretrained", help="Model_AB weights")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--variant", nargs=2, action="append", required=True,
-                    metavar=("NAME", "JSON"), help="a name and synthesize's keyword arguments")
+                    metavar=("NAME", "JSON"), help="a name and synthesize's keyword arguments "
+                    '(a "model" key replaces --model, e.g. "scans" with "scans" settings)')
+    ap.add_argument("--classifier-steps", type=int, default=0,
+                    help="also the classifier two-sample AUC against run 3, with this many "
+                    "Adam steps per fold (per_plan's: 600; default 0: none)")
     args = ap.parse_args(argv)
 
     from map2map.datasets.pair import crop_box, preprocess_pair
@@ -64,7 +88,8 @@ def main(argv=None) -> int:
     from map2map.experiments.realism.measure import simulated_references, stats_of_sets
     from map2map.experiments.realism.ranks import format_rank_table, plan_ranks, rank_table
     from map2map.learn.ab.model import load_ab_model
-    from map2map.learn.ab.synthesize import synthesize
+    from map2map.learn.ab.synthesize import SCANS, synthesize
+    from map2map.learn.two_sample import two_sample_auc
     from map2map.maps.formats import load_map
 
     variants = {name: _kwargs(text) for name, text in args.variant}
@@ -73,10 +98,14 @@ def main(argv=None) -> int:
                               progress=False)
     both = np.intersect1d(r2.indices, r3.indices)[:args.plans]
     r2, r3 = r2.only(both), r3.only(both)
-    net = load_ab_model(args.model)
+    nets = {}
     size = r2.a.shape[-1]
     gens = {}
     for name, kw in variants.items():
+        model = kw.pop("model", args.model)
+        if model != SCANS and model not in nets:
+            nets[model] = load_ab_model(model)
+        net = nets.get(model, SCANS)
         t0, maps = time.perf_counter(), []
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -93,6 +122,10 @@ def main(argv=None) -> int:
         rows = rank_table(plan_ranks(st[name], [st[r] for r in runs], seed=args.seed), 3)
         print()
         print(format_rank_table(rows, name))
+        if args.classifier_steps > 0:
+            res = two_sample_auc(r2.a, runs["run 3"], gens[name],
+                                 steps=args.classifier_steps, seed=args.seed)
+            print(f"{name}: classifier AUC {res.auc:.3f} against run 3 (paired {res.paired:.3f})")
     return 0
 
 
