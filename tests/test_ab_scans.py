@@ -124,3 +124,42 @@ def test_cli_synthesize_scans_writes_maps_and_its_summary(tmp_path, plan):
                          capture_output=True, text=True, timeout=600)
     assert bad.returncode == 2 and "render" in bad.stderr and "Traceback" not in bad.stderr
     assert not (tmp_path / "x").exists()
+
+
+def test_a_given_start_is_where_every_hypothesis_starts(plan):
+    free = np.argwhere(plan.data == 255)
+    r, c = free[len(free) // 2]
+    x, y = plan.pixel_to_world(np.array([float(r)]), np.array([float(c)]))
+    start = (float(x[0]), float(y[0]), 0.7)
+    p = ScanMapParams(duration=20.0)
+    for k in (0, 1):
+        h = scan_map(plan, 0, k, p, start=start)
+        assert np.allclose(h.true_poses[0], start)
+    own = [scan_map(plan, 0, k, p).true_poses[0] for k in (0, 1)]
+    assert not np.allclose(own[0], own[1])          # by default each draws its own
+    res = synthesize(plan, SCANS, samples=2, scans=p, start=start)
+    assert len(res.maps) == 2 and 0.0 < res.diversity < 1.0
+    with pytest.raises(InputError, match="model 'scans' only") as e:
+        synthesize(plan, "pretrained", samples=1, start=start)
+    assert e.value.source == "start"
+
+
+def test_cli_synthesize_start_is_recorded_and_a_start_outside_names_the_plan(tmp_path, plan):
+    from map2map.maps.formats import save_map
+
+    src = tmp_path / "apt.yaml"
+    save_map(plan, src)
+    free = np.argwhere(plan.data == 255)
+    r, c = free[len(free) // 2]
+    x, y = plan.pixel_to_world(np.array([float(r)]), np.array([float(c)]))
+    base = [sys.executable, "-m", "map2map", "synthesize", str(src), "--model", "scans",
+            "--samples", "1", "--no-figure", "--start"]
+    ok = subprocess.run(base + [f"{x[0]}", f"{y[0]}", "0.5", "--out", str(tmp_path / "s")],
+                        capture_output=True, text=True, timeout=600)
+    assert ok.returncode == 0, ok.stderr
+    summary = json.loads((tmp_path / "s" / "apt_synthesize.json").read_text())
+    assert np.allclose(summary["start"], [x[0], y[0], 0.5])
+    bad = subprocess.run(base + ["-50", "-50", "0", "--out", str(tmp_path / "x")],
+                         capture_output=True, text=True, timeout=600)
+    assert bad.returncode == 2 and str(src) in bad.stderr and "start" in bad.stderr
+    assert "Traceback" not in bad.stderr and not (tmp_path / "x").exists()

@@ -195,6 +195,12 @@ def test_per_plan_benchmark_measures_synthesize_scans(small_dataset, tmp_path, c
         for c in r["classifier"].values():
             c.pop("seconds")
     assert rep2 == rep
+    # --same-start: the hypotheses start where the plan's runs do (its own cache key)
+    assert mod.main(args + ["--same-start", "--classifier-steps", "0"]) == 0
+    rep3 = json.loads(out_json.read_text())
+    assert "scans synthesize, runs' start" in {r for r in rep3["ranks"]}
+    with np.load(tmp_path / "maps.npz") as z:
+        assert json.loads(str(z["key"]))["start"] == "pair"
 
 
 def test_per_plan_variants_takes_a_model_per_variant_and_the_classifier(small_dataset,

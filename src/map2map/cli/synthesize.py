@@ -31,6 +31,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "apply) (default %(default)s)")
     p.add_argument("--seed", type=int, default=d.seed,
                    help="seed of the dropout masks (default %(default)s)")
+    p.add_argument("--start", type=float, nargs=3, metavar=("X", "Y", "YAW"),
+                   default=d.start, help="scans: where the robot starts every hypothesis "
+                   "(metres and radians in the plan's frame, as simulate --start; default: "
+                   "each hypothesis draws its own start in the free space)")
     p.add_argument("--format", choices=("ros", "png"), default=d.format,
                    help="ros: .yaml + .pgm; png: pictures (default %(default)s)")
     p.add_argument("--render", choices=("slam", "plain"), default=d.render,
@@ -80,7 +84,8 @@ def run(args: argparse.Namespace) -> int:
         args.input, args.out, samples=args.samples, model=args.model, seed=args.seed,
         format=args.format, render=args.render, drift=args.drift,
         drift_method=args.drift_method, drift_scale=args.drift_scale, coverage=args.coverage,
-        drift_route=args.drift_route, traces=args.traces, device=args.device,
+        drift_route=args.drift_route, traces=args.traces,
+        start=None if args.start is None else tuple(args.start), device=args.device,
         figure=not args.no_figure, read_options=read_options_from_args(args)))
     say_how_read(args.input, run.plan)
     src, res = Path(args.input), run.result

@@ -41,7 +41,7 @@ class SynthesizeSpec:
         Output folder: ``<stem>_hypNN.yaml`` (or ``.png``), ``<stem>_synthesize.json`` and
         ``<stem>_synthesize.png``.
     samples, model, seed, device, render, drift, drift_method, drift_scale, coverage,
-    drift_route, traces
+    drift_route, traces, start
         As :func:`~map2map.learn.ab.synthesize.synthesize`.
     format : {"ros", "png"}
         The hypotheses' file format.
@@ -64,6 +64,7 @@ class SynthesizeSpec:
     coverage: str = "explore"
     drift_route: str = "tour"
     traces: str | None = None
+    start: tuple[float, float, float] | None = None
     device: str = "cpu"
     figure: bool = True
     read_options: Any = None
@@ -103,11 +104,16 @@ def synthesize(spec: SynthesizeSpec) -> SynthesizeRun:
     plan = load_map(src, spec.read_options)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = synthesize_maps(plan, spec.model, samples=spec.samples, seed=spec.seed,
-                              device=spec.device, render=spec.render, drift=spec.drift,
-                              drift_method=spec.drift_method, drift_scale=spec.drift_scale,
-                              coverage=spec.coverage, drift_route=spec.drift_route,
-                              traces=spec.traces)
+        try:
+            res = synthesize_maps(
+                plan, spec.model, samples=spec.samples, seed=spec.seed, device=spec.device,
+                render=spec.render, drift=spec.drift, drift_method=spec.drift_method,
+                drift_scale=spec.drift_scale, coverage=spec.coverage,
+                drift_route=spec.drift_route, traces=spec.traces, start=spec.start)
+        except InputError as exc:       # the plan's problems (a start in a wall) name it
+            if exc.source not in (None, "plan"):
+                raise
+            raise InputError(src, exc.problem) from None
     ensure_output_dir(out)
     written: dict[str, Path] = {}
     for k, (path, m) in enumerate(zip(names, res.maps, strict=True)):
@@ -118,6 +124,7 @@ def synthesize(spec: SynthesizeSpec) -> SynthesizeRun:
     meta = res.maps[0].meta["synthesize"]
     if meta["model"] == "scans":          # no network: its own settings, per hypothesis
         summary = {"plan": str(src), "seed": spec.seed, "scans": meta["scans"],
+                   **({"start": list(spec.start)} if spec.start is not None else {}),
                    "hypotheses": [m.meta["synthesize"]["hypothesis"] for m in res.maps],
                    "files": [p.name for p in names], **res.summary()}
     else:

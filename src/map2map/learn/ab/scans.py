@@ -233,10 +233,14 @@ def map_scans(scans, times, poses, start, plan: OccupancyMap) -> OccupancyMap:
 
 
 def scan_map(plan: OccupancyMap, seed: int, k: int,
-             params: ScanMapParams | None = None) -> ScanHypothesis:
+             params: ScanMapParams | None = None, start=None) -> ScanHypothesis:
     """Hypothesis ``k`` of ``plan`` under ``seed`` (module doc): explored with the
     simulation seed of :func:`~map2map.learn.ab.coverage.explore_rng` ``(seed, k)``, its
     pose error drawn from :func:`scan_rng` ``(seed, k)``.
+
+    ``start`` (x, y, yaw; metres and radians in the plan's frame, optional) is where the
+    robot starts, as ``map2map simulate --start``; by default the simulation seed draws
+    it in the free space.
 
     Raises
     ------
@@ -249,6 +253,7 @@ def scan_map(plan: OccupancyMap, seed: int, k: int,
     sp = params or ScanMapParams()
     sim_seed = int(explore_rng(seed, k).integers(1 << 32))
     res = simulate(plan, seed=sim_seed, duration=sp.duration, fov=sp.fov, mapper="oracle",
+                   start=None if start is None else tuple(float(v) for v in start),
                    progress=False)
     rng = scan_rng(seed, k)
     drift = room_drift_field(plan.data, rng, sp.rooms)

@@ -195,7 +195,7 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
                coverage: str = "explore", drift_route: str = "tour",
                explore: ExploreParams | None = None,
                traces: str | TraceParams | None = None,
-               scans: ScanMapParams | None = None) -> SynthesisResult:
+               scans: ScanMapParams | None = None, start=None) -> SynthesisResult:
     """``samples`` SLAM-map hypotheses of ``plan`` (module doc), in its frame.
 
     Parameters
@@ -240,6 +240,9 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
         275 s, 180 degree LIDAR, ``oracle``, band = rendered wall thickness).
     scans : ScanMapParams, optional
         With ``model="scans"``: the exploration, pose error and mapping settings.
+    start : (x, y, yaw), optional
+        With ``model="scans"``: where the robot starts every hypothesis (metres and
+        radians in the plan's frame); by default each hypothesis draws its own.
     traces : {"lidar", "none"}, TraceParams or None
         ``"lidar"`` (the default, ``None``, with ``render="slam"``; ``None`` with
         ``render="plain"`` is ``"none"``): what a LIDAR + SLAM leaves beyond the faces
@@ -265,9 +268,10 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
         if changed:
             raise InputError(changed[0], "does not apply to model 'scans' (the robot's own "
                              "scans mapped at drifted poses, no network)")
-        return _synthesize_scans(plan, samples, seed, scans or ScanMapParams())
-    if scans is not None:
-        raise InputError("scans", "settings for model 'scans' only")
+        return _synthesize_scans(plan, samples, seed, scans or ScanMapParams(), start)
+    for name, v in (("scans", scans), ("start", start)):
+        if v is not None:
+            raise InputError(name, "applies to model 'scans' only")
     if render not in RENDERS:
         raise InputError("render", f"must be one of {', '.join(RENDERS)}, got {render!r}")
     dp, tp, hide, along, ep = _options(drift, drift_method, drift_scale, traces, render,
@@ -362,14 +366,14 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
 
 
 def _synthesize_scans(plan: OccupancyMap, samples: int, seed: int,
-                      params: ScanMapParams) -> SynthesisResult:
+                      params: ScanMapParams, start=None) -> SynthesisResult:
     """:func:`synthesize` with ``model="scans"``: hypothesis ``k`` is
-    :func:`~map2map.learn.ab.scans.scan_map` ``(plan, seed, k)``."""
+    :func:`~map2map.learn.ab.scans.scan_map` ``(plan, seed, k, params, start)``."""
     if not (plan.data == FREE).any():
         raise InputError(None, "the plan has no free space; nothing to explore")
     maps, warns = [], []
     for k in range(samples):
-        h = scan_map(plan, seed, k, params)
+        h = scan_map(plan, seed, k, params, start)
         m = h.map
         m.meta["synthesize"] = {"model": SCANS, "seed": seed, "samples": samples,
                                 "scans": params.to_dict(), "hypothesis": h.info}

@@ -62,6 +62,9 @@ def main(argv=None) -> int:
     ap.add_argument("--classifier-steps", type=int, default=600,
                     help="Adam steps per fold of the classifier (0: no classifier test)")
     ap.add_argument("--maps-cache", help=".npz keeping synthesize's hypotheses of every plan")
+    ap.add_argument("--same-start", action="store_true",
+                    help="scans: start each hypothesis where the plan's runs start "
+                    "(synthesize --start; the runs share the pair's start pose)")
     ap.add_argument("--figure", help="PNG: plan, runs 1-3 and each generator on 6 plans")
     ap.add_argument("--json", help="write every figure printed here")
     args = ap.parse_args(argv)
@@ -172,8 +175,9 @@ def _model_maps(model: str, args, refs, cache=None) -> tuple[dict, dict]:
 
     if model == SCANS:                   # no network: the pipeline is all there is
         hyp = _native_hypotheses(args.data, refs.indices, SCANS, args.seed,
-                                 refs.a.shape[-1], cache)
-        return {"scans synthesize": hyp["synthesize"][:, 0]}, hyp
+                                 refs.a.shape[-1], cache, same_start=args.same_start)
+        name = "scans synthesize" + (", runs' start" if args.same_start else "")
+        return {name: hyp["synthesize"][:, 0]}, hyp
     net = load_ab_model(model)
     base = "Model_AB" if model == "pretrained" else f"AB:{Path(model).name}"
     alone = synthesize_squares(net, refs.a, seed=args.seed, render="plain", drift="none",
@@ -184,10 +188,12 @@ def _model_maps(model: str, args, refs, cache=None) -> tuple[dict, dict]:
             hyp)
 
 
-def _native_hypotheses(ds, indices, net, seed: int, size: int, cache=None) -> dict:
+def _native_hypotheses(ds, indices, net, seed: int, size: int, cache=None,
+                       same_start: bool = False) -> dict:
     """Per pair: ``synthesize`` (3 hypotheses, its defaults) and the same with drift,
     coverage and traces off (the network's dropout alone) of the pair's plan (``A.yaml``,
-    its own resolution), cut with the pair's window to its ``size`` px square.
+    its own resolution), cut with the pair's window to its ``size`` px square;
+    ``same_start`` (scans only): started at the pair's start pose (``meta.json``).
 
     ``cache`` (an ``.npz``, optional) keeps them between calls, tied to the dataset's
     folder, the weights, ``seed`` and ``size`` (rewritten at most every minute and at the
@@ -195,7 +201,7 @@ def _native_hypotheses(ds, indices, net, seed: int, size: int, cache=None) -> di
     from tqdm.auto import tqdm
 
     from map2map.core._io import atomic_path
-    from map2map.datasets.pair import crop_box, preprocess_pair
+    from map2map.datasets.pair import crop_box, preprocess_pair, read_pair_meta
     from map2map.datasets.pairfolder import PLAN_YAML, SLAM_YAML, pair_dir
     from map2map.learn.ab.synthesize import synthesize
     from map2map.maps.formats import load_map
@@ -203,6 +209,8 @@ def _native_hypotheses(ds, indices, net, seed: int, size: int, cache=None) -> di
     scans = isinstance(net, str)
     key = {"dataset": str(Path(ds).resolve()), "model": net if scans else str(net.source),
            "seed": int(seed), "size": int(size), "version": 1}
+    if same_start:
+        key["start"] = "pair"
     have: dict[int, tuple] = {}
     if cache is not None and Path(cache).is_file():
         with np.load(cache, allow_pickle=False) as z:
@@ -229,7 +237,8 @@ def _native_hypotheses(ds, indices, net, seed: int, size: int, cache=None) -> di
             a, b = load_map(folder / PLAN_YAML), load_map(folder / SLAM_YAML)
             box = crop_box(a, b)
             got = []
-            for kw in ({},) if scans else ({}, {"drift": "none", "coverage": "none",
+            at = {"start": tuple(read_pair_meta(folder)["start_pose"])} if same_start else {}
+            for kw in ({**at},) if scans else ({}, {"drift": "none", "coverage": "none",
                                                 "traces": "none"}):
                 res = synthesize(a, net, samples=3, seed=seed + i, **kw)
                 got.append(np.stack([preprocess_pair(a, h, size, 0, box)[1]
