@@ -215,7 +215,8 @@ def test_cli_synthesize_coverage(tmp_path, capsys, drawer, monkeypatch):
     save_map(_plan(), tmp_path / "plan.yaml")
     out = tmp_path / "hyps"
     assert main(["synthesize", str(tmp_path / "plan.yaml"), "--out", str(out), "--samples",
-                 "1", "--no-figure", "--coverage", "explore", "--drift-route", "explore"]) == 0
+                 "1", "--no-figure", "--model", "pretrained", "--coverage", "explore",
+                 "--drift-route", "explore"]) == 0
     s = json.loads((out / "plan_synthesize.json").read_text())
     assert (s["coverage"], s["drift_route"]) == ("explore", "explore")
     assert s["unknown_share"][0] > 0.5

@@ -1,4 +1,5 @@
-"""``map2map synthesize``: K SLAM-map hypotheses for a CAD plan with Model_AB."""
+"""``map2map synthesize``: K SLAM-map hypotheses for a CAD plan (the robot's own scans at
+drifted poses by default, or Model_AB)."""
 
 from __future__ import annotations
 
@@ -13,9 +14,11 @@ from ._mapargs import add_input_options, read_options_from_args, say_how_read
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "synthesize",
-        help="learned CAD -> SLAM: K SLAM-map hypotheses of a plan (Model_AB)",
-        description="Generate --samples SLAM-map hypotheses of a CAD plan with Model_AB "
-        "(test-time dropout, seeded), in the plan's frame, resolution and origin. Writes "
+        help="CAD -> SLAM: K SLAM-map hypotheses of a plan (scans, or Model_AB)",
+        description="Generate --samples SLAM-map hypotheses of a CAD plan, in the plan's "
+        "frame, resolution and origin: by default each is the simulated robot's own "
+        "exploration mapped at drifted poses (no network); with --model pretrained or a "
+        "run, Model_AB's output (test-time dropout, seeded). Writes "
         "OUT/<plan>_hypNN.yaml (+ .pgm; or .png with --format png), OUT/<plan>_synthesize.json "
         "(diversity: mean pairwise pixel disagreement) and OUT/<plan>_synthesize.png.",
     )
@@ -25,12 +28,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--samples", type=int, default=d.samples,
                    help="number of hypotheses K (default %(default)s)")
     p.add_argument("--model", default=d.model,
-                   help="'pretrained' (shipped weights), a 'train ab' run folder or weights "
-                   "file, or 'scans': no network, the robot's own exploration mapped at "
-                   "drifted poses (the rendering, drift, coverage and traces options do not "
-                   "apply) (default %(default)s)")
+                   help="'scans' (the default): no network, the robot's own exploration "
+                   "mapped at drifted poses (the rendering, drift, coverage and traces "
+                   "options below do not apply); 'pretrained': the shipped Model_AB weights; "
+                   "or a 'train ab' run folder or weights file (default %(default)s)")
     p.add_argument("--seed", type=int, default=d.seed,
-                   help="seed of the dropout masks (default %(default)s)")
+                   help="seed of every random draw: the explorations and pose errors, or "
+                   "the network's dropout masks (default %(default)s)")
     p.add_argument("--start", type=float, nargs=3, metavar=("X", "Y", "YAW"),
                    default=d.start, help="scans: where the robot starts every hypothesis "
                    "(metres and radians in the plan's frame, as simulate --start; default: "

@@ -1,5 +1,6 @@
-"""``map2map synthesize`` as a job: a CAD plan in, K Model_AB SLAM-map hypotheses out
-(:func:`map2map.learn.ab.synthesize.synthesize`), with a JSON summary and a figure.
+"""``map2map synthesize`` as a job: a CAD plan in, K SLAM-map hypotheses out
+(:func:`map2map.learn.ab.synthesize.synthesize`: the robot's own scans at drifted poses
+by default, or Model_AB), with a JSON summary and a figure.
 
 Every output path is checked before the plan is read; each file is written atomically.
 
@@ -54,7 +55,7 @@ class SynthesizeSpec:
     input: str | os.PathLike
     out: str | os.PathLike
     samples: int = 4
-    model: str | os.PathLike = "pretrained"
+    model: str | os.PathLike = "scans"
     seed: int = 0
     format: str = "ros"
     render: str = "slam"

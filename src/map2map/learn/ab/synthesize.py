@@ -1,6 +1,11 @@
 """``map2map synthesize``: SLAM-map hypotheses for a CAD plan with Model_AB (thesis 3.1,
 5.1, Fig. 5.3), in the plan's frame and resolution.
 
+The default model is ``"scans"`` (:data:`SCANS`, :mod:`map2map.learn.ab.scans`): no
+network, each hypothesis the simulated robot's own exploration mapped at drifted poses.
+On the frozen tests of docs/synthesize.md its maps are told from simulated ones less often
+than the network's; ``model="pretrained"`` (or a run) is Model_AB, below.
+
 The thesis's Model_AB gives one SLAM map per plan and calls that a weakness against the
 parametric model (sec. 5.2). Here one plan gives ``K`` hypotheses: the generator's
 decoder dropout (:class:`~map2map.learn.nets.progressive.StochasticUNet`, trained with it on)
@@ -188,7 +193,7 @@ def dataset_thicken(header: dict) -> int:
     return int(k or 0)
 
 
-def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "pretrained",
+def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = SCANS,
                *, samples: int = 4, seed: int = 0, device: str = "cpu",
                render: str = "slam", drift: str | DriftParams = "rooms",
                drift_method: str | None = None, drift_scale: float | None = None,
@@ -202,8 +207,8 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = "
     ----------
     plan : OccupancyMap
         The CAD plan (internal convention; any size and resolution).
-    model : "pretrained", run folder, weights file, ABModel, or "scans"
-        ``"scans"`` (:data:`SCANS`): no network; each hypothesis is the robot's own
+    model : "scans", "pretrained", run folder, weights file or ABModel
+        ``"scans"`` (:data:`SCANS`, the default): no network; each hypothesis is the robot's own
         exploration mapped at drifted poses (:mod:`map2map.learn.ab.scans`, settings
         ``scans``); ``render``, ``drift``, ``coverage``, ``traces`` and their options do
         not apply and are refused when changed.
