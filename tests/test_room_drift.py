@@ -219,3 +219,27 @@ def test_default_rooms_drift_conserves_free_space_and_walls(seed):
     assert abs((out == OCCUPIED).sum() / walls - 1) < 0.03
     assert (apply_drift(d, old) == FREE).sum() / free > 1.03
     assert _wall_parts(out) <= _wall_parts(d) + 3
+
+
+def test_jumps_turn_a_few_steps_and_every_room_after_them():
+    """``jump_share``: most steps keep their parent's rotation (rot_deg 0), a jump turns
+    the room and every room reached from it; no jumps drawn when the share is 0 (the
+    draws, and so the maps, as before)."""
+    plan = generate_floorplan(5, size=(16, 12)).data
+    still = RoomDriftParams(rot_deg=0.0, lin=0.0, spread=0.0, parametric=False)
+    rot = room_drift_field(plan, np.random.default_rng(1), still).transforms[:, 1, 0]
+    assert np.allclose(rot, 0.0)
+    jumpy = RoomDriftParams(rot_deg=0.0, lin=0.0, spread=0.0, parametric=False,
+                            jump_share=0.3, jump_deg=3.0)
+    d = room_drift_field(plan, np.random.default_rng(1), jumpy)
+    angles = np.round(np.degrees(np.arctan2(d.transforms[:, 1, 0], d.transforms[:, 0, 0])), 6)
+    n = len(angles)
+    assert n >= 6 and 1 < len(np.unique(angles)) < n     # some rooms share a rotation
+    assert "jumps 0.3 x 3 deg" in jumpy.describe()
+    base = RoomDriftParams(parametric=False)
+    a = room_drift_field(plan, np.random.default_rng(2), base).transforms
+    b = room_drift_field(plan, np.random.default_rng(2), RoomDriftParams(
+        parametric=False, jump_share=0.0, jump_deg=9.0)).transforms
+    assert np.array_equal(a, b)
+    with pytest.raises(InputError):
+        RoomDriftParams(jump_share=1.5)

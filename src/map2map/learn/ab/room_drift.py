@@ -97,6 +97,11 @@ class RoomDriftParams:
     lin : float
         Standard deviation of the shift each step adds, per axis, as a fraction of the
         step's length (distance between the two rooms' centroids).
+    jump_share, jump_deg : float
+        Probability that a step is a *jump* instead, and its rotation's standard
+        deviation [deg] (its shift as any step's): a particle filter keeps most rooms
+        nearly right and now and then a wrong match that turns every room reached after
+        it (0: no jumps, every step alike; drawn only when > 0).
     spread : float
         Log-normal spread of the per-map amplitude that multiplies every step.
     blend_px : float
@@ -132,6 +137,8 @@ class RoomDriftParams:
 
     rot_deg: float = 1.5
     lin: float = 0.02
+    jump_share: float = 0.0
+    jump_deg: float = 0.0
     spread: float = 0.8
     blend_px: float = 4.0
     h_px: float = 4.0
@@ -142,8 +149,11 @@ class RoomDriftParams:
     conserve: bool = False
 
     def __post_init__(self):
-        bad = [n for n in ("rot_deg", "lin", "spread", "scale", "h_px", "smooth_m")
+        bad = [n for n in ("rot_deg", "lin", "spread", "scale", "h_px", "smooth_m",
+                           "jump_deg")
                if not (math.isfinite(getattr(self, n)) and getattr(self, n) >= 0)]
+        if not 0.0 <= self.jump_share <= 1.0:
+            bad.append("jump_share")
         if not (math.isfinite(self.blend_px) and self.blend_px > 0):
             bad.append("blend_px")
         if self.method not in ("additive", "ekf"):
@@ -160,7 +170,9 @@ class RoomDriftParams:
         >>> RoomDriftParams().describe()[:58]
         'rooms: 1.5 deg + 0.02 dl per step, spread 0.8, blend 4 px,'
         """
-        return (f"rooms: {self.rot_deg:g} deg + {self.lin:g} dl per step, spread "
+        return (f"rooms: {self.rot_deg:g} deg + {self.lin:g} dl per step, "
+                + (f"jumps {self.jump_share:g} x {self.jump_deg:g} deg, "
+                   if self.jump_share > 0 else "") + "spread "
                 f"{self.spread:g}, blend {self.blend_px:g} px, h {self.h_px:g} px, "
                 f"x{self.scale:g}" + (f" + parametric {self.method} smoothed "
                                       f"{self.smooth_m:g} m"
@@ -378,7 +390,10 @@ def room_drift_field(plan: np.ndarray, rng: np.random.Generator,
 
     def step(parent: int, child: int, door) -> None:
         dl = math.hypot(cx[child - 1] - cx[parent - 1], cy[child - 1] - cy[parent - 1])
-        th = math.radians(rp.rot_deg) * amp * float(rng.standard_normal())
+        deg = rp.rot_deg
+        if rp.jump_share > 0 and rng.random() < rp.jump_share:
+            deg = rp.jump_deg
+        th = math.radians(deg) * amp * float(rng.standard_normal())
         sh = rp.lin * dl * amp * rng.standard_normal(2)
         T[child] = T[parent] @ _rigid(th, door, sh)
 
