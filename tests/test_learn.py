@@ -307,6 +307,39 @@ def test_cli_train_and_autocorrect(tmp_path, capsys):
     assert "Traceback" not in err and err.count("map2map: error:") == 3
 
 
+def test_cli_train_on_two_builds_merges_them_and_names_both(tmp_path, capsys):
+    """``--data DS1 DS2``: one run on both builds' pairs (their splits kept, plan ids kept
+    apart), both named in the model's header; resume needs the same list; a build of
+    another map size is refused by name."""
+    from safetensors import safe_open
+
+    def read_header(path):
+        with safe_open(str(path), framework="pt") as f:
+            return json.loads(f.metadata()["map2map"])
+
+    d1, d2 = tmp_path / "d1.npz", tmp_path / "d2.npz"
+    save_packed(d1, _pairs(6, seed=0))
+    save_packed(d2, _pairs(4, seed=1))
+    run = tmp_path / "run"
+    opts = ["--size", "16", "--batch", "4", "--g-channels", "8", "--d-channels", "8",
+            "--d-layers", "2", "--quiet"]
+    assert main(["train", "ba", "--data", str(d1), str(d2), "--out", str(run), "--epochs",
+                 "1", *opts]) == 0
+    merged = read_header(run / "model.safetensors")["dataset"]["merged"]
+    assert [m["source"] for m in merged] == [str(d1), str(d2)]
+    assert [m["count"] for m in merged] == [6, 4]
+    assert main(["train", "ba", "--data", str(d1), str(d2), "--out", str(run), "--epochs",
+                 "2", "--resume", "--quiet"]) == 0
+    capsys.readouterr()
+    assert main(["train", "ba", "--data", str(d1), "--out", str(run), "--epochs", "3",
+                 "--resume", "--quiet"]) == 2
+    save_packed(tmp_path / "big.npz", _pairs(2, size=64))
+    assert main(["train", "ba", "--data", str(d1), str(tmp_path / "big.npz"), "--out",
+                 str(tmp_path / "r2"), "--epochs", "1", *opts]) == 2
+    err = capsys.readouterr().err
+    assert "digest differs" in err and "big.npz" in err and "Traceback" not in err
+
+
 @pytest.mark.slow
 def test_ddp_two_processes_gloo(tmp_path):
     """torchrun with 2 CPU processes (gloo): one run folder, one report, a loadable model."""

@@ -30,7 +30,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _data_options(b: argparse.ArgumentParser, epochs_help: str) -> None:
-    b.add_argument("--data", required=True, help="dataset folder (packed.npz inside) or .npz")
+    b.add_argument("--data", required=True, nargs="+", metavar="DS",
+                   help="dataset folder (packed.npz inside) or .npz; several: their pairs "
+                   "merged, each keeping its splits")
     b.add_argument("--out", required=True, help="run folder")
     b.add_argument("--epochs", type=int, help=epochs_help)
     b.add_argument("--resume", action="store_true", help="continue the run in --out exactly")
@@ -143,7 +145,8 @@ def _settings(args: argparse.Namespace, own: tuple[str, ...]) -> dict:
 def _train(args: argparse.Namespace, model: str, own: tuple[str, ...]) -> int:
     from ..jobs.train import TrainSpec, train
 
-    run = train(TrainSpec(model, args.data, args.out, _settings(args, own),
+    data = args.data if len(args.data) > 1 else args.data[0]
+    run = train(TrainSpec(model, data, args.out, _settings(args, own),
                           resume=args.resume, progress=not args.quiet))
     if run.main:
         print(run.summary(), file=sys.stderr)

@@ -42,7 +42,8 @@ from ..core._io import atomic_path
 from ..core.errors import InputError
 from ..core.grid import FREE, OCCUPIED, UNKNOWN
 
-__all__ = ["PackedPairs", "save_packed", "load_packed", "pack_ternary", "unpack_ternary"]
+__all__ = ["PackedPairs", "save_packed", "load_packed", "merge_packed", "pack_ternary",
+           "unpack_ternary"]
 
 #: Pixel value of each 2-bit code; the code of a value is its index here.
 _VALUES = np.array([OCCUPIED, UNKNOWN, FREE], np.uint8)
@@ -192,3 +193,39 @@ def load_packed(path: str | os.PathLike) -> PackedPairs:
     if pairs.digest() != meta.get("digest"):
         raise InputError(path, "content digest mismatch (file corrupt or edited)")
     return pairs
+
+
+def merge_packed(parts, sources=None) -> PackedPairs:
+    """Several packed datasets as one training set (``map2map train --data DS1 DS2 ...``).
+
+    The pairs are concatenated in the order given, each keeping its split; plan ids get
+    the part's index as a prefix (``"0:"``, ``"1:"``, ...), since two builds with other
+    seeds may name different plans alike. ``meta["merged"]`` lists every part's source,
+    identity, digest and split counts, so a model trained on the merge names its data.
+
+    Examples
+    --------
+    >>> a = np.zeros((2, 4, 4), np.uint8)
+    >>> one = PackedPairs(a, a, np.array(["p0", "p1"]), np.array(["train", "val"]), {"seed": 1})
+    >>> two = PackedPairs(a[:1], a[:1], np.array(["p0"]), np.array(["train"]), {"seed": 2})
+    >>> m = merge_packed([one, two], ["DS1", "DS2"])
+    >>> len(m), m.plan_id.tolist(), [p["source"] for p in m.meta["merged"]]
+    (3, ['0:p0', '0:p1', '1:p0'], ['DS1', 'DS2'])
+    """
+    parts = list(parts)
+    sources = [str(s) for s in (sources or [f"part {k}" for k in range(len(parts))])]
+    if not parts or len(sources) != len(parts):
+        raise ValueError("merge_packed needs one source name per part, and at least one part")
+    shapes = {p.a.shape[1:] for p in parts}
+    if len(shapes) > 1:
+        raise InputError(sources[[p.a.shape[1:] for p in parts].index(sorted(shapes)[-1])],
+                         f"maps of another size than the other datasets' ({sorted(shapes)}); "
+                         "build them with the same --size")
+    keys = ("dataset", "identity", "digest", "count", "splits")
+    meta = {"merged": [{"source": s, **{k: p.meta[k] for k in keys if k in p.meta}}
+                       for s, p in zip(sources, parts, strict=True)]}
+    return PackedPairs(np.concatenate([p.a for p in parts]),
+                       np.concatenate([p.b for p in parts]),
+                       np.concatenate([np.char.add(f"{k}:", p.plan_id.astype(str))
+                                       for k, p in enumerate(parts)]),
+                       np.concatenate([p.split for p in parts]), meta)

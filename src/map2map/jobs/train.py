@@ -43,8 +43,9 @@ class TrainSpec:
     ----------
     model : {"ba", "ab"}
         Which model.
-    data : path-like or PackedPairs
-        A dataset folder (``packed.npz`` inside), a packed ``.npz`` or the pairs.
+    data : path-like, list of them, or PackedPairs
+        A dataset folder (``packed.npz`` inside), a packed ``.npz``, several of them (their
+        pairs merged, :func:`~map2map.datasets.packed.merge_packed`) or the pairs.
     out : path-like
         The run folder.
     settings : dict

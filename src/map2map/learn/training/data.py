@@ -40,7 +40,7 @@ import torch.nn.functional as F
 
 from ...core.errors import InputError
 from ...core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
-from ...datasets.packed import PackedPairs, load_packed
+from ...datasets.packed import PackedPairs, load_packed, merge_packed
 
 __all__ = ["ContentSquare", "content_square", "MARGIN_PX", "wall_thickness_px",
            "resolve_packed", "load_pairs", "downsample_input", "downsample_target",
@@ -58,9 +58,18 @@ def resolve_packed(path: str | os.PathLike) -> Path:
     return p
 
 
-def load_pairs(data: str | os.PathLike | PackedPairs) -> PackedPairs:
-    """``data`` as :class:`PackedPairs` (a path is read with :func:`load_packed`)."""
-    return data if isinstance(data, PackedPairs) else load_packed(resolve_packed(data))
+def load_pairs(data) -> PackedPairs:
+    """``data`` as :class:`PackedPairs`: a path is read with :func:`load_packed`, a list of
+    paths (several dataset builds) is read and merged (:func:`~map2map.datasets.packed.
+    merge_packed`; one path in a list is that dataset as is)."""
+    if isinstance(data, PackedPairs):
+        return data
+    if isinstance(data, (list, tuple)):
+        if len(data) == 1:
+            return load_pairs(data[0])
+        return merge_packed([load_packed(resolve_packed(d)) for d in data],
+                            [os.fspath(d) for d in data])
+    return load_packed(resolve_packed(data))
 
 
 def _pool(mask: np.ndarray, size: int) -> torch.Tensor:

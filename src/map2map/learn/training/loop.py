@@ -249,7 +249,8 @@ def open_run(data, out, config: TrainConfig | None, *, config_type: type, fmt: s
     """
     out = Path(out)
     pairs = load_pairs(data)
-    src = data if not isinstance(data, PackedPairs) else None
+    src = None if isinstance(data, PackedPairs) else (
+        ", ".join(map(os.fspath, data)) if isinstance(data, (list, tuple)) else data)
     ck_path = out / CHECKPOINT_FILE
     tensors, state = {}, {}
     if resume:
