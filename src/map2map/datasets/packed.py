@@ -216,11 +216,10 @@ def merge_packed(parts, sources=None) -> PackedPairs:
     sources = [str(s) for s in (sources or [f"part {k}" for k in range(len(parts))])]
     if not parts or len(sources) != len(parts):
         raise ValueError("merge_packed needs one source name per part, and at least one part")
-    shapes = {p.a.shape[1:] for p in parts}
-    if len(shapes) > 1:
-        raise InputError(sources[[p.a.shape[1:] for p in parts].index(sorted(shapes)[-1])],
-                         f"maps of another size than the other datasets' ({sorted(shapes)}); "
-                         "build them with the same --size")
+    odd = [s for s, p in zip(sources, parts, strict=True) if p.a.shape[1:] != parts[0].a.shape[1:]]
+    if odd:
+        raise InputError(odd[0], f"maps of another size than {sources[0]}'s "
+                         f"{parts[0].a.shape[1:]}; build them with the same --size")
     keys = ("dataset", "identity", "digest", "count", "splits")
     meta = {"merged": [{"source": s, **{k: p.meta[k] for k in keys if k in p.meta}}
                        for s, p in zip(sources, parts, strict=True)]}

@@ -238,7 +238,7 @@ def _native_hypotheses(ds, indices, net, seed: int, size: int, cache=None,
             box = crop_box(a, b)
             got = []
             at = {"start": tuple(read_pair_meta(folder)["start_pose"])} if same_start else {}
-            for kw in ({**at},) if scans else ({}, {"drift": "none", "coverage": "none",
+            for kw in (at,) if scans else ({}, {"drift": "none", "coverage": "none",
                                                 "traces": "none"}):
                 res = synthesize(a, net, samples=3, seed=seed + i, **kw)
                 got.append(np.stack([preprocess_pair(a, h, size, 0, box)[1]

@@ -20,7 +20,7 @@ comparison that chose ``--model scans``'s settings (docs/synthesize.md; run then
 script outside the package, with other seeds) reads::
 
     python -m map2map.experiments.realism.per_plan.variants --data HELD --cache2 refs2.npz \\
-        --cache3 refs3.npz --plans 160 --classifier-steps 600 --variant default '{}' \\
+        --cache3 refs3.npz --plans 160 --classifier-steps 600 --variant network '{}' \\
         --variant scans '{"model": "scans"}'
 """
 
