@@ -163,3 +163,32 @@ def test_cli_synthesize_start_is_recorded_and_a_start_outside_names_the_plan(tmp
                          capture_output=True, text=True, timeout=600)
     assert bad.returncode == 2 and str(src) in bad.stderr and "start" in bad.stderr
     assert "Traceback" not in bad.stderr and not (tmp_path / "x").exists()
+
+
+def test_the_gmapping_explore_map_sees_no_farther_than_gmappings_usable_range():
+    """``explore_map="gmapping"``: the robot explores on GMapping's count grid at its true
+    poses, so its map is free only within ``maxUrange`` (3 m) of where it scanned, while
+    the simulator's oracle maps the LIDAR's whole range (3.5 m)."""
+    from scipy import ndimage
+
+    from map2map.core.grid import OccupancyMap
+    from map2map.learn.ab.scans import CountOracle
+    from map2map.sim.runner import simulate
+
+    data = np.full((300, 300), 255, np.uint8)               # a 15 m square hall, 0.05 m/px
+    data[:4], data[-4:], data[:, :4], data[:, -4:] = 0, 0, 0, 0
+    hall = OccupancyMap(data, 0.05)
+    start = (7.5, 7.5, 0.0)
+    reach = {}
+    for name, mapper in (("count", CountOracle(0.05)), ("oracle", "oracle")):
+        r = simulate(hall, seed=1, duration=4.0, fov=180.0, mapper=mapper, start=start,
+                     progress=False)
+        free = r.slam_map_plan.data == 255
+        rows, cols = hall.world_to_pixel(r.true_poses[:, 0], r.true_poses[:, 1])
+        seen_from = np.ones(hall.shape, bool)
+        seen_from[np.clip(rows, 0, 299), np.clip(cols, 0, 299)] = False
+        reach[name] = ndimage.distance_transform_edt(seen_from)[free].max() * 0.05
+    assert reach["count"] <= 3.0 + 0.1
+    assert reach["oracle"] > 3.2
+    with pytest.raises(InputError, match="explore_map"):
+        ScanMapParams(explore_map="slam")

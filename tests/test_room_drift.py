@@ -243,3 +243,30 @@ def test_jumps_turn_a_few_steps_and_every_room_after_them():
     assert np.array_equal(a, b)
     with pytest.raises(InputError):
         RoomDriftParams(jump_share=1.5)
+
+
+def test_a_drift_along_a_path_starts_unmoved_and_chains_rooms_in_the_order_entered():
+    """``path``: the room the robot starts in keeps the identity; each room steps once from
+    the room the robot came from when it first entered it (a revisit adds no step); the
+    draws are seeded; without a path the random walk is unchanged."""
+    p = _three_rooms()
+    rp = RoomDriftParams(rot_deg=2.0, lin=0.05, spread=0.0, h_px=2.0, parametric=False)
+    lab = segment_rooms(p, h_px=2.0)
+    left, mid, right = (int(lab[20, c]) for c in (15, 50, 85))
+    cols = np.r_[np.linspace(85, 50, 20), np.linspace(50, 15, 20), np.linspace(15, 85, 40)]
+    path = (np.full(cols.shape, 21.0), cols)               # right -> middle -> left -> back
+    d = room_drift_field(p, np.random.default_rng(4), rp, path)
+    assert list(d.order) == [right, mid, left]
+    T = {r: np.vstack([d.transforms[r - 1], [0, 0, 1]]) for r in (left, mid, right)}
+    assert np.allclose(T[right], np.eye(3))
+    assert not np.allclose(T[mid], np.eye(3)) and not np.allclose(T[left], T[mid])
+    again = room_drift_field(p, np.random.default_rng(4), rp, path)
+    assert np.array_equal(again.transforms, d.transforms)
+    free = room_drift_field(p, np.random.default_rng(4), rp)
+    assert np.array_equal(free.transforms, room_drift_field(p, np.random.default_rng(4),
+                                                            rp, None).transforms)
+    # a path from the left room: that one is now unmoved
+    back = room_drift_field(p, np.random.default_rng(4), rp,
+                            (np.full(40, 21.0), np.linspace(15, 85, 40)))
+    assert list(back.order) == [left, mid, right]
+    assert np.allclose(back.transforms[left - 1], np.eye(3)[:2])

@@ -345,8 +345,22 @@ def _rigid(theta: float, pivot, shift) -> np.ndarray:
                      [0.0, 0.0, 1.0]])
 
 
+def _path_rooms(rooms: np.ndarray, path) -> list[int]:
+    """The rooms ``path`` (rows, cols; time order) passes through, in order, consecutive
+    repeats merged (pixels outside the map or in no room skipped)."""
+    rows, cols = (np.rint(np.asarray(v, float)).astype(int) for v in path)
+    H, W = rooms.shape
+    inside = (rows >= 0) & (rows < H) & (cols >= 0) & (cols < W)
+    lab = rooms[rows[inside], cols[inside]]
+    lab = lab[lab > 0]
+    if lab.size == 0:
+        return []
+    keep = np.concatenate([[True], lab[1:] != lab[:-1]])
+    return [int(v) for v in lab[keep]]
+
+
 def room_drift_field(plan: np.ndarray, rng: np.random.Generator,
-                     params: RoomDriftParams | None = None) -> RoomDrift:
+                     params: RoomDriftParams | None = None, path=None) -> RoomDrift:
     """A room-wise drift of ``plan`` (module doc, steps 1-4).
 
     Parameters
@@ -357,6 +371,12 @@ def room_drift_field(plan: np.ndarray, rng: np.random.Generator,
     rng : numpy.random.Generator
         Every random draw (start room, order, steps, amplitude), in a fixed sequence.
     params : RoomDriftParams, optional
+    path : (rows, cols) arrays, optional
+        Pixels a robot passed through, in time order. The drift then follows the robot
+        instead of a random walk: its first room is the start (identity), and each room
+        steps from the room the robot came from when it first entered it, as a SLAM run's
+        pose error grows along the route and a room mapped once keeps its place (rooms the
+        path never enters hang off the visited ones as before).
 
     Returns
     -------
@@ -397,12 +417,21 @@ def room_drift_field(plan: np.ndarray, rng: np.random.Generator,
         sh = rp.lin * dl * amp * rng.standard_normal(2)
         T[child] = T[parent] @ _rigid(th, door, sh)
 
+    seq = _path_rooms(rooms, path) if path is not None else []
+    if seq:
+        start = seq[0]
     T[start] = np.eye(3)
+    seen[start] = True
+    order.append(start)
+    for r, b in zip(seq[:-1], seq[1:], strict=True):
+        if not seen[b]:
+            mid = (0.5 * (cx[r - 1] + cx[b - 1]), 0.5 * (cy[r - 1] + cy[b - 1]))
+            step(r, b, doors.get((min(r, b), max(r, b)), mid))
+            seen[b] = True
+            order.append(b)
+    stack = list(order)
     while True:
-        # depth-first walk in random order from the current root
-        stack = [start]
-        seen[start] = True
-        order.append(start)
+        # depth-first walk in random order from the visited rooms
         while stack:
             r = stack[-1]
             cand = [b for b in nbrs[r] if not seen[b]]
@@ -424,6 +453,9 @@ def room_drift_field(plan: np.ndarray, rng: np.random.Generator,
         start, parent = int(left[i]), int(vis[j])
         mid = (0.5 * (cx[start - 1] + cx[parent - 1]), 0.5 * (cy[start - 1] + cy[parent - 1]))
         step(parent, start, mid)
+        stack = [start]
+        seen[start] = True
+        order.append(start)
     # blend the rooms' affine coefficients by smoothed memberships (they sum to one), over
     # at least blend_px, and wide enough that the field's slope across a wall stays below
     # MAX_SLOPE (a Gaussian step of height D has slope D / (sigma sqrt(2 pi))): no fold

@@ -4,9 +4,9 @@ For the first ``--plans`` plans of a dataset whose runs 2 and 3 are cached (as
 :mod:`map2map.experiments.realism.per_plan` leaves them), each ``--variant`` (a name and
 the keyword arguments of :func:`map2map.learn.ab.synthesize.synthesize` as JSON; nested
 ``explore`` and ``traces`` objects become :class:`~map2map.learn.ab.coverage.ExploreParams`
-and :class:`~map2map.learn.ab.render.TraceParams`) makes three hypotheses per plan (seed
-``--seed`` + the pair's index, as ``per_plan``), cut with the pair's window; the first is
-ranked among the plan's runs 1-3 per statistic. Tune on a set that is not the final test
+and :class:`~map2map.learn.ab.render.TraceParams`) makes ``--samples`` (3) hypotheses per
+plan (seed ``--seed`` + the pair's index, as ``per_plan``), cut with the pair's window; the
+first is ranked among the plan's runs 1-3 per statistic. Tune on a set that is not the final test
 (docs/synthesize.md, "Tuning ``--coverage rays``")::
 
     python -m map2map.experiments.realism.per_plan.variants --data HELD --cache2 refs2.npz \\
@@ -75,6 +75,9 @@ def main(argv=None) -> int:
     ap.add_argument("--cache3", required=True, help=".npz keeping run 3 of every plan")
     ap.add_argument("--model", default="pretrained", help="Model_AB weights")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--samples", type=int, default=3,
+                    help="hypotheses made per plan, the first ranked (default 3, as per_plan; "
+                    "with --model scans the first does not depend on it: 1 is 3x faster)")
     ap.add_argument("--variant", nargs=2, action="append", required=True,
                     metavar=("NAME", "JSON"), help="a name and synthesize's keyword arguments "
                     '(a "model" key replaces --model, e.g. "scans" with "scans" settings)')
@@ -112,7 +115,7 @@ def main(argv=None) -> int:
             for i in both:
                 folder = pair_dir(args.data, int(i))
                 a, b = load_map(folder / PLAN_YAML), load_map(folder / SLAM_YAML)
-                res = synthesize(a, net, samples=3, seed=args.seed + int(i), **kw)
+                res = synthesize(a, net, samples=args.samples, seed=args.seed + int(i), **kw)
                 maps.append(preprocess_pair(a, res.maps[0], size, 0, crop_box(a, b))[1])
         gens[name] = np.stack(maps)
         print(f"{name}: {len(both)} plans in {time.perf_counter() - t0:.0f} s")
