@@ -165,30 +165,20 @@ def test_cli_synthesize_start_is_recorded_and_a_start_outside_names_the_plan(tmp
     assert "Traceback" not in bad.stderr and not (tmp_path / "x").exists()
 
 
-def test_the_gmapping_explore_map_sees_no_farther_than_gmappings_usable_range():
-    """``explore_map="gmapping"``: the robot explores on GMapping's count grid at its true
-    poses, so its map is free only within ``maxUrange`` (3 m) of where it scanned, while
-    the simulator's oracle maps the LIDAR's whole range (3.5 m)."""
-    from scipy import ndimage
 
-    from map2map.core.grid import OccupancyMap
-    from map2map.learn.ab.scans import CountOracle
-    from map2map.sim.runner import simulate
-
-    data = np.full((300, 300), 255, np.uint8)               # a 15 m square hall, 0.05 m/px
-    data[:4], data[-4:], data[:, :4], data[:, -4:] = 0, 0, 0, 0
-    hall = OccupancyMap(data, 0.05)
-    start = (7.5, 7.5, 0.0)
-    reach = {}
-    for name, mapper in (("count", CountOracle(0.05)), ("oracle", "oracle")):
-        r = simulate(hall, seed=1, duration=4.0, fov=180.0, mapper=mapper, start=start,
-                     progress=False)
-        free = r.slam_map_plan.data == 255
-        rows, cols = hall.world_to_pixel(r.true_poses[:, 0], r.true_poses[:, 1])
-        seen_from = np.ones(hall.shape, bool)
-        seen_from[np.clip(rows, 0, 299), np.clip(cols, 0, 299)] = False
-        reach[name] = ndimage.distance_transform_edt(seen_from)[free].max() * 0.05
-    assert reach["count"] <= 3.0 + 0.1
-    assert reach["oracle"] > 3.2
-    with pytest.raises(InputError, match="explore_map"):
-        ScanMapParams(explore_map="slam")
+def test_the_drift_follows_the_route_the_start_room_unmoved(plan):
+    """``room_order="visits"`` (the default): the room the robot starts in keeps its true
+    poses (only the whole-run turn and the jitter move them, here off), rooms it entered
+    later are moved; ``"random"`` chains the rooms from a random room instead."""
+    sp = ScanMapParams(duration=60.0, **STILL)
+    h = scan_map(plan, 0, 1, sp)
+    rows, cols = plan.world_to_pixel(h.true_poses[:, 0], h.true_poses[:, 1])
+    room = h.drift.rooms[rows, cols]
+    first = room == room[0]
+    assert int(h.drift.order[0]) == int(room[0])
+    assert np.allclose(h.poses[first], h.true_poses[first])
+    assert (~first).any() and not np.allclose(h.poses[~first], h.true_poses[~first])
+    r = scan_map(plan, 0, 1, ScanMapParams(duration=60.0, room_order="random", **STILL))
+    assert not np.array_equal(r.poses, h.poses)
+    with pytest.raises(InputError, match="room_order"):
+        ScanMapParams(room_order="time")
