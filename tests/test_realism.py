@@ -366,3 +366,34 @@ def test_a_failed_second_run_leaves_its_plan_out_and_is_cached(tiny_dataset, tmp
     with pytest.warns(UserWarning, match="1 of 1 plans left out"), \
             pytest.raises(InputError):
         simulated_references(tiny_dataset, split=split, n=1, cache=cache, progress=False)
+
+
+def test_fig514_draws_synthesizes_default_scans(tiny_dataset, tmp_path):
+    """``model="scans"``: the generated column is ``synthesize``'s default (no network),
+    named so in the table, the figure and the drift line, and it is the same map as
+    ``synthesize`` itself makes of the pair's plan (hypothesis 0, seed + index), cut with
+    the pair's window."""
+    import warnings
+
+    from map2map.datasets.build import open_dataset
+    from map2map.datasets.pair import crop_box, preprocess_pair
+    from map2map.datasets.pairfolder import PLAN_YAML, SLAM_YAML, pair_dir
+    from map2map.experiments.fig514.measure import run_fig514
+    from map2map.learn.ab.synthesize import SCANS, synthesize
+    from map2map.maps.formats import load_map
+
+    with open_dataset(tiny_dataset) as man:
+        row = man.rows("done")[0]
+    f = run_fig514(tiny_dataset, 1, "scans", split=row["split"], progress=False, seed=3)
+    assert f.summary["model"] == "scans" and f.drift.startswith("scans: ")
+    assert "synthesize (scans)" in f.table()
+    i = f.indices[0]
+    a, b = load_map(pair_dir(tiny_dataset, i) / PLAN_YAML), load_map(pair_dir(tiny_dataset, i)
+                                                                     / SLAM_YAML)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        h = synthesize(a, SCANS, samples=1, seed=3 + i).maps[0]
+    want = preprocess_pair(a, h, f.plans.shape[-1], 0, crop_box(a, b))[1]
+    assert np.array_equal(f.maps["model_ab"][0], want)
+    f.figure(tmp_path / "s.png")
+    assert (tmp_path / "s.png").stat().st_size > 1000

@@ -213,9 +213,14 @@ def test_per_plan_variants_takes_a_model_per_variant_and_the_classifier(small_da
     capsys.readouterr()
     from map2map.experiments.realism.per_plan.variants import main
 
-    assert main(["--data", str(small_dataset), *caches, "--plans", "4",
+    assert main(["--data", str(small_dataset), *caches, "--plans", "4", "--samples", "1",
                  "--classifier-steps", "10", "--variant", "scans",
                  '{"model": "scans", "scans": {"duration": 60, "rooms": {"rot_deg": 2}}}']) == 0
     out = capsys.readouterr().out
     assert "scans: 4 plans" in out and "scans: rank among 3 simulated runs" in out
     assert "scans: classifier AUC" in out
+    medians = out[out.index("median "):].splitlines()
+    assert "bend" in medians[0] and "streaks" in medians[0]
+    assert [r.split()[0] for r in medians[1:5]] == ["run", "run", "run", "scans"]
+    assert all(len(r.split()) == len(medians[0].split()) + (r.startswith(" run")) for r in
+               medians[1:5])

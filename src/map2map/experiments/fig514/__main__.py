@@ -6,15 +6,17 @@ the work; this script writes ``fig514.png`` and ``fig514.csv`` into ``--out`` an
 the table.
 
     python3 -m map2map.experiments.fig514 --data DS --n 6 --out DIR \
-        [--model pretrained|RUN] [--seed 0]
+        [--model pretrained|scans|RUN] [--seed 0]
         [--render slam|plain] [--drift parametric|none] [--drift-method additive|ekf]
         [--drift-scale F] [--coverage none|explore] [--drift-route tour|explore]
         [--traces none|lidar] [--explore-at square|native] [--as-synthesize]
 
-``--as-synthesize`` draws Model_AB as ``map2map synthesize`` makes it by default (session
-13: ``--drift rooms --coverage explore --traces lidar --explore-at native``); without it
-the defaults stay session 9's (parametric drift, the network's extent, no traces), as in
-``map2map reproduce``.
+``--model scans`` draws ``map2map synthesize``'s default instead of Model_AB: the robot's
+own scans at drifted poses, no network (the Model_AB options do not apply).
+``--as-synthesize`` draws Model_AB as ``map2map synthesize --model pretrained`` makes it
+(session 13: ``--drift rooms --coverage explore --traces lidar --explore-at native``);
+without it the defaults stay session 9's (parametric drift, the network's extent, no
+traces), as in ``map2map reproduce``.
 """
 
 from __future__ import annotations
@@ -32,7 +34,9 @@ def main(argv=None) -> int:
     ap.add_argument("--data", required=True, help="a 'map2map dataset build' folder")
     ap.add_argument("--n", type=int, default=6, help="plans (the first N of the split)")
     ap.add_argument("--out", required=True, help="folder for fig514.png and fig514.csv")
-    ap.add_argument("--model", default="pretrained")
+    ap.add_argument("--model", default="pretrained",
+                    help="Model_AB: pretrained (default) or a run; scans: synthesize's "
+                    "default, no network")
     ap.add_argument("--split", default="test")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--render", choices=("slam", "plain"), default="slam",
@@ -55,8 +59,8 @@ def main(argv=None) -> int:
                     help="where --coverage explore's robot explores: the 256 px square "
                     "(default) or the plan at its own resolution (native: as synthesize)")
     ap.add_argument("--as-synthesize", action="store_true",
-                    help="map2map synthesize's defaults: --drift rooms --coverage explore "
-                    "--traces lidar --explore-at native")
+                    help="Model_AB as map2map synthesize --model pretrained draws it: "
+                    "--drift rooms --coverage explore --traces lidar --explore-at native")
     args = ap.parse_args(argv)
     if args.as_synthesize:
         args.drift, args.coverage, args.traces, args.explore_at = \

@@ -123,6 +123,13 @@ class Fig514:
     warnings: list = field(default_factory=list)
     drift: str = ""
 
+    def title(self, method: str) -> str:
+        """A column's title: :data:`METHOD_TITLES`, the generated column named after the
+        generator (``"scans"``: ``synthesize --model scans``)."""
+        if method == "model_ab" and self.model == "scans":
+            return "synthesize (scans)"
+        return METHOD_TITLES[method]
+
     @property
     def summary(self) -> dict:
         """Per method: mean and median error (over the aligned maps), how many failed to
@@ -147,14 +154,14 @@ class Fig514:
         """The rows as text, then the summary per method."""
         lines = [f"{'plan':>14} {'method':>22} {'error px':>9} {'recall':>7} {'precision':>9}"]
         for r in self.rows:
-            lines.append(f"{r['plan']:>14} {METHOD_TITLES[r['method']]:>22} "
+            lines.append(f"{r['plan']:>14} {self.title(r['method']):>22} "
                          f"{r['error_px']:>9.2f} {r['wall_recall']:>7.2f} "
                          f"{r.get('wall_precision', float('nan')):>9.2f}"
                          + (f"  ({r['note']})" if r.get("note") else ""))
         s = self.summary
         for m in METHODS:
             v = s[m]
-            lines.append(f"{'mean':>14} {METHOD_TITLES[m]:>22} {v['error_px_mean']:>9.2f} "
+            lines.append(f"{'mean':>14} {self.title(m):>22} {v['error_px_mean']:>9.2f} "
                          f"{v['wall_recall_mean']:>7.2f} {v['wall_precision_mean']:>9.2f}"
                          f"  (median error "
                          f"{v['error_px_median']:.2f}; {v['alignment_failed']} not aligned)")
@@ -178,7 +185,7 @@ class Fig514:
                 r = by.get((pid, m), {})
                 e = r.get("error_px", float("nan"))
                 err = f"{e:.2f} px" if math.isfinite(e) else "not aligned"
-                panels.append((self.maps[m][i], f"{METHOD_TITLES[m]}\nerror {err}, "
+                panels.append((self.maps[m][i], f"{self.title(m)}\nerror {err}, "
                                f"recall {r.get('wall_recall', float('nan')):.2f}, "
                                f"precision {r.get('wall_precision', float('nan')):.2f}"))
             rows, cols = np.nonzero(self.plans[i] != 127)
@@ -193,11 +200,15 @@ class Fig514:
                     ax.set_ylim(box[1] + 3, box[0] - 3)
         import textwrap
 
-        extra = textwrap.wrap(f"Model_AB's drift: {self.drift}", 130) if self.drift else []
+        gen = self.title("model_ab")
+        scans = self.model == "scans"
+        how = f"{gen}: {self.drift.removeprefix('scans: ')}" if scans else \
+            f"{gen}'s drift: {self.drift}"
+        extra = textwrap.wrap(how, 130) if self.drift else []
         fig.suptitle("\n".join([
             f"Fig. 5.14 reproduced: same plan, same trajectory (appendix-metric error px of "
-            f"the {self.plans.shape[-1]} px square; wall recall 2 px); "
-            f"Model_AB: {Path(self.model).name}", *extra]), fontsize=9)
+            f"the {self.plans.shape[-1]} px square; wall recall 2 px)"
+            + ("" if scans else f"; {gen}: {Path(self.model).name}"), *extra]), fontsize=9)
         top = 0.45 + 0.3 * len(extra)
         fig.tight_layout(rect=(0, 0, 1, 1 - top / (3.1 * max(n, 1))))
         if path is not None:
@@ -289,8 +300,10 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
         A ``map2map dataset build`` folder (its ``split`` pairs, by index) or plans.
     n : int
         Number of plans (the first ``n`` of the split; all given plans otherwise).
-    model : "pretrained", run folder, weights file or ABModel
-        Model_AB.
+    model : "pretrained", "scans", run folder, weights file or ABModel
+        Model_AB, or ``"scans"``: ``synthesize``'s default, the robot's own scans at
+        drifted poses (:mod:`map2map.learn.ab.scans`; hypothesis 0 with seed ``seed`` +
+        the pair's index; the Model_AB options below do not apply).
     seed : int
         Seeds the parametric model (and the simulations of plans given in memory).
     split : str
@@ -323,9 +336,6 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
     Fig514
         ``.rows``, ``.summary``, ``.figure()``, ``.table()``.
     """
-    from ...learn.ab.model import load_ab_model
-    from ...learn.ab.synthesize import synthesize_squares
-
     if isinstance(source, str | os.PathLike):
         made = _from_dataset(Path(source), int(n), int(seed), split, progress)
     else:
@@ -337,8 +347,62 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
                          f"no simulated '{split}' pairs to draw")
     if explore_at not in ("square", "native"):
         raise ValueError(f"explore_at must be 'square' or 'native', got {explore_at!r}")
-    net = load_ab_model(model)
     plans = np.stack([m[2] for m in made])
+    if model == "scans":
+        gen, source, warns, how = _scans_squares(made, plans.shape[-1], seed, progress)
+    else:
+        gen, source, warns, how = _network_squares(
+            made, plans, model, seed, render=render, drift=drift, drift_method=drift_method,
+            drift_scale=drift_scale, coverage=coverage, drift_route=drift_route,
+            traces=traces, explore_at=explore_at)
+    maps = {"simulated": np.stack([m[3] for m in made]),
+            "parametric": np.stack([m[4] for m in made]), "model_ab": gen}
+    rows = []
+    for i, (pid, idx, *_rest) in enumerate(_bar(made, progress, "evaluate")):
+        for m in METHODS:
+            rows.append({"plan": pid, "index": int(idx), "method": m,
+                         **measure(maps[m][i], plans[i])})
+    info = {m[0]: m[5] for m in made}
+    bad = [pid for pid, v in info.items() if v.get("reproduces_dataset_map") is False]
+    if bad:
+        warns.append(f"the re-run of {len(bad)} pair(s) ({', '.join(bad[:4])}) did not give "
+                     "the dataset's map; the figure shows the re-run (whose trajectory the "
+                     "parametric model follows)")
+    return Fig514([m[0] for m in made], [int(m[1]) for m in made], plans, maps, rows, info,
+                  source, warns, how)
+
+
+def _scans_squares(made, size: int, seed: int, progress: bool):
+    """``synthesize --model scans``'s first hypothesis of every plan (seed ``seed`` + its
+    row, as per_plan's), cut with the pair's window: ``(maps, source, warnings, how)``."""
+    from ...datasets.pair import preprocess_pair
+    from ...learn.ab.scans import ScanMapParams
+    from ...learn.ab.synthesize import SCANS, synthesize
+
+    out = []
+    for j, m in enumerate(_bar(made, progress, "synthesize --model scans")):
+        idx = int(m[1]) if int(m[1]) >= 0 else j
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            res = synthesize(m[6], SCANS, samples=1, seed=int(seed) + idx)
+        out.append(preprocess_pair(m[6], res.maps[0], size, 0, m[7])[1])
+    sp = ScanMapParams()
+    how = (f"scans: the robot's own scans at drifted poses (rooms {sp.room_order}, "
+           f"{sp.rooms.rot_deg:g} deg a room step; jitter {100 * sp.jitter_m:g} cm / "
+           f"{sp.jitter_deg:g} deg)")
+    return np.stack(out), SCANS, [], how
+
+
+def _network_squares(made, plans, model, seed, *, render, drift, drift_method, drift_scale,
+                     coverage, drift_route, traces, explore_at):
+    """Model_AB's map of every plan (:func:`~map2map.learn.ab.synthesize.synthesize_squares`):
+    ``(maps, source, warnings, how)``."""
+    from ...learn.ab.drift import drift_params
+    from ...learn.ab.model import load_ab_model
+    from ...learn.ab.room_drift import RoomDriftParams
+    from ...learn.ab.synthesize import synthesize_squares
+
+    net = load_ab_model(model)
     seen = None
     unexplored = []
     if explore_at == "native" and coverage == "explore":
@@ -366,24 +430,7 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
         warns.append(f"the robot could not explore {len(unexplored)} plan(s) "
                      f"({', '.join(unexplored[:4])}): Model_AB's map there hides nothing")
     warns += sorted({str(w.message) for w in caught})
-    maps = {"simulated": np.stack([m[3] for m in made]),
-            "parametric": np.stack([m[4] for m in made]), "model_ab": gen}
-    rows = []
-    for i, (pid, idx, *_rest) in enumerate(_bar(made, progress, "evaluate")):
-        for m in METHODS:
-            rows.append({"plan": pid, "index": int(idx), "method": m,
-                         **measure(maps[m][i], plans[i])})
-    info = {m[0]: m[5] for m in made}
-    bad = [pid for pid, v in info.items() if v.get("reproduces_dataset_map") is False]
-    if bad:
-        warns.append(f"the re-run of {len(bad)} pair(s) ({', '.join(bad[:4])}) did not give "
-                     "the dataset's map; the figure shows the re-run (whose trajectory the "
-                     "parametric model follows)")
-    from ...learn.ab.drift import drift_params
-
     dp = drift_params(drift, drift_method, drift_scale)
-    from ...learn.ab.room_drift import RoomDriftParams
-
     how = "none" if dp is None else dp.describe() if isinstance(dp, RoomDriftParams) else \
         f"parametric ({dp.describe()})"
     if coverage != "none" or (drift_route != "tour" and dp is not None):
@@ -392,5 +439,4 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
             how += f", explored at {explore_at} resolution"
     if traces not in ("none", None):
         how += "; LIDAR traces"
-    return Fig514([m[0] for m in made], [int(m[1]) for m in made], plans, maps, rows, info,
-                  net.source, warns, how)
+    return gen, net.source, warns, how

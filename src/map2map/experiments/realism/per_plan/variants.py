@@ -6,7 +6,8 @@ the keyword arguments of :func:`map2map.learn.ab.synthesize.synthesize` as JSON;
 ``explore`` and ``traces`` objects become :class:`~map2map.learn.ab.coverage.ExploreParams`
 and :class:`~map2map.learn.ab.render.TraceParams`) makes ``--samples`` (3) hypotheses per
 plan (seed ``--seed`` + the pair's index, as ``per_plan``), cut with the pair's window; the
-first is ranked among the plan's runs 1-3 per statistic. Tune on a set that is not the final test
+first is ranked among the plan's runs 1-3 per statistic; the medians of every statistic
+over the plans are printed for the runs and each variant. Tune on a set that is not the final test
 (docs/synthesize.md, "Tuning ``--coverage rays``")::
 
     python -m map2map.experiments.realism.per_plan.variants --data HELD --cache2 refs2.npz \\
@@ -65,6 +66,28 @@ def _kwargs(text: str) -> dict:
     return kw
 
 
+def format_medians(st: dict) -> str:
+    """One row per map set (runs, then variants), the median of every statistic over its
+    plans (NaN left out): the tells' sizes, beside the ranks' directions.
+
+    Examples
+    --------
+    >>> st = {"run 1": {"bend": np.array([0.3, 0.4, np.nan])}, "v": {"bend": np.array([0.6])}}
+    >>> print(format_medians(st))
+    median        bend
+     run 1       0.350
+         v       0.600
+    """
+    names = list(next(iter(st.values())))
+    w = [max(11, len(n) + 1) for n in names]
+    lines = ["median " + "".join(f"{n:>{k}s}" for n, k in zip(names, w, strict=True))]
+    for who, vals in st.items():
+        med = [float(np.nanmedian(vals[n])) if np.isfinite(vals[n]).any() else float("nan")
+               for n in names]
+        lines.append(f"{who:>6s} " + "".join(f"{v:{k}.3f}" for v, k in zip(med, w, strict=True)))
+    return "\n".join(lines)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m map2map.experiments.realism.per_plan.variants",
                                  description=__doc__.split("\n\n")[0])
@@ -121,6 +144,8 @@ def main(argv=None) -> int:
         print(f"{name}: {len(both)} plans in {time.perf_counter() - t0:.0f} s")
     runs = {"run 1": r2.sim1, "run 2": r2.sim2, "run 3": r3.sim2}
     st = stats_of_sets({**runs, **gens}, r2.a)
+    print()
+    print(format_medians(st))
     for name in gens:
         rows = rank_table(plan_ranks(st[name], [st[r] for r in runs], seed=args.seed), 3)
         print()
