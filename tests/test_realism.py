@@ -397,3 +397,7 @@ def test_fig514_draws_synthesizes_default_scans(tiny_dataset, tmp_path):
     assert np.array_equal(f.maps["model_ab"][0], want)
     f.figure(tmp_path / "s.png")
     assert (tmp_path / "s.png").stat().st_size > 1000
+    assert not any("not used by scans" in w for w in f.warnings)
+    g = run_fig514(tiny_dataset, 1, "scans", split=row["split"], progress=False, seed=3,
+                   drift="rooms", traces="lidar")
+    assert any(w.startswith("drift, traces: Model_AB's options") for w in g.warnings)

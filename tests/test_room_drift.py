@@ -262,9 +262,13 @@ def test_a_drift_along_a_path_starts_unmoved_and_chains_rooms_in_the_order_enter
     assert not np.allclose(T[mid], np.eye(3)) and not np.allclose(T[left], T[mid])
     again = room_drift_field(p, np.random.default_rng(4), rp, path)
     assert np.array_equal(again.transforms, d.transforms)
+    # no path: the random walk as it was before paths existed (values from d63bbe8)
     free = room_drift_field(p, np.random.default_rng(4), rp)
-    assert np.array_equal(free.transforms, room_drift_field(p, np.random.default_rng(4),
-                                                            rp, None).transforms)
+    assert list(free.order) == [2, 3, 1]
+    assert np.allclose(free.transforms, [
+        [[0.999763, 0.021761, -0.214574], [-0.021761, 0.999763, -1.908535]],
+        [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        [[0.999735, -0.023007, -2.195666], [0.023007, 0.999735, -1.567341]]], atol=1e-6)
     # a path from the left room: that one is now unmoved
     back = room_drift_field(p, np.random.default_rng(4), rp,
                             (np.full(40, 21.0), np.linspace(15, 85, 40)))

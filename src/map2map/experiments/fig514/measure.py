@@ -350,6 +350,13 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
     plans = np.stack([m[2] for m in made])
     if model == "scans":
         gen, source, warns, how = _scans_squares(made, plans.shape[-1], seed, progress)
+        given = {"render": (render, "slam"), "drift": (drift, "parametric"),
+                 "drift_method": (drift_method, None), "drift_scale": (drift_scale, None),
+                 "coverage": (coverage, "none"), "drift_route": (drift_route, "tour"),
+                 "traces": (traces, "none"), "explore_at": (explore_at, "square")}
+        unused = [k for k, (v, d) in given.items() if v != d]
+        if unused:
+            warns.append(f"{', '.join(unused)}: Model_AB's options, not used by scans")
     else:
         gen, source, warns, how = _network_squares(
             made, plans, model, seed, render=render, drift=drift, drift_method=drift_method,
@@ -380,17 +387,17 @@ def _scans_squares(made, size: int, seed: int, progress: bool):
     from ...learn.ab.synthesize import SCANS, synthesize
 
     out = []
-    for j, m in enumerate(_bar(made, progress, "synthesize --model scans")):
-        idx = int(m[1]) if int(m[1]) >= 0 else j
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for j, m in enumerate(_bar(made, progress, "synthesize --model scans")):
+            idx = int(m[1]) if int(m[1]) >= 0 else j
             res = synthesize(m[6], SCANS, samples=1, seed=int(seed) + idx)
-        out.append(preprocess_pair(m[6], res.maps[0], size, 0, m[7])[1])
+            out.append(preprocess_pair(m[6], res.maps[0], size, 0, m[7])[1])
     sp = ScanMapParams()
     how = (f"scans: the robot's own scans at drifted poses (rooms {sp.room_order}, "
            f"{sp.rooms.rot_deg:g} deg a room step; jitter {100 * sp.jitter_m:g} cm / "
            f"{sp.jitter_deg:g} deg)")
-    return np.stack(out), SCANS, [], how
+    return np.stack(out), SCANS, sorted({str(w.message) for w in caught}), how
 
 
 def _network_squares(made, plans, model, seed, *, render, drift, drift_method, drift_scale,
