@@ -182,3 +182,26 @@ def test_the_drift_follows_the_route_the_start_room_unmoved(plan):
     assert not np.array_equal(r.poses, h.poses)
     with pytest.raises(InputError, match="room_order"):
         ScanMapParams(room_order="time")
+
+
+def test_the_robot_explores_on_the_grid_that_is_drawn(plan):
+    """``explore_map="grid"``: without pose error the hypothesis is exactly the map the
+    robot planned on (:class:`GridOracle`, GMapping's update rule); ``"oracle"`` (the
+    default) explores on the simulator's log-odds map and maps one scan every 0.5 s."""
+    from map2map.learn.ab.coverage import explore_rng
+    from map2map.learn.ab.scans import GridOracle
+    from map2map.sim.mapping import resample_to_frame
+    from map2map.sim.runner import simulate
+
+    still = dict(STILL, duration=40.0, rooms=RoomDriftParams(parametric=False, scale=0.0))
+    h = scan_map(plan, 3, 0, ScanMapParams(**still, explore_map="grid"))
+    m = GridOracle(plan.resolution)
+    res = simulate(plan, seed=int(explore_rng(3, 0).integers(1 << 32)), duration=40.0,
+                   fov=180.0, mapper=m, progress=False)
+    assert np.allclose(h.true_poses, res.true_poses)
+    assert m.processed[0] == 0 and 10 < len(m.processed) < len(res.scans)
+    assert np.array_equal(h.map.data, resample_to_frame(m.get_map(), res.start, plan).data)
+    o = scan_map(plan, 3, 0, ScanMapParams(**still))
+    assert not np.array_equal(o.map.data, h.map.data)
+    with pytest.raises(InputError, match="explore_map"):
+        ScanMapParams(explore_map="rbpf")

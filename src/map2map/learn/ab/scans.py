@@ -53,8 +53,8 @@ from ...core.geometry import compose_pose, relative_pose
 from ...core.grid import OccupancyMap
 from .room_drift import RoomDrift, RoomDriftParams, room_drift_field
 
-__all__ = ["ScanMapParams", "ScanHypothesis", "scan_rng", "drifted_poses", "map_scans",
-           "scan_map"]
+__all__ = ["ScanMapParams", "ScanHypothesis", "GridOracle", "scan_rng", "drifted_poses",
+           "map_scans", "scan_map"]
 
 #: Stream of :func:`scan_rng` (apart from the exploration's, the drift's and the traces').
 _STREAM = 0x5CA75
@@ -89,6 +89,12 @@ class ScanMapParams:
         How the room drift chains the rooms: a random walk from a random room
         (``"random"``), or along the robot's route (``"visits"``: the start room is not
         moved, each room steps from the one the robot came from when it first entered it).
+    explore_map : {"oracle", "grid"}
+        The map the robot explores on: the simulator's log-odds oracle out to the full
+        range (``"oracle"``; one scan every ``temporal_update`` seconds is mapped), or
+        GMapping's count grid of the scans it would process, at the true poses
+        (``"grid"``, :class:`GridOracle`, as the run's robot explores; those scans are
+        the ones mapped). ``"grid"`` did not measurably help (docs/synthesize.md).
 
     The defaults were chosen on 160 plans of the seed-20261127 dev set among eight
     settings by the per-plan ranks and the classifier AUC; ``room_order="visits"`` on
@@ -105,6 +111,7 @@ class ScanMapParams:
     outlier_deg: float = 3.0
     rooms: RoomDriftParams = field(default_factory=_rooms_default)
     room_order: str = "visits"
+    explore_map: str = "oracle"
 
     def __post_init__(self):
         for name in ("duration", "fov", "jitter_m", "jitter_deg", "global_deg",
@@ -116,6 +123,9 @@ class ScanMapParams:
             raise InputError("outlier_share", f"must be in [0, 1], got {self.outlier_share!r}")
         if self.duration <= 0:
             raise InputError("duration", f"must be > 0, got {self.duration!r}")
+        if self.explore_map not in ("grid", "oracle"):
+            raise InputError("explore_map",
+                             f"must be 'grid' or 'oracle', got {self.explore_map!r}")
         if self.room_order not in ("random", "visits"):
             raise InputError("room_order",
                              f"must be 'random' or 'visits', got {self.room_order!r}")
@@ -147,6 +157,118 @@ class ScanHypothesis:
     true_poses: np.ndarray
     drift: RoomDrift
     info: dict
+
+
+class GridOracle:
+    """A mapper (the :class:`~map2map.robotlog.base.Mapper` protocol) that counts the
+    scans GMapping would process into GMapping's grid at the **true** poses: the map the
+    run's robot explores on, without its pose error (module doc, step 1).
+
+    A scan is processed as :class:`~map2map.slam.rbpf.GMappingRBPF` processes one: the
+    first, then whenever the robot has moved ``linear_update`` metres or turned
+    ``angular_update`` radians since the last processed scan (the true motion stands for
+    the odometry), or ``temporal_update`` seconds have passed. Each is registered in a
+    :class:`~map2map.slam.gridmap.CountGrid` (beams cropped at ``max_urange``, no-return
+    beams clearing), and the map is occupied where hits / visits > ``occ_thresh``: the
+    cells the robot plans on are the cells :func:`map_scans` draws. The
+    :class:`~map2map.sim.mapping.OracleMapper` instead integrates every scan in a
+    log-odds grid out to the full 3.5 m range, so a robot exploring on it may leave a
+    room whose GMapping map is not complete; ``ScanMapParams(explore_map="grid")``
+    explores on this one instead (docs/synthesize.md, "Exploring on the run's grid").
+
+    Parameters
+    ----------
+    resolution : float
+        Cell size (metres; the plan's).
+
+    Attributes
+    ----------
+    processed : list of int
+        The indices (in the order :meth:`update` was called) of the scans registered.
+
+    Examples
+    --------
+    >>> from map2map.robotlog.base import LaserScan, OdometryReading
+    >>> m = GridOracle(0.05)
+    >>> for t, x in [(0.0, 2.0), (0.2, 2.01), (0.6, 2.02), (0.7, 3.1)]:
+    ...     scan = LaserScan(t, np.full(180, 1.0, np.float32), -math.pi / 2, math.pi / 179,
+    ...                      0.12, 3.5)
+    ...     m.observe_truth((x, 2.0, 0.0))
+    ...     m.update(OdometryReading(t, 0.0, 0.0, 0.0), scan)
+    >>> m.processed, m.pose().round(2).tolist()
+    ([0, 2, 3], [1.1, 0.0, 0.0])
+    >>> bool(m.get_map().occupied.sum() > 10)
+    True
+    """
+
+    name = "grid-oracle"
+
+    def __init__(self, resolution: float = 0.05):
+        from ...slam.gridmap import CountGrid
+        from ...slam.rbpf import GMappingParams
+
+        self.params = GMappingParams()
+        self.grid = CountGrid.around(0.0, 0.0, self.params.initial_size / 2, float(resolution))
+        self.processed: list[int] = []
+        self._truth = None
+        self._start = None
+        self._pose = (0.0, 0.0, 0.0)
+        self._last = None                  # (t, pose) of the last processed scan
+        self._lin = self._ang = 0.0
+        self._prev = None                  # the previous true pose (map frame)
+        self._n = 0
+        self._map = None
+
+    def observe_truth(self, pose) -> None:
+        """The true pose (plan frame) of the next scan."""
+        self._truth = tuple(float(v) for v in pose)
+
+    def update(self, odom, scan) -> None:
+        """Register ``scan`` at the pose given to :meth:`observe_truth` if it is due
+        (class doc); ``odom`` is not used.
+
+        Raises
+        ------
+        RuntimeError
+            No :meth:`observe_truth` since the last update.
+        """
+        from ...slam.rbpf import prepare_scan
+
+        if self._truth is None:
+            raise RuntimeError("GridOracle needs observe_truth(pose) before each update")
+        if self._start is None:
+            self._start = self._truth
+        self._pose = relative_pose(self._start, self._truth)
+        self._truth = None
+        i, self._n = self._n, self._n + 1
+        p = self.params
+        if self._prev is not None:
+            step = relative_pose(self._prev, self._pose)
+            self._lin += math.hypot(step[0], step[1])
+            self._ang += abs(step[2])
+        self._prev = self._pose
+        t = float(scan.t)
+        if self._last is not None and not (
+                self._lin >= p.linear_update or self._ang >= p.angular_update
+                or t - self._last > p.temporal_update):
+            return
+        self._lin = self._ang = 0.0
+        self._last = t
+        r, a = prepare_scan(scan)
+        self.grid.register_scan(compose_pose(self._pose, scan.sensor_offset), r, a,
+                                p.max_urange, float(scan.range_max), p.no_return_free)
+        self.processed.append(i)
+        self._map = None
+
+    def pose(self) -> np.ndarray:
+        """The last true pose in the map frame (the first pose at the origin)."""
+        return np.array(self._pose)
+
+    def get_map(self) -> OccupancyMap:
+        """GMapping's map of the scans processed so far (cached between them)."""
+        if self._map is None:
+            self._map = self.grid.to_occupancy_map(self.params.occ_thresh)
+        return self._map
 
 
 def scan_rng(seed: int, k: int) -> np.random.Generator:
@@ -211,11 +333,14 @@ def drifted_poses(plan: OccupancyMap, poses: np.ndarray, start, drift: RoomDrift
     return out
 
 
-def map_scans(scans, times, poses, start, plan: OccupancyMap) -> OccupancyMap:
+def map_scans(scans, times, poses, start, plan: OccupancyMap, keep=None) -> OccupancyMap:
     """Count ``scans`` taken at ``poses`` (plan frame) into GMapping's grid as the datasets'
     ``rbpf`` mapper does (module doc, step 3; :class:`~map2map.slam.rbpf.GMappingParams`
     defaults: ``max_urange``, ``occ_thresh``, ``temporal_update``, ``no_return_free``),
     in the run's frame (``start`` at the origin), and put the map on ``plan``'s grid.
+
+    ``keep`` (indices, optional) names the scans to map, e.g. the ones a
+    :class:`GridOracle` processed; by default one every ``temporal_update`` seconds.
 
     Examples
     --------
@@ -233,10 +358,14 @@ def map_scans(scans, times, poses, start, plan: OccupancyMap) -> OccupancyMap:
     gp = GMappingParams()
     grid = CountGrid.around(0.0, 0.0, gp.initial_size / 2, plan.resolution)
     last = -math.inf
-    for scan, t, pose in zip(scans, times, poses, strict=True):
-        if float(t) - last < gp.temporal_update:
+    use = None if keep is None else set(int(i) for i in keep)
+    for i, (scan, t, pose) in enumerate(zip(scans, times, poses, strict=True)):
+        if use is None:
+            if float(t) - last < gp.temporal_update:
+                continue
+            last = float(t)
+        elif i not in use:
             continue
-        last = float(t)
         r, a = prepare_scan(scan)
         laser = compose_pose(relative_pose(start, pose), scan.sensor_offset)
         grid.register_scan(laser, r, a, gp.max_urange, float(scan.range_max),
@@ -264,7 +393,8 @@ def scan_map(plan: OccupancyMap, seed: int, k: int,
 
     sp = params or ScanMapParams()
     sim_seed = int(explore_rng(seed, k).integers(1 << 32))
-    res = simulate(plan, seed=sim_seed, duration=sp.duration, fov=sp.fov, mapper="oracle",
+    mapper = GridOracle(plan.resolution) if sp.explore_map == "grid" else "oracle"
+    res = simulate(plan, seed=sim_seed, duration=sp.duration, fov=sp.fov, mapper=mapper,
                    start=None if start is None else tuple(float(v) for v in start),
                    progress=False)
     rng = scan_rng(seed, k)
@@ -272,7 +402,8 @@ def scan_map(plan: OccupancyMap, seed: int, k: int,
         if sp.room_order == "visits" else None
     drift = room_drift_field(plan.data, rng, sp.rooms, path)
     poses = drifted_poses(plan, res.true_poses, res.start, drift, rng, sp)
-    m = map_scans(res.scans, res.times, poses, res.start, plan)
+    keep = mapper.processed if isinstance(mapper, GridOracle) else None
+    m = map_scans(res.scans, res.times, poses, res.start, plan, keep)
     err = np.hypot(*(poses[:, :2] - res.true_poses[:, :2]).T)
     info = {"seed": sim_seed, "coverage": round(float(res.coverage), 4),
             "sim_seconds": round(float(res.sim_seconds), 1), "scans": len(res.scans),
