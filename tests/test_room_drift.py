@@ -51,6 +51,26 @@ def test_segment_rooms_and_doors():
     assert segment_rooms(np.full((5, 5), UNKNOWN, np.uint8)).max() == 0
 
 
+def test_a_step_across_zero_slides_the_next_room_along_the_doors_wall():
+    """``across=0``: with no rotation, each room's shift from its parent lies along the
+    wall of the door between them (here vertical walls: no x shift at all); with the
+    default ``across=1`` the shift has both components."""
+    p = _three_rooms()
+    _, axes = room_adjacency(segment_rooms(p, h_px=2.0), p == FREE, axes=True)
+    assert all(abs(u[0]) < 1e-9 and abs(abs(u[1]) - 1) < 1e-9 for u in axes.values())
+    for seed in range(5):
+        d = room_drift_field(p, np.random.default_rng(seed),
+                             RoomDriftParams(rot_deg=0.0, across=0.0, h_px=2.0,
+                                             parametric=False))
+        assert np.abs(d.transforms[:, 0, 2]).max() < 1e-9
+        assert np.abs(d.transforms[:, 1, 2]).max() > 1e-3
+    iso = room_drift_field(p, np.random.default_rng(0),
+                           RoomDriftParams(rot_deg=0.0, h_px=2.0, parametric=False))
+    assert np.abs(iso.transforms[:, 0, 2]).max() > 1e-3
+    with pytest.raises(InputError, match="across"):
+        RoomDriftParams(across=-1.0)
+
+
 def test_seeded_same_bytes_and_other_seed_differs():
     plan = generate_floorplan(1, size=(12, 9))
     rp = RoomDriftParams()

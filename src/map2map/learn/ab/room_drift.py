@@ -97,6 +97,10 @@ class RoomDriftParams:
     lin : float
         Standard deviation of the shift each step adds, per axis, as a fraction of the
         step's length (distance between the two rooms' centroids).
+    across : float
+        Factor on the part of each step's shift across the wall of the door between the
+        two rooms (1: the shift is isotropic; 0: the new room only slides along that wall,
+        as a scan matcher that sees the wall from both sides keeps it whole).
     jump_share, jump_deg : float
         Probability that a step is a *jump* instead, and its rotation's standard
         deviation [deg] (its shift as any step's): a particle filter keeps most rooms
@@ -137,6 +141,7 @@ class RoomDriftParams:
 
     rot_deg: float = 1.5
     lin: float = 0.02
+    across: float = 1.0
     jump_share: float = 0.0
     jump_deg: float = 0.0
     spread: float = 0.8
@@ -149,7 +154,7 @@ class RoomDriftParams:
     conserve: bool = False
 
     def __post_init__(self):
-        bad = [n for n in ("rot_deg", "lin", "spread", "scale", "h_px", "smooth_m",
+        bad = [n for n in ("rot_deg", "lin", "across", "spread", "scale", "h_px", "smooth_m",
                            "jump_deg")
                if not (math.isfinite(getattr(self, n)) and getattr(self, n) >= 0)]
         if not 0.0 <= self.jump_share <= 1.0:
@@ -171,6 +176,7 @@ class RoomDriftParams:
         'rooms: 1.5 deg + 0.02 dl per step, spread 0.8, blend 4 px,'
         """
         return (f"rooms: {self.rot_deg:g} deg + {self.lin:g} dl per step, "
+                + (f"x{self.across:g} across the door, " if self.across != 1.0 else "")
                 + (f"jumps {self.jump_share:g} x {self.jump_deg:g} deg, "
                    if self.jump_share > 0 else "") + "spread "
                 f"{self.spread:g}, blend {self.blend_px:g} px, h {self.h_px:g} px, "
@@ -289,16 +295,28 @@ def _relabel(lab: np.ndarray) -> np.ndarray:
     return lut[lab]
 
 
-def room_adjacency(rooms: np.ndarray, free: np.ndarray):
+def room_adjacency(rooms: np.ndarray, free: np.ndarray, axes: bool = False):
     """Door adjacency of the rooms: pairs whose free pixels touch (4-neighbours), and a
     door point (x, y) per pair (the mean of the touching pixels).
 
+    With ``axes``, also the door's direction per pair: the unit vector (x, y) along which
+    the touching pixels lie (their scatter's larger eigenvector; across a door, the
+    direction of the wall it is cut in).
+
     Returns
     -------
-    dict
-        ``{(a, b): (x, y)}`` with ``a < b``.
+    dict or (dict, dict)
+        ``{(a, b): (x, y)}`` with ``a < b``; with ``axes``, also ``{(a, b): (ux, uy)}``.
+
+    Examples
+    --------
+    >>> lab = np.zeros((6, 9), int); lab[:, :4] = 1; lab[:, 4:] = 2
+    >>> doors, ax = room_adjacency(lab, np.ones((6, 9), bool), axes=True)
+    >>> doors, [round(abs(v), 6) for v in ax[(1, 2)]]
+    ({(1, 2): (3.0, 2.5)}, [0.0, 1.0])
     """
     out: dict = {}
+    cov: dict = {}
     lab = np.where(free, rooms, 0)
     for a, b in ((lab[:, :-1], lab[:, 1:]), (lab[:-1, :], lab[1:, :])):
         touch = (a > 0) & (b > 0) & (a != b)
@@ -314,9 +332,19 @@ def room_adjacency(rooms: np.ndarray, free: np.ndarray):
             if pair in out:
                 n0, s0 = out[pair]
                 out[pair] = (n0 + len(pts), s0 + pts.sum(0))
+                cov[pair] = cov[pair] + pts.T @ pts
             else:
                 out[pair] = (len(pts), pts.sum(0))
-    return {k: tuple((s / n).tolist()) for k, (n, s) in out.items()}
+                cov[pair] = pts.T @ pts
+    doors = {k: tuple((s / n).tolist()) for k, (n, s) in out.items()}
+    if not axes:
+        return doors
+    dirs = {}
+    for k, (n, s) in out.items():
+        m = s / n
+        w, v = np.linalg.eigh(cov[k] / n - np.outer(m, m))
+        dirs[k] = tuple(v[:, 1].tolist())
+    return doors, dirs
 
 
 def _largest_step(rooms: np.ndarray, T: np.ndarray) -> float:
@@ -398,7 +426,7 @@ def room_drift_field(plan: np.ndarray, rng: np.random.Generator,
     area = ndimage.sum(free, own, idx)
     cy, cx = (np.asarray(v) for v in zip(*ndimage.center_of_mass(free, own, idx),
                                          strict=True))
-    doors = room_adjacency(rooms, free)
+    doors, axes = room_adjacency(rooms, free, axes=True)
     nbrs: dict[int, list[int]] = {r: [] for r in idx.tolist()}
     for a, b in sorted(doors):
         nbrs[a].append(b)
@@ -415,6 +443,11 @@ def room_drift_field(plan: np.ndarray, rng: np.random.Generator,
             deg = rp.jump_deg
         th = math.radians(deg) * amp * float(rng.standard_normal())
         sh = rp.lin * dl * amp * rng.standard_normal(2)
+        u = axes.get((min(parent, child), max(parent, child)))
+        if rp.across != 1.0 and u is not None:
+            # the shift across the door's wall scaled by ``across``, along it kept
+            along = float(sh @ u) * np.asarray(u)
+            sh = along + rp.across * (sh - along)
         T[child] = T[parent] @ _rigid(th, door, sh)
 
     seq = _path_rooms(rooms, path) if path is not None else []
