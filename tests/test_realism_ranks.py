@@ -131,6 +131,10 @@ def test_per_plan_benchmark_end_to_end(small_dataset, tmp_path, capsys):
     assert rep["plans"] == 4 and set(rep["classifier"]) == {
         "run 2 (floor)", "parametric", "Model_AB network alone", "Model_AB synthesize"}
     assert all(r["plans"] <= 4 for r in rep["ranks"]["parametric"])
+    # three classifier seeds by default: the AUC reported is their mean
+    for c in rep["classifier"].values():
+        assert c["seeds"] == [0, 1, 2] and len(c["aucs"]) == 3
+        assert c["auc"] == pytest.approx(np.mean(c["aucs"])) and c["sd"] >= 0
     div = rep["diversity"]["pretrained"]
     assert 0 < div["network"] <= div["synthesize"] and div["ratio"] > 0
     from map2map.experiments.realism.per_plan.summary import sentences
@@ -214,11 +218,16 @@ def test_per_plan_variants_takes_a_model_per_variant_and_the_classifier(small_da
     from map2map.experiments.realism.per_plan.variants import main
 
     assert main(["--data", str(small_dataset), *caches, "--plans", "4", "--samples", "1",
-                 "--classifier-steps", "10", "--variant", "scans",
+                 "--classifier-steps", "10", "--classifier-seeds", "2",
+                 "--save-maps", str(tmp_path / "saved"), "--variant", "scans",
                  '{"model": "scans", "scans": {"duration": 60, "rooms": {"rot_deg": 2}}}']) == 0
     out = capsys.readouterr().out
     assert "scans: 4 plans" in out and "scans: rank among 3 simulated runs" in out
-    assert "scans: classifier AUC" in out
+    assert "scans: classifier AUC" in out and "over 2 seed(s)" in out
+    with np.load(tmp_path / "saved" / "scans.npz") as z:     # scored again from these
+        assert z["maps"].shape == z["plans"].shape == z["run3"].shape
+        assert z["maps"].shape[0] == len(z["indices"]) == 4
+        assert not np.array_equal(z["maps"], z["run1"])
     medians = out[out.index("median "):].splitlines()
     assert "bend" in medians[0] and "streaks" in medians[0]
     assert [r.split()[0] for r in medians[1:5]] == ["run", "run", "run", "scans"]

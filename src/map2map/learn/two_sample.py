@@ -12,7 +12,14 @@ walls. The result is the ROC AUC over all maps (0.5: indistinguishable; 1: alway
 apart) and the paired share of plans whose ``b`` scores above their ``a``.
 
 The same test on two simulated runs (run 3 against run 2) is its floor: a generator
-passes when its AUC is at most the floor + 0.05 (issue #33). Inputs are four channels:
+passes when its AUC is at most the floor + 0.05 (issue #33).
+
+One seed's AUC is noisy: the seed draws the folds, the crops and the networks' weights.
+On the 640 plans of the seed-20261201 set (600 steps), three seeds gave 0.681, 0.668 and
+0.710 for one generator and 0.742, 0.745 and 0.665 for another, so one seed ranked them
+the other way round; on 160 plans four seeds of one generator spread over 0.653-0.722
+(docs/synthesize.md, "how far 160 plans go"). :func:`repeated_auc` runs several seeds and
+reports their mean and standard deviation; compare generators by it. Inputs are four channels:
 the plan's walls and free space, the map's occupied and free cells (unknown is neither).
 
 Deterministic per seed on CPU (same seed, same AUC): torch's deterministic algorithms,
@@ -39,7 +46,7 @@ import numpy as np
 
 from ..core.grid import FREE, OCCUPIED
 
-__all__ = ["ClassifierResult", "two_sample_auc", "encode"]
+__all__ = ["ClassifierResult", "RepeatedAUC", "two_sample_auc", "repeated_auc", "encode"]
 
 
 @dataclass
@@ -232,3 +239,66 @@ def two_sample_auc(plans, a, b, *, folds: int = 2, crop: int = 64, steps: int = 
     paired = float(np.mean(sb > sa)) if n else math.nan
     return ClassifierResult(auc, paired, n, folds, steps, crop, seed,
                             time.perf_counter() - t0)
+
+
+@dataclass
+class RepeatedAUC:
+    """:func:`repeated_auc`'s result: one :func:`two_sample_auc` per seed.
+
+    Attributes
+    ----------
+    auc, sd : float
+        Mean and standard deviation (``ddof=1``; 0 for one seed) of the seeds' AUCs.
+    paired : float
+        Mean of their paired shares.
+    runs : list of ClassifierResult
+        One per seed, in order.
+    """
+
+    auc: float
+    sd: float
+    paired: float
+    runs: list
+
+    def as_dict(self) -> dict:
+        """``auc``, ``sd``, ``paired``, ``aucs`` (per seed), ``seeds``, ``plans``,
+        ``folds``, ``steps``, ``crop`` and ``seconds`` (all seeds) as plain values."""
+        r0 = self.runs[0]
+        return {"auc": self.auc, "sd": self.sd, "paired": self.paired,
+                "aucs": [r.auc for r in self.runs], "seeds": [r.seed for r in self.runs],
+                "plans": r0.plans, "folds": r0.folds, "steps": r0.steps, "crop": r0.crop,
+                "seconds": float(sum(r.seconds for r in self.runs))}
+
+
+def repeated_auc(plans, a, b, seeds=(0, 1, 2), **kwargs) -> RepeatedAUC:
+    """:func:`two_sample_auc` of ``b`` against ``a`` once per seed in ``seeds``, with the
+    mean and standard deviation of the AUCs (module doc: one seed's AUC is noisy).
+
+    Parameters
+    ----------
+    plans, a, b : (N, S, S) uint8
+        As :func:`two_sample_auc`.
+    seeds : sequence of int
+        At least one.
+    **kwargs
+        :func:`two_sample_auc`'s other options (``folds``, ``crop``, ``steps``, ...).
+
+    Returns
+    -------
+    RepeatedAUC
+
+    Examples
+    --------
+    >>> plans = np.full((16, 48, 48), 255, np.uint8); plans[:, :, 22:24] = 0
+    >>> b = plans.copy(); b[:, :, 25:27] = 0
+    >>> r = repeated_auc(plans, plans, b, seeds=(0, 1), crop=32, steps=40)
+    >>> [x.seed for x in r.runs], r.auc == float(np.mean([x.auc for x in r.runs]))
+    ([0, 1], True)
+    """
+    seeds = [int(v) for v in seeds]
+    if not seeds:
+        raise ValueError("repeated_auc needs at least one seed")
+    runs = [two_sample_auc(plans, a, b, seed=sd, **kwargs) for sd in seeds]
+    aucs = np.array([r.auc for r in runs])
+    sd = float(aucs.std(ddof=1)) if len(aucs) > 1 else 0.0
+    return RepeatedAUC(float(aucs.mean()), sd, float(np.mean([r.paired for r in runs])), runs)

@@ -25,14 +25,16 @@ Printed, per generator:
    extreme share is 2/3); run 1 passed the dataset's cleaner, the others did not.
 2. **Classifier** (:mod:`map2map.learn.two_sample`): cross-fitted AUC of a
    small CNN telling (plan, generated) from (plan, run 3), beside the same test on (plan,
-   run 2) against (plan, run 3), the floor.
+   run 2) against (plan, run 3), the floor; both the mean over ``--classifier-seeds``
+   seeds (default 3), with their standard deviation.
 3. **Diversity**: mean pairwise disagreement of ``synthesize``'s three hypotheses of a
    plan over that of its three simulated runs (target 0.8 - 1.25), and the network's own
    share (three hypotheses with only its dropout, drift, coverage and traces off).
 
     python -m map2map.experiments.realism.per_plan --data DS --split all \\
         --cache2 refs2.npz --cache3 refs3.npz [--plans N] [--model pretrained ...] \\
-        [--classifier-steps 600] [--maps-cache maps.npz] [--figure F.png] [--json F]
+        [--classifier-steps 600] [--classifier-seeds 3] [--maps-cache maps.npz] \\
+        [--figure F.png] [--json F]
 """
 
 from __future__ import annotations
@@ -61,6 +63,10 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0, help="seed of everything drawn here")
     ap.add_argument("--classifier-steps", type=int, default=600,
                     help="Adam steps per fold of the classifier (0: no classifier test)")
+    ap.add_argument("--classifier-seeds", type=int, default=3,
+                    help="classifier runs (seeds --seed, --seed + 1, ...); the AUC is their "
+                    "mean, with their standard deviation (default 3: one seed's AUC moves "
+                    "by a few hundredths)")
     ap.add_argument("--maps-cache", help=".npz keeping synthesize's hypotheses of every plan")
     ap.add_argument("--same-start", action="store_true",
                     help="scans: start each hypothesis where the plan's runs start "
@@ -76,8 +82,10 @@ def main(argv=None) -> int:
         plan_ranks,
         rank_table,
     )
-    from map2map.learn.two_sample import two_sample_auc
+    from map2map.learn.two_sample import repeated_auc
 
+    if args.classifier_seeds < 1:
+        ap.error("--classifier-seeds must be >= 1")
     t0 = time.perf_counter()
     r2 = simulated_references(args.data, split=args.split, n=args.plans, cache=args.cache2)
     r3 = simulated_references(args.data, split=args.split, n=args.plans, cache=args.cache3,
@@ -120,14 +128,17 @@ def main(argv=None) -> int:
         report["ranks"][name] = [r.as_dict() for r in rows]
 
     if args.classifier_steps > 0:
+        seeds = [args.seed + k for k in range(args.classifier_seeds)]
         print(f"\nClassifier two-sample test: cross-fitted AUC (2 folds, "
-              f"{args.classifier_steps} steps each), against run 3; paired: share of plans "
-              "whose map scores above its run 3")
+              f"{args.classifier_steps} steps each), against run 3, mean +- sd over "
+              f"{len(seeds)} classifier seed(s); paired: share of plans whose map scores "
+              "above its run 3")
         for name, maps in {"run 2 (floor)": runs["run 2"], **gens}.items():
-            res = two_sample_auc(plans, runs["run 3"], maps, steps=args.classifier_steps,
-                                 seed=args.seed)
-            print(f"{name:<36} AUC {res.auc:.3f}  paired {res.paired:.3f}  "
-                  f"({res.seconds:.0f} s)")
+            res = repeated_auc(plans, runs["run 3"], maps, seeds,
+                               steps=args.classifier_steps)
+            each = " ".join(f"{r.auc:.3f}" for r in res.runs)
+            print(f"{name:<36} AUC {res.auc:.3f} +- {res.sd:.3f} ({each})  paired "
+                  f"{res.paired:.3f}  ({sum(r.seconds for r in res.runs):.0f} s)")
             report["classifier"][name] = res.as_dict()
         floor = report["classifier"]["run 2 (floor)"]["auc"]
         for name in gens:

@@ -27,6 +27,9 @@ def sentences(report: dict) -> list[str]:
     passes issue #33's rank target on 1 of 2 statistics.
     A CNN tells Model_AB synthesize's maps from simulated ones with AUC 0.99 on plans it
     never saw (two simulated runs: 0.52; target: at most 0.05 above).
+    >>> r["classifier"]["Model_AB synthesize"].update(sd=0.012, aucs=[0.98, 0.99, 1.0])
+    >>> sentences(r)[1].split(" on plans")[0][-40:]
+    'AUC 0.99 +- 0.01 over 3 classifier seeds'
     """
     out = []
     n = report.get("plans")
@@ -46,8 +49,11 @@ def sentences(report: dict) -> list[str]:
     floor = cl.get("run 2 (floor)", {}).get("auc")
     for name, c in cl.items():
         if name.startswith(GENERATORS) and floor is not None:
+            seeds = len(c.get("aucs", ()))
+            spread = (f" +- {c['sd']:.2f} over {seeds} classifier seeds" if seeds > 1
+                      else "")
             out.append(f"A CNN tells {name}'s maps from simulated ones with AUC "
-                       f"{c['auc']:.2f} on plans it never saw (two simulated runs: "
+                       f"{c['auc']:.2f}{spread} on plans it never saw (two simulated runs: "
                        f"{floor:.2f}; target: at most 0.05 above).")
     for m, d in report.get("diversity", {}).items():
         if m == "simulated":

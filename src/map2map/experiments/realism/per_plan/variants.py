@@ -32,6 +32,7 @@ import json
 import sys
 import time
 import warnings
+from pathlib import Path
 
 import numpy as np
 
@@ -107,7 +108,15 @@ def main(argv=None) -> int:
     ap.add_argument("--classifier-steps", type=int, default=0,
                     help="also the classifier two-sample AUC against run 3, with this many "
                     "Adam steps per fold (per_plan's: 600; default 0: none)")
+    ap.add_argument("--classifier-seeds", type=int, default=3,
+                    help="classifier runs, seeds --seed, --seed + 1, ... (default 3): the AUC "
+                    "printed is their mean +- sd")
+    ap.add_argument("--save-maps", metavar="DIR",
+                    help="write each variant's maps (and the plans and runs) to "
+                    "DIR/NAME.npz, to score them again without making them again")
     args = ap.parse_args(argv)
+    if args.classifier_seeds < 1:
+        ap.error("--classifier-seeds must be >= 1")
 
     from map2map.datasets.pair import crop_box, preprocess_pair
     from map2map.datasets.pairfolder import PLAN_YAML, SLAM_YAML, pair_dir
@@ -115,7 +124,7 @@ def main(argv=None) -> int:
     from map2map.experiments.realism.ranks import format_rank_table, plan_ranks, rank_table
     from map2map.learn.ab.model import load_ab_model
     from map2map.learn.ab.synthesize import SCANS, synthesize
-    from map2map.learn.two_sample import two_sample_auc
+    from map2map.learn.two_sample import repeated_auc
     from map2map.maps.formats import load_map
 
     variants = {name: _kwargs(text) for name, text in args.variant}
@@ -142,6 +151,14 @@ def main(argv=None) -> int:
                 maps.append(preprocess_pair(a, res.maps[0], size, 0, crop_box(a, b))[1])
         gens[name] = np.stack(maps)
         print(f"{name}: {len(both)} plans in {time.perf_counter() - t0:.0f} s")
+        if args.save_maps:
+            from map2map.core._io import atomic_path
+
+            out = Path(args.save_maps) / f"{name}.npz"
+            out.parent.mkdir(parents=True, exist_ok=True)
+            with atomic_path(out) as tmp, open(tmp, "wb") as fh:
+                np.savez_compressed(fh, indices=both, maps=gens[name], plans=r2.a,
+                                    run1=r2.sim1, run2=r2.sim2, run3=r3.sim2)
     runs = {"run 1": r2.sim1, "run 2": r2.sim2, "run 3": r3.sim2}
     st = stats_of_sets({**runs, **gens}, r2.a)
     print()
@@ -151,9 +168,12 @@ def main(argv=None) -> int:
         print()
         print(format_rank_table(rows, name))
         if args.classifier_steps > 0:
-            res = two_sample_auc(r2.a, runs["run 3"], gens[name],
-                                 steps=args.classifier_steps, seed=args.seed)
-            print(f"{name}: classifier AUC {res.auc:.3f} against run 3 (paired {res.paired:.3f})")
+            seeds = [args.seed + k for k in range(args.classifier_seeds)]
+            res = repeated_auc(r2.a, runs["run 3"], gens[name], seeds,
+                               steps=args.classifier_steps)
+            each = " ".join(f"{r.auc:.3f}" for r in res.runs)
+            print(f"{name}: classifier AUC {res.auc:.3f} +- {res.sd:.3f} over {len(seeds)} "
+                  f"seed(s) ({each}) against run 3 (paired {res.paired:.3f})")
     return 0
 
 
