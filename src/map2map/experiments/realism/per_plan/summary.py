@@ -3,6 +3,10 @@ carries them with one sentence each")."""
 
 from __future__ import annotations
 
+import numpy as np
+
+from ..ranks import ALPHA, holm
+
 __all__ = ["sentences", "GENERATORS"]
 
 #: Report names of the generators summarised (Model_AB's, and ``synthesize --model scans``).
@@ -27,6 +31,10 @@ def sentences(report: dict) -> list[str]:
     passes issue #33's rank target on 1 of 2 statistics.
     A CNN tells Model_AB synthesize's maps from simulated ones with AUC 0.99 on plans it
     never saw (two simulated runs: 0.52; target: at most 0.05 above).
+    >>> for row, p in zip(r["ranks"]["Model_AB synthesize"], (1e-9, 0.4)):
+    ...     row["p_uniform"] = p              # as rank_table's rows carry it
+    >>> sentences(r)[0].rsplit("; ", 1)[1]
+    "Holm's test over the statistics tells it apart on 1 of 2."
     >>> r["classifier"]["Model_AB synthesize"].update(sd=0.012, aucs=[0.98, 0.99, 1.0])
     >>> sentences(r)[1].split(" on plans")[0][-40:]
     'AUC 0.99 +- 0.01 over 3 classifier seeds'
@@ -40,11 +48,15 @@ def sentences(report: dict) -> list[str]:
         if not valid:
             continue
         worst = max(valid, key=lambda r: r["extreme"])
+        adj = holm([r.get("p_uniform", float("nan")) for r in valid])
+        tested = int(np.isfinite(adj).sum())
+        calibrated = (f"; Holm's test over the statistics tells it apart on "
+                      f"{int((adj < ALPHA).sum())} of {tested}" if tested else "")
         out.append(f"{name}, ranked among three simulated SLAM maps of each of {n} held-out "
                    f"plans, is the most extreme on {100 * worst['extreme']:.0f} % of plans "
                    f"for {worst['statistic']} (a perfect generator: 50 %) and passes issue "
                    f"#33's rank target on {sum(r['met'] for r in valid)} of {len(valid)} "
-                   "statistics.")
+                   f"statistics{calibrated}.")
     cl = report.get("classifier", {})
     floor = cl.get("run 2 (floor)", {}).get("auc")
     for name, c in cl.items():
