@@ -315,14 +315,20 @@ class OracleMapper:
         RuntimeError
             No :meth:`observe_truth` since the last update.
         """
+        sensor = compose_pose(self._advance(), scan.sensor_offset)
+        self.grid.integrate(sensor, scan)
+
+    def _advance(self) -> tuple[float, float, float]:
+        """Take the pose given to :meth:`observe_truth` as the current one (map frame: the
+        first such pose at the origin) and return it."""
         if self._truth is None:
-            raise RuntimeError("OracleMapper needs observe_truth(pose) before each update")
+            raise RuntimeError(f"{type(self).__name__} needs observe_truth(pose) before "
+                               "each update")
         if self._start is None:
             self._start = self._truth
         self._pose = relative_pose(self._start, self._truth)
-        sensor = compose_pose(self._pose, scan.sensor_offset)
-        self.grid.integrate(sensor, scan)
         self._truth = None
+        return self._pose
 
     def pose(self) -> np.ndarray:
         """The current pose in the map frame (exact).

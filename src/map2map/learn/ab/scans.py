@@ -51,6 +51,7 @@ import numpy as np
 from ...core.errors import InputError
 from ...core.geometry import compose_pose, relative_pose
 from ...core.grid import OccupancyMap
+from ...sim.mapping import OracleMapper
 from .room_drift import RoomDrift, RoomDriftParams, room_drift_field
 
 __all__ = ["ScanMapParams", "ScanHypothesis", "GridOracle", "scan_rng", "drifted_poses",
@@ -159,7 +160,7 @@ class ScanHypothesis:
     info: dict
 
 
-class GridOracle:
+class GridOracle(OracleMapper):
     """A mapper (the :class:`~map2map.robotlog.base.Mapper` protocol) that counts the
     scans GMapping would process into GMapping's grid at the **true** poses: the map the
     run's robot explores on, without its pose error (module doc, step 1).
@@ -210,18 +211,13 @@ class GridOracle:
         self.params = GMappingParams()
         self.grid = CountGrid.around(0.0, 0.0, self.params.initial_size / 2, float(resolution))
         self.processed: list[int] = []
-        self._truth = None
-        self._start = None
+        self._truth = self._start = None
         self._pose = (0.0, 0.0, 0.0)
         self._last = None                  # (t, pose) of the last processed scan
         self._lin = self._ang = 0.0
         self._prev = None                  # the previous true pose (map frame)
         self._n = 0
         self._map = None
-
-    def observe_truth(self, pose) -> None:
-        """The true pose (plan frame) of the next scan."""
-        self._truth = tuple(float(v) for v in pose)
 
     def update(self, odom, scan) -> None:
         """Register ``scan`` at the pose given to :meth:`observe_truth` if it is due
@@ -234,12 +230,7 @@ class GridOracle:
         """
         from ...slam.rbpf import prepare_scan
 
-        if self._truth is None:
-            raise RuntimeError("GridOracle needs observe_truth(pose) before each update")
-        if self._start is None:
-            self._start = self._truth
-        self._pose = relative_pose(self._start, self._truth)
-        self._truth = None
+        self._advance()
         i, self._n = self._n, self._n + 1
         p = self.params
         if self._prev is not None:
@@ -259,10 +250,6 @@ class GridOracle:
                                 p.max_urange, float(scan.range_max), p.no_return_free)
         self.processed.append(i)
         self._map = None
-
-    def pose(self) -> np.ndarray:
-        """The last true pose in the map frame (the first pose at the origin)."""
-        return np.array(self._pose)
 
     def get_map(self) -> OccupancyMap:
         """GMapping's map of the scans processed so far (cached between them)."""
