@@ -178,6 +178,20 @@ class GMappingParams:
             if isinstance(v, float) and not math.isfinite(v):
                 raise ValueError(f"{f.name} must be finite, got {v}")
 
+    def due(self, moved: float, turned: float, elapsed: float) -> bool:
+        """Whether a scan is processed: ``moved`` metres / ``turned`` radians travelled
+        since the last processed scan reach ``linear_update`` / ``angular_update``, or
+        ``elapsed`` seconds exceed ``temporal_update`` (when that is >= 0).
+
+        Examples
+        --------
+        >>> p = GMappingParams()
+        >>> p.due(0.2, 0.05, 0.4), p.due(1.0, 0.0, 0.0), p.due(0.0, 0.0, 0.6)
+        (False, True, True)
+        """
+        return (moved >= self.linear_update or turned >= self.angular_update
+                or (self.temporal_update >= 0 and elapsed > self.temporal_update))
+
 
 # ----------------------------------------------------------------------------- motion
 def absolute_difference(p1: np.ndarray, p2: np.ndarray) -> np.ndarray:
@@ -528,12 +542,7 @@ class GMappingRBPF:
         self._lin += math.hypot(step[0], step[1])
         self._ang += abs(step[2])
         self._last_odom = o
-        due = (
-            self._lin >= p.linear_update
-            or self._ang >= p.angular_update
-            or (p.temporal_update >= 0 and scan.t - self._last_t > p.temporal_update)
-        )
-        if not due:
+        if not p.due(self._lin, self._ang, scan.t - self._last_t):
             return
         self._lin = self._ang = 0.0
         self._last_t = scan.t

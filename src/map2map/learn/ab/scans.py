@@ -165,17 +165,19 @@ class GridOracle(OracleMapper):
     scans GMapping would process into GMapping's grid at the **true** poses: the map the
     run's robot explores on, without its pose error (module doc, step 1).
 
-    A scan is processed as :class:`~map2map.slam.rbpf.GMappingRBPF` processes one: the
-    first, then whenever the robot has moved ``linear_update`` metres or turned
-    ``angular_update`` radians since the last processed scan (the true motion stands for
-    the odometry), or ``temporal_update`` seconds have passed. Each is registered in a
+    A scan is processed as :class:`~map2map.slam.rbpf.GMappingRBPF` processes one
+    (:meth:`~map2map.slam.rbpf.GMappingParams.due`): the first, then whenever the robot has
+    moved ``linear_update`` metres or turned ``angular_update`` radians since the last
+    processed scan (the true motion stands for the odometry), or ``temporal_update``
+    seconds have passed. Each is registered in a
     :class:`~map2map.slam.gridmap.CountGrid` (beams cropped at ``max_urange``, no-return
     beams clearing), and the map is occupied where hits / visits > ``occ_thresh``: the
     cells the robot plans on are the cells :func:`map_scans` draws. The
     :class:`~map2map.sim.mapping.OracleMapper` instead integrates every scan in a
     log-odds grid out to the full 3.5 m range, so a robot exploring on it may leave a
     room whose GMapping map is not complete; ``ScanMapParams(explore_map="grid")``
-    explores on this one instead (docs/synthesize.md, "Exploring on the run's grid").
+    explores on this one instead (docs/synthesize.md, session 23, "Exploring on GMapping's
+    grid").
 
     Parameters
     ----------
@@ -213,7 +215,7 @@ class GridOracle(OracleMapper):
         self.processed: list[int] = []
         self._truth = self._start = None
         self._pose = (0.0, 0.0, 0.0)
-        self._last = None                  # (t, pose) of the last processed scan
+        self._last = None                  # time of the last processed scan
         self._lin = self._ang = 0.0
         self._prev = None                  # the previous true pose (map frame)
         self._n = 0
@@ -239,9 +241,7 @@ class GridOracle(OracleMapper):
             self._ang += abs(step[2])
         self._prev = self._pose
         t = float(scan.t)
-        if self._last is not None and not (
-                self._lin >= p.linear_update or self._ang >= p.angular_update
-                or t - self._last > p.temporal_update):
+        if self._last is not None and not p.due(self._lin, self._ang, t - self._last):
             return
         self._lin = self._ang = 0.0
         self._last = t
