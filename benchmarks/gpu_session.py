@@ -23,6 +23,11 @@ each part is capped by a wall-clock budget:
 4. inference maps/s at 256 px on the GPU (``bench_learn.py --inference-only``);
 5. the run folders (without the optimiser checkpoints) packed as ``ba.tar`` / ``ab.tar``.
 
+``--parts abprobe`` (before part 3): Model_prog's 256 px step, graphed, at ``--ab-batch``
+in channels-last and in NCHW, then the faster layout at twice the batch (the issue's 700
+img/s); part 3 then trains in the faster layout (``train ab --nchw`` when NCHW wins by
+more than 3 %).
+
 Every training run is stopped by SIGINT at its budget plus a margin (the trainer then
 writes its checkpoint), so a slower machine gives fewer epochs, never a lost call.
 
@@ -121,6 +126,43 @@ def _pack(run: Path, dest: Path) -> None:
             tar.add(f, arcname=f"{run.name}/samples/{f.name}")
 
 
+def _stage_rates(log_csv: Path) -> dict:
+    """Per stage resolution of a ``train ab`` run: epochs logged and the median img/s."""
+    import csv
+
+    if not log_csv.is_file():
+        return {}
+    by: dict[str, list[float]] = {}
+    for row in csv.DictReader(log_csv.open()):
+        by.setdefault(row.get("resolution", "?"), []).append(float(row.get("img_per_s") or "nan"))
+    return {r: {"epochs": len(v), "median_img_per_s": float(np.median(v))} for r, v in by.items()}
+
+
+def _probe_256(args, py: str, log, res: dict) -> bool:
+    """Model_prog's graphed 256 px step in both layouts at ``--ab-batch`` (64 if unset), then
+    the faster one at twice the batch; ``res["abprobe"]``; True when NCHW wins by > 3 %."""
+    b = args.ab_batch or 64
+    base = [py, "-m", "benchmarks.bench_ab", "--device", args.device, "--only",
+            "32" if args.quick else "256", "--g-channels", "16", "--g-max-channels", "128",
+            "--steps", "2" if args.quick else "10", "--graph", *(["--quick"] if args.quick else [])]
+    pat = r"^\s*\d+\s+\d+\s+\d+\s+([\d.]+)\s+[\d.]+ min\s+(\S.*)$"
+    probe = res.setdefault("abprobe", {})
+
+    def one(layout: list[str], batch: int, name: str) -> float:
+        _, txt = _run(base + ["--batch", str(batch)] + layout, 90, log)
+        m = re.search(pat, txt, re.M)
+        probe[name] = f"{m.group(1)} img/s ({m.group(2)})" if m else "failed"
+        return float(m.group(1)) if m else 0.0
+
+    cl = one([], b, f"channels_last, batch {b}")
+    nchw = one(["--nchw"], b, f"nchw, batch {b}")
+    use_nchw = nchw > 1.03 * cl
+    lay = ["--nchw"] if use_nchw else []
+    one(lay, 2 * b, f"{'nchw' if use_nchw else 'channels_last'}, batch {2 * b}")
+    probe["train_layout"] = "nchw" if use_nchw else "channels_last"
+    return use_nchw
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--data", required=True, type=Path, help="packed.npz")
@@ -130,13 +172,15 @@ def main(argv=None) -> int:
     ap.add_argument("--ab-seconds", type=float, default=200.0)
     ap.add_argument("--ba-batch", type=int, default=64)
     ap.add_argument("--ab-batch-rate", type=float, default=4.0)
+    ap.add_argument("--ab-batch", type=int, help="train ab with this batch at every stage "
+                    "(instead of --ab-batch-rate x Table 5.1's)")
     ap.add_argument("--deadline", type=float, default=560.0,
                     help="seconds for the whole script: the training budgets shrink to fit")
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--skip", default="", help="comma list of parts to skip: "
                     "graph,bench,ba,ab,infer")
     ap.add_argument("--parts", default="", help="comma list of optional parts to run: "
-                    "abprof")
+                    "abprof,abprobe")
     ap.add_argument("--ba-graph", choices=("auto", "yes", "no"), default="auto",
                     help="train ba with --cuda-graph: auto = when part 0 captured one")
     ap.add_argument("--ab-graph", choices=("auto", "yes", "no"), default="no",
@@ -232,9 +276,15 @@ def main(argv=None) -> int:
         res.update(_last_epoch(args.out / "ba_run" / "log.csv", "ba"))
         _pack(args.out / "ba_run", args.out / "ba.tar")
 
+    parts = set(filter(None, args.parts.split(",")))
+    ab_nchw = False
+    if "abprobe" in parts:
+        ab_nchw = _probe_256(args, py, log, res)
+        print(json.dumps(res), file=log, flush=True)
+
     # 3. Model_AB, Table 5.2's stages fitted into the budget
     if "ab" not in skip:
-        budget = max(10.0, min(args.ab_seconds, left(100)))
+        budget = max(10.0, min(args.ab_seconds, left(40 if "infer" in skip else 100)))
         res["ab_budget_s"] = budget
         sched = []
         for r, share in AB_SHARES.items():
@@ -245,23 +295,28 @@ def main(argv=None) -> int:
         if args.ab_schedule:
             sched = [s.strip() for s in args.ab_schedule.split(",")]
         total = sum(int(s.split(":")[1]) for s in sched)
+        batch = ["--batch", str(args.ab_batch)] if args.ab_batch else \
+            ["--batch-rate", str(args.ab_batch_rate)]
         cmd = [py, "-c", CLI_TRAIN, "train", "ab", "--data", str(args.data), "--out",
-               str(args.out / "ab_run"), "--schedule", ",".join(sched), "--batch-rate",
-               str(args.ab_batch_rate), "--g-channels", "16", "--g-max-channels", "128",
+               str(args.out / "ab_run"), "--schedule", ",".join(sched), *batch,
+               "--g-channels", "16", "--g-max-channels", "128",
                "--device", args.device, "--seed", "0", "--save-every",
                str(max(1, total // 20)), "--quiet"]
+        if ab_nchw:
+            cmd += ["--nchw"]
         if args.quick:
             cmd += ["--d-channels", "8", "--g-max-channels", "32"]
         if args.ab_graph == "yes" or (args.ab_graph == "auto" and graph_ok):
             cmd += ["--cuda-graph"]
         res["ab_cmd"] = " ".join(cmd[1:])
-        rc, _ = _run(cmd, budget * 1.15 + 25, log, signal="INT")
+        rc, _ = _run(cmd, budget + 20, log, signal="INT")
         res["ab_rc"] = rc
+        res["ab_stages"] = _stage_rates(args.out / "ab_run" / "log.csv")
         res.update(_last_epoch(args.out / "ab_run" / "log.csv", "ab"))
         _pack(args.out / "ab_run", args.out / "ab.tar")
 
     # 4b. where Model_prog's 256 px step goes
-    if "abprof" in set(filter(None, args.parts.split(","))):
+    if "abprof" in parts:
         base = [py, "-m", "benchmarks.bench_ab", "--device", args.device, "--only",
                 "32" if args.quick else "256", "--batch", "8" if args.quick else "64",
                 "--g-channels", "16", "--g-max-channels", "128", "--steps",

@@ -599,3 +599,21 @@ def test_cli_train_on_one_pair_without_val_warns_and_prints_a_rate(tmp_path, cap
     (summary,) = [ln for ln in err.splitlines() if ln.startswith("trained 1 epochs at ")]
     rate = summary.split(" at ")[1].split(" img/s")[0]
     assert float(rate) > 0, summary
+
+
+@pytest.mark.parametrize("channels_last", [True, False])
+def test_place_networks_layout_follows_config(channels_last):
+    """Under amp the networks go channels-last unless ``channels_last=False`` (``--nchw``)."""
+    from map2map.learn.ba.config import BAConfig
+    from map2map.learn.training.loop import place_networks
+
+    cfg = BAConfig(size=32, g_channels=4, g_max_channels=8, d_channels=4, d_layers=2,
+                      channels_last=channels_last)
+    nets = T.build_networks(cfg)
+    place_networks(nets, torch.device("cpu"), True, cfg)
+    w = next(p for p in nets[0].parameters() if p.dim() == 4 and p.shape[1] > 1
+             and p.shape[-1] > 1)
+    assert w.is_contiguous(memory_format=torch.channels_last) is channels_last
+    assert w.is_contiguous() is not channels_last
+    assert BAConfig.from_dict(cfg.to_dict()).channels_last is channels_last
+    assert BAConfig.from_dict({"size": 32}).channels_last  # older configs: channels-last

@@ -61,6 +61,9 @@ def _step_options(b: argparse.ArgumentParser, cfg) -> None:
     b.add_argument("--no-false-targets", action="store_true",
                    help="no false-target augmentation for D_d")
     b.add_argument("--no-amp", action="store_true", help="fp32 on CUDA (no bf16 autocast)")
+    b.add_argument("--nchw", action="store_true", help="CUDA: keep networks and data NCHW "
+                   "under bf16 (default channels-last; benchmarks.bench_ab --nchw says which "
+                   "is faster)")
     b.add_argument("--compile", action="store_true", help="torch.compile the generator")
     b.add_argument("--cuda-graph", action="store_true",
                    help="run each training step as one CUDA graph replay (single process; "
@@ -139,7 +142,8 @@ def register_ab(tsub) -> None:
 def _settings(args: argparse.Namespace, own: tuple[str, ...]) -> dict:
     return {**{k: getattr(args, k) for k in (*_COMMON, *own)},
             "false_targets": not args.no_false_targets, "amp": not args.no_amp,
-            "compile": args.compile, "cuda_graph": args.cuda_graph}
+            "channels_last": not args.nchw, "compile": args.compile,
+            "cuda_graph": args.cuda_graph}
 
 
 def _train(args: argparse.Namespace, model: str, own: tuple[str, ...]) -> int:

@@ -169,19 +169,20 @@ class _ABRun(GANRun):
         self.full_inputs: dict[str, ResidentPairs] = {}
 
     def _stage_data(self, r: int) -> tuple[ResidentPairs, ResidentPairs]:
-        cfg, dev, amp, train, show = self.cfg, self.dev, self.amp, self.start.train, self.show
+        cfg, dev, train, show = self.cfg, self.dev, self.start.train, self.show
+        cl = self.amp and cfg.channels_last
         if r not in self.resident:
             self.resident.clear()  # one stage's data on the device at a time
             self.resident[r] = (
-                ResidentPairs(train.a, train.b, r, dev, channels_last=amp,
+                ResidentPairs(train.a, train.b, r, dev, channels_last=cl,
                               input_reduce=cfg.input_reduce),
                 ResidentPairs(show.a[:cfg.samples], show.b[:cfg.samples], r, dev,
-                              channels_last=amp, input_reduce=cfg.input_reduce))
+                              channels_last=cl, input_reduce=cfg.input_reduce))
             self.g.out_size = r
         if self.decoder and not self.full_inputs:  # the generator's input: always cfg.size
             for name, part in (("train", train.a), ("show", show.a[:cfg.samples])):
                 self.full_inputs[name] = ResidentPairs(
-                    part, part[:, :1, :1], cfg.size, dev, channels_last=amp,
+                    part, part[:, :1, :1], cfg.size, dev, channels_last=cl,
                     input_reduce=cfg.input_reduce, target_size=1)
         return self.resident[r]
 

@@ -124,10 +124,11 @@ def train_ba(data: str | os.PathLike | PackedPairs, out: str | os.PathLike,
     val = pairs.select("val")
     show = val if len(val) else train
     dev, amp = dist.device, dist.device.type == "cuda" and cfg.amp
-    res = ResidentPairs(train.b, train.a, cfg.size, dev, channels_last=amp,
+    cl = amp and cfg.channels_last
+    res = ResidentPairs(train.b, train.a, cfg.size, dev, channels_last=cl,
                         input_reduce=cfg.input_reduce)
     shown = ResidentPairs(show.b[:cfg.samples], show.a[:cfg.samples], cfg.size, dev,
-                          channels_last=amp, input_reduce=cfg.input_reduce)
+                          channels_last=cl, input_reduce=cfg.input_reduce)
     nets = build_networks(cfg)
     header = model_header(cfg, start.meta,
                           GANRun.header_fields(train.a, pairs.a.shape[-1], nets))

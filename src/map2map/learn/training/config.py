@@ -73,6 +73,11 @@ class TrainConfig:
         ``"auto"`` (CUDA when present), ``"cpu"``, ``"cuda"``, ``"cuda:1"``...
     amp : bool
         bf16 autocast + channels_last on CUDA (ignored on CPU).
+    channels_last : bool
+        Under ``amp``, networks and data in channels-last layout (the default); False
+        keeps them NCHW (``python -m benchmarks.bench_ab --nchw`` measures which is
+        faster: GroupNorm returns NCHW, so cuDNN may transpose around each convolution
+        after it). No effect on CPU or without ``amp``.
     compile : bool
         ``torch.compile`` the generator (not the spectral-normalised discriminators).
     cuda_graph : bool
@@ -115,6 +120,7 @@ class TrainConfig:
     seed: int = 0
     device: str = "auto"
     amp: bool = True
+    channels_last: bool = True
     compile: bool = False
     cuda_graph: bool = False
     samples: int = 6

@@ -101,12 +101,13 @@ def resolve_device(name: str = "auto") -> torch.device:
 
 def place_networks(nets, dev: torch.device, amp: bool, cfg: TrainConfig
                    ) -> tuple[torch.optim.Adam, torch.optim.Adam]:
-    """Move ``(G, D_d, D_r)`` to ``dev`` (channels_last under ``amp``) and return Adam for
+    """Move ``(G, D_d, D_r)`` to ``dev`` (channels_last under ``amp`` unless
+    ``cfg.channels_last`` is False) and return Adam for
     ``G`` and Adam for both discriminators (thesis 4.2: lr, betas of ``cfg``)."""
     g, dd, dr = nets
     for net in nets:
         net.to(dev)
-        if amp:
+        if amp and cfg.channels_last:
             net.to(memory_format=torch.channels_last)
     opt_g = torch.optim.Adam(g.parameters(), lr=cfg.lr, betas=(cfg.beta1, cfg.beta2))
     opt_d = torch.optim.Adam(list(dd.parameters()) + list(dr.parameters()), lr=cfg.lr,
