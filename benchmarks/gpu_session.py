@@ -43,6 +43,14 @@ since the upsampling fix; run it on an H100 too):
     python3 -m benchmarks.gpu_session --data .gpu/packed.npz --out $OUT/s13
         --skip bench,ab,infer --ba-batch 256 --ba-seconds 330 --deadline 470
 
+Session 24 (H200, 2026-11-27) ran Table 5.2's schedule at 256 px on the 1,471 pairs
+(stopped by its budget after 170 of 205 epochs, 65 at 256 px; docs/synthesize.md, "256 px
+weights from a GPU"):
+
+    python3 -m benchmarks.gpu_session --data .gpu/packed.npz --out /tmp/s24
+        --skip graph,bench,ba,infer --parts abprobe --ab-graph yes --ab-batch 64
+        --ab-schedule 32:15,64:30,128:60,256:100 --ab-seconds 400 --deadline 540
+
 ``--quick``: tiny budgets and networks, for checking the script on a CPU.
 """
 
