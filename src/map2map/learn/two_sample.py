@@ -272,6 +272,18 @@ class RepeatedAUC:
                 "plans": r0.plans, "folds": r0.folds, "steps": r0.steps, "crop": r0.crop,
                 "seconds": float(sum(r.seconds for r in self.runs))}
 
+    def __str__(self) -> str:
+        """``AUC mean +- sd (each seed's)``, as the benchmarks print it.
+
+        Examples
+        --------
+        >>> r0 = ClassifierResult(0.7, 0.8, 10, 2, 60, 32, 0, 1.0)
+        >>> str(RepeatedAUC(0.7, 0.0, 0.8, [r0]))
+        'AUC 0.700 +- 0.000 (0.700)'
+        """
+        each = " ".join(f"{r.auc:.3f}" for r in self.runs)
+        return f"AUC {self.auc:.3f} +- {self.sd:.3f} ({each})"
+
 
 def repeated_auc(plans, a, b, seeds=(0, 1, 2), **kwargs) -> RepeatedAUC:
     """:func:`two_sample_auc` of ``b`` against ``a`` once per seed in ``seeds``, with the

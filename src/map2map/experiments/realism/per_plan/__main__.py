@@ -136,9 +136,8 @@ def main(argv=None) -> int:
         for name, maps in {"run 2 (floor)": runs["run 2"], **gens}.items():
             res = repeated_auc(plans, runs["run 3"], maps, seeds,
                                steps=args.classifier_steps)
-            each = " ".join(f"{r.auc:.3f}" for r in res.runs)
-            print(f"{name:<36} AUC {res.auc:.3f} +- {res.sd:.3f} ({each})  paired "
-                  f"{res.paired:.3f}  ({sum(r.seconds for r in res.runs):.0f} s)")
+            print(f"{name:<36} {res}  paired {res.paired:.3f}  "
+                  f"({sum(r.seconds for r in res.runs):.0f} s)")
             report["classifier"][name] = res.as_dict()
         floor = report["classifier"]["run 2 (floor)"]["auc"]
         for name in gens:

@@ -171,9 +171,8 @@ def main(argv=None) -> int:
             seeds = [args.seed + k for k in range(args.classifier_seeds)]
             res = repeated_auc(r2.a, runs["run 3"], gens[name], seeds,
                                steps=args.classifier_steps)
-            each = " ".join(f"{r.auc:.3f}" for r in res.runs)
-            print(f"{name}: classifier AUC {res.auc:.3f} +- {res.sd:.3f} over {len(seeds)} "
-                  f"seed(s) ({each}) against run 3 (paired {res.paired:.3f})")
+            print(f"{name}: classifier {res} over {len(seeds)} seed(s) against run 3 "
+                  f"(paired {res.paired:.3f})")
     return 0
 
 
