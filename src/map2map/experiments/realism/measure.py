@@ -86,7 +86,7 @@ from scipy import ndimage
 from scipy.stats import wasserstein_distance
 
 from ...core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
-from .slam_errors import SLAM_ERROR_INFO, SLAM_ERROR_STATS, slam_error_stats
+from .slam_errors import SLAM_ERROR_INFO, SLAM_ERROR_STATS, line_scatter, slam_error_stats
 
 __all__ = ["STATS", "STAT_INFO", "TARGET_RATIO", "map_stats", "stats_of", "stats_of_sets",
            "RealismRow",
@@ -180,13 +180,9 @@ def _local_deviation(skel: np.ndarray, radius: int = BEND_RADIUS):
         return ndimage.convolve(a, disc, mode="constant")
 
     n = conv(m)
-    safe = np.maximum(n, 1.0)
-    mx, my = conv(m * X) / safe, conv(m * Y) / safe
-    cxx = conv(m * X * X) / safe - mx**2
-    cyy = conv(m * Y * Y) / safe - my**2
-    cxy = conv(m * X * Y) / safe - mx * my
-    lam = 0.5 * (cxx + cyy) - np.sqrt(np.maximum(0.25 * (cxx - cyy) ** 2 + cxy**2, 0.0))
-    return n, np.sqrt(np.maximum(lam, 0.0))
+    dev, _ = line_scatter(n, conv(m * X), conv(m * Y), conv(m * X * X), conv(m * Y * Y),
+                          conv(m * X * Y))
+    return n, dev
 
 
 def _bend(occ: np.ndarray, walls: np.ndarray, d_wall: np.ndarray) -> float:

@@ -215,15 +215,41 @@ def straight_centre_line(walls: np.ndarray):
     w = pad[rows[:, None] + LINE_RADIUS + dy.astype(int)[None],
             cols[:, None] + LINE_RADIUS + dx.astype(int)[None]].astype(float)
     n = w.sum(1)
-    safe = np.maximum(n, 1.0)
-    mx, my = (w @ dx) / safe, (w @ dy) / safe
-    cxx = (w @ (dx * dx)) / safe - mx**2
-    cyy = (w @ (dy * dy)) / safe - my**2
-    cxy = (w @ (dx * dy)) / safe - mx * my
-    lam = 0.5 * (cxx + cyy) - np.sqrt(np.maximum(0.25 * (cxx - cyy) ** 2 + cxy**2, 0.0))
-    keep = (n >= LINE_MIN_PX) & (np.sqrt(np.maximum(lam, 0.0)) < STRAIGHT_PX)
-    theta = 0.5 * np.arctan2(2 * cxy, cxx - cyy)
+    dev, theta = line_scatter(n, w @ dx, w @ dy, w @ (dx * dx), w @ (dy * dy), w @ (dx * dy))
+    keep = (n >= LINE_MIN_PX) & (dev < STRAIGHT_PX)
     return rows[keep], cols[keep], theta[keep]
+
+
+def line_scatter(n, sx, sy, sxx, syy, sxy):
+    """The best-fitting line of weighted points, from their sums: the RMS distance of the
+    points to it (sqrt of the smaller eigenvalue of their scatter) and its direction.
+
+    Parameters
+    ----------
+    n, sx, sy, sxx, syy, sxy : array_like
+        Sums of the weights and of ``w x``, ``w y``, ``w x^2``, ``w y^2``, ``w x y`` (any
+        shape, all alike; a zero ``n`` is taken as 1).
+
+    Returns
+    -------
+    dev, theta : ndarray
+        RMS distance to the line, and the line's direction (radians, of ``(x, y)``).
+
+    Examples
+    --------
+    >>> x = np.arange(5.0); y = 2.0 + 0 * x                       # points on y = 2
+    >>> dev, th = line_scatter(5.0, x.sum(), y.sum(), (x * x).sum(), (y * y).sum(),
+    ...                        (x * y).sum())
+    >>> round(float(dev), 6), round(float(th), 6)
+    (0.0, 0.0)
+    """
+    safe = np.maximum(n, 1.0)
+    mx, my = sx / safe, sy / safe
+    cxx = sxx / safe - mx**2
+    cyy = syy / safe - my**2
+    cxy = sxy / safe - mx * my
+    lam = 0.5 * (cxx + cyy) - np.sqrt(np.maximum(0.25 * (cxx - cyy) ** 2 + cxy**2, 0.0))
+    return np.sqrt(np.maximum(lam, 0.0)), 0.5 * np.arctan2(2 * cxy, cxx - cyy)
 
 
 def _runs(a: np.ndarray) -> np.ndarray:
