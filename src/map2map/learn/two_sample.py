@@ -19,10 +19,12 @@ On the 640 plans of the seed-20261201 set (600 steps), three seeds gave 0.681, 0
 0.710 for one generator and 0.742, 0.745 and 0.665 for another, so one seed ranked them
 the other way round; on 160 plans four seeds of one generator spread over 0.653-0.722
 (docs/synthesize.md, "how far 160 plans go"). :func:`repeated_auc` runs several seeds and
-reports their mean and standard deviation; compare generators by it. 600 steps is short of
-convergence: with 2000 the same two generators scored 0.869 and 0.841 (floor 0.499), so
-the AUC depends on the steps as much as on the maps; keep the steps fixed between the
-results compared. Inputs are four channels:
+reports their mean and standard deviation; compare generators by it. 600 steps is far
+short of convergence: with 2000 the same two generators scored 0.869 and 0.841 (floor
+0.499), and one seed of the first gave 0.681 / 0.778 / 0.839 / 0.934 at 600 / 1000 / 2000
+/ 4000 steps while the floor stayed at 0.498 / 0.499 / 0.501 (600 / 2000 / 4000). The AUC
+depends on the steps as much as on the maps: keep the steps fixed between the results
+compared. Inputs are four channels:
 the plan's walls and free space, the map's occupied and free cells (unknown is neither).
 
 Deterministic per seed on CPU (same seed, same AUC): torch's deterministic algorithms,
