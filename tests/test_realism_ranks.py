@@ -134,6 +134,25 @@ def test_classifier_tells_a_generator_apart_and_is_deterministic_per_seed():
     assert same.auc < 0.8
 
 
+def test_classifier_early_stopping_keeps_the_best_held_out_step():
+    """patience > 0: each fold keeps the network of its lowest held-out loss, checked every
+    ``check_every`` steps, stopped early or at ``steps``; deterministic per seed; the
+    fixed-steps result records ``steps`` per fold."""
+    pytest.importorskip("torch")
+    from map2map.learn.two_sample import two_sample_auc
+
+    plans, a = _maps(20, 1, False)
+    _, b = _maps(20, 2, True)
+    kw = dict(crop=32, steps=400, seed=1, patience=2, check_every=40)
+    r1, r2 = two_sample_auc(plans, a, b, **kw), two_sample_auc(plans, a, b, **kw)
+    assert r1.auc == r2.auc and r1.trained == r2.trained
+    assert len(r1.trained) == 2
+    assert all(0 < t <= 400 and t % 40 == 0 for t in r1.trained)
+    assert r1.auc > 0.9
+    fixed = two_sample_auc(plans, a, b, crop=32, steps=60, seed=1)
+    assert fixed.trained == (60, 60)
+
+
 @pytest.fixture(scope="module")
 def small_dataset(tmp_path_factory):
     return room_dataset(tmp_path_factory.mktemp("plans"), tmp_path_factory.mktemp("ds") / "DS",
@@ -208,12 +227,14 @@ def test_per_plan_benchmark_measures_synthesize_scans(small_dataset, tmp_path, c
     args = ["--data", str(small_dataset), "--split", "all", "--cache2",
             str(tmp_path / "c2.npz"), "--cache3", str(tmp_path / "c3.npz"), "--model", "scans",
             "--maps-cache", str(tmp_path / "maps.npz"), "--classifier-steps", "20",
-            "--json", str(out_json)]
+            "--classifier-patience", "1", "--json", str(out_json)]
     assert mod.main(args) == 0
     out = capsys.readouterr().out
     assert "scans synthesize: rank among 3" in out and "network alone" not in out
+    assert "early stopping, patience 1, at most 20 steps" in out and "steps kept" in out
     rep = json.loads(out_json.read_text())
     assert set(rep["classifier"]) == {"run 2 (floor)", "parametric", "scans synthesize"}
+    assert all(len(t) == 2 and max(t) <= 20 for t in rep["classifier"]["parametric"]["trained"])
     assert rep["diversity"]["scans"]["ratio"] > 0 and "network" not in rep["diversity"]["scans"]
     from map2map.experiments.realism.per_plan.summary import sentences
 

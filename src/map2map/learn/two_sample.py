@@ -67,6 +67,9 @@ class ClassifierResult:
     plans, folds, steps, crop, seed : int
     seconds : float
         Wall time of the whole test.
+    trained : tuple of int
+        Per fold, the Adam steps of the network that scored it: ``steps`` each, or with
+        early stopping (``patience``) the step of the lowest held-out loss.
     """
 
     auc: float
@@ -77,6 +80,7 @@ class ClassifierResult:
     crop: int
     seed: int
     seconds: float
+    trained: tuple = ()
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -138,7 +142,22 @@ def _augment(x, k: int, flip: bool):
     return torch.flip(x, dims=(-1,)) if flip else x
 
 
-def _train(xa, xb, corners, train_idx, *, crop, steps, batch, lr, seed):
+def _val_loss(net, xa, xb, corners, idx, crop) -> float:
+    """Binary cross-entropy of the map scores (mean logit over the scoring grid) of the
+    plans ``idx``: their ``a`` maps labelled 0, their ``b`` maps 1."""
+    sa, sb = _score(net, xa, corners, idx, crop), _score(net, xb, corners, idx, crop)
+    # -log(1 - sigmoid(s)) = softplus(s); -log(sigmoid(s)) = softplus(-s)
+    return float(np.mean(np.r_[np.logaddexp(0.0, sa), np.logaddexp(0.0, -sb)]))
+
+
+def _train(xa, xb, corners, train_idx, *, crop, steps, batch, lr, seed, val_idx=None,
+           patience=0, check_every=200):
+    """The fold's network and the steps it was trained. With ``patience`` > 0 the held-out
+    plans ``val_idx`` are scored every ``check_every`` steps and training stops after
+    ``patience`` checks without a lower loss (or at ``steps``); the network of the lowest
+    loss is returned."""
+    import copy
+
     import torch
 
     torch.manual_seed(seed)
@@ -147,7 +166,8 @@ def _train(xa, xb, corners, train_idx, *, crop, steps, batch, lr, seed):
     lossf = torch.nn.BCEWithLogitsLoss()
     rng = np.random.default_rng(seed)
     y = torch.cat([torch.zeros(batch), torch.ones(batch)])
-    for _ in range(steps):
+    best, best_step, best_state, waited = math.inf, steps, None, 0
+    for step in range(1, steps + 1):
         pick = rng.choice(train_idx, batch)
         cs = []
         for i in pick:
@@ -165,7 +185,20 @@ def _train(xa, xb, corners, train_idx, *, crop, steps, batch, lr, seed):
         loss = lossf(net(torch.cat([ba, bb])).squeeze(1), y)
         loss.backward()
         opt.step()
-    return net
+        if patience > 0 and (step % check_every == 0 or step == steps):
+            net.eval()
+            v = _val_loss(net, xa, xb, corners, val_idx, crop)
+            net.train()
+            if v < best:
+                best, best_step, best_state, waited = v, step, copy.deepcopy(
+                    net.state_dict()), 0
+            else:
+                waited += 1
+                if waited >= patience:
+                    break
+    if best_state is not None:
+        net.load_state_dict(best_state)
+    return net, best_step
 
 
 def _score(net, x, corners, idx, crop) -> np.ndarray:
@@ -189,7 +222,8 @@ def _auc(neg: np.ndarray, pos: np.ndarray) -> float:
 
 
 def two_sample_auc(plans, a, b, *, folds: int = 2, crop: int = 64, steps: int = 600,
-                   batch: int = 32, lr: float = 1e-3, seed: int = 0, threads: int = 1
+                   batch: int = 32, lr: float = 1e-3, seed: int = 0, threads: int = 1,
+                   patience: int = 0, check_every: int = 200, val_share: float = 0.25
                    ) -> ClassifierResult:
     """Cross-fitted classifier two-sample test of maps ``b`` against maps ``a`` (module
     doc).
@@ -203,11 +237,19 @@ def two_sample_auc(plans, a, b, *, folds: int = 2, crop: int = 64, steps: int = 
     crop : int
         Crop side (px), at most ``S``.
     steps, batch, lr : int, int, float
-        Adam steps per fold, plans per step (each gives an ``a`` and a ``b`` crop).
+        Adam steps per fold (with ``patience``: at most), plans per step (each gives an
+        ``a`` and a ``b`` crop).
     seed : int
     threads : int
         torch CPU threads while it runs (default 1: the small convolutions gain little
         from more, and lose much when the cores are busy).
+    patience, check_every, val_share : int, int, float
+        Early stopping (``patience`` > 0; 0, the default: ``steps`` steps): each fold
+        holds ``val_share`` of its training plans out, scores them every ``check_every``
+        steps (cross-entropy of their maps' scores) and stops after ``patience`` checks
+        without a lower loss; the network of the lowest loss scores the fold. The
+        classifier then trains to convergence rather than for a budget (the module doc:
+        the AUC depends on the budget).
 
     Returns
     -------
@@ -230,10 +272,18 @@ def two_sample_auc(plans, a, b, *, folds: int = 2, crop: int = 64, steps: int = 
         corners = _grid(plans, crop)
         group = np.random.default_rng(seed).permutation(n) % folds
         sa, sb = np.empty(n), np.empty(n)
+        trained = []
         for f in range(folds):
             test, train = np.flatnonzero(group == f), np.flatnonzero(group != f)
-            net = _train(xa, xb, corners, train, crop=crop, steps=steps, batch=batch, lr=lr,
-                         seed=seed * 1000 + f)
+            val = None
+            if patience > 0:
+                train = np.random.default_rng(seed * 1000 + f).permutation(train)
+                k = max(1, int(round(val_share * len(train))))
+                val, train = np.sort(train[:k]), np.sort(train[k:])
+            net, used = _train(xa, xb, corners, train, crop=crop, steps=steps, batch=batch,
+                               lr=lr, seed=seed * 1000 + f, val_idx=val, patience=patience,
+                               check_every=check_every)
+            trained.append(int(used))
             net.eval()
             sa[test] = _score(net, xa, corners, test, crop)
             sb[test] = _score(net, xb, corners, test, crop)
@@ -243,7 +293,7 @@ def two_sample_auc(plans, a, b, *, folds: int = 2, crop: int = 64, steps: int = 
     auc = _auc(sa, sb)
     paired = float(np.mean(sb > sa)) if n else math.nan
     return ClassifierResult(auc, paired, n, folds, steps, crop, seed,
-                            time.perf_counter() - t0)
+                            time.perf_counter() - t0, tuple(trained))
 
 
 @dataclass
@@ -272,6 +322,7 @@ class RepeatedAUC:
         return {"auc": self.auc, "sd": self.sd, "paired": self.paired,
                 "aucs": [r.auc for r in self.runs], "seeds": [r.seed for r in self.runs],
                 "plans": r0.plans, "folds": r0.folds, "steps": r0.steps, "crop": r0.crop,
+                "trained": [list(r.trained) for r in self.runs],
                 "seconds": float(sum(r.seconds for r in self.runs))}
 
     def __str__(self) -> str:

@@ -26,14 +26,18 @@ Printed, per generator:
 2. **Classifier** (:mod:`map2map.learn.two_sample`): cross-fitted AUC of a
    small CNN telling (plan, generated) from (plan, run 3), beside the same test on (plan,
    run 2) against (plan, run 3), the floor; both the mean over ``--classifier-seeds``
-   seeds (default 3), with their standard deviation.
+   seeds (default 3), with their standard deviation. Trained ``--classifier-steps`` (600)
+   a fold by default, which is far from convergence (docs/synthesize.md, "How long the
+   classifier must train"); ``--classifier-patience N`` trains each fold until N checks
+   without a lower held-out loss, ``--classifier-steps`` then the most.
 3. **Diversity**: mean pairwise disagreement of ``synthesize``'s three hypotheses of a
    plan over that of its three simulated runs (target 0.8 - 1.25), and the network's own
    share (three hypotheses with only its dropout, drift, coverage and traces off).
 
     python -m map2map.experiments.realism.per_plan --data DS --split all \\
         --cache2 refs2.npz --cache3 refs3.npz [--plans N] [--model pretrained ...] \\
-        [--classifier-steps 600] [--classifier-seeds 3] [--maps-cache maps.npz] \\
+        [--classifier-steps 600] [--classifier-patience 0] [--classifier-seeds 3] \\
+        [--maps-cache maps.npz] \\
         [--figure F.png] [--json F]
 """
 
@@ -63,6 +67,11 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0, help="seed of everything drawn here")
     ap.add_argument("--classifier-steps", type=int, default=600,
                     help="Adam steps per fold of the classifier (0: no classifier test)")
+    ap.add_argument("--classifier-patience", type=int, default=0, metavar="N",
+                    help="train the classifier to convergence: stop each fold after N checks "
+                    "(every 200 steps) without a lower loss on a quarter of its training "
+                    "plans held out, --classifier-steps then the most (default 0: exactly "
+                    "--classifier-steps)")
     ap.add_argument("--classifier-seeds", type=int, default=3,
                     help="classifier runs (seeds --seed, --seed + 1, ...); the AUC is their "
                     "mean, with their standard deviation (default 3: one seed's AUC moves "
@@ -129,15 +138,21 @@ def main(argv=None) -> int:
 
     if args.classifier_steps > 0:
         seeds = [args.seed + k for k in range(args.classifier_seeds)]
-        print(f"\nClassifier two-sample test: cross-fitted AUC (2 folds, "
-              f"{args.classifier_steps} steps each), against run 3, mean +- sd over "
+        budget = (f"early stopping, patience {args.classifier_patience}, at most "
+                  f"{args.classifier_steps} steps" if args.classifier_patience > 0 else
+                  f"{args.classifier_steps} steps each")
+        print(f"\nClassifier two-sample test: cross-fitted AUC (2 folds, {budget}), "
+              f"against run 3, mean +- sd over "
               f"{len(seeds)} classifier seed(s); paired: share of plans whose map scores "
               "above its run 3")
         for name, maps in {"run 2 (floor)": runs["run 2"], **gens}.items():
             res = repeated_auc(plans, runs["run 3"], maps, seeds,
-                               steps=args.classifier_steps)
+                               steps=args.classifier_steps,
+                               patience=args.classifier_patience)
+            kept = (f"  steps kept {[list(r.trained) for r in res.runs]}"
+                    if args.classifier_patience > 0 else "")
             print(f"{name:<36} {res}  paired {res.paired:.3f}  "
-                  f"({sum(r.seconds for r in res.runs):.0f} s)")
+                  f"({sum(r.seconds for r in res.runs):.0f} s){kept}")
             report["classifier"][name] = res.as_dict()
         floor = report["classifier"]["run 2 (floor)"]["auc"]
         for name in gens:

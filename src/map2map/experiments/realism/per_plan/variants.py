@@ -108,6 +108,11 @@ def main(argv=None) -> int:
     ap.add_argument("--classifier-steps", type=int, default=0,
                     help="also the classifier two-sample AUC against run 3, with this many "
                     "Adam steps per fold (per_plan's: 600; default 0: none)")
+    ap.add_argument("--classifier-patience", type=int, default=0, metavar="N",
+                    help="train the classifier to convergence: stop each fold after N checks "
+                    "(every 200 steps) without a lower loss on a quarter of its training "
+                    "plans held out, --classifier-steps then the most (default 0: exactly "
+                    "--classifier-steps)")
     ap.add_argument("--classifier-seeds", type=int, default=3,
                     help="classifier runs, seeds --seed, --seed + 1, ... (default 3): the AUC "
                     "printed is their mean +- sd")
@@ -170,7 +175,8 @@ def main(argv=None) -> int:
         if args.classifier_steps > 0:
             seeds = [args.seed + k for k in range(args.classifier_seeds)]
             res = repeated_auc(r2.a, runs["run 3"], gens[name], seeds,
-                               steps=args.classifier_steps)
+                               steps=args.classifier_steps,
+                               patience=args.classifier_patience)
             print(f"{name}: classifier {res} over {len(seeds)} seed(s) against run 3 "
                   f"(paired {res.paired:.3f})")
     return 0
