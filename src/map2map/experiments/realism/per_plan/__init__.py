@@ -4,9 +4,41 @@ and the diversity of K hypotheses; ``python -m map2map.experiments.realism.per_p
 Model_AB, ``results_scans.json`` that of ``synthesize --model scans``; ``map2map
 reproduce`` quotes both."""
 
+import argparse
 from pathlib import Path
 
 #: The last full run's ``--json`` report (with ``date`` and ``command`` added).
 RESULTS = Path(__file__).with_name("results.json")
 #: The same for ``synthesize --model scans``.
 RESULTS_SCANS = Path(__file__).with_name("results_scans.json")
+
+
+def add_classifier_options(ap: argparse.ArgumentParser, steps: int, steps_help: str) -> None:
+    """``--classifier-steps`` (default ``steps``), ``--classifier-patience`` and
+    ``--classifier-seeds``, as ``per_plan`` and ``per_plan.variants`` take them; check them
+    with :func:`check_classifier_options` after parsing."""
+    ap.add_argument("--classifier-steps", type=int, default=steps, help=steps_help)
+    ap.add_argument("--classifier-patience", type=int, default=0, metavar="N",
+                    help="train the classifier to convergence: stop each fold after N checks "
+                    "(every 200 steps) without a lower loss on a quarter of its training "
+                    "plans held out, --classifier-steps then the most (default 0: exactly "
+                    "--classifier-steps)")
+    ap.add_argument("--classifier-seeds", type=int, default=3,
+                    help="classifier runs (seeds --seed, --seed + 1, ...); the AUC is their "
+                    "mean, with their standard deviation (default 3: one seed's AUC moves "
+                    "by a few hundredths)")
+
+
+def check_classifier_options(ap: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    if args.classifier_seeds < 1:
+        ap.error("--classifier-seeds must be >= 1")
+
+
+def classifier_auc(args: argparse.Namespace, plans, a, b):
+    """:func:`~map2map.learn.two_sample.repeated_auc` of ``b`` against ``a`` with the
+    options of :func:`add_classifier_options` (seeds ``--seed``, ``--seed + 1``, ...)."""
+    from map2map.learn.two_sample import repeated_auc
+
+    seeds = [args.seed + k for k in range(args.classifier_seeds)]
+    return repeated_auc(plans, a, b, seeds, steps=args.classifier_steps,
+                        patience=args.classifier_patience)

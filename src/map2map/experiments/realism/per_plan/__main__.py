@@ -52,6 +52,12 @@ from pathlib import Path
 
 import numpy as np
 
+from map2map.experiments.realism.per_plan import (
+    add_classifier_options,
+    check_classifier_options,
+    classifier_auc,
+)
+
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -65,17 +71,8 @@ def main(argv=None) -> int:
                     help="Model_AB weights, or scans (synthesize --model scans); none: "
                     "the parametric model only")
     ap.add_argument("--seed", type=int, default=0, help="seed of everything drawn here")
-    ap.add_argument("--classifier-steps", type=int, default=600,
-                    help="Adam steps per fold of the classifier (0: no classifier test)")
-    ap.add_argument("--classifier-patience", type=int, default=0, metavar="N",
-                    help="train the classifier to convergence: stop each fold after N checks "
-                    "(every 200 steps) without a lower loss on a quarter of its training "
-                    "plans held out, --classifier-steps then the most (default 0: exactly "
-                    "--classifier-steps)")
-    ap.add_argument("--classifier-seeds", type=int, default=3,
-                    help="classifier runs (seeds --seed, --seed + 1, ...); the AUC is their "
-                    "mean, with their standard deviation (default 3: one seed's AUC moves "
-                    "by a few hundredths)")
+    add_classifier_options(ap, 600, "Adam steps per fold of the classifier (0: no "
+                           "classifier test)")
     ap.add_argument("--maps-cache", help=".npz keeping synthesize's hypotheses of every plan")
     ap.add_argument("--same-start", action="store_true",
                     help="scans: start each hypothesis where the plan's runs start "
@@ -91,10 +88,8 @@ def main(argv=None) -> int:
         plan_ranks,
         rank_table,
     )
-    from map2map.learn.two_sample import repeated_auc
 
-    if args.classifier_seeds < 1:
-        ap.error("--classifier-seeds must be >= 1")
+    check_classifier_options(ap, args)
     t0 = time.perf_counter()
     r2 = simulated_references(args.data, split=args.split, n=args.plans, cache=args.cache2)
     r3 = simulated_references(args.data, split=args.split, n=args.plans, cache=args.cache3,
@@ -137,18 +132,14 @@ def main(argv=None) -> int:
         report["ranks"][name] = [r.as_dict() for r in rows]
 
     if args.classifier_steps > 0:
-        seeds = [args.seed + k for k in range(args.classifier_seeds)]
         budget = (f"early stopping, patience {args.classifier_patience}, at most "
                   f"{args.classifier_steps} steps" if args.classifier_patience > 0 else
                   f"{args.classifier_steps} steps each")
         print(f"\nClassifier two-sample test: cross-fitted AUC (2 folds, {budget}), "
-              f"against run 3, mean +- sd over "
-              f"{len(seeds)} classifier seed(s); paired: share of plans whose map scores "
-              "above its run 3")
+              f"against run 3, mean +- sd over {args.classifier_seeds} classifier seed(s); "
+              "paired: share of plans whose map scores above its run 3")
         for name, maps in {"run 2 (floor)": runs["run 2"], **gens}.items():
-            res = repeated_auc(plans, runs["run 3"], maps, seeds,
-                               steps=args.classifier_steps,
-                               patience=args.classifier_patience)
+            res = classifier_auc(args, plans, runs["run 3"], maps)
             kept = (f"  steps kept {[list(r.trained) for r in res.runs]}"
                     if args.classifier_patience > 0 else "")
             print(f"{name:<36} {res}  paired {res.paired:.3f}  "

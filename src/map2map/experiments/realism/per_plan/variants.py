@@ -36,6 +36,12 @@ from pathlib import Path
 
 import numpy as np
 
+from map2map.experiments.realism.per_plan import (
+    add_classifier_options,
+    check_classifier_options,
+    classifier_auc,
+)
+
 
 def _kwargs(text: str) -> dict:
     """``synthesize``'s keyword arguments from a variant's JSON.
@@ -105,23 +111,13 @@ def main(argv=None) -> int:
     ap.add_argument("--variant", nargs=2, action="append", required=True,
                     metavar=("NAME", "JSON"), help="a name and synthesize's keyword arguments "
                     '(a "model" key replaces --model, e.g. "scans" with "scans" settings)')
-    ap.add_argument("--classifier-steps", type=int, default=0,
-                    help="also the classifier two-sample AUC against run 3, with this many "
-                    "Adam steps per fold (per_plan's: 600; default 0: none)")
-    ap.add_argument("--classifier-patience", type=int, default=0, metavar="N",
-                    help="train the classifier to convergence: stop each fold after N checks "
-                    "(every 200 steps) without a lower loss on a quarter of its training "
-                    "plans held out, --classifier-steps then the most (default 0: exactly "
-                    "--classifier-steps)")
-    ap.add_argument("--classifier-seeds", type=int, default=3,
-                    help="classifier runs, seeds --seed, --seed + 1, ... (default 3): the AUC "
-                    "printed is their mean +- sd")
+    add_classifier_options(ap, 0, "also the classifier two-sample AUC against run 3, with "
+                           "this many Adam steps per fold (per_plan's: 600; default 0: none)")
     ap.add_argument("--save-maps", metavar="DIR",
                     help="write each variant's maps (and the plans and runs) to "
                     "DIR/NAME.npz, to score them again without making them again")
     args = ap.parse_args(argv)
-    if args.classifier_seeds < 1:
-        ap.error("--classifier-seeds must be >= 1")
+    check_classifier_options(ap, args)
 
     from map2map.datasets.pair import crop_box, preprocess_pair
     from map2map.datasets.pairfolder import PLAN_YAML, SLAM_YAML, pair_dir
@@ -129,7 +125,6 @@ def main(argv=None) -> int:
     from map2map.experiments.realism.ranks import format_rank_table, plan_ranks, rank_table
     from map2map.learn.ab.model import load_ab_model
     from map2map.learn.ab.synthesize import SCANS, synthesize
-    from map2map.learn.two_sample import repeated_auc
     from map2map.maps.formats import load_map
 
     variants = {name: _kwargs(text) for name, text in args.variant}
@@ -173,11 +168,8 @@ def main(argv=None) -> int:
         print()
         print(format_rank_table(rows, name))
         if args.classifier_steps > 0:
-            seeds = [args.seed + k for k in range(args.classifier_seeds)]
-            res = repeated_auc(r2.a, runs["run 3"], gens[name], seeds,
-                               steps=args.classifier_steps,
-                               patience=args.classifier_patience)
-            print(f"{name}: classifier {res} over {len(seeds)} seed(s) against run 3 "
+            res = classifier_auc(args, r2.a, runs["run 3"], gens[name])
+            print(f"{name}: classifier {res} over {len(res.runs)} seed(s) against run 3 "
                   f"(paired {res.paired:.3f})")
     return 0
 
