@@ -11,18 +11,24 @@ from pathlib import Path
 RESULTS = Path(__file__).with_name("results.json")
 #: The same for ``synthesize --model scans``.
 RESULTS_SCANS = Path(__file__).with_name("results_scans.json")
+#: ``per_plan``'s classifier: trained to convergence (early stopping after this many
+#: checks without a lower held-out loss, at most this many steps a fold). At a fixed
+#: 600 steps (the default until 2026-11-27) it was far from converged and understated
+#: every gap (docs/synthesize.md, "How long the classifier must train").
+CONVERGED_PATIENCE, CONVERGED_STEPS = 5, 12000
 
 
-def add_classifier_options(ap: argparse.ArgumentParser, steps: int, steps_help: str) -> None:
-    """``--classifier-steps`` (default ``steps``), ``--classifier-patience`` and
-    ``--classifier-seeds``, as ``per_plan`` and ``per_plan.variants`` take them; check them
-    with :func:`check_classifier_options` after parsing."""
+def add_classifier_options(ap: argparse.ArgumentParser, steps: int, steps_help: str,
+                           patience: int = 0) -> None:
+    """``--classifier-steps`` (default ``steps``), ``--classifier-patience`` (default
+    ``patience``) and ``--classifier-seeds``, as ``per_plan`` and ``per_plan.variants``
+    take them; check them with :func:`check_classifier_options` after parsing."""
     ap.add_argument("--classifier-steps", type=int, default=steps, help=steps_help)
-    ap.add_argument("--classifier-patience", type=int, default=0, metavar="N",
+    ap.add_argument("--classifier-patience", type=int, default=patience, metavar="N",
                     help="train the classifier to convergence: stop each fold after N checks "
                     "(every 200 steps) without a lower loss on a quarter of its training "
-                    "plans held out, --classifier-steps then the most (default 0: exactly "
-                    "--classifier-steps)")
+                    "plans held out, --classifier-steps then the most (0: exactly "
+                    f"--classifier-steps; default {patience})")
     ap.add_argument("--classifier-seeds", type=int, default=3,
                     help="classifier runs (seeds --seed, --seed + 1, ...); the AUC is their "
                     "mean, with their standard deviation (default 3: one seed's AUC moves "
@@ -32,6 +38,8 @@ def add_classifier_options(ap: argparse.ArgumentParser, steps: int, steps_help: 
 def check_classifier_options(ap: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     if args.classifier_seeds < 1:
         ap.error("--classifier-seeds must be >= 1")
+    if args.classifier_patience < 0:
+        ap.error("--classifier-patience must be >= 0")
 
 
 def classifier_auc(args: argparse.Namespace, plans, a, b):
