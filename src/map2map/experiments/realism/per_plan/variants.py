@@ -32,6 +32,7 @@ import json
 import sys
 import time
 import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -54,10 +55,11 @@ def _kwargs(text: str) -> dict:
     >>> kw = _kwargs('{"model": "scans", "scans": {"global_deg": 1, "rooms": {"rot_deg": 2}}}')
     >>> kw["model"], kw["scans"].global_deg, kw["scans"].rooms.rot_deg, kw["scans"].rooms.parametric
     ('scans', 1, 2, False)
+    >>> _kwargs('{"model": "scans", "scans": {"rooms": {"lin": 0.01}}}')["scans"].rooms.rot_deg
+    1.0
     """
     from map2map.learn.ab.coverage import ExploreParams
     from map2map.learn.ab.render import TraceParams
-    from map2map.learn.ab.room_drift import RoomDriftParams
     from map2map.learn.ab.scans import ScanMapParams
 
     kw = json.loads(text)
@@ -68,7 +70,8 @@ def _kwargs(text: str) -> dict:
     if isinstance(kw.get("scans"), dict):
         sc = dict(kw["scans"])
         if isinstance(sc.get("rooms"), dict):
-            sc["rooms"] = RoomDriftParams(**{"parametric": False, **sc["rooms"]})
+            # on top of the scans default's room drift (not RoomDriftParams' own defaults)
+            sc["rooms"] = replace(ScanMapParams().rooms, **sc["rooms"])
         kw["scans"] = ScanMapParams(**sc)
     return kw
 
