@@ -12,9 +12,11 @@ from map2map.learn.ab.drift import DriftParams, apply_drift, drift_field, drift_
 from map2map.learn.ab.room_drift import (
     RoomDriftParams,
     apply_room_drift,
+    collapse_shift,
     room_adjacency,
     room_drift_field,
     segment_rooms,
+    shared_walls,
     solenoidal,
 )
 from map2map.maps.floorplan import generate_floorplan
@@ -294,3 +296,48 @@ def test_a_drift_along_a_path_starts_unmoved_and_chains_rooms_in_the_order_enter
                             (np.full(40, 21.0), np.linspace(15, 85, 40)))
     assert list(back.order) == [left, mid, right]
     assert np.allclose(back.transforms[left - 1], np.eye(3)[:2])
+
+
+def _thick_rooms(t: int = 5) -> np.ndarray:
+    """Three rooms in a row, the two walls between them ``t`` px thick, doors in both."""
+    p = np.full((44, 110), UNKNOWN, np.uint8)
+    p[2:42, 2:108] = FREE
+    p[2, 2:108] = p[41, 2:108] = OCCUPIED
+    p[2:42, 2] = p[2:42, 107] = OCCUPIED
+    for c in (35, 70):
+        p[2:42, c:c + t] = OCCUPIED
+        p[18:26, c:c + t] = FREE
+    return p
+
+
+def test_shared_walls_have_their_thickness_and_point_from_room_to_room():
+    p = _thick_rooms(5)
+    lab = segment_rooms(p, h_px=2.0)
+    a, b, c = (int(lab[20, x]) for x in (15, 55, 90))
+    w = shared_walls(p, lab, shortest=5)
+    n, t, ln = w[(a, b)]
+    assert n.round(6).tolist() == [1.0, 0.0] and t == 5.0 and ln >= 25
+    assert w[(b, a)][0].round(6).tolist() == [-1.0, 0.0] and w[(b, a)][1] == 5.0
+    assert (a, c) not in w and (c, a) not in w                  # no wall between them
+    assert collapse_shift(w, b, [a]).round(6).tolist() == [-5.0, 0.0]
+    assert collapse_shift(w, b, []).tolist() == [0.0, 0.0]
+    assert len(shared_walls(p, lab, thickest=4, shortest=5)) == 0     # too thick to count
+
+
+def test_a_collapsing_step_lays_the_new_rooms_face_on_the_mapped_one():
+    """``collapse=1`` with no random step: entering each room along the route moves it
+    towards the room the robot came from by the shared wall's thickness, so the wall seen
+    from both rooms is drawn as one face; ``collapse=0`` moves nothing."""
+    p = _thick_rooms(3)        # the thickest wall counted is 10 px of a 256 px square
+    path = (np.full(100, 21.0), np.linspace(10, 100, 100))
+    still = dict(rot_deg=0.0, lin=0.0, h_px=2.0, parametric=False)
+    d = room_drift_field(p, np.random.default_rng(0), RoomDriftParams(**still, collapse=1.0),
+                         path)
+    lab = d.rooms
+    shifts = [float(d.transforms[int(lab[20, x]) - 1, 0, 2]) for x in (15, 55, 90)]
+    assert np.allclose(shifts, [0.0, -3.0, -6.0])
+    assert np.abs(d.transforms[:, 1, 2]).max() < 1e-9
+    d0 = room_drift_field(p, np.random.default_rng(0), RoomDriftParams(**still), path)
+    assert np.abs(d0.transforms[:, :, 2]).max() < 1e-9
+    with pytest.raises(InputError, match="collapse"):
+        RoomDriftParams(collapse=1.5)

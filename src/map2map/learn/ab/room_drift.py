@@ -34,9 +34,8 @@ pixels across the walls between them so that the warped walls stay continuous:
    inversion, wall pixels splatted).
 
 The magnitudes are fitted to the per-room offsets measured on the simulated maps of
-``gen900``'s val plans (``map2map.experiments.realism.room_offsets``), not taken from eqs.
-3.81-3.82's
-coefficients, which describe raw odometry and not what the particle filter leaves of it.
+``gen900``'s val plans (``map2map.experiments.realism.room_offsets``), not eqs.
+3.81-3.82's coefficients (raw odometry, not what the particle filter leaves of it).
 
 The rooms' field moves free space and walls without making or erasing them (gen900 val:
 -0.5 % free, +0.4 % wall pixels a map). The parametric field that
@@ -44,9 +43,8 @@ The rooms' field moves free space and walls without making or erasing them (gen9
 pose sees away from it (thesis eq. 3.83's range error is positive), so summed over the
 poses it grows the rooms (+12 % free pixels) and squeezes walls (-15 %).
 ``conserve=True`` adds only its divergence-free part (:func:`solenoidal`), which keeps
-both (-0.5 % free, +1 % walls); not the default, because the session 11 traces were
-tuned on the squeezed walls and the retuned setting lost on test (docs/synthesize.md,
-"Drift that keeps walls and free space", session 12).
+both (-0.5 % free, +1 % walls); not the default: the retuned setting lost on test
+(docs/synthesize.md, "Drift that keeps walls and free space", session 12).
 
 Examples
 --------
@@ -74,6 +72,7 @@ from scipy import ndimage
 from ...core.errors import InputError
 from ...core.grid import FREE
 from ...parametric.field import DisplacementField, warp_map
+from .wall_collapse import MAX_WALL_PX, MIN_SHARED_PX, collapse_shift, shared_walls
 
 __all__ = ["RoomDriftParams", "RoomDrift", "segment_rooms", "room_adjacency",
            "room_drift_field", "apply_room_drift", "solenoidal"]
@@ -101,6 +100,10 @@ class RoomDriftParams:
         Factor on the part of each step's shift across the wall of the door between the
         two rooms (1: the shift is isotropic; 0: the new room only slides along that wall,
         as a scan matcher that sees the wall from both sides keeps it whole).
+    collapse : float
+        Probability that a step also lays the new room's faces of the walls it shares with
+        the rooms mapped before it onto theirs, as a scan matcher does
+        (:mod:`map2map.learn.ab.wall_collapse`; drawn only when > 0).
     jump_share, jump_deg : float
         Probability that a step is a *jump* instead, and its rotation's standard
         deviation [deg] (its shift as any step's): a particle filter keeps most rooms
@@ -142,6 +145,7 @@ class RoomDriftParams:
     rot_deg: float = 1.5
     lin: float = 0.02
     across: float = 1.0
+    collapse: float = 0.0
     jump_share: float = 0.0
     jump_deg: float = 0.0
     spread: float = 0.8
@@ -157,8 +161,7 @@ class RoomDriftParams:
         bad = [n for n in ("rot_deg", "lin", "across", "spread", "scale", "h_px", "smooth_m",
                            "jump_deg")
                if not (math.isfinite(getattr(self, n)) and getattr(self, n) >= 0)]
-        if not 0.0 <= self.jump_share <= 1.0:
-            bad.append("jump_share")
+        bad += [n for n in ("jump_share", "collapse") if not 0.0 <= getattr(self, n) <= 1.0]
         if not (math.isfinite(self.blend_px) and self.blend_px > 0):
             bad.append("blend_px")
         if self.method not in ("additive", "ekf"):
@@ -177,6 +180,7 @@ class RoomDriftParams:
         """
         return (f"rooms: {self.rot_deg:g} deg + {self.lin:g} dl per step, "
                 + (f"x{self.across:g} across the door, " if self.across != 1.0 else "")
+                + (f"walls collapsed {self.collapse:g}, " if self.collapse > 0 else "")
                 + (f"jumps {self.jump_share:g} x {self.jump_deg:g} deg, "
                    if self.jump_share > 0 else "") + "spread "
                 f"{self.spread:g}, blend {self.blend_px:g} px, h {self.h_px:g} px, "
@@ -427,6 +431,7 @@ def room_drift_field(plan: np.ndarray, rng: np.random.Generator,
     cy, cx = (np.asarray(v) for v in zip(*ndimage.center_of_mass(free, own, idx),
                                          strict=True))
     doors, axes = room_adjacency(rooms, free, axes=True)
+    walls = shared_walls(plan, rooms, MAX_WALL_PX * f, MIN_SHARED_PX * f) if rp.collapse else None
     nbrs: dict[int, list[int]] = {r: [] for r in idx.tolist()}
     for a, b in sorted(doors):
         nbrs[a].append(b)
@@ -448,6 +453,8 @@ def room_drift_field(plan: np.ndarray, rng: np.random.Generator,
             # the shift across the door's wall scaled by ``across``, along it kept
             along = float(sh @ u) * np.asarray(u)
             sh = along + rp.across * (sh - along)
+        if walls is not None and rng.random() < rp.collapse:
+            sh = sh + collapse_shift(walls, child, np.flatnonzero(seen))
         T[child] = T[parent] @ _rigid(th, door, sh)
 
     seq = _path_rooms(rooms, path) if path is not None else []
