@@ -185,9 +185,9 @@ def test_the_drift_follows_the_route_the_start_room_unmoved(plan):
 
 
 def test_the_robot_explores_on_the_grid_that_is_drawn(plan):
-    """``explore_map="grid"``: without pose error the hypothesis is exactly the map the
-    robot planned on (:class:`GridOracle`, GMapping's update rule); ``"oracle"`` (the
-    default) explores on the simulator's log-odds map and maps one scan every 0.5 s."""
+    """``explore_map="grid"`` (the default): without pose error the hypothesis is exactly
+    the map the robot planned on (:class:`GridOracle`, GMapping's update rule);
+    ``"oracle"`` explores on the simulator's log-odds map and maps one scan every 0.5 s."""
     from map2map.learn.ab.coverage import explore_rng
     from map2map.learn.ab.scans import GridOracle
     from map2map.sim.mapping import resample_to_frame
@@ -201,7 +201,8 @@ def test_the_robot_explores_on_the_grid_that_is_drawn(plan):
     assert np.allclose(h.true_poses, res.true_poses)
     assert m.processed[0] == 0 and 10 < len(m.processed) < len(res.scans)
     assert np.array_equal(h.map.data, resample_to_frame(m.get_map(), res.start, plan).data)
-    o = scan_map(plan, 3, 0, ScanMapParams(**still))
+    assert np.array_equal(scan_map(plan, 3, 0, ScanMapParams(**still)).map.data, h.map.data)
+    o = scan_map(plan, 3, 0, ScanMapParams(**still, explore_map="oracle"))
     assert not np.array_equal(o.map.data, h.map.data)
     with pytest.raises(InputError, match="explore_map"):
         ScanMapParams(explore_map="rbpf")
