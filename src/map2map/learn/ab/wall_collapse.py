@@ -19,8 +19,6 @@ Examples
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from scipy import ndimage
 
@@ -50,38 +48,36 @@ def shared_walls(plan: np.ndarray, rooms: np.ndarray, thickest: float = MAX_WALL
     ([1.0, 0.0], 5.0, 30)
     """
     occ = np.asarray(plan) == OCCUPIED
+    rooms = np.asarray(rooms)
     # distance from a wall pixel to the nearest non-wall pixel
-    half = ndimage.distance_transform_edt(occ)
-    out: dict = {}
-    acc: dict = {}
+    dist = ndimage.distance_transform_edt(occ)
     H, W = occ.shape
+    parts = []                      # per 4-neighbour pair of wall pixels in two rooms
     for dr, dc in ((0, 1), (1, 0), (0, -1), (-1, 0)):
-        r0, r1 = max(0, -dr), H - max(0, dr)
-        c0, c1 = max(0, -dc), W - max(0, dc)
-        la = rooms[r0:r1, c0:c1]
-        lb = rooms[r0 + dr:r1 + dr, c0 + dc:c1 + dc]
-        m = occ[r0:r1, c0:c1] & occ[r0 + dr:r1 + dr, c0 + dc:c1 + dc] & (la != lb) \
-            & (la > 0) & (lb > 0)
-        if not m.any():
-            continue
+        here = np.s_[max(0, -dr):H - max(0, dr), max(0, -dc):W - max(0, dc)]
+        there = np.s_[max(0, dr):H + min(0, dr), max(0, dc):W + min(0, dc)]
+        la, lb = rooms[here], rooms[there]
+        m = occ[here] & occ[there] & (la != lb) & (la > 0) & (lb > 0)
         # the two pixels either side of the rooms' boundary: their distances to the free
         # space on their own side add up to the wall's thickness
-        hv = half[r0:r1, c0:c1][m] + half[r0 + dr:r1 + dr, c0 + dc:c1 + dc][m]
-        for a_, b_, h in zip(la[m].tolist(), lb[m].tolist(), hv.tolist(), strict=True):
-            e = acc.setdefault((a_, b_), [0.0, 0.0, 0, []])
-            e[0] += dc
-            e[1] += dr
-            e[2] += 1
-            e[3].append(h)
-    for (a_, b_), (sx, sy, n, hs) in acc.items():
-        if n < shortest:
-            continue
-        t = float(np.median(hs))
-        norm = math.hypot(sx, sy)
-        if t > thickest or norm == 0:
-            continue
-        out[(a_, b_)] = (np.array([sx / norm, sy / norm]), t, n)
-    return out
+        h = dist[here][m] + dist[there][m]
+        parts.append((la[m], lb[m], np.full(h.size, dc), np.full(h.size, dr), h))
+    a, b, dx, dy, h = (np.concatenate(v) for v in zip(*parts, strict=True))
+    if a.size == 0:
+        return {}
+    keys, inv, n = np.unique(np.stack([a, b], 1), axis=0, return_inverse=True,
+                             return_counts=True)
+    inv = inv.ravel()
+    sx, sy = np.bincount(inv, dx, len(keys)), np.bincount(inv, dy, len(keys))
+    order = np.lexsort((h, inv))                   # each pair's thicknesses, sorted
+    start = np.r_[0, np.cumsum(n)[:-1]]
+    hs = h[order]
+    med = 0.5 * (hs[start + (n - 1) // 2] + hs[start + n // 2])
+    norm = np.hypot(sx, sy)
+    ok = (n >= shortest) & (med <= thickest) & (norm > 0)
+    return {(int(k[0]), int(k[1])): (np.array([x / r, y / r]), float(t), int(c))
+            for k, x, y, r, t, c in zip(keys[ok], sx[ok], sy[ok], norm[ok], med[ok], n[ok],
+                                        strict=True)}
 
 
 def collapse_shift(walls: dict, child: int, mapped) -> np.ndarray:
