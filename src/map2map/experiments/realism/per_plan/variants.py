@@ -115,7 +115,8 @@ def main(argv=None) -> int:
                     metavar=("NAME", "JSON"), help="a name and synthesize's keyword arguments "
                     '(a "model" key replaces --model, e.g. "scans" with "scans" settings)')
     add_classifier_options(ap, 0, "also the classifier two-sample AUC against run 3, with "
-                           "this many Adam steps per fold (per_plan's: 600; default 0: none)")
+                           "this many Adam steps per fold (the most, with a patience; "
+                           "per_plan's: 12000, patience 5; default 0: none)")
     ap.add_argument("--save-maps", metavar="DIR",
                     help="write each variant's maps (and the plans and runs) to "
                     "DIR/NAME.npz, to score them again without making them again")
