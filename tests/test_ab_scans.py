@@ -124,6 +124,16 @@ def test_cli_synthesize_scans_writes_maps_and_its_summary(tmp_path, plan):
                          capture_output=True, text=True, timeout=600)
     assert bad.returncode == 2 and "render" in bad.stderr and "Traceback" not in bad.stderr
     assert not (tmp_path / "x").exists()
+    grid = subprocess.run(cmd + ["--explore-map", "grid", "--out", str(tmp_path / "g")],
+                          capture_output=True, text=True, timeout=600)
+    assert grid.returncode == 0, grid.stderr
+    summary = json.loads((tmp_path / "g" / "apt_synthesize.json").read_text())
+    assert summary["scans"]["explore_map"] == "grid"
+    net = subprocess.run(cmd[:5] + ["--model", "pretrained", "--explore-map", "grid",
+                                    "--out", str(tmp_path / "n")],
+                         capture_output=True, text=True, timeout=600)
+    assert net.returncode == 2 and "--explore-map" in net.stderr and "Traceback" not in net.stderr
+    assert not (tmp_path / "n").exists()
 
 
 def test_a_given_start_is_where_every_hypothesis_starts(plan):
@@ -205,4 +215,28 @@ def test_the_robot_explores_on_the_grid_that_is_drawn(plan):
     o = scan_map(plan, 3, 0, ScanMapParams(**still, explore_map="oracle"))
     assert not np.array_equal(o.map.data, h.map.data)
     with pytest.raises(InputError, match="explore_map"):
-        ScanMapParams(explore_map="rbpf")
+        ScanMapParams(explore_map="gmapping")
+
+
+def test_the_robot_may_explore_on_its_particle_filters_map(plan):
+    """``explore_map="rbpf"``: the robot drives as a run's robot does (on the best
+    particle's map, steered by its pose estimate); the scans the filter processed are the
+    ones mapped, at the hypothesis's own poses (here the true ones)."""
+    from map2map.learn.ab.coverage import explore_rng
+    from map2map.learn.ab.scans import map_scans
+    from map2map.robotlog.mappers import make_mapper
+    from map2map.sim.runner import simulate
+
+    still = dict(STILL, duration=40.0, rooms=RoomDriftParams(parametric=False, scale=0.0))
+    h = scan_map(plan, 3, 0, ScanMapParams(**still, explore_map="rbpf"))
+    seed = int(explore_rng(3, 0).integers(1 << 32))
+    m = make_mapper("rbpf", resolution=plan.resolution, seed=seed)
+    res = simulate(plan, seed=seed, duration=40.0, fov=180.0, mapper=m, progress=False)
+    assert np.array_equal(h.true_poses, res.true_poses)
+    keep = np.searchsorted(res.times, m.trajectory()[:, 0])
+    assert len(keep) == m.n_updates and 10 < len(keep) < len(res.scans)
+    assert np.array_equal(res.times[keep], m.trajectory()[:, 0])
+    ref = map_scans(res.scans, res.times, res.true_poses, res.start, plan, keep)
+    assert np.array_equal(h.map.data, ref.data)
+    # the filter's own map is not the one drawn: its poses err, the hypothesis's do not
+    assert not np.array_equal(h.map.data, res.slam_map_plan.data)

@@ -39,6 +39,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    default=d.start, help="scans: where the robot starts every hypothesis "
                    "(metres and radians in the plan's frame, as simulate --start; default: "
                    "each hypothesis draws its own start in the free space)")
+    p.add_argument("--explore-map", choices=("rbpf", "grid", "oracle"), default=d.explore_map,
+                   help="scans: the map the robot explores on: rbpf, the particle filter's "
+                   "(as a simulated run's robot; the default); grid, GMapping's grid at the "
+                   "true poses (faster); oracle, the simulator's perfect map")
     p.add_argument("--format", choices=("ros", "png"), default=d.format,
                    help="ros: .yaml + .pgm; png: pictures (default %(default)s)")
     p.add_argument("--render", choices=("slam", "plain"), default=d.render,
@@ -89,7 +93,8 @@ def run(args: argparse.Namespace) -> int:
         format=args.format, render=args.render, drift=args.drift,
         drift_method=args.drift_method, drift_scale=args.drift_scale, coverage=args.coverage,
         drift_route=args.drift_route, traces=args.traces,
-        start=None if args.start is None else tuple(args.start), device=args.device,
+        start=None if args.start is None else tuple(args.start),
+        explore_map=args.explore_map, device=args.device,
         figure=not args.no_figure, read_options=read_options_from_args(args)))
     say_how_read(args.input, run.plan)
     src, res = Path(args.input), run.result

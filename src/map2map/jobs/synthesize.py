@@ -44,6 +44,9 @@ class SynthesizeSpec:
     samples, model, seed, device, render, drift, drift_method, drift_scale, coverage,
     drift_route, traces, start
         As :func:`~map2map.learn.ab.synthesize.synthesize`.
+    explore_map : {"rbpf", "grid", "oracle"} or None
+        With ``model="scans"``: the map its robot explores on
+        (:class:`~map2map.learn.ab.scans.ScanMapParams`; None: its default).
     format : {"ros", "png"}
         The hypotheses' file format.
     figure : bool
@@ -66,6 +69,7 @@ class SynthesizeSpec:
     drift_route: str = "tour"
     traces: str | None = None
     start: tuple[float, float, float] | None = None
+    explore_map: str | None = None
     device: str = "cpu"
     figure: bool = True
     read_options: Any = None
@@ -102,6 +106,13 @@ def synthesize(spec: SynthesizeSpec) -> SynthesizeRun:
     names = [out / f"{src.stem}_hyp{k:02d}{suffix}" for k in range(spec.samples)]
     for path in names:
         check_output_path(path)
+    scans = None
+    if spec.explore_map is not None:
+        if str(spec.model) != "scans":
+            raise InputError("explore_map", "applies to model 'scans' only")
+        from ..learn.ab.scans import ScanMapParams
+
+        scans = ScanMapParams(explore_map=spec.explore_map)
     plan = load_map(src, spec.read_options)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -110,7 +121,8 @@ def synthesize(spec: SynthesizeSpec) -> SynthesizeRun:
                 plan, spec.model, samples=spec.samples, seed=spec.seed, device=spec.device,
                 render=spec.render, drift=spec.drift, drift_method=spec.drift_method,
                 drift_scale=spec.drift_scale, coverage=spec.coverage,
-                drift_route=spec.drift_route, traces=spec.traces, start=spec.start)
+                drift_route=spec.drift_route, traces=spec.traces, start=spec.start,
+                scans=scans)
         except InputError as exc:       # the plan's problems (a start in a wall) name it
             if exc.source not in (None, "plan"):
                 raise

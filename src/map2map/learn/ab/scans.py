@@ -59,8 +59,8 @@ from ...core.grid import OccupancyMap
 from ...sim.mapping import OracleMapper
 from .room_drift import RoomDrift, RoomDriftParams, room_drift_field
 
-__all__ = ["ScanMapParams", "ScanHypothesis", "GridOracle", "scan_rng", "drifted_poses",
-           "map_scans", "scan_map"]
+__all__ = ["ScanMapParams", "ScanHypothesis", "GridOracle", "Exploration", "explore",
+           "scan_rng", "drifted_poses", "map_scans", "scan_map"]
 
 #: Stream of :func:`scan_rng` (apart from the exploration's, the drift's and the traces').
 _STREAM = 0x5CA75
@@ -131,9 +131,9 @@ class ScanMapParams:
             raise InputError("outlier_share", f"must be in [0, 1], got {self.outlier_share!r}")
         if self.duration <= 0:
             raise InputError("duration", f"must be > 0, got {self.duration!r}")
-        if self.explore_map not in ("grid", "oracle"):
+        if self.explore_map not in ("grid", "oracle", "rbpf"):
             raise InputError("explore_map",
-                             f"must be 'grid' or 'oracle', got {self.explore_map!r}")
+                             f"must be 'grid', 'oracle' or 'rbpf', got {self.explore_map!r}")
         if self.room_order not in ("random", "visits"):
             raise InputError("room_order",
                              f"must be 'random' or 'visits', got {self.room_order!r}")
@@ -367,11 +367,77 @@ def map_scans(scans, times, poses, start, plan: OccupancyMap, keep=None) -> Occu
     return resample_to_frame(grid.to_occupancy_map(gp.occ_thresh), start, plan)
 
 
+def _explore_mapper(kind: str, resolution: float, sim_seed: int):
+    """The mapper the robot explores on (:class:`ScanMapParams` ``explore_map``)."""
+    if kind == "grid":
+        return GridOracle(resolution)
+    if kind == "rbpf":
+        from ...robotlog.mappers import make_mapper
+
+        return make_mapper("rbpf", resolution=resolution, seed=sim_seed)
+    return "oracle"
+
+
+def _processed(mapper, times) -> np.ndarray | None:
+    """Indices of the scans the exploring ``mapper`` registered (None: the oracle's, one
+    every ``temporal_update`` seconds is mapped instead)."""
+    if isinstance(mapper, GridOracle):
+        return np.asarray(mapper.processed, int)
+    if hasattr(mapper, "trajectory"):          # the particle filter: its nodes' times
+        return np.searchsorted(np.asarray(times, float), mapper.trajectory()[:, 0])
+    return None
+
+
+@dataclass
+class Exploration:
+    """What :func:`explore` recorded of one robot's run: its true ``poses`` (N, 3), the
+    ``scans`` and their ``times``, the ``start`` pose, the indices ``keep`` of the scans
+    the exploring mapper processed (None: the oracle's, one every ``temporal_update`` s is
+    drawn), and the run's ``seed``, ``coverage`` and ``sim_seconds``."""
+
+    poses: np.ndarray
+    scans: list
+    times: np.ndarray
+    start: tuple
+    keep: np.ndarray | None
+    seed: int
+    coverage: float
+    sim_seconds: float
+
+
+def explore(plan: OccupancyMap, seed: int, k: int, params: ScanMapParams | None = None,
+            start=None) -> Exploration:
+    """Step 1 of the module doc for hypothesis ``k`` of ``plan`` under ``seed``: the
+    simulator's robot explores with the simulation seed of
+    :func:`~map2map.learn.ab.coverage.explore_rng` ``(seed, k)`` on the map of
+    ``params.explore_map``. It does not depend on the pose-error settings.
+
+    Examples
+    --------
+    >>> from map2map.maps.floorplan import generate_floorplan
+    >>> plan = generate_floorplan(3, size=(10, 8))
+    >>> e = explore(plan, 0, 0, ScanMapParams(duration=20.0))
+    >>> len(e.scans) == len(e.poses) == len(e.times), bool(0 < len(e.keep) < len(e.scans))
+    (True, True)
+    """
+    from ...sim.runner import simulate
+    from .coverage import explore_rng
+
+    sp = params or ScanMapParams()
+    sim_seed = int(explore_rng(seed, k).integers(1 << 32))
+    mapper = _explore_mapper(sp.explore_map, plan.resolution, sim_seed)
+    res = simulate(plan, seed=sim_seed, duration=sp.duration, fov=sp.fov, mapper=mapper,
+                   start=None if start is None else tuple(float(v) for v in start),
+                   progress=False)
+    return Exploration(res.true_poses, res.scans, res.times, res.start,
+                       _processed(mapper, res.times), sim_seed, float(res.coverage),
+                       float(res.sim_seconds))
+
+
 def scan_map(plan: OccupancyMap, seed: int, k: int,
              params: ScanMapParams | None = None, start=None) -> ScanHypothesis:
-    """Hypothesis ``k`` of ``plan`` under ``seed`` (module doc): explored with the
-    simulation seed of :func:`~map2map.learn.ab.coverage.explore_rng` ``(seed, k)``, its
-    pose error drawn from :func:`scan_rng` ``(seed, k)``.
+    """Hypothesis ``k`` of ``plan`` under ``seed`` (module doc): its exploration
+    (:func:`explore`), its pose error drawn from :func:`scan_rng` ``(seed, k)``.
 
     ``start`` (x, y, yaw; metres and radians in the plan's frame, optional) is where the
     robot starts, as ``map2map simulate --start``; by default the simulation seed draws
@@ -382,26 +448,18 @@ def scan_map(plan: OccupancyMap, seed: int, k: int,
     InputError
         A plan without free space or too small for the robot.
     """
-    from ...sim.runner import simulate
-    from .coverage import explore_rng
-
     sp = params or ScanMapParams()
-    sim_seed = int(explore_rng(seed, k).integers(1 << 32))
-    mapper = GridOracle(plan.resolution) if sp.explore_map == "grid" else "oracle"
-    res = simulate(plan, seed=sim_seed, duration=sp.duration, fov=sp.fov, mapper=mapper,
-                   start=None if start is None else tuple(float(v) for v in start),
-                   progress=False)
+    ex = explore(plan, seed, k, sp, start)
     rng = scan_rng(seed, k)
-    path = plan.world_to_pixel_float(res.true_poses[:, 0], res.true_poses[:, 1]) \
+    path = plan.world_to_pixel_float(ex.poses[:, 0], ex.poses[:, 1]) \
         if sp.room_order == "visits" else None
     drift = room_drift_field(plan.data, rng, sp.rooms, path)
-    poses = drifted_poses(plan, res.true_poses, res.start, drift, rng, sp)
-    keep = mapper.processed if isinstance(mapper, GridOracle) else None
-    m = map_scans(res.scans, res.times, poses, res.start, plan, keep)
-    err = np.hypot(*(poses[:, :2] - res.true_poses[:, :2]).T)
-    info = {"seed": sim_seed, "coverage": round(float(res.coverage), 4),
-            "sim_seconds": round(float(res.sim_seconds), 1), "scans": len(res.scans),
+    poses = drifted_poses(plan, ex.poses, ex.start, drift, rng, sp)
+    m = map_scans(ex.scans, ex.times, poses, ex.start, plan, ex.keep)
+    err = np.hypot(*(poses[:, :2] - ex.poses[:, :2]).T)
+    info = {"seed": ex.seed, "coverage": round(ex.coverage, 4),
+            "sim_seconds": round(ex.sim_seconds, 1), "scans": len(ex.scans),
             "pose_error_m": {"mean": round(float(err.mean()), 4) if len(err) else 0.0,
                              "max": round(float(err.max()), 4) if len(err) else 0.0},
             "drift": {k2: round(float(v), 3) for k2, v in drift.stats().items()}}
-    return ScanHypothesis(m, poses, res.true_poses, drift, info)
+    return ScanHypothesis(m, poses, ex.poses, drift, info)

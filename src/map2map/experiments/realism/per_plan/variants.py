@@ -117,6 +117,9 @@ def main(argv=None) -> int:
     add_classifier_options(ap, 0, "also the classifier two-sample AUC against run 3, with "
                            "this many Adam steps per fold (the most, with a patience; "
                            "per_plan's: 12000, patience 5; default 0: none)")
+    ap.add_argument("--floor", action="store_true",
+                    help="with --classifier-steps: also the same classifier on run 2 against "
+                    "run 3 (the floor a generator is measured against; per_plan prints it)")
     ap.add_argument("--save-maps", metavar="DIR",
                     help="write each variant's maps (and the plans and runs) to "
                     "DIR/NAME.npz, to score them again without making them again")
@@ -167,6 +170,10 @@ def main(argv=None) -> int:
     st = stats_of_sets({**runs, **gens}, r2.a)
     print()
     print(format_medians(st))
+    if args.floor and args.classifier_steps > 0:
+        res = classifier_auc(args, r2.a, runs["run 3"], runs["run 2"])
+        print(f"\nrun 2 (floor): classifier {res} over {len(res.runs)} seed(s) against run 3 "
+              f"(paired {res.paired:.3f})")
     for name in gens:
         rows = rank_table(plan_ranks(st[name], [st[r] for r in runs], seed=args.seed), 3)
         print()
