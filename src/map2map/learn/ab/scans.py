@@ -5,16 +5,22 @@ Model_AB's network draws a 64 px map; upsampled, its walls come out wobbly, its 
 round and its free space in blobs, and a small CNN tells its maps from simulated ones
 (docs/synthesize.md). What a SLAM run's map looks like is set by how it was made: a LIDAR's
 beams, cropped at the usable range, counted into a grid at poses that err. This module
-makes a hypothesis the same way, without a particle filter:
+makes a hypothesis the same way, its pose error drawn, not estimated:
 
-1. **exploration** (:func:`map2map.sim.runner.simulate`, :class:`GridOracle` mapper): the
+1. **exploration** (:func:`explore`, :func:`map2map.sim.runner.simulate`): the
    simulator's robot explores the plan (frontier exploration, ``duration`` simulated
-   seconds, 180 degree LIDAR with its range noise) on GMapping's grid of the scans a run
-   would process, at the true poses, recording its true poses and scans; so it goes to
-   every wall a run's robot goes to (``explore_map="oracle"``, the default until session
-   25: exploring on a perfect map out to the full range, it left walls seen only from 3 to
-   3.5 m away unmapped, and free space ending in range arcs in front of them was the
-   converged classifier's strongest tell, docs/synthesize.md);
+   seconds, 180 degree LIDAR with its range noise) on the map of the datasets' ``rbpf``
+   particle filter, steered by its pose estimate, exactly as a run's robot explores
+   (``explore_map="rbpf"``, the default since session 26), recording its true poses, its
+   scans and which of them the filter processed; the filter's own map and poses are not
+   used. ``"grid"`` (:class:`GridOracle`, the default in session 25) explores on
+   GMapping's grid at the true poses instead: its walls are one cell thick, so the
+   no-return beams that cross them open frontiers behind them, and its robot turns back
+   at doors to chase those (it finished 28 % of 40 dev plans within 420 s, the particle
+   filter's robot 55 %), leaving too many laser streaks and too much open frontier in
+   its maps. ``"oracle"`` (the default until session 25) explores on the simulator's
+   perfect map out to the full range and leaves walls seen only from 3 to 3.5 m away
+   unmapped, free space ending in range arcs in front of them (docs/synthesize.md);
 2. **pose error** (:func:`drifted_poses`): every scan's pose is moved by the room-wise
    rigid drift of :mod:`map2map.learn.ab.room_drift` (the transform of the room the robot
    is in, chained along its route: the start room is where the map is anchored, each
@@ -30,7 +36,8 @@ makes a hypothesis the same way, without a particle filter:
    ``occ_thresh``; the scans GMapping would process), in the run's own frame, then put
    on the plan's grid at the true start pose, as a run's map is.
 
-A hypothesis costs the exploration (0.1-5 s of CPU a plan) plus the mapping; K hypotheses
+A hypothesis costs the exploration (about 1-3 s of CPU a plan with the particle filter,
+half that on the grid) plus the mapping; K hypotheses
 differ in start, route, drift and jitter. The settings (:class:`ScanMapParams`) were chosen
 on 160 plans of a dev set by the per-plan ranks and the classifier test
 (``python -m map2map.experiments.realism.per_plan``; docs/synthesize.md).
@@ -94,20 +101,22 @@ class ScanMapParams:
         How the room drift chains the rooms: a random walk from a random room
         (``"random"``), or along the robot's route (``"visits"``: the start room is not
         moved, each room steps from the one the robot came from when it first entered it).
-    explore_map : {"oracle", "grid"}
-        The map the robot explores on: the simulator's log-odds oracle out to the full
-        range (``"oracle"``; one scan every ``temporal_update`` seconds is mapped), or
-        GMapping's count grid of the scans it would process, at the true poses
-        (``"grid"``, :class:`GridOracle`, as the run's robot explores; those scans are
-        the ones mapped; the default since session 25: the converged realism classifier
-        told its maps apart with AUC 0.85 against the oracle's 0.95 on 320 plans of a dev
-        set; docs/synthesize.md).
+    explore_map : {"rbpf", "grid", "oracle"}
+        The map the robot explores on (module doc, step 1): the ``rbpf`` particle
+        filter's, as a run's robot (the default since session 26; the scans it processed
+        are the ones mapped); GMapping's count grid of the scans it would process at the
+        true poses (``"grid"``, :class:`GridOracle`, the default in session 25; about
+        half the time); or the simulator's log-odds oracle out to the full range
+        (``"oracle"``; one scan every ``temporal_update`` seconds is mapped).
 
     The defaults were chosen on 160 plans of the seed-20261127 dev set among eight
     settings by the per-plan ranks and the classifier AUC; ``room_order="visits"`` on
     160 plans of each of two other dev sets (seeds 20261130 and 20261129), against the
     random walk and three other candidates; ``explore_map="grid"`` with 420 s on 320 plans
-    of the seed-20261201 dev set by the converged classifier (docs/synthesize.md).
+    of the seed-20261201 dev set by the converged classifier, and ``"rbpf"`` on 320 plans
+    of the seed-20261203 dev set (classifier AUC 0.77 / 0.82 / 0.78 against 0.80 / 0.86 /
+    0.83 with three classifier seeds; its streaks and open frontier as the runs'; the
+    diversity ratio 1.16 against 1.29; docs/synthesize.md).
     """
 
     duration: float = 420.0
@@ -119,7 +128,7 @@ class ScanMapParams:
     outlier_deg: float = 3.0
     rooms: RoomDriftParams = field(default_factory=_rooms_default)
     room_order: str = "visits"
-    explore_map: str = "grid"
+    explore_map: str = "rbpf"
 
     def __post_init__(self):
         for name in ("duration", "fov", "jitter_m", "jitter_deg", "global_deg",
