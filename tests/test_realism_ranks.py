@@ -266,12 +266,13 @@ def test_per_plan_variants_takes_a_model_per_variant_and_the_classifier(small_da
     from map2map.experiments.realism.per_plan.variants import main
 
     assert main(["--data", str(small_dataset), *caches, "--plans", "4", "--samples", "1",
-                 "--classifier-steps", "10", "--classifier-seeds", "2",
+                 "--classifier-steps", "10", "--classifier-seeds", "2", "--floor",
                  "--save-maps", str(tmp_path / "saved"), "--variant", "scans",
                  '{"model": "scans", "scans": {"duration": 60, "rooms": {"rot_deg": 2}}}']) == 0
     out = capsys.readouterr().out
     assert "scans: 4 plans" in out and "scans: rank among 3 simulated runs" in out
     assert "scans: classifier AUC" in out and "over 2 seed(s)" in out
+    assert "run 2 (floor): classifier AUC" in out      # --floor: run 2 against run 3
     with np.load(tmp_path / "saved" / "scans.npz") as z:     # scored again from these
         assert z["maps"].shape == z["plans"].shape == z["run3"].shape
         assert z["maps"].shape[0] == len(z["indices"]) == 4

@@ -91,7 +91,7 @@ def synthesize(spec: SynthesizeSpec) -> SynthesizeRun:
     from ..maps.formats import check_output_path, load_map, save_map
 
     try:
-        from ..learn.ab.synthesize import save_synthesis_figure
+        from ..learn.ab.synthesize import SCANS, save_synthesis_figure
         from ..learn.ab.synthesize import synthesize as synthesize_maps
     except ImportError as exc:
         raise InputError("synthesize", f"needs PyTorch: pip install 'map2map[learn]' ({exc})"
@@ -108,8 +108,8 @@ def synthesize(spec: SynthesizeSpec) -> SynthesizeRun:
         check_output_path(path)
     scans = None
     if spec.explore_map is not None:
-        if str(spec.model) != "scans":
-            raise InputError("explore_map", "applies to model 'scans' only")
+        if str(spec.model) != SCANS:
+            raise InputError("explore_map", f"applies to model '{SCANS}' only")
         from ..learn.ab.scans import ScanMapParams
 
         scans = ScanMapParams(explore_map=spec.explore_map)

@@ -106,8 +106,9 @@ class ScanMapParams:
         filter's, as a run's robot (the default since session 26; the scans it processed
         are the ones mapped); GMapping's count grid of the scans it would process at the
         true poses (``"grid"``, :class:`GridOracle`, the default in session 25; about
-        half the time); or the simulator's log-odds oracle out to the full range
-        (``"oracle"``; one scan every ``temporal_update`` seconds is mapped).
+        half the particle filter's CPU time); or the simulator's log-odds oracle out to
+        the full range (``"oracle"``; one scan every ``temporal_update`` seconds is
+        mapped).
 
     The defaults were chosen on 160 plans of the seed-20261127 dev set among eight
     settings by the per-plan ranks and the classifier AUC; ``room_order="visits"`` on
