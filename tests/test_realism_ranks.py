@@ -268,9 +268,29 @@ def test_per_plan_variants_takes_a_model_per_variant_and_the_classifier(small_da
     assert main(["--data", str(small_dataset), *caches, "--plans", "4", "--samples", "1",
                  "--classifier-steps", "10", "--classifier-seeds", "2", "--floor",
                  "--save-maps", str(tmp_path / "saved"), "--variant", "scans",
-                 '{"model": "scans", "scans": {"duration": 60, "rooms": {"rot_deg": 2}}}']) == 0
+                 '{"model": "scans", "scans": {"duration": 60, "rooms": {"rot_deg": 2}}}',
+                 "--variant", "still", '{"model": "scans", "scans": {"duration": 60, '
+                 '"jitter_m": 0, "jitter_deg": 0}}']) == 0
     out = capsys.readouterr().out
     assert "scans: 4 plans" in out and "scans: rank among 3 simulated runs" in out
+    # the two variants share each plan's exploration (drawn_hypothesis); each map is
+    # still synthesize's first hypothesis with the variant's settings
+    from dataclasses import replace
+
+    from map2map.datasets.pair import crop_box, preprocess_pair
+    from map2map.datasets.pairfolder import PLAN_YAML, SLAM_YAML, pair_dir
+    from map2map.learn.ab.scans import ScanMapParams
+    from map2map.learn.ab.synthesize import SCANS, synthesize
+    from map2map.maps.formats import load_map
+
+    sp = ScanMapParams(duration=60, rooms=replace(ScanMapParams().rooms, rot_deg=2))
+    for name, params in (("scans", sp), ("still", ScanMapParams(duration=60, jitter_m=0,
+                                                                jitter_deg=0))):
+        with np.load(tmp_path / "saved" / f"{name}.npz") as z:
+            i, got, size = int(z["indices"][1]), z["maps"][1], z["plans"].shape[-1]
+        a, b = (load_map(pair_dir(small_dataset, i) / f) for f in (PLAN_YAML, SLAM_YAML))
+        want = synthesize(a, SCANS, samples=1, seed=i, scans=params).maps[0]
+        assert np.array_equal(got, preprocess_pair(a, want, size, 0, crop_box(a, b))[1])
     assert "scans: classifier AUC" in out and "over 2 seed(s)" in out
     assert "run 2 (floor): classifier AUC" in out      # --floor: run 2 against run 3
     with np.load(tmp_path / "saved" / "scans.npz") as z:     # scored again from these

@@ -67,7 +67,7 @@ from ...sim.mapping import OracleMapper
 from .room_drift import RoomDrift, RoomDriftParams, room_drift_field
 
 __all__ = ["ScanMapParams", "ScanHypothesis", "GridOracle", "Exploration", "explore",
-           "scan_rng", "drifted_poses", "map_scans", "scan_map"]
+           "scan_rng", "drifted_poses", "map_scans", "drawn_hypothesis", "scan_map"]
 
 #: Stream of :func:`scan_rng` (apart from the exploration's, the drift's and the traces').
 _STREAM = 0x5CA75
@@ -459,7 +459,30 @@ def scan_map(plan: OccupancyMap, seed: int, k: int,
         A plan without free space or too small for the robot.
     """
     sp = params or ScanMapParams()
-    ex = explore(plan, seed, k, sp, start)
+    return drawn_hypothesis(plan, explore(plan, seed, k, sp, start), seed, k, sp)
+
+
+def drawn_hypothesis(plan: OccupancyMap, ex: Exploration, seed: int, k: int,
+                     params: ScanMapParams | None = None) -> ScanHypothesis:
+    """Steps 2 and 3 of the module doc for a recorded exploration ``ex`` (of
+    :func:`explore`): hypothesis ``k``'s pose error drawn from :func:`scan_rng`
+    ``(seed, k)``, its scans mapped. ``scan_map(plan, seed, k, params)`` is
+    ``drawn_hypothesis(plan, explore(plan, seed, k, params), seed, k, params)``, so one
+    exploration serves any pose-error settings (``params.duration``, ``fov`` and
+    ``explore_map`` are the exploration's and not read here): tuning the pose error
+    need not explore again.
+
+    Examples
+    --------
+    >>> from map2map.maps.floorplan import generate_floorplan
+    >>> plan = generate_floorplan(3, size=(10, 8))
+    >>> sp = ScanMapParams(duration=20.0)
+    >>> ex = explore(plan, 0, 0, sp)
+    >>> h = drawn_hypothesis(plan, ex, 0, 0, sp)
+    >>> bool((h.map.data == scan_map(plan, 0, 0, sp).map.data).all())
+    True
+    """
+    sp = params or ScanMapParams()
     rng = scan_rng(seed, k)
     path = plan.world_to_pixel_float(ex.poses[:, 0], ex.poses[:, 1]) \
         if sp.room_order == "visits" else None

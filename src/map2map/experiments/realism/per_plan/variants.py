@@ -16,7 +16,10 @@ over the plans are printed for the runs and each variant. Tune on a set that is 
 
 A variant may name its own ``"model"`` (``"scans"``: ``synthesize --model scans``, its
 settings under ``"scans"`` as :class:`~map2map.learn.ab.scans.ScanMapParams` fields, the
-room drift under ``"rooms"``); ``--classifier-steps`` adds the classifier's AUC. The
+room drift under ``"rooms"``; its maps are the first hypothesis of ``synthesize``, and
+the variants of one exploration setting share each plan's exploration,
+:func:`~map2map.learn.ab.scans.drawn_hypothesis`); ``--classifier-steps`` adds the
+classifier's AUC. The
 comparison that chose ``--model scans``'s settings (docs/synthesize.md; run then by a
 script outside the package, with other seeds) reads::
 
@@ -131,6 +134,7 @@ def main(argv=None) -> int:
     from map2map.experiments.realism.measure import simulated_references, stats_of_sets
     from map2map.experiments.realism.ranks import format_rank_table, plan_ranks, rank_table
     from map2map.learn.ab.model import load_ab_model
+    from map2map.learn.ab.scans import ScanMapParams, drawn_hypothesis, explore
     from map2map.learn.ab.synthesize import SCANS, synthesize
     from map2map.maps.formats import load_map
 
@@ -142,22 +146,37 @@ def main(argv=None) -> int:
     r2, r3 = r2.only(both), r3.only(both)
     nets = {}
     size = r2.a.shape[-1]
-    gens = {}
+    models = {}
     for name, kw in variants.items():
-        model = kw.pop("model", args.model)
-        if model != SCANS and model not in nets:
-            nets[model] = load_ab_model(model)
-        net = nets.get(model, SCANS)
-        t0, maps = time.perf_counter(), []
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            for i in both:
-                folder = pair_dir(args.data, int(i))
-                a, b = load_map(folder / PLAN_YAML), load_map(folder / SLAM_YAML)
-                res = synthesize(a, net, samples=args.samples, seed=args.seed + int(i), **kw)
-                maps.append(preprocess_pair(a, res.maps[0], size, 0, crop_box(a, b))[1])
-        gens[name] = np.stack(maps)
-        print(f"{name}: {len(both)} plans in {time.perf_counter() - t0:.0f} s")
+        models[name] = kw.pop("model", args.model)
+        if models[name] != SCANS and models[name] not in nets:
+            nets[models[name]] = load_ab_model(models[name])
+    gens = {name: [] for name in variants}
+    took = dict.fromkeys(variants, 0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for i in both:
+            folder = pair_dir(args.data, int(i))
+            a, b = load_map(folder / PLAN_YAML), load_map(folder / SLAM_YAML)
+            explored = {}              # one exploration per plan serves every scans variant
+            for name, kw in variants.items():
+                t0 = time.perf_counter()
+                if models[name] == SCANS and set(kw) <= {"scans"}:
+                    # the first hypothesis of synthesize(a, SCANS, seed=...): scan_map's
+                    sp = kw.get("scans") or ScanMapParams()
+                    key = (sp.duration, sp.fov, sp.explore_map)
+                    if key not in explored:
+                        explored[key] = explore(a, args.seed + int(i), 0, sp)
+                    m = drawn_hypothesis(a, explored[key], args.seed + int(i), 0, sp).map
+                else:
+                    net = nets.get(models[name], SCANS)
+                    m = synthesize(a, net, samples=args.samples, seed=args.seed + int(i),
+                                   **kw).maps[0]
+                gens[name].append(preprocess_pair(a, m, size, 0, crop_box(a, b))[1])
+                took[name] += time.perf_counter() - t0
+    for name in variants:
+        gens[name] = np.stack(gens[name])
+        print(f"{name}: {len(both)} plans in {took[name]:.0f} s")
         if args.save_maps:
             from map2map.core._io import atomic_path
 
