@@ -297,6 +297,16 @@ def test_per_plan_variants_takes_a_model_per_variant_and_the_classifier(small_da
         assert z["maps"].shape == z["plans"].shape == z["run3"].shape
         assert z["maps"].shape[0] == len(z["indices"]) == 4
         assert not np.array_equal(z["maps"], z["run1"])
+    # what gives the variant away: the classifier's most telling crops of held-out plans
+    from map2map.experiments.realism.per_plan.tells import main as tells
+
+    fig = tmp_path / "tells.png"
+    assert tells([str(tmp_path / "saved" / "scans.npz"), "--out", str(fig), "--steps", "20",
+                  "--top", "2"]) == 0
+    told = capsys.readouterr().out
+    assert "held-out AUC" in told and fig.stat().st_size > 1000
+    assert tells([str(tmp_path / "c2.npz"), "--out", str(fig)]) == 2     # not a saved file
+    assert "not a per_plan.variants --save-maps file" in capsys.readouterr().err
     medians = out[out.index("median "):].splitlines()
     assert "bend" in medians[0] and "streaks" in medians[0]
     assert [r.split()[0] for r in medians[1:5]] == ["run", "run", "run", "scans"]

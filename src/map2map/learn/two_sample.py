@@ -51,7 +51,8 @@ import numpy as np
 
 from ..core.grid import FREE, OCCUPIED
 
-__all__ = ["ClassifierResult", "RepeatedAUC", "two_sample_auc", "repeated_auc", "encode"]
+__all__ = ["ClassifierResult", "RepeatedAUC", "TellingCrops", "two_sample_auc", "repeated_auc",
+           "telling_crops", "encode"]
 
 
 @dataclass
@@ -370,3 +371,94 @@ def repeated_auc(plans, a, b, seeds=(0, 1, 2), **kwargs) -> RepeatedAUC:
     aucs = np.array([r.auc for r in runs])
     sd = float(aucs.std(ddof=1)) if len(aucs) > 1 else 0.0
     return RepeatedAUC(float(aucs.mean()), sd, float(np.mean([r.paired for r in runs])), runs)
+
+
+@dataclass
+class TellingCrops:
+    """:func:`telling_crops`'s result.
+
+    Attributes
+    ----------
+    auc : float
+        The network's ROC AUC on the held-out plans (map scores as :func:`two_sample_auc`).
+    test : (T,) int array
+        The held-out plans.
+    crops : (K, 5) float array
+        Every scoring crop of the held-out plans, most telling first: plan index, top-left
+        row and column, the logit of its ``b`` crop minus its ``a`` crop's, and the ``b``
+        crop's logit.
+    saliency : (k, crop, crop) float32 array
+        For the first ``top`` crops: the absolute gradient of the ``b`` crop's logit with
+        respect to its map channels (occupied and free, summed): where the network looks.
+    steps : int
+        The steps the network was trained (early stopping).
+    """
+
+    auc: float
+    test: np.ndarray
+    crops: np.ndarray
+    saliency: np.ndarray
+    steps: int
+
+
+def telling_crops(plans, a, b, *, crop: int = 64, steps: int = 12000, patience: int = 5,
+                  test_share: float = 0.25, val_share: float = 0.2, top: int = 8,
+                  seed: int = 0, threads: int = 1) -> TellingCrops:
+    """What tells maps ``b`` from maps ``a`` (issue #33): one network of
+    :func:`two_sample_auc`, trained on the plans outside a held-out ``test_share`` (early
+    stopping on ``val_share`` of them), scores every scoring crop of the held-out plans'
+    two maps; the crops where ``b`` scores most above ``a`` show what gives ``b`` away.
+
+    Examples
+    --------
+    >>> plans = np.full((24, 64, 64), 255, np.uint8); plans[:, :, 30:32] = 0
+    >>> b = plans.copy(); b[:, :, 33:35] = 0                # every b wall saved twice
+    >>> t = telling_crops(plans, plans, b, crop=32, steps=60, patience=0, top=2)
+    >>> t.auc > 0.9, t.crops.shape[1], t.saliency.shape
+    (True, 5, (2, 32, 32))
+    >>> bool(t.crops[0, 3] >= t.crops[-1, 3])
+    True
+    """
+    import torch
+
+    plans, a, b = (np.asarray(x) for x in (plans, a, b))
+    n = len(plans)
+    order = np.random.default_rng(seed).permutation(n)
+    k_test = max(2, int(round(test_share * n)))
+    test, rest = np.sort(order[:k_test]), order[k_test:]
+    k_val = max(1, int(round(val_share * len(rest)))) if patience > 0 else 0
+    val, train = np.sort(rest[:k_val]), np.sort(rest[k_val:])
+    if len(train) < 1:
+        raise ValueError(f"too few plans to train on: {n}")
+    crop = min(crop, plans.shape[-1])
+    prev = torch.are_deterministic_algorithms_enabled(), torch.get_num_threads()
+    torch.use_deterministic_algorithms(True)
+    torch.set_num_threads(threads)
+    try:
+        xa, xb = torch.from_numpy(encode(plans, a)), torch.from_numpy(encode(plans, b))
+        corners = _grid(plans, crop)
+        net, used = _train(xa, xb, corners, train, crop=crop, steps=steps, batch=32, lr=1e-3,
+                           seed=seed, val_idx=val if patience > 0 else None,
+                           patience=patience)
+        net.eval()
+        auc = _auc(_score(net, xa, corners, test, crop), _score(net, xb, corners, test, crop))
+        rows = []
+        with torch.no_grad():
+            for i in test:
+                ca = torch.stack([xa[i, :, y:y + crop, x:x + crop] for y, x in corners[i]])
+                cb = torch.stack([xb[i, :, y:y + crop, x:x + crop] for y, x in corners[i]])
+                la, lb = net(ca)[:, 0].numpy(), net(cb)[:, 0].numpy()
+                for (y, x), va, vb in zip(corners[i], la, lb, strict=True):
+                    rows.append((i, y, x, vb - va, vb))
+        crops = np.array(rows, float).reshape(-1, 5)
+        crops = crops[np.argsort(-crops[:, 3], kind="stable")]
+        sal = []
+        for i, y, x in crops[:top, :3].astype(int):
+            c = xb[i:i + 1, :, y:y + crop, x:x + crop].clone().requires_grad_(True)
+            net(c).sum().backward()
+            sal.append(c.grad[0, 2:].abs().sum(0).numpy())
+    finally:
+        torch.use_deterministic_algorithms(prev[0])
+        torch.set_num_threads(prev[1])
+    return TellingCrops(float(auc), test, crops,
+                        np.asarray(sal, np.float32).reshape(-1, crop, crop), int(used))
