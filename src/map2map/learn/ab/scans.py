@@ -26,8 +26,10 @@ makes a hypothesis the same way, its pose error drawn, not estimated:
    is in, chained along its route: the start room is where the map is anchored, each
    room steps from the one the robot entered it from, so rooms reached late are off the
    most and a wall seen from two rooms can be saved twice), a rotation of the whole run
-   about its start (``global_deg``), an independent jitter per scan (the scan matcher's
-   error: walls a few cm thick and ragged) and, with probability ``outlier_share`` per
+   about its start (``global_deg``), a jitter per scan correlated over about a second
+   (the scan matcher's error: walls a few cm thick and ragged; independent per scan until
+   session 27, which drew walls thicker than a run's) and, with probability
+   ``outlier_share`` per
    scan, a heading error of ``outlier_deg`` (a scan matched wrong: laser streaks through
    walls);
 3. **mapping** (:func:`map_scans`): the scans at those poses counted into GMapping's grid
@@ -67,7 +69,7 @@ from ...sim.mapping import OracleMapper
 from .room_drift import RoomDrift, RoomDriftParams, room_drift_field
 
 __all__ = ["ScanMapParams", "ScanHypothesis", "GridOracle", "Exploration", "explore",
-           "scan_rng", "drifted_poses", "map_scans", "drawn_hypothesis", "scan_map"]
+           "scan_rng", "correlated", "drifted_poses", "map_scans", "drawn_hypothesis", "scan_map"]
 
 #: Stream of :func:`scan_rng` (apart from the exploration's, the drift's and the traces').
 _STREAM = 0x5CA75
@@ -88,8 +90,11 @@ class ScanMapParams:
     fov : float
         LIDAR field of view [deg] (the datasets': 180).
     jitter_m, jitter_deg : float
-        Standard deviation of each scan's independent position (per axis) and heading
-        error.
+        Standard deviation of each scan's position (per axis) and heading error.
+    jitter_s : float
+        Correlation time of that error, seconds (0: independent per scan, the default
+        until session 27; > 0: a Gauss-Markov process along the run, :func:`correlated`,
+        so that scans taken close in time err alike, as a scan matcher's estimate does).
     global_deg : float
         Standard deviation of the rotation of the whole run about its start pose.
     outlier_share, outlier_deg : float
@@ -117,7 +122,9 @@ class ScanMapParams:
     of the seed-20261201 dev set by the converged classifier, and ``"rbpf"`` on 320 plans
     of the seed-20261203 dev set (classifier AUC 0.77 / 0.82 / 0.78 against 0.80 / 0.86 /
     0.83 with three classifier seeds; its streaks and open frontier as the runs'; the
-    diversity ratio 1.16 against 1.29; docs/synthesize.md).
+    diversity ratio 1.16 against 1.29; docs/synthesize.md); ``jitter_s=1.0`` on 320
+    plans of the seed-20261205 dev set (AUC 0.723 / 0.716 against 0.777 / 0.830 with two
+    classifier seeds; walls as thin as the runs', saved twice and bent a little more).
     """
 
     duration: float = 420.0
@@ -130,10 +137,11 @@ class ScanMapParams:
     rooms: RoomDriftParams = field(default_factory=_rooms_default)
     room_order: str = "visits"
     explore_map: str = "rbpf"
+    jitter_s: float = 1.0
 
     def __post_init__(self):
         for name in ("duration", "fov", "jitter_m", "jitter_deg", "global_deg",
-                     "outlier_deg"):
+                     "outlier_deg", "jitter_s"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
                 raise InputError(name, f"must be finite and >= 0, got {v!r}")
@@ -288,12 +296,42 @@ def scan_rng(seed: int, k: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(_STREAM, int(k))))
 
 
+def correlated(z: np.ndarray, dt: float, tau: float) -> np.ndarray:
+    """Independent standard normal rows ``z`` (one per scan, ``dt`` seconds apart) made a
+    stationary Gauss-Markov process of correlation time ``tau`` seconds (AR(1), ``rho =
+    exp(-dt / tau)``): each row still standard normal, neighbours alike.
+
+    Examples
+    --------
+    >>> z = np.random.default_rng(0).standard_normal((20000, 1))
+    >>> y = correlated(z, 0.2, 2.0)
+    >>> round(float(y.std()), 1), round(float(np.corrcoef(y[1:, 0], y[:-1, 0])[0, 1]), 1)
+    (1.0, 0.9)
+    """
+    from scipy.signal import lfilter
+
+    rho = math.exp(-float(dt) / float(tau))
+    gain = math.sqrt(1.0 - rho * rho)
+    x = np.array(z, float)
+    x[0] /= max(gain, 1e-12)                 # the first row keeps unit variance
+    return lfilter([gain], [1.0, -rho], x, axis=0)
+
+
+def _scan_period(times, n: int) -> float:
+    """Median seconds between scans (``times`` None: the LIDAR's 5 Hz)."""
+    if times is None or len(times) < 2:
+        return 0.2
+    return float(np.median(np.diff(np.asarray(times, float)))) or 0.2
+
+
 def drifted_poses(plan: OccupancyMap, poses: np.ndarray, start, drift: RoomDrift,
-                  rng: np.random.Generator, params: ScanMapParams) -> np.ndarray:
+                  rng: np.random.Generator, params: ScanMapParams,
+                  times=None) -> np.ndarray:
     """Poses ``(N, 3)`` (plan frame, metres and radians) moved by the pose error of the
     module doc, step 2: each by the rigid transform of the room it lies in, then the
     whole run turned about ``start``, then per-scan jitter and outliers (drawn from
-    ``rng`` in that order).
+    ``rng`` in that order). With ``params.jitter_s`` > 0 the jitter is correlated in time
+    (:func:`correlated`; ``times``, the scans' seconds, give its step).
 
     The room transforms act on pixel coordinates ``(column, row)``, rows pointing down,
     so a room turned by ``phi`` there turns the poses in it by ``-phi`` in the world.
@@ -330,6 +368,8 @@ def drifted_poses(plan: OccupancyMap, poses: np.ndarray, start, drift: RoomDrift
     out[:, 0], out[:, 1] = sx + c * dx - s * dy, sy + s * dx + c * dy
     out[:, 2] += g
     z = rng.standard_normal((n, 3))
+    if params.jitter_s > 0 and n > 1:
+        z = correlated(z, _scan_period(times, n), params.jitter_s)
     out[:, :2] += params.jitter_m * z[:, :2]
     out[:, 2] += math.radians(params.jitter_deg) * z[:, 2]
     hit = rng.random(n) < params.outlier_share
@@ -487,7 +527,7 @@ def drawn_hypothesis(plan: OccupancyMap, ex: Exploration, seed: int, k: int,
     path = plan.world_to_pixel_float(ex.poses[:, 0], ex.poses[:, 1]) \
         if sp.room_order == "visits" else None
     drift = room_drift_field(plan.data, rng, sp.rooms, path)
-    poses = drifted_poses(plan, ex.poses, ex.start, drift, rng, sp)
+    poses = drifted_poses(plan, ex.poses, ex.start, drift, rng, sp, ex.times)
     m = map_scans(ex.scans, ex.times, poses, ex.start, plan, ex.keep)
     err = np.hypot(*(poses[:, :2] - ex.poses[:, :2]).T)
     info = {"seed": ex.seed, "coverage": round(ex.coverage, 4),
