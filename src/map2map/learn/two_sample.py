@@ -45,6 +45,7 @@ from __future__ import annotations
 
 import math
 import time
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -134,6 +135,22 @@ def _grid(plans: np.ndarray, crop: int) -> list[np.ndarray]:
         else:
             out.append(np.stack([yy[keep], xx[keep]], 1))
     return out
+
+
+@contextmanager
+def _deterministic(threads: int):
+    """torch's deterministic algorithms on ``threads`` CPU threads while the block runs
+    (both restored after it)."""
+    import torch
+
+    prev = torch.are_deterministic_algorithms_enabled(), torch.get_num_threads()
+    torch.use_deterministic_algorithms(True)
+    torch.set_num_threads(threads)
+    try:
+        yield
+    finally:
+        torch.use_deterministic_algorithms(prev[0])
+        torch.set_num_threads(prev[1])
 
 
 def _augment(x, k: int, flip: bool):
@@ -265,10 +282,7 @@ def two_sample_auc(plans, a, b, *, folds: int = 2, crop: int = 64, steps: int = 
         raise ValueError(f"need as many a as b maps as plans, at least {2 * folds}: "
                          f"{len(a)}, {len(b)}, {n}")
     crop = min(crop, plans.shape[-1])
-    prev = torch.are_deterministic_algorithms_enabled(), torch.get_num_threads()
-    torch.use_deterministic_algorithms(True)
-    torch.set_num_threads(threads)
-    try:
+    with _deterministic(threads):
         xa, xb = torch.from_numpy(encode(plans, a)), torch.from_numpy(encode(plans, b))
         corners = _grid(plans, crop)
         group = np.random.default_rng(seed).permutation(n) % folds
@@ -288,9 +302,6 @@ def two_sample_auc(plans, a, b, *, folds: int = 2, crop: int = 64, steps: int = 
             net.eval()
             sa[test] = _score(net, xa, corners, test, crop)
             sb[test] = _score(net, xb, corners, test, crop)
-    finally:
-        torch.use_deterministic_algorithms(prev[0])
-        torch.set_num_threads(prev[1])
     auc = _auc(sa, sb)
     paired = float(np.mean(sb > sa)) if n else math.nan
     return ClassifierResult(auc, paired, n, folds, steps, crop, seed,
@@ -431,10 +442,7 @@ def telling_crops(plans, a, b, *, crop: int = 64, steps: int = 12000, patience: 
     if len(train) < 1:
         raise ValueError(f"too few plans to train on: {n}")
     crop = min(crop, plans.shape[-1])
-    prev = torch.are_deterministic_algorithms_enabled(), torch.get_num_threads()
-    torch.use_deterministic_algorithms(True)
-    torch.set_num_threads(threads)
-    try:
+    with _deterministic(threads):
         xa, xb = torch.from_numpy(encode(plans, a)), torch.from_numpy(encode(plans, b))
         corners = _grid(plans, crop)
         net, used = _train(xa, xb, corners, train, crop=crop, steps=steps, batch=32, lr=1e-3,
@@ -457,8 +465,5 @@ def telling_crops(plans, a, b, *, crop: int = 64, steps: int = 12000, patience: 
             c = xb[i:i + 1, :, y:y + crop, x:x + crop].clone().requires_grad_(True)
             net(c).sum().backward()
             sal.append(c.grad[0, 2:].abs().sum(0).numpy())
-    finally:
-        torch.use_deterministic_algorithms(prev[0])
-        torch.set_num_threads(prev[1])
     return TellingCrops(float(auc), test, crops,
                         np.asarray(sal, np.float32).reshape(-1, crop, crop), int(used))
