@@ -74,6 +74,24 @@ def test_the_whole_run_turns_about_its_start_and_jitter_has_its_size(plan):
     assert abs(np.degrees(np.std(jit[:, 2])) - 0.5) < 0.05
 
 
+def test_jitter_correlated_in_time_keeps_its_size_and_makes_neighbours_alike(plan):
+    """``jitter_s`` > 0: the per-scan error is a Gauss-Markov process along the run (the
+    scans' times give its step), the same size as the independent jitter of ``jitter_s=0``."""
+    d = room_drift_field(plan.data, np.random.default_rng(0), RoomDriftParams(scale=0.0))
+    pose = np.array([[3.0, 2.0, 0.0]])
+    poses, times = np.repeat(pose, 6000, 0), np.arange(6000) * 0.2
+    lag1 = {}
+    for tau in (0.0, 5.0):
+        sp = ScanMapParams(jitter_m=0.02, jitter_deg=0.5, global_deg=0.0, outlier_share=0.0,
+                           jitter_s=tau)
+        e = drifted_poses(plan, poses, pose[0], d, np.random.default_rng(4), sp, times)[:, 0] - 3.0
+        assert abs(e.std() - 0.02) < 0.004
+        lag1[tau] = np.corrcoef(e[1:], e[:-1])[0, 1]
+    assert abs(lag1[0.0]) < 0.05 and lag1[5.0] > 0.9            # exp(-0.2 / 5) = 0.96
+    with pytest.raises(InputError, match="jitter_s"):
+        ScanMapParams(jitter_s=-1.0)
+
+
 def test_scan_maps_are_seeded_and_differ_between_hypotheses(plan):
     sp = ScanMapParams(duration=40.0)
     a, b = scan_map(plan, 5, 0, sp), scan_map(plan, 5, 0, sp)
