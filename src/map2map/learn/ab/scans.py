@@ -29,9 +29,8 @@ makes a hypothesis the same way, its pose error drawn, not estimated:
    about its start (``global_deg``), a jitter per scan correlated over about a second
    (the scan matcher's error: walls a few cm thick and ragged; independent per scan until
    session 27, which drew walls thicker than a run's) and, with probability
-   ``outlier_share`` per
-   scan, a heading error of ``outlier_deg`` (a scan matched wrong: laser streaks through
-   walls);
+   ``outlier_share`` per scan, a heading error of ``outlier_deg`` (a scan matched wrong:
+   laser streaks through walls);
 3. **mapping** (:func:`map_scans`): the scans at those poses counted into GMapping's grid
    exactly as the datasets' ``rbpf`` mapper does (:class:`map2map.slam.gridmap.CountGrid`:
    beams cropped at ``maxUrange``, no-return beams clearing, occupied where hits / visits >
@@ -317,7 +316,7 @@ def correlated(z: np.ndarray, dt: float, tau: float) -> np.ndarray:
     return lfilter([gain], [1.0, -rho], x, axis=0)
 
 
-def _scan_period(times, n: int) -> float:
+def _scan_period(times) -> float:
     """Median seconds between scans (``times`` None: the LIDAR's 5 Hz)."""
     if times is None or len(times) < 2:
         return 0.2
@@ -369,7 +368,7 @@ def drifted_poses(plan: OccupancyMap, poses: np.ndarray, start, drift: RoomDrift
     out[:, 2] += g
     z = rng.standard_normal((n, 3))
     if params.jitter_s > 0 and n > 1:
-        z = correlated(z, _scan_period(times, n), params.jitter_s)
+        z = correlated(z, _scan_period(times), params.jitter_s)
     out[:, :2] += params.jitter_m * z[:, :2]
     out[:, 2] += math.radians(params.jitter_deg) * z[:, 2]
     hit = rng.random(n) < params.outlier_share
