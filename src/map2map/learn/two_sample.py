@@ -449,15 +449,17 @@ def telling_crops(plans, a, b, *, crop: int = 64, steps: int = 12000, patience: 
                            seed=seed, val_idx=val if patience > 0 else None,
                            patience=patience)
         net.eval()
-        auc = _auc(_score(net, xa, corners, test, crop), _score(net, xb, corners, test, crop))
-        rows = []
-        with torch.no_grad():
-            for i in test:
+        rows, sa, sb = [], np.empty(len(test)), np.empty(len(test))
+        with torch.no_grad():           # each crop scored once: the map scores are their means
+            for j, i in enumerate(test):
                 ca = torch.stack([xa[i, :, y:y + crop, x:x + crop] for y, x in corners[i]])
                 cb = torch.stack([xb[i, :, y:y + crop, x:x + crop] for y, x in corners[i]])
-                la, lb = net(ca)[:, 0].numpy(), net(cb)[:, 0].numpy()
+                la, lb = net(ca), net(cb)
+                sa[j], sb[j] = float(la.mean()), float(lb.mean())    # as _score scores them
+                la, lb = la[:, 0].numpy(), lb[:, 0].numpy()
                 for (y, x), va, vb in zip(corners[i], la, lb, strict=True):
                     rows.append((i, y, x, vb - va, vb))
+        auc = _auc(sa, sb)
         crops = np.array(rows, float).reshape(-1, 5)
         crops = crops[np.argsort(-crops[:, 3], kind="stable")]
         sal = []
