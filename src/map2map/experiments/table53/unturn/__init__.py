@@ -125,6 +125,7 @@ def unturn_field(walls: np.ndarray, dominant_deg: float, *, step: int = 4,
     True
     """
     import scipy.sparse as sp
+    from scipy import ndimage
     from scipy.sparse.linalg import spsolve
 
     H, W = walls.shape
@@ -152,8 +153,7 @@ def unturn_field(walls: np.ndarray, dominant_deg: float, *, step: int = 4,
                    math.sqrt(gauge) * sp.identity(2 * n)]).tocsr()
     b = np.concatenate([np.sqrt(data * share.ravel()) * target.ravel(), np.zeros(3 * m + 2 * n)])
     u = spsolve((A.T @ A).tocsc(), A.T @ b)
-    size = (gw * step, gh * step)
-    return np.stack([cv2.resize(u[:n].reshape(gh, gw).astype(np.float32), size,
-                                interpolation=cv2.INTER_LINEAR)[:H, :W],
-                     cv2.resize(u[n:].reshape(gh, gw).astype(np.float32), size,
-                                interpolation=cv2.INTER_LINEAR)[:H, :W]])
+    # node (j, i) sits on pixel (j * step, i * step): bilinear with the corners aligned
+    at = np.mgrid[0:H, 0:W].astype(float) / step
+    return np.stack([ndimage.map_coordinates(u[k * n:(k + 1) * n].reshape(gh, gw), at, order=1)
+                     for k in (0, 1)]).astype(np.float32)
