@@ -13,6 +13,11 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
    smoothed density, 0.1 degree steps) refines it. A map whose walls run at 20 degrees
    keeps them at 20: the two orthogonal families are found in the frame turned by that
    angle. An angle that turns a line across the map by at most ``snap_px`` is 0.
+   A wing of the map whose walls run more than 5 degrees off the rest (a particle
+   filter's heading error that lasted while the robot mapped it) is a further direction
+   family (:func:`map2map.maps.directions.angle_families`, at most ``families``): its
+   wall points go through steps 3-7 in a frame turned by its own angle, and the
+   families' corners and junctions are closed in the map's frame.
 3. **Wall pieces** of each family: the evidence, rasterised in the turned frame, closed
    along the family's direction (holes up to ``bridge`` long: a dotted wall) and opened
    with a line of ``L = max(thickest + 2, min_len / resolution)`` pixels, keeps only the
@@ -86,6 +91,8 @@ import cv2
 import numpy as np
 
 from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from .directions import angle_families, orientation, sharp_angle
+from .directions import splat as _splat
 from .segments import _join
 
 __all__ = ["DrawOptions", "PlanDrawing", "default_wall_thickness", "wall_points",
@@ -155,6 +162,10 @@ class DrawOptions:
     main_min : float
         A segment needs at least ``main_min / resolution`` main-evidence points (those of
         at least half the largest weight; with equal weights every point is main).
+    families : int
+        Most direction families (:func:`map2map.maps.directions.angle_families`): a wing
+        of the map whose walls run more than 5 degrees off the rest is drawn in its own
+        frame (1: one dominant direction for the whole map, as before session 28).
     """
 
     tol: float = 0.12
@@ -171,6 +182,7 @@ class DrawOptions:
     keep_faces: bool = True
     cut_free: bool = True
     main_min: float = 0.5
+    families: int = 3
 
 
 @dataclass
@@ -190,7 +202,8 @@ class PlanDrawing:
     info : dict
         Counts: ``pieces`` (straight pieces found), ``doors`` (gaps kept open), ``joined``
         (gaps closed), ``other`` (segments off the dominant directions), ``cut`` (segments
-        more (or fewer) after :func:`_cut_free`).
+        more (or fewer) after :func:`_cut_free`); ``angles``, the direction families'
+        angles (the dominant one first).
     """
 
     segments: np.ndarray
@@ -228,15 +241,6 @@ def _as_points(evidence, weights) -> tuple[np.ndarray, np.ndarray]:
     return pts[keep], w[keep]
 
 
-def _splat(pts: np.ndarray, w: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
-    """Summed weights of the points per pixel (nearest pixel)."""
-    H, W = shape
-    c = np.floor(pts[:, 0]).astype(np.int64)
-    r = np.floor(pts[:, 1]).astype(np.int64)
-    ok = (r >= 0) & (r < H) & (c >= 0) & (c < W)
-    return np.bincount(r[ok] * W + c[ok], w[ok], H * W).reshape(H, W)
-
-
 def dominant_angle(points: np.ndarray, weights: np.ndarray | None = None,
                    shape: tuple[int, int] | None = None, snap_deg: float = 0.15) -> float:
     """Dominant wall direction (degrees in [-45, 45), image frame) of wall points
@@ -264,53 +268,21 @@ def dominant_angle(points: np.ndarray, weights: np.ndarray | None = None,
     # coarse: the structure tensor's orientation (gradient products averaged over a few
     # pixels: a 9 x 9 box), folded modulo 90 degrees, weighted by its coherence; 0.5
     # degree bins
-    gx = cv2.Sobel(img, cv2.CV_32F, 1, 0, ksize=3)
-    gy = cv2.Sobel(img, cv2.CV_32F, 0, 1, ksize=3)
-    jxx = cv2.blur(gx * gx, (9, 9))
-    jyy = cv2.blur(gy * gy, (9, 9))
-    jxy = cv2.blur(gx * gy, (9, 9))
-    coh = np.hypot(jxx - jyy, 2 * jxy).ravel()
+    ang, coh = orientation(img)
+    ang, coh = ang.ravel(), coh.ravel()
     sel = coh > 1e-3 * max(float(coh.max()), 1e-12)
-    ang = np.degrees(0.5 * np.arctan2(2 * jxy.ravel()[sel], (jxx - jyy).ravel()[sel])) % 90.0
+    ang = ang[sel]
     hist = np.bincount(np.minimum((ang * 2).astype(np.int64), 179), coh[sel], 180)
     k = np.array([1.0, 2, 3, 4, 3, 2, 1])
     sm = np.convolve(np.concatenate([hist[-3:], hist, hist[:3]]), k, "valid")
     coarse = (int(np.argmax(sm)) + 0.5) / 2.0
     # refine: the angle whose projections onto both axes are sharpest (linear binning
     # in half pixels, so that the score is smooth in the angle): +-3 degrees in steps of
-    # 0.5, then +-0.4 in steps of 0.1 (a few angles, not pixels)
-    if len(pts) > 2000:                                     # every k-th point: enough
-        k = int(math.ceil(len(pts) / 2000))
-        pts, w = pts[::k], w[::k]
-    best = coarse
-    for step, span in ((0.5, 3.0), (0.1, 0.4)):
-        cand = best + np.arange(-span, span + step / 2, step)
-        scores = [_sharpness(pts, w, a) for a in cand]
-        best = float(cand[int(np.argmax(scores))])
+    # 0.5, then +-0.4 in steps of 0.1
+    best = sharp_angle(pts, w, coarse, 3.0)
     a = (best + 45.0) % 90.0 - 45.0
     a = round(a, 1)
     return 0.0 if abs(a) <= snap_deg else float(a)
-
-
-#: Gaussian kernel (quarter-pixel bins, sigma 0.7 px) that :func:`_sharpness` smooths with.
-_KDE = np.exp(-0.5 * (np.arange(-8, 9) / 2.8) ** 2)
-
-
-def _sharpness(pts: np.ndarray, w: np.ndarray, angle: float) -> float:
-    """Sum of squares of the smoothed density of the points' projections onto the axes
-    turned by ``angle`` (quarter-pixel bins, linear binning, then a Gaussian of 0.7 px:
-    the score of a raster's pixel centres does not jump where they fall on the bins)."""
-    t = math.radians(angle)
-    cs, sn = math.cos(t), math.sin(t)
-    s = 0.0
-    for q in (pts[:, 0] * cs + pts[:, 1] * sn, -pts[:, 0] * sn + pts[:, 1] * cs):
-        z = (q - q.min()) * 4.0
-        i = np.floor(z).astype(np.int64)
-        f = z - i
-        n = int(i.max()) + 2
-        h = np.bincount(i, w * (1 - f), n) + np.bincount(i + 1, w * f, n)
-        s += float(np.square(np.convolve(h, _KDE)).sum())
-    return s
 
 
 class _Frame:
@@ -626,18 +598,56 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
     tol = max(1.5, opt.tol / res)
     reach = max(2.0, opt.reach / res)
     L = int(max(round(opt.thickest / res) + 2, round(opt.min_len / res), 4))
+    snap = math.degrees(math.atan(opt.snap_px / max(H, W)))
+    angle = dominant_angle(pts, w, (H, W), snap) if len(pts) >= 3 else 0.0
+    angles, fam = angle_families(pts, w, (H, W), angle, res,
+                                 max_families=opt.families) if len(pts) >= 3 else (
+        [angle], np.zeros(len(pts), np.int64))
+    info = {"pieces": 0, "doors": 0, "joined": 0, "other": 0}
+    parts = []
+    for k, a in enumerate(angles):           # one frame per direction family (a few)
+        sel = fam == k
+        segs_k, info_k = _draw_family(pts[sel], w[sel], a, occ, pts, w, t, res, opt)
+        parts.append(segs_k)
+        info = {key: info[key] + info_k[key] for key in info}
+    segs = np.concatenate(parts).reshape(-1, 4)
+    if len(angles) > 1 and len(segs):
+        # corners and junctions between the families' walls (within each family they
+        # were closed in its own frame), in the map's frame
+        segs = np.concatenate(_trim_overshoots(_snap_ends([segs], reach), L + max(
+            tol, opt.thickest / res / 2), reach, occ == FREE, t / 2 + 2)).reshape(-1, 4)
+    n0 = len(segs)
+    if opt.cut_free and len(segs):
+        segs = _cut_free(segs, occ == FREE, _splat(pts, w, (H, W)) > 0, tol + t / 4,
+                         max(2, int(round(tol))), L, t, opt.min_room / res**2, reach)
+    out = render_plan(segs, occ, t, res, min_room=opt.min_room, enclosed=opt.enclosed)
+    info.update(cut=int(len(segs) - n0), angles=[float(a) for a in angles])
+    return PlanDrawing(segs, out, angle, t, info)
+
+
+def _draw_family(pts: np.ndarray, w: np.ndarray, angle: float, occ: np.ndarray,
+                 all_pts: np.ndarray, all_w: np.ndarray, t: float, res: float,
+                 opt: DrawOptions) -> tuple[np.ndarray, dict]:
+    """Steps 3-7 of the module doc for the wall points of one direction family, in the
+    frame turned by its ``angle``: segments in the map's frame (before
+    :func:`_cut_free`) and counts. Rooms are told from every family's points
+    (``all_pts``), so that a room of one family bounded by another's walls is one."""
+    H, W = occ.shape
+    tol = max(1.5, opt.tol / res)
+    reach = max(2.0, opt.reach / res)
+    L = int(max(round(opt.thickest / res) + 2, round(opt.min_len / res), 4))
     door_min = max(1, int(round(opt.door_min / res)))
     half = int(math.ceil(t / 2)) + 1
     min_room = opt.min_room / res**2
-    snap = math.degrees(math.atan(opt.snap_px / max(H, W)))
-    angle = dominant_angle(pts, w, (H, W), snap) if len(pts) >= 3 else 0.0
     fr = _Frame(angle, (H, W))
     uv = fr.to(pts) if len(pts) else np.zeros((0, 2))
     Hr, Wr = fr.shape
     E = (_splat(uv, w, (Hr, Wr)) > 0).astype(np.uint8)
+    E_all = E if len(all_pts) == len(pts) else (
+        _splat(fr.to(all_pts), all_w, (Hr, Wr)) > 0).astype(np.uint8)
     free_c = fr.warp((occ == FREE).astype(np.uint8), 0) > 0
     bridge = 2 * int(math.ceil(opt.bridge / res / 2)) + 1
-    main = (w >= 0.5 * float(w.max())).astype(float) if len(w) else w
+    main = (w >= 0.5 * float(all_w.max())).astype(float) if len(w) else w
     ph, pt_h = _pieces(E, uv[:, 0], uv[:, 1], w, L, 1.0, bridge, main)
     pv, pt_v = _pieces(np.ascontiguousarray(E.T), uv[:, 1], uv[:, 0], w, L, 1.0, bridge,
                        main)
@@ -649,7 +659,7 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
                        door_min, opt.max_gap / res)
     _fill_rects(closed, hc[:, :3], vc[:, :3], max(t, 2 * half - 1))
     region = free_c & (closed == 0)
-    room = _rooms(region, (closed > 0) | (E > 0), min_room, opt.enclosed)
+    room = _rooms(region, (closed > 0) | (E_all > 0), min_room, opt.enclosed)
     room |= free_c & (closed > 0)                  # the wall band itself counts
     hs, d1, j1, sh = _family(ph, free_c, room, tol, half, door_min, opt.max_gap / res)
     vs, d2, j2, sv = _family(pv, free_c.T, room.T, tol, half, door_min, opt.max_gap / res)
@@ -683,14 +693,9 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
     segs = np.concatenate([_order(hseg), _order(vseg), other]).reshape(-1, 4)
     if len(segs):
         segs = np.concatenate([fr.back(segs[:, :2]), fr.back(segs[:, 2:])], axis=1)
-    n0 = len(segs)
-    if opt.cut_free and len(segs):
-        segs = _cut_free(segs, occ == FREE, _splat(pts, w, (H, W)) > 0, tol + t / 4,
-                         max(2, int(round(tol))), L, t, min_room, reach)
-    out = render_plan(segs, occ, t, res, min_room=opt.min_room, enclosed=opt.enclosed)
     info = {"pieces": int(len(ph) + len(pv)), "doors": d1 + d2, "joined": j1 + j2,
-            "other": int(len(other)), "cut": int(len(segs) - n0)}
-    return PlanDrawing(segs, out, angle, t, info)
+            "other": int(len(other))}
+    return segs, info
 
 
 def _samples(segs: np.ndarray):
