@@ -62,15 +62,18 @@ def splat(pts: np.ndarray, w: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     return np.bincount(r[ok] * W + c[ok], w[ok], H * W).reshape(H, W)
 
 
-def orientation(img: np.ndarray, box: int = 9) -> tuple[np.ndarray, np.ndarray]:
+def orientation(img: np.ndarray, box: int = 9, at: tuple[np.ndarray, np.ndarray] | None = None
+                ) -> tuple[np.ndarray, np.ndarray]:
     """Per pixel, the structure tensor's orientation (degrees, folded into [0, 90)) and
     its coherence (``|(Jxx - Jyy, 2 Jxy)|``), gradient products averaged over a ``box``
-    square.
+    square; only at the pixels ``at`` (rows, columns) when given.
 
     >>> img = np.zeros((30, 30), np.float32); img[14:16, 3:27] = 1
     >>> ang, coh = orientation(img)
     >>> float(ang[15, 15]), bool(coh[15, 15] > 0)
     (0.0, True)
+    >>> orientation(img, at=(np.array([15]), np.array([15])))[0].tolist()
+    [0.0]
     """
     img = np.asarray(img, np.float32)
     gx = cv2.Sobel(img, cv2.CV_32F, 1, 0, ksize=3)
@@ -78,6 +81,8 @@ def orientation(img: np.ndarray, box: int = 9) -> tuple[np.ndarray, np.ndarray]:
     jxx = cv2.blur(gx * gx, (box, box))
     jyy = cv2.blur(gy * gy, (box, box))
     jxy = cv2.blur(gx * gy, (box, box))
+    if at is not None:
+        jxx, jyy, jxy = jxx[at], jyy[at], jxy[at]
     coh = np.hypot(jxx - jyy, 2 * jxy)
     ang = np.degrees(0.5 * np.arctan2(2 * jxy, jxx - jyy)) % 90.0
     return ang, coh
@@ -182,9 +187,12 @@ def angle_families(points: np.ndarray, weights: np.ndarray, shape: tuple[int, in
         return [float(angle)], label
     H, W = shape
     img = splat(pts, w, shape).astype(np.float32)
-    ang, coh = orientation(img)
-    dev = ((ang - angle + 45.0) % 90.0 - 45.0).astype(np.float32)
-    c = np.where(img > 0, coh, 0).astype(np.float32)
+    at = np.nonzero(img > 0)                   # the wall pixels only: a few thousand
+    ang, coh = orientation(img, at=at)
+    dev = np.zeros(shape, np.float32)
+    dev[at] = (ang - angle + 45.0) % 90.0 - 45.0
+    c = np.zeros(shape, np.float32)
+    c[at] = coh
     s = max(1.0, sigma / float(resolution))
     num, den = _smooth(c * dev, c, s)
     r = np.clip(np.floor(pts[:, 1]).astype(np.int64), 0, H - 1)
