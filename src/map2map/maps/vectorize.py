@@ -595,14 +595,10 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
     if not t > 0:
         raise ValueError(f"wall thickness must be positive, not {wall_thickness}")
     pts, w = _as_points(evidence, weights)
-    tol = max(1.5, opt.tol / res)
-    reach = max(2.0, opt.reach / res)
-    L = int(max(round(opt.thickest / res) + 2, round(opt.min_len / res), 4))
+    tol, reach, L, band = _scales(opt, res)
     snap = math.degrees(math.atan(opt.snap_px / max(H, W)))
     angle = dominant_angle(pts, w, (H, W), snap) if len(pts) >= 3 else 0.0
-    angles, fam = angle_families(pts, w, (H, W), angle, res,
-                                 max_families=opt.families) if len(pts) >= 3 else (
-        [angle], np.zeros(len(pts), np.int64))
+    angles, fam = angle_families(pts, w, (H, W), angle, res, max_families=opt.families)
     info = {"pieces": 0, "doors": 0, "joined": 0, "other": 0}
     parts = []
     for k, a in enumerate(angles):           # one frame per direction family (a few)
@@ -614,8 +610,8 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
     if len(angles) > 1 and len(segs):
         # corners and junctions between the families' walls (within each family they
         # were closed in its own frame), in the map's frame
-        segs = np.concatenate(_trim_overshoots(_snap_ends([segs], reach), L + max(
-            tol, opt.thickest / res / 2), reach, occ == FREE, t / 2 + 2)).reshape(-1, 4)
+        segs = np.concatenate(_trim_overshoots(_snap_ends([segs], reach), L + band, reach,
+                                               occ == FREE, t / 2 + 2)).reshape(-1, 4)
     n0 = len(segs)
     if opt.cut_free and len(segs):
         segs = _cut_free(segs, occ == FREE, _splat(pts, w, (H, W)) > 0, tol + t / 4,
@@ -623,6 +619,14 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
     out = render_plan(segs, occ, t, res, min_room=opt.min_room, enclosed=opt.enclosed)
     info.update(cut=int(len(segs) - n0), angles=[float(a) for a in angles])
     return PlanDrawing(segs, out, angle, t, info)
+
+
+def _scales(opt: DrawOptions, res: float) -> tuple[float, float, int, float]:
+    """Pixel tolerances of :func:`draw_plan`: ``tol``, ``reach``, the shortest piece
+    ``L`` and the band about a crossing wall that :func:`_drop_stubs` leaves out."""
+    tol = max(1.5, opt.tol / res)
+    L = int(max(round(opt.thickest / res) + 2, round(opt.min_len / res), 4))
+    return tol, max(2.0, opt.reach / res), L, max(tol, opt.thickest / res / 2)
 
 
 def _draw_family(pts: np.ndarray, w: np.ndarray, angle: float, occ: np.ndarray,
@@ -633,9 +637,7 @@ def _draw_family(pts: np.ndarray, w: np.ndarray, angle: float, occ: np.ndarray,
     :func:`_cut_free`) and counts. Rooms are told from every family's points
     (``all_pts``), so that a room of one family bounded by another's walls is one."""
     H, W = occ.shape
-    tol = max(1.5, opt.tol / res)
-    reach = max(2.0, opt.reach / res)
-    L = int(max(round(opt.thickest / res) + 2, round(opt.min_len / res), 4))
+    tol, reach, L, band = _scales(opt, res)
     door_min = max(1, int(round(opt.door_min / res)))
     half = int(math.ceil(t / 2)) + 1
     min_room = opt.min_room / res**2
@@ -666,7 +668,6 @@ def _draw_family(pts: np.ndarray, w: np.ndarray, angle: float, occ: np.ndarray,
     hseg = np.stack([hs[:, 1], hs[:, 0], hs[:, 2], hs[:, 0]], 1).reshape(-1, 4)
     vseg = np.stack([vs[:, 0], vs[:, 1], vs[:, 0], vs[:, 2]], 1).reshape(-1, 4)
     hseg, vseg = _join(hseg, vseg, reach)
-    band = max(tol, opt.thickest / res / 2)
     kh, kv = _drop_stubs(hseg, vseg, band, L)
     kh &= hs[:, 9] >= opt.main_min / res
     kv &= vs[:, 9] >= opt.main_min / res
