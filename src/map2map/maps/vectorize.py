@@ -91,6 +91,7 @@ import cv2
 import numpy as np
 
 from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from .cover import keep_runs_inside
 from .directions import angle_families, orientation, sharp_angle
 from .directions import splat as _splat
 from .segments import _join
@@ -166,6 +167,10 @@ class DrawOptions:
         Most direction families (:func:`map2map.maps.directions.angle_families`): a wing
         of the map whose walls run more than 5 degrees off the rest is drawn in its own
         frame (1: one dominant direction for the whole map, as before session 28).
+    cover_run, cover_tol : float
+        With :func:`draw_plan`'s ``cover``: the input's straight wall runs at least
+        ``cover_run`` long lie within the drawn wall's half thickness plus ``cover_tol``
+        of its line (:func:`map2map.maps.cover.keep_runs_inside`; ``cover_run`` 0: off).
     """
 
     tol: float = 0.12
@@ -183,6 +188,8 @@ class DrawOptions:
     cut_free: bool = True
     main_min: float = 0.5
     families: int = 3
+    cover_run: float = 1.0
+    cover_tol: float = 0.15
 
 
 @dataclass
@@ -547,7 +554,8 @@ def _near_line(b: np.ndarray, p: np.ndarray) -> float:
 
 def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
               wall_thickness: float | None = None, *, weights: np.ndarray | None = None,
-              options: DrawOptions | None = None) -> PlanDrawing:
+              options: DrawOptions | None = None, cover: np.ndarray | None = None
+              ) -> PlanDrawing:
     """Straight walls of a map, drawn like a plan (the module doc's steps 1-7).
 
     Parameters
@@ -566,6 +574,12 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
     weights : (N,) float, optional
         Weights of wall points (a point of weight 0 is ignored).
     options : DrawOptions, optional
+    cover : (H, W) bool, optional
+        The input's wall pixels: where they run straight for at least
+        ``options.cover_run`` beside a drawn wall, the wall moves (as little as it
+        must) so that they lie within its half thickness plus ``options.cover_tol``
+        (:mod:`map2map.maps.cover`); a wall the input shows whole is then not left at
+        one end. :func:`draw_plan_map` passes the map's occupied pixels.
 
     Returns
     -------
@@ -595,6 +609,11 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
     if not t > 0:
         raise ValueError(f"wall thickness must be positive, not {wall_thickness}")
     pts, w = _as_points(evidence, weights)
+    if cover is not None:
+        cover = np.asarray(cover, bool)
+        if cover.shape != occ.shape:
+            raise ValueError(f"cover must be shaped like the map {occ.shape}, not "
+                             f"{cover.shape}")
     tol, reach, L, band = _scales(opt, res)
     snap = math.degrees(math.atan(opt.snap_px / max(H, W)))
     angle = dominant_angle(pts, w, (H, W), snap) if len(pts) >= 3 else 0.0
@@ -603,7 +622,8 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
     parts = []
     for k, a in enumerate(angles):           # one frame per direction family (a few)
         sel = fam == k
-        segs_k, info_k = _draw_family(pts[sel], w[sel], a, occ, pts, w, t, res, opt)
+        segs_k, info_k = _draw_family(pts[sel], w[sel], a, occ, pts, w, t, res, opt,
+                                      cover)
         parts.append(segs_k)
         info = {key: info[key] + info_k[key] for key in info}
     segs = np.concatenate(parts).reshape(-1, 4)
@@ -631,11 +651,14 @@ def _scales(opt: DrawOptions, res: float) -> tuple[float, float, int, float]:
 
 def _draw_family(pts: np.ndarray, w: np.ndarray, angle: float, occ: np.ndarray,
                  all_pts: np.ndarray, all_w: np.ndarray, t: float, res: float,
-                 opt: DrawOptions) -> tuple[np.ndarray, dict]:
+                 opt: DrawOptions, cover: np.ndarray | None = None
+                 ) -> tuple[np.ndarray, dict]:
     """Steps 3-7 of the module doc for the wall points of one direction family, in the
     frame turned by its ``angle``: segments in the map's frame (before
     :func:`_cut_free`) and counts. Rooms are told from every family's points
-    (``all_pts``), so that a room of one family bounded by another's walls is one."""
+    (``all_pts``), so that a room of one family bounded by another's walls is one;
+    ``cover``: the input's wall pixels (image frame), whose straight runs the walls keep
+    inside (:func:`map2map.maps.cover.keep_runs_inside`)."""
     H, W = occ.shape
     tol, reach, L, band = _scales(opt, res)
     door_min = max(1, int(round(opt.door_min / res)))
@@ -685,9 +708,16 @@ def _draw_family(pts: np.ndarray, w: np.ndarray, angle: float, occ: np.ndarray,
     slant = (1.5, opt.other_min / res, math.tan(math.radians(6.0)))
     faces = t if opt.keep_faces else 0.0
     a = _place(hs, hseg[:, 0], hseg[:, 2], free_c, faces, half, slant)
+    b = _place(vs, vseg[:, 1], vseg[:, 3], free_c.T, faces, half, slant)
+    if cover is not None and opt.cover_run > 0:
+        # the input's straight runs stay inside the walls drawn for them (maps.cover)
+        C = fr.warp(cover.view(np.uint8), 0) > 0
+        n = max(2, int(round(opt.cover_run / res)))
+        kw = {"band": t / 2 + 2 * tol, "c": t / 2 + opt.cover_tol / res}
+        a = keep_runs_inside(hseg[:, 0], hseg[:, 2], a[0], a[1], C, n, **kw)
+        b = keep_runs_inside(vseg[:, 1], vseg[:, 3], b[0], b[1], C.T, n, **kw)
     hseg = np.stack([hseg[:, 0], a[0], hseg[:, 2], a[1]], 1)
-    a = _place(vs, vseg[:, 1], vseg[:, 3], free_c.T, faces, half, slant)
-    vseg = np.stack([a[0], vseg[:, 1], a[1], vseg[:, 3]], 1)
+    vseg = np.stack([b[0], vseg[:, 1], b[1], vseg[:, 3]], 1)
     hseg, vseg, other = _snap_ends([hseg, vseg, other], reach)
     hseg, vseg, other = _trim_overshoots([hseg, vseg, other], L + band, reach, free_c,
                                          t / 2 + 2)
@@ -1115,7 +1145,8 @@ def draw_plan_map(m: OccupancyMap, evidence: np.ndarray | None = None,
     (True, [[0.275, 0.95, 2.725, 0.95]])
     """
     ev = m.occupied if evidence is None else evidence
-    d = draw_plan(ev, m.data, m.resolution, wall_thickness, weights=weights, options=options)
+    d = draw_plan(ev, m.data, m.resolution, wall_thickness, weights=weights, options=options,
+                  cover=m.occupied)
     out = m.copy(d.map)
     out.meta["plan_drawer"] = {"segments_px": d.segments.tolist(), "angle": d.angle,
                                "thickness_px": d.thickness, **d.info}
