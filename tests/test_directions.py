@@ -76,7 +76,7 @@ def test_ragged_walls_at_one_angle_are_one_family(seed):
     pts = wall_points(m == OCC)
     a0 = dominant_angle(pts)
     angles, label = angle_families(pts, np.ones(len(pts)), m.shape, a0, RES)
-    assert angles == [a0] and a0 == pytest.approx(7.0, abs=2.5)
+    assert angles == [a0] and a0 == pytest.approx(7.0, abs=0.5)
     assert (label == 0).all()
 
 

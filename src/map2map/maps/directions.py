@@ -110,22 +110,35 @@ def _sharpness(pts: np.ndarray, w: np.ndarray, angle: float) -> float:
 
 
 def sharp_angle(pts: np.ndarray, w: np.ndarray, start: float, span: float = 3.0) -> float:
-    """The angle within ``start +- span`` whose projections of the points onto both axes
-    are sharpest (:func:`_sharpness`): 0.5 degree steps, then +-0.4 in steps of 0.1 (a
-    few angles, not pixels; at most 2,000 points, every k-th).
+    """The angle near ``start`` whose projections of the points onto both axes are
+    sharpest (:func:`_sharpness`): ``start +- span`` in 0.5 degree steps (moved on by
+    ``span`` while the sharpest lies at an edge, up to 5 times), then +-0.4 in steps of
+    0.1 (a few angles, not pixels; at most 2,000 points, every k-th).
 
     >>> pts = np.stack([np.arange(100.0), 50 + np.arange(100.0) * math.tan(math.radians(2))], 1)
     >>> round(sharp_angle(pts, np.ones(100), 0.0), 1)
+    2.0
+    >>> round(sharp_angle(pts, np.ones(100), -4.0), 1)        # a start 6 degrees off
     2.0
     """
     if len(pts) > 2000:                                     # every k-th point: enough
         k = int(math.ceil(len(pts) / 2000))
         pts, w = pts[::k], w[::k]
-    best = start
-    for step, sp in ((0.5, span), (0.1, 0.4)):
-        cand = best + np.arange(-sp, sp + step / 2, step)
-        best = float(cand[int(np.argmax([_sharpness(pts, w, a) for a in cand]))])
-    return best
+
+    def sharpest(cand: np.ndarray) -> tuple[float, int]:
+        i = int(np.argmax([_sharpness(pts, w, a) for a in cand]))
+        return float(cand[i]), i
+
+    cand = start + np.arange(-span, span + 0.25, 0.5)
+    best, i = sharpest(cand)
+    for _ in range(5):
+        # the sharpest at an edge of the window: ``start`` was off by more than ``span``
+        # (a ragged wall's structure tensor), so the window walks on, at most 5 times
+        if 0 < i < len(cand) - 1:
+            break
+        cand = best + np.arange(-span, span + 0.25, 0.5)
+        best, i = sharpest(cand)
+    return sharpest(best + np.arange(-0.4, 0.45, 0.1))[0]
 
 
 def _smooth(a: np.ndarray, b: np.ndarray, sigma: float) -> tuple[np.ndarray, np.ndarray]:
