@@ -49,7 +49,11 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
 7. **Placing** (:func:`_place`): each wall's line is refitted to its own points near it
    (:func:`_refit`); a long wall that SLAM drift turned a little follows its
    least-squares line, and a wall seen from one side keeps its seen face (its thickness
-   grows away from the free side). Ends are then moved onto the lines they meet again
+   grows away from the free side). With ``cover`` (the input's own wall pixels), a wall
+   whose line leaves a straight run of the input beside it (at least ``cover_run``
+   long) by more than half the thickness plus ``cover_tol`` moves as little as it must
+   to keep the run inside (:mod:`map2map.maps.cover`): a wall the input shows whole is
+   not drawn leaving it at one end. Ends are then moved onto the lines they meet again
    (:func:`_snap_ends`), so corners stay closed. Where a segment's centre line runs over
    the input's free space more than ``tol`` plus a quarter of the thickness from any
    evidence (for more than ``reach`` at an end, where corners close across free
