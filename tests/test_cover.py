@@ -126,24 +126,3 @@ def test_cover_is_deterministic_and_off_means_off():
     none = draw_plan(corr, m, RES, 4)
     off = draw_plan(corr, m, RES, 4, cover=m == OCC, options=DrawOptions(cover_run=0.0))
     assert np.array_equal(none.segments, off.segments)
-
-
-def test_a_wall_shorter_than_its_run_is_stretched_to_the_run_s_end():
-    c = _turned_run(0.0, u=(20, 180))
-    lo, hi = np.array([60.5]), np.array([179.5])           # drawn from 60 only
-    a0, a1, lo2, hi2 = keep_runs_inside(lo, hi, np.array([30.5]), np.array([30.5]), c, 20,
-                                        band=6.0, c=2.0, extend=True)
-    assert lo2[0] == 20.5 and hi2[0] == 179.5
-    assert a0[0] == a1[0] == 30.5
-    # without extend, the extent is not touched (and not returned)
-    assert len(keep_runs_inside(lo, hi, np.array([30.5]), np.array([30.5]), c, 20,
-                                band=6.0, c=2.0)) == 2
-
-
-def test_a_wall_is_not_stretched_over_another_on_its_line():
-    c = _turned_run(0.0, u=(20, 180))
-    lo, hi = np.array([20.5, 100.5]), np.array([80.5, 179.5])    # a jog's two walls
-    a = np.array([30.5, 31.5])
-    _, _, lo2, hi2 = keep_runs_inside(lo, hi, a, a.copy(), c, 20, band=6.0, c=2.0,
-                                      extend=True)
-    assert lo2.tolist() == lo.tolist() and hi2.tolist() == hi.tolist()

@@ -25,11 +25,6 @@ This module moves such a wall as little as it must:
    as it must at the run's two ends, into the band within which every column lies
    within ``c`` (:func:`_least_move`; a run too bent for any straight line: its own
    least-squares line).
-4. **Ends** (``extend=True``, as the drawer calls it): a wall that stops more than 2
-   pixels short of an end of a run it holds is stretched along its line to the run's
-   end, unless another wall on about the same line (within ``band``) lies there (two
-   pieces of a wall with a jog): a wall the input shows running on into a corner does
-   not stop short of it (on the dev maps 78 -> 70 broken runs).
 
 Examples
 --------
@@ -89,7 +84,7 @@ def _runs(c: np.ndarray, n: int, slack: int
 
 def keep_runs_inside(lo: np.ndarray, hi: np.ndarray, a0: np.ndarray, a1: np.ndarray,
                      canvas: np.ndarray, n: int, *, band: float, c: float,
-                     slack: int = 1, extend: bool = False) -> tuple[np.ndarray, ...]:
+                     slack: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """Across-positions of horizontal walls moved so that the straight runs of
     ``canvas`` beside them lie within ``c`` of their lines (module doc, steps 1-3).
 
@@ -112,25 +107,20 @@ def keep_runs_inside(lo: np.ndarray, hi: np.ndarray, a0: np.ndarray, a1: np.ndar
         wall's half thickness plus a tolerance.
     slack : int
         Steps across allowed within a run (:func:`straight_runs`).
-    extend : bool
-        Also stretch walls to the ends of their runs (module doc, step 4).
 
     Returns
     -------
     a0, a1 : (K,) float
         The new positions (copies; unchanged where the runs already lie inside).
-    lo, hi : (K,) float
-        With ``extend``: the new ends along.
     """
     a0 = np.asarray(a0, float).copy()
     a1 = np.asarray(a1, float).copy()
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-    lo, hi = lo.copy(), hi.copy()
     if len(a0) == 0:
-        return (a0, a1, lo, hi) if extend else (a0, a1)
+        return a0, a1
     rr, cc, run, k = _runs(np.ascontiguousarray(canvas, bool), n, slack)
     if k == 0:
-        return (a0, a1, lo, hi) if extend else (a0, a1)
+        return a0, a1
     u, v = cc + 0.5, rr + 0.5
     span = np.maximum(hi - lo, 1e-9)
     # each run's least-squares line v = vb + b (u - ub) and its extent along
@@ -153,9 +143,6 @@ def keep_runs_inside(lo: np.ndarray, hi: np.ndarray, a0: np.ndarray, a1: np.ndar
     ok = (s1 - s0 >= max(2, n // 2)) & (dist <= band)
     dist = np.where(ok, dist, np.inf)
     owner = np.where(ok.any(axis=0), np.argmin(dist, axis=0), -1)
-    if extend:
-        lo, hi, a0, a1 = _extend(lo, hi, a0, a1, owner, u0, u1, band)
-        span = np.maximum(hi - lo, 1e-9)
     # the runs' pixels along their walls, and the walls some of them lie too far from
     pw = owner[run]
     own = pw >= 0
@@ -176,39 +163,7 @@ def keep_runs_inside(lo: np.ndarray, hi: np.ndarray, a0: np.ndarray, a1: np.ndar
         line = a0[i] + (a1[i] - a0[i]) * fi
         if np.max(np.abs(mid - line)) > c:
             a0[i], a1[i] = _least_move(a0[i], a1[i], fi, mid, c)
-    return (a0, a1, lo, hi) if extend else (a0, a1)
-
-
-def _extend(lo, hi, a0, a1, owner, u0, u1, band):
-    """Walls stretched along to the ends of the runs they own (more than 2 pixels
-    beyond an end), unless another wall on about the same line (within ``band``)
-    already lies there; their lines extrapolated."""
-    lo, hi = lo.copy(), hi.copy()
-    new_lo, new_hi = lo.copy(), hi.copy()
-    for i in np.unique(owner[owner >= 0]):
-        r = owner == i
-        new_lo[i] = min(lo[i], float(u0[r].min()))
-        new_hi[i] = max(hi[i], float(u1[r].max()))
-    span = np.maximum(hi - lo, 1e-9)
-    for i in np.flatnonzero((new_lo < lo - 2) | (new_hi > hi + 2)):
-        for side, (e0, e1) in (("lo", (new_lo[i], lo[i])), ("hi", (hi[i], new_hi[i]))):
-            if e1 - e0 <= 2:
-                continue
-            um = (e0 + e1) / 2
-            vi = a0[i] + (a1[i] - a0[i]) * (um - lo[i]) / span[i]
-            vk = a0 + (a1 - a0) * (um - lo) / span
-            other = (np.arange(len(lo)) != i) & (hi >= e0) & (lo <= e1) \
-                & (np.abs(vk - vi) <= band)
-            if other.any():
-                continue
-            if side == "lo":
-                new = new_lo[i]
-                a0[i], lo[i] = a0[i] + (a1[i] - a0[i]) * (new - lo[i]) / span[i], new
-            else:
-                new = new_hi[i]
-                a1[i], hi[i] = a0[i] + (a1[i] - a0[i]) * (new - lo[i]) / span[i], new
-            span[i] = max(hi[i] - lo[i], 1e-9)
-    return lo, hi, a0, a1
+    return a0, a1
 
 
 def _least_move(a0: float, a1: float, f: np.ndarray, mid: np.ndarray, c: float

@@ -52,9 +52,8 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
    grows away from the free side). With ``cover`` (the input's own wall pixels), a wall
    whose line leaves a straight run of the input beside it (at least ``cover_run``
    long) by more than half the thickness plus ``cover_tol`` moves as little as it must
-   to keep the run inside, and one that stops short of an end of such a run is
-   stretched to it (:mod:`map2map.maps.cover`): a wall the input shows whole is not
-   drawn leaving it at one end. Ends are then moved onto the lines they meet again
+   to keep the run inside (:mod:`map2map.maps.cover`): a wall the input shows whole is
+   not drawn leaving it at one end. Ends are then moved onto the lines they meet again
    (:func:`_snap_ends`), so corners stay closed. Where a segment's centre line runs over
    the input's free space more than ``tol`` plus a quarter of the thickness from any
    evidence (for more than ``reach`` at an end, where corners close across free
@@ -719,11 +718,8 @@ def _draw_family(pts: np.ndarray, w: np.ndarray, angle: float, occ: np.ndarray,
         C = fr.warp(cover.view(np.uint8), 0) > 0
         n = max(2, int(round(opt.cover_run / res)))
         kw = {"band": t / 2 + 2 * tol, "c": t / 2 + opt.cover_tol / res}
-        a0, a1, hseg[:, 0], hseg[:, 2] = keep_runs_inside(
-            hseg[:, 0], hseg[:, 2], a[0], a[1], C, n, extend=True, **kw)
-        b0, b1, vseg[:, 1], vseg[:, 3] = keep_runs_inside(
-            vseg[:, 1], vseg[:, 3], b[0], b[1], C.T, n, extend=True, **kw)
-        a, b = (a0, a1), (b0, b1)
+        a = keep_runs_inside(hseg[:, 0], hseg[:, 2], a[0], a[1], C, n, **kw)
+        b = keep_runs_inside(vseg[:, 1], vseg[:, 3], b[0], b[1], C.T, n, **kw)
     hseg = np.stack([hseg[:, 0], a[0], hseg[:, 2], a[1]], 1)
     vseg = np.stack([b[0], vseg[:, 1], b[1], vseg[:, 3]], 1)
     hseg, vseg, other = _snap_ends([hseg, vseg, other], reach)
