@@ -126,3 +126,9 @@ def test_cover_is_deterministic_and_off_means_off():
     none = draw_plan(corr, m, RES, 4)
     off = draw_plan(corr, m, RES, 4, cover=m == OCC, options=DrawOptions(cover_run=0.0))
     assert np.array_equal(none.segments, off.segments)
+
+
+def test_a_cover_of_another_shape_is_refused():
+    m, corr = _room_with_a_drifted_wall()
+    with pytest.raises(ValueError, match="cover must be shaped like the map"):
+        draw_plan(corr, m, RES, 4, cover=np.zeros((10, 10), bool))
