@@ -193,6 +193,51 @@ def test_maximise_fitness_polishes_a_nearly_right_similarity(plan):
     assert np.abs(apply(T, pts) - pts).max() < 0.5 < np.abs(apply(T0, pts) - pts).max()
 
 
+def test_maximise_fitness_rigid_holds_the_scale(plan):
+    from map2map.evaluate.features import occupied_points
+
+    pts = occupied_points(plan)
+    Mf = fitness_map(plan == OCCUPIED, 4.0)
+    T0 = similarity_matrix(1.02, math.radians(1.0), -2.0, 1.5)
+    T = maximise_fitness(pts, Mf, T0, rigid=True)
+    assert decompose_similarity(T)[0] == pytest.approx(1.02, abs=1e-12)
+    assert fitness(Mf, apply(T, pts)) > fitness(Mf, apply(T0, pts))
+    # the free similarity gets nearer the truth (identity), the rigid one cannot take
+    # the 2 % of scale off
+    Ts = maximise_fitness(pts, Mf, T0)
+    assert fitness(Mf, apply(Ts, pts)) > fitness(Mf, apply(T, pts))
+
+
+def test_a_fallback_against_a_line_drawn_plan_is_polished_like_a_passed_match():
+    """No hypothesis passes (``min_score`` out of reach): the similarity is the rigid
+    fallback polished on eq. 8 at ``direct_sigma`` with the scale held, as a passed
+    similarity is against a line-drawn plan (Halmstad HIH_03 auto-corrected: keypoints
+    8.2 -> 5.3 px, floor 4.4); the rigid variant, which carries the metric, is not."""
+    from map2map.evaluate.features import occupied_points
+    from map2map.evaluate.fitness import distance_map
+
+    lines = draw_walls((H, W), office_walls(W, H, thickness=1))
+    rng = np.random.default_rng(3)
+    src = warp_image(draw_walls((H, W), office_walls(W, H, thickness=5)),
+                     similarity_matrix(1.0, math.radians(0.5), 1.0, -1.5), (H, W))
+    src[(src == OCCUPIED) & (rng.random(src.shape) < 0.3)] = FREE
+    al = align_maps(src, lines, params=AlignParams(min_score=2.0))
+    assert any("no alignment hypothesis passed" in w for w in al.warnings)
+    assert decompose_similarity(al.similarity)[0] == pytest.approx(1.0, abs=1e-9)
+    assert np.abs(al.similarity - al.rigid).max() > 1e-3
+    # no less fit than the rigid in the polish's terms (the winning direction; the
+    # polish scores a subsample bilinearly, hence the tolerance)
+    a, b, S, R = src, lines, al.similarity, al.rigid
+    if al.hypotheses["direction"] == "target->source":
+        a, b, S, R = lines, src, np.linalg.inv(S), np.linalg.inv(R)
+    pts = occupied_points(a)
+    Mf = np.exp(-distance_map(b == OCCUPIED) ** 2 / (2 * 4.0**2)).astype(np.float32)
+    assert fitness(Mf, apply(S, pts)) >= fitness(Mf, apply(R, pts)) - 1e-3
+    off = align_maps(src, lines, params=AlignParams(min_score=2.0, direct_sigma=None))
+    np.testing.assert_allclose(off.similarity, off.rigid)  # no polish: the fallback as it was
+    np.testing.assert_allclose(off.rigid, al.rigid)
+
+
 # ------------------------------------------------------------------- Algorithm 1
 def test_error_is_measured_across_the_plan_wall_not_along_a_tilted_normal():
     plan = np.full((60, 60), FREE, np.uint8)

@@ -16,7 +16,8 @@ on a three-level pyramid so that a 1585 x 1585 pair aligns in about a second:
 3. *full resolution*: the winner is refined again, then an affine refinement and
    the rigid variant (scale held at ``rigid_scale``, 1 when both maps share a
    resolution) are fitted the same way; last, against a line-drawn plan, the
-   similarity is polished by maximising eq. 8 itself (:func:`maximise_fitness`).
+   similarity is polished by maximising eq. 8 itself (:func:`maximise_fitness`; when
+   no hypothesis passed, the rigid fallback's similarity, with its scale held).
 
 Anchors (eqs. 1-6), given or found automatically (:mod:`.anchors`), are applied
 last. When no hypothesis reaches ``min_score`` (eq. 8 at the refine level times the
@@ -375,7 +376,7 @@ def refine_surfaces(
 
 
 def maximise_fitness(
-    pts: np.ndarray, Mf: np.ndarray, T: np.ndarray, *, tol: float = 1e-4
+    pts: np.ndarray, Mf: np.ndarray, T: np.ndarray, *, tol: float = 1e-4, rigid: bool = False
 ) -> np.ndarray:
     """Maximise eq. 8 over the similarities near ``T`` directly (Powell's method).
 
@@ -392,12 +393,14 @@ def maximise_fitness(
     (floor 3.8 px) and the median similarity residual from 9.1 to 8.7 px: the
     least-squares fixed point had the scale 1.4% too large, held by clutter
     beside a sparsely observed wall. Sigma 2 px overfits the sensor noise
-    (E5_09, HIH_layout -> HIH_01 worse), 6 px is too blunt.
+    (E5_09, HIH_layout -> HIH_01 worse), 6 px is too blunt. ``rigid`` holds ``T``'s
+    scale (angle and translation only).
     """
     Mf = np.asarray(Mf, np.float32)
     centre = apply(T, pts).mean(0)
 
     def compose(x: np.ndarray) -> np.ndarray:
+        x = np.concatenate([[0.0], x]) if rigid else x
         D = similarity_matrix(math.exp(x[0]), x[1], 0.0, 0.0)
         D[:2, 2] = centre - apply(D, [centre])[0] + x[2:]
         return D @ T
@@ -406,8 +409,9 @@ def maximise_fitness(
         q = apply(compose(x), pts)
         return -float(ndimage.map_coordinates(Mf, [q[:, 1] - 0.5, q[:, 0] - 0.5], order=1).mean())
 
-    res = optimize.minimize(cost, np.zeros(4), method="Powell", options={"xtol": tol, "ftol": 1e-7})
-    return compose(res.x) if res.fun < cost(np.zeros(4)) else T
+    x0 = np.zeros(3 if rigid else 4)
+    res = optimize.minimize(cost, x0, method="Powell", options={"xtol": tol, "ftol": 1e-7})
+    return compose(res.x) if res.fun < cost(x0) else T
 
 
 def _score(level_t: _Level, Mf: np.ndarray, pts: np.ndarray, free_pts: np.ndarray, T) -> float:
@@ -873,19 +877,26 @@ def _surfaces(source, target, src, a, b, sims, crop: _Crop, theta_t: float, pass
     )
     if not passed:
         sim = aff = rig
-    elif p.direct_sigma and line_plan:
+    if p.direct_sigma and line_plan:
         # polish the similarity on eq. 8 itself, in the winning direction (a -> b); only
         # against line-drawn plans: on a plan with real wall faces the surface fit above
-        # is exact, and a 4 px wide fitness would be pulled by walls built a few px off
+        # is exact, and a 4 px wide fitness would be pulled by walls built a few px off.
+        # A fallback's similarity is its rigid polished with the scale held: its surface
+        # fit locks onto the nearest faces (Halmstad HIH_01-03 auto-corrected, whose
+        # search scores 0.15-0.20 fall under min_score: keypoints 10.5 / 11.6 / 8.2 px
+        # -> 9.2 / 8.8 / 5.3 against their inputs' 9.5 / 8.7 / 4.9); the rigid variant,
+        # which carries Algorithm 1, is left as it is
         pa = subsample(occupied_points(a), p.max_points, p.seed)
         off_a, off_b = ((c0t, r0t), (c0s, r0s)) if reverse else ((c0s, r0s), (c0t, r0t))
         d_b = distance_map(b == OCCUPIED)
         Mfd = np.exp(-(d_b**2) / (2 * p.direct_sigma**2)).astype(np.float32)
         S = np.linalg.inv(sim) if reverse else sim
         S = _shift(-off_b[0], -off_b[1]) @ S @ _shift(*off_a)
-        S = maximise_fitness(pa, Mfd, S)
+        S = maximise_fitness(pa, Mfd, S, rigid=not passed)
         S = _shift(*off_b) @ S @ _shift(-off_a[0], -off_a[1])
         sim = np.linalg.inv(S) if reverse else S
+        if not passed:  # the fallback's similarity: its rigid polished the same way
+            aff = sim
     return (sim, aff, rig), fields
 
 
