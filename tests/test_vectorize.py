@@ -100,6 +100,22 @@ def test_a_t_junction_joins():
     assert wall_components(d.map) == 1
 
 
+def test_a_thick_wall_across_is_not_taken_into_the_wall_it_meets():
+    """A wall at least ``L`` thick (a cleaned one-sided wall, grown outward) holds runs
+    of ``L`` across its own direction: its pixels must not join the top wall's piece,
+    whose line they would pull down into the room (dev map 000102: the top wall drawn
+    8 px inside the room, then cut away as free space)."""
+    m = room(t=3)
+    m[20:100, 20:32] = OCC                        # the left wall, 12 px thick
+    m[20:23, 20:180] = OCC
+    d = draw_plan(m == OCC, m, RES, 3)
+    top = horizontal(d.segments, 21.5, tol=1.0)
+    assert len(top) == 1, d.segments
+    assert top[0, 0] <= 32 and top[0, 2] >= 178
+    assert len(horizontal(d.segments)) == 2       # top and bottom, nothing down the side
+    assert (d.map[20:23, 40:170] == OCC).all()
+
+
 def test_an_l_corner_closes():
     m = np.full((120, 200), FREE, np.uint8)
     m[20:23, 20:150] = OCC                        # horizontal, ends at x = 150

@@ -23,7 +23,9 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
    with a line of ``L = max(thickest + 2, min_len / resolution)`` pixels, keeps only the
    pixels lying in
    a straight run at least ``L`` long along that direction (specks, ray-end blobs and the
-   other family's walls go); each 8-connected component is a piece, its line the
+   other family's walls go; so do the pixels of a wall across it as thick as ``L``,
+   whose runs across are at least ``2 L`` and twice their runs along: a pixel of two
+   walls belongs to the longer); each 8-connected component is a piece, its line the
    weighted mean of its points across (sub-pixel), its extent its first and last pixel.
 4. **Wall lines**: pieces whose lines lie within ``tol`` of each other (clusters at most
    ``tol`` wide) are one wall line. Consecutive pieces of a line are joined into one
@@ -353,6 +355,17 @@ def _pieces(E: np.ndarray, u: np.ndarray, v: np.ndarray, w: np.ndarray, L: int,
     closed = cv2.morphologyEx(E, cv2.MORPH_CLOSE, np.ones((1, bridge), np.uint8))
     closed |= E
     opened = cv2.morphologyEx(closed, cv2.MORPH_OPEN, np.ones((1, L), np.uint8))
+    # a wall across the family as thick as L holds runs of L along it: its pixels are
+    # not this direction's where their run across is at least 2 L and twice their run
+    # along, so a thick perpendicular wall is neither a piece nor joined to the wall it
+    # meets (a pixel of two walls belongs to the longer)
+    across = cv2.morphologyEx(E, cv2.MORPH_CLOSE, np.ones((bridge, 1), np.uint8)) | E
+    rr, cc = np.nonzero(opened & cv2.morphologyEx(across, cv2.MORPH_OPEN,
+                                                  np.ones((2 * L, 1), np.uint8)))
+    if len(rr):
+        v_run = _run_through(np.ascontiguousarray(across.T), cc, rr)
+        drop = v_run >= 2 * _run_through(closed, rr, cc)
+        opened[rr[drop], cc[drop]] = 0
     n, lab = cv2.connectedComponents(opened, connectivity=8)
     if n <= 1:
         return np.zeros((0, 10)), np.full(len(u), -1, np.int64)
@@ -380,6 +393,24 @@ def _pieces(E: np.ndarray, u: np.ndarray, v: np.ndarray, w: np.ndarray, L: int,
     index[1:][ok] = np.arange(int(ok.sum()))
     return np.stack([c, left[ok] + 0.5, right[ok] + 0.5] + [x[ok] for x in st]
                     + [npix[ok], nmain[ok]], axis=1), index[lp]
+
+
+def _run_through(mask: np.ndarray, rr: np.ndarray, cc: np.ndarray) -> np.ndarray:
+    """Length of the horizontal run of nonzero pixels of ``mask`` through each pixel
+    ``(rr[i], cc[i])`` (each one of its nonzero pixels): run starts and ends found once,
+    then looked up.
+
+    >>> m = np.array([[1, 1, 0, 1], [0, 1, 1, 1]], np.uint8)
+    >>> _run_through(m, np.array([0, 0, 1]), np.array([1, 3, 2]))
+    array([2, 1, 3])
+    """
+    H, W = mask.shape
+    flat = np.zeros((H, W + 1), np.int8)
+    flat[:, :W] = mask != 0
+    d = np.diff(flat.ravel(), prepend=np.int8(0))
+    starts, ends = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
+    k = np.searchsorted(starts, rr * (W + 1) + cc, side="right") - 1
+    return ends[k] - starts[k]
 
 
 def _lines(p: np.ndarray, tol: float) -> np.ndarray:
