@@ -39,6 +39,7 @@ import cv2
 import numpy as np
 
 from ..core.grid import OCCUPIED
+from ..core.runs import open_runs
 
 __all__ = ["wall_components", "median_wall_thickness", "straight_wall_count",
            "broken_runs", "drawing_report", "TARGETS"]
@@ -104,8 +105,9 @@ def straight_wall_count(m: np.ndarray, cell: float = 4.0) -> int:
 
 
 def _run_mask(w: np.ndarray, n: int, axis: int) -> np.ndarray:
-    k = np.ones((1, n) if axis == 0 else (n, 1), np.uint8)
-    return cv2.morphologyEx(w.astype(np.uint8), cv2.MORPH_OPEN, k) > 0
+    """Pixels in runs of at least ``n`` along rows (``axis`` 0) or columns (1), exactly
+    (:func:`map2map.core.runs.open_runs`; OpenCV's opening shifts even lengths)."""
+    return open_runs(w, n, axis=1 if axis == 0 else 0)
 
 
 def broken_runs(inp: np.ndarray, out: np.ndarray, resolution: float, *,
@@ -144,9 +146,7 @@ def broken_runs(inp: np.ndarray, out: np.ndarray, resolution: float, *,
         k = np.ones((2 * across + 1, 1) if axis == 0 else (1, 2 * across + 1), np.uint8)
         near = cv2.dilate(wo.astype(np.uint8), k) > 0
         miss = (r & ~near).astype(np.uint8)
-        gap = cv2.morphologyEx(miss, cv2.MORPH_OPEN,
-                               np.ones((1, max_gap + 1) if axis == 0 else (max_gap + 1, 1),
-                                       np.uint8)) > 0
+        gap = _run_mask(miss, max_gap + 1, axis)
         cnt, lab = cv2.connectedComponents(r.astype(np.uint8), connectivity=8)
         runs += cnt - 1
         for i in np.unique(lab[gap]):               # the runs with a gap (a few)

@@ -97,6 +97,7 @@ import cv2
 import numpy as np
 
 from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from ..core.runs import open_runs, run_through
 from .cover import keep_runs_inside
 from .directions import angle_families, orientation, sharp_angle
 from .directions import splat as _splat
@@ -354,17 +355,16 @@ def _pieces(E: np.ndarray, u: np.ndarray, v: np.ndarray, w: np.ndarray, L: int,
     half of its length must be at least ``2 L`` long (a few specks in a row are not)."""
     closed = cv2.morphologyEx(E, cv2.MORPH_CLOSE, np.ones((1, bridge), np.uint8))
     closed |= E
-    opened = cv2.morphologyEx(closed, cv2.MORPH_OPEN, np.ones((1, L), np.uint8))
+    opened = open_runs(closed, L, axis=1).astype(np.uint8)
     # a wall across the family as thick as L holds runs of L along it: its pixels are
     # not this direction's where their run across is at least 2 L and twice their run
     # along, so a thick perpendicular wall is neither a piece nor joined to the wall it
     # meets (a pixel of two walls belongs to the longer)
     across = cv2.morphologyEx(E, cv2.MORPH_CLOSE, np.ones((bridge, 1), np.uint8)) | E
-    rr, cc = np.nonzero(opened & cv2.morphologyEx(across, cv2.MORPH_OPEN,
-                                                  np.ones((2 * L, 1), np.uint8)))
+    rr, cc = np.nonzero(opened & open_runs(across, 2 * L, axis=0))
     if len(rr):
-        v_run = _run_through(np.ascontiguousarray(across.T), cc, rr)
-        drop = v_run >= 2 * _run_through(closed, rr, cc)
+        v_run = run_through(np.ascontiguousarray(across.T), cc, rr)
+        drop = v_run >= 2 * run_through(closed, rr, cc)
         opened[rr[drop], cc[drop]] = 0
     n, lab = cv2.connectedComponents(opened, connectivity=8)
     if n <= 1:
@@ -393,24 +393,6 @@ def _pieces(E: np.ndarray, u: np.ndarray, v: np.ndarray, w: np.ndarray, L: int,
     index[1:][ok] = np.arange(int(ok.sum()))
     return np.stack([c, left[ok] + 0.5, right[ok] + 0.5] + [x[ok] for x in st]
                     + [npix[ok], nmain[ok]], axis=1), index[lp]
-
-
-def _run_through(mask: np.ndarray, rr: np.ndarray, cc: np.ndarray) -> np.ndarray:
-    """Length of the horizontal run of nonzero pixels of ``mask`` through each pixel
-    ``(rr[i], cc[i])`` (each one of its nonzero pixels): run starts and ends found once,
-    then looked up.
-
-    >>> m = np.array([[1, 1, 0, 1], [0, 1, 1, 1]], np.uint8)
-    >>> _run_through(m, np.array([0, 0, 1]), np.array([1, 3, 2]))
-    array([2, 1, 3])
-    """
-    H, W = mask.shape
-    flat = np.zeros((H, W + 1), np.int8)
-    flat[:, :W] = mask != 0
-    d = np.diff(flat.ravel(), prepend=np.int8(0))
-    starts, ends = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
-    k = np.searchsorted(starts, rr * (W + 1) + cc, side="right") - 1
-    return ends[k] - starts[k]
 
 
 def _lines(p: np.ndarray, tol: float) -> np.ndarray:
