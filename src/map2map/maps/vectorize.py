@@ -366,17 +366,13 @@ def _pieces(E: np.ndarray, u: np.ndarray, v: np.ndarray, w: np.ndarray, L: int,
         v_run = run_through(np.ascontiguousarray(across.T), cc, rr)
         drop = v_run >= 2 * run_through(closed, rr, cc)
         opened[rr[drop], cc[drop]] = 0
-    n, lab = cv2.connectedComponents(opened, connectivity=8)
+    n, lab, stats, _ = cv2.connectedComponentsWithStats(opened, connectivity=8)
     if n <= 1:
         return np.zeros((0, 10)), np.full(len(u), -1, np.int64)
     H, W = E.shape
-    rr, cc = np.nonzero(lab)
-    lv = lab[rr, cc]
-    o = np.argsort(lv, kind="stable")
-    first = np.flatnonzero(np.r_[True, lv[o][1:] != lv[o][:-1]])
-    left = np.minimum.reduceat(cc[o], first)
-    right = np.maximum.reduceat(cc[o], first)
-    npix = np.bincount(lv, minlength=n)[1:]
+    left = stats[1:, cv2.CC_STAT_LEFT].astype(np.int64)
+    right = left + stats[1:, cv2.CC_STAT_WIDTH] - 1
+    npix = stats[1:, cv2.CC_STAT_AREA].astype(np.int64)
     ci = np.clip(np.floor(u).astype(np.int64), 0, W - 1)
     ri = np.clip(np.floor(v).astype(np.int64), 0, H - 1)
     lp = lab[ri, ci]
