@@ -153,6 +153,16 @@ def test_cli_synthesize_scans_writes_maps_and_its_summary(tmp_path, plan):
                          capture_output=True, text=True, timeout=600)
     assert net.returncode == 2 and "--explore-map" in net.stderr and "Traceback" not in net.stderr
     assert not (tmp_path / "n").exists()
+    filt = subprocess.run(cmd + ["--pose-error", "filter", "--out", str(tmp_path / "f")],
+                          capture_output=True, text=True, timeout=600)
+    assert filt.returncode == 0, filt.stderr
+    summary = json.loads((tmp_path / "f" / "apt_synthesize.json").read_text())
+    assert summary["scans"]["pose_error"] == "filter"
+    bad = subprocess.run(cmd + ["--pose-error", "filter", "--explore-map", "grid",
+                                "--out", str(tmp_path / "fg")], capture_output=True, text=True,
+                         timeout=600)
+    assert bad.returncode == 2 and "explore_map" in bad.stderr and "Traceback" not in bad.stderr
+    assert not (tmp_path / "fg").exists()
 
 
 def test_a_given_start_is_where_every_hypothesis_starts(plan):
@@ -259,3 +269,28 @@ def test_the_robot_may_explore_on_its_particle_filters_map(plan):
     assert np.array_equal(scan_map(plan, 3, 0, ScanMapParams(**still)).map.data, h.map.data)
     # the filter's own map is not the one drawn: its poses err, the hypothesis's do not
     assert not np.array_equal(h.map.data, res.slam_map_plan.data)
+
+
+def test_with_the_filters_own_poses_a_hypothesis_is_a_simulated_runs_map(plan):
+    """``pose_error="filter"``: the scans the exploring particle filter processed, mapped at
+    its best particle's trajectory, are its own map: exactly the map of a simulated
+    ``rbpf`` run with that seed (what the datasets' pairs hold)."""
+    from map2map.learn.ab.coverage import explore_rng
+    from map2map.robotlog.mappers import make_mapper
+    from map2map.sim.runner import simulate
+
+    sp = ScanMapParams(duration=40.0, pose_error="filter")
+    h = scan_map(plan, 3, 0, sp)
+    seed = int(explore_rng(3, 0).integers(1 << 32))
+    m = make_mapper("rbpf", resolution=plan.resolution, seed=seed)
+    res = simulate(plan, seed=seed, duration=40.0, fov=180.0, mapper=m, progress=False)
+    assert np.array_equal(h.map.data, res.slam_map_plan.data)
+    assert h.drift is None and h.info["pose_error"] == "filter"
+    assert 0 < h.info["pose_error_m"]["mean"] < 0.5          # the filter's own error
+    drawn = scan_map(plan, 3, 0, replace(sp, pose_error="drawn"))
+    assert np.array_equal(drawn.true_poses, h.true_poses)    # the same exploration
+    assert not np.array_equal(drawn.map.data, h.map.data)
+    with pytest.raises(InputError, match="explore_map"):
+        ScanMapParams(pose_error="filter", explore_map="grid")
+    with pytest.raises(InputError, match="pose_error"):
+        ScanMapParams(pose_error="odometry")

@@ -43,6 +43,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="scans: the map the robot explores on: rbpf, the particle filter's "
                    "(as a simulated run's robot; the default); grid, GMapping's grid at the "
                    "true poses (faster); oracle, the simulator's perfect map")
+    p.add_argument("--pose-error", choices=("drawn", "filter"), default=d.pose_error,
+                   help="scans: the poses the scans are mapped at: drawn (room drift, turn "
+                   "and jitter; the default) or the exploring particle filter's own (each "
+                   "hypothesis is then a simulated rbpf run's map; needs --explore-map rbpf)")
     p.add_argument("--format", choices=("ros", "png"), default=d.format,
                    help="ros: .yaml + .pgm; png: pictures (default %(default)s)")
     p.add_argument("--render", choices=("slam", "plain"), default=d.render,
@@ -94,7 +98,7 @@ def run(args: argparse.Namespace) -> int:
         drift_method=args.drift_method, drift_scale=args.drift_scale, coverage=args.coverage,
         drift_route=args.drift_route, traces=args.traces,
         start=None if args.start is None else tuple(args.start),
-        explore_map=args.explore_map, device=args.device,
+        explore_map=args.explore_map, pose_error=args.pose_error, device=args.device,
         figure=not args.no_figure, read_options=read_options_from_args(args)))
     say_how_read(args.input, run.plan)
     src, res = Path(args.input), run.result

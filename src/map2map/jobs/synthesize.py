@@ -47,6 +47,9 @@ class SynthesizeSpec:
     explore_map : {"rbpf", "grid", "oracle"} or None
         With ``model="scans"``: the map its robot explores on
         (:class:`~map2map.learn.ab.scans.ScanMapParams`; None: its default).
+    pose_error : {"drawn", "filter"} or None
+        With ``model="scans"``: the poses its scans are mapped at, drawn or the exploring
+        particle filter's (:class:`~map2map.learn.ab.scans.ScanMapParams`; None: drawn).
     format : {"ros", "png"}
         The hypotheses' file format.
     figure : bool
@@ -70,6 +73,7 @@ class SynthesizeSpec:
     traces: str | None = None
     start: tuple[float, float, float] | None = None
     explore_map: str | None = None
+    pose_error: str | None = None
     device: str = "cpu"
     figure: bool = True
     read_options: Any = None
@@ -107,12 +111,14 @@ def synthesize(spec: SynthesizeSpec) -> SynthesizeRun:
     for path in names:
         check_output_path(path)
     scans = None
-    if spec.explore_map is not None:
+    chosen = {k: v for k, v in (("explore_map", spec.explore_map),
+                                ("pose_error", spec.pose_error)) if v is not None}
+    if chosen:
         if str(spec.model) != SCANS:
-            raise InputError("explore_map", f"applies to model '{SCANS}' only")
+            raise InputError(next(iter(chosen)), f"applies to model '{SCANS}' only")
         from ..learn.ab.scans import ScanMapParams
 
-        scans = ScanMapParams(explore_map=spec.explore_map)
+        scans = ScanMapParams(**chosen)
     plan = load_map(src, spec.read_options)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

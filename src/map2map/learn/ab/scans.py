@@ -116,6 +116,12 @@ class ScanMapParams:
         half the particle filter's CPU time); or the simulator's log-odds oracle out to
         the full range (``"oracle"``; one scan every ``temporal_update`` seconds is
         mapped).
+    pose_error : {"drawn", "filter"}
+        Where the poses the scans are mapped at come from: drawn (steps 2 of the module
+        doc: room drift, whole-run turn, jitter; the default) or the exploring particle
+        filter's own estimate (``"filter"``, needs ``explore_map="rbpf"``: the best
+        particle's trajectory, so the hypothesis is the map of a simulated ``rbpf`` run of
+        the plan, as the datasets' pairs are; the drift settings are not used).
 
     The defaults were chosen on 160 plans of the seed-20261127 dev set among eight
     settings by the per-plan ranks and the classifier AUC; ``room_order="visits"`` on
@@ -142,6 +148,7 @@ class ScanMapParams:
     room_order: str = "visits"
     explore_map: str = "rbpf"
     jitter_s: float = 1.0
+    pose_error: str = "drawn"
 
     def __post_init__(self):
         for name in ("duration", "fov", "jitter_m", "jitter_deg", "global_deg",
@@ -156,6 +163,12 @@ class ScanMapParams:
         if self.explore_map not in ("grid", "oracle", "rbpf"):
             raise InputError("explore_map",
                              f"must be 'grid', 'oracle' or 'rbpf', got {self.explore_map!r}")
+        if self.pose_error not in ("drawn", "filter"):
+            raise InputError("pose_error",
+                             f"must be 'drawn' or 'filter', got {self.pose_error!r}")
+        if self.pose_error == "filter" and self.explore_map != "rbpf":
+            raise InputError("pose_error", "'filter' takes the exploring particle filter's "
+                             f"poses: it needs explore_map 'rbpf', not {self.explore_map!r}")
         if self.room_order not in ("random", "visits"):
             raise InputError("room_order",
                              f"must be 'random' or 'visits', got {self.room_order!r}")
@@ -174,10 +187,12 @@ class ScanHypothesis:
     map : OccupancyMap
         In the plan's grid (shape, resolution, origin).
     poses : (N, 3) float
-        The drifted poses of the scans mapped (plan frame).
+        The poses the scans were mapped at (plan frame): drifted, or with ``pose_error
+        "filter"`` the particle filter's at the scans it processed (true elsewhere).
     true_poses : (N, 3) float
         Their true poses.
-    drift : RoomDrift
+    drift : RoomDrift or None
+        None with ``pose_error "filter"``.
     info : dict
         Exploration and drift figures for a summary.
     """
@@ -185,7 +200,7 @@ class ScanHypothesis:
     map: OccupancyMap
     poses: np.ndarray
     true_poses: np.ndarray
-    drift: RoomDrift
+    drift: RoomDrift | None
     info: dict
 
 
@@ -447,7 +462,9 @@ class Exploration:
     """What :func:`explore` recorded of one robot's run: its true ``poses`` (N, 3), the
     ``scans`` and their ``times``, the ``start`` pose, the indices ``keep`` of the scans
     the exploring mapper processed (None: the oracle's, one every ``temporal_update`` s is
-    drawn), and the run's ``seed``, ``coverage`` and ``sim_seconds``."""
+    drawn), and the run's ``seed``, ``coverage`` and ``sim_seconds``; ``filter_poses``:
+    the particle filter's estimate at the scans ``keep`` names (plan frame; the best
+    particle's trajectory at the end of the run), None unless it explored on ``rbpf``."""
 
     poses: np.ndarray
     scans: list
@@ -457,6 +474,7 @@ class Exploration:
     seed: int
     coverage: float
     sim_seconds: float
+    filter_poses: np.ndarray | None = None
 
 
 def explore(plan: OccupancyMap, seed: int, k: int, params: ScanMapParams | None = None,
@@ -483,9 +501,13 @@ def explore(plan: OccupancyMap, seed: int, k: int, params: ScanMapParams | None 
     res = simulate(plan, seed=sim_seed, duration=sp.duration, fov=sp.fov, mapper=mapper,
                    start=None if start is None else tuple(float(v) for v in start),
                    progress=False)
+    filt = None
+    if hasattr(mapper, "trajectory"):           # the particle filter: its own poses too
+        traj = mapper.trajectory()
+        filt = compose_pose(np.asarray(res.start, float), traj[:, 1:4]).reshape(-1, 3)
     return Exploration(res.true_poses, res.scans, res.times, res.start,
                        _processed(mapper, res.times), sim_seed, float(res.coverage),
-                       float(res.sim_seconds))
+                       float(res.sim_seconds), filt)
 
 
 def scan_map(plan: OccupancyMap, seed: int, k: int,
@@ -527,16 +549,28 @@ def drawn_hypothesis(plan: OccupancyMap, ex: Exploration, seed: int, k: int,
     True
     """
     sp = params or ScanMapParams()
-    rng = scan_rng(seed, k)
-    path = plan.world_to_pixel_float(ex.poses[:, 0], ex.poses[:, 1]) \
-        if sp.room_order == "visits" else None
-    drift = room_drift_field(plan.data, rng, sp.rooms, path)
-    poses = drifted_poses(plan, ex.poses, ex.start, drift, rng, sp, ex.times)
+    if sp.pose_error == "filter":
+        if ex.filter_poses is None or ex.keep is None:
+            raise InputError("pose_error", "'filter' needs an exploration on the particle "
+                             "filter's map (explore_map 'rbpf')")
+        drift = None
+        poses = np.array(ex.poses, float, copy=True)
+        poses[ex.keep] = ex.filter_poses
+        used = np.asarray(ex.keep, int)
+    else:
+        rng = scan_rng(seed, k)
+        path = plan.world_to_pixel_float(ex.poses[:, 0], ex.poses[:, 1]) \
+            if sp.room_order == "visits" else None
+        drift = room_drift_field(plan.data, rng, sp.rooms, path)
+        poses = drifted_poses(plan, ex.poses, ex.start, drift, rng, sp, ex.times)
+        used = np.arange(len(poses))
     m = map_scans(ex.scans, ex.times, poses, ex.start, plan, ex.keep)
-    err = np.hypot(*(poses[:, :2] - ex.poses[:, :2]).T)
+    err = np.hypot(*(poses[used, :2] - ex.poses[used, :2]).T)
     info = {"seed": ex.seed, "coverage": round(ex.coverage, 4),
             "sim_seconds": round(ex.sim_seconds, 1), "scans": len(ex.scans),
+            "pose_error": sp.pose_error,
             "pose_error_m": {"mean": round(float(err.mean()), 4) if len(err) else 0.0,
                              "max": round(float(err.max()), 4) if len(err) else 0.0},
-            "drift": {k2: round(float(v), 3) for k2, v in drift.stats().items()}}
+            "drift": {} if drift is None else
+            {k2: round(float(v), 3) for k2, v in drift.stats().items()}}
     return ScanHypothesis(m, poses, ex.poses, drift, info)
