@@ -117,7 +117,7 @@ class ScanMapParams:
         the full range (``"oracle"``; one scan every ``temporal_update`` seconds is
         mapped).
     pose_error : {"drawn", "filter"}
-        Where the poses the scans are mapped at come from: drawn (steps 2 of the module
+        Where the poses the scans are mapped at come from: drawn (step 2 of the module
         doc: room drift, whole-run turn, jitter; the default) or the exploring particle
         filter's own estimate (``"filter"``, needs ``explore_map="rbpf"``: the best
         particle's trajectory, so the hypothesis is the map of a simulated ``rbpf`` run of
