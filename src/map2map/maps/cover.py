@@ -46,6 +46,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from ..core.runs import open_runs
+
 __all__ = ["straight_runs", "keep_runs_inside"]
 
 
@@ -75,10 +77,9 @@ def _runs(c: np.ndarray, n: int, slack: int
         return e, e, e, 0
     c8 = c.view(np.uint8)
     wide = cv2.dilate(c8, np.ones((2 * slack + 1, 1), np.uint8)) if slack > 0 else c8
-    # an odd line (OpenCV's opening with an even one shifts by a pixel)
-    opened = cv2.morphologyEx(wide, cv2.MORPH_OPEN, np.ones((1, int(n) | 1), np.uint8))
-    k, lab = cv2.connectedComponents(opened, connectivity=8)
-    rr, cc = np.nonzero(c & (opened > 0))
+    opened = open_runs(wide, int(n) | 1, axis=1)
+    k, lab = cv2.connectedComponents(opened.view(np.uint8), connectivity=8)
+    rr, cc = np.nonzero(c & opened)
     return rr, cc, lab[rr, cc].astype(np.int64) - 1, int(k - 1)
 
 
