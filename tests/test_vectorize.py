@@ -262,6 +262,23 @@ def test_specks_and_ray_ends_are_removed():
     assert (d.map[5:8, 60:63] == UNK).all()
 
 
+def test_no_unknown_sliver_is_left_between_a_moved_wall_and_its_room():
+    """A stretch of the top wall saved 3 px low (shorter than a run the drawer keeps
+    inside its wall) is drawn on the wall's line: the input's wall pixels and the
+    unknown beyond them, now inside the room, become free; a corner of the room the
+    robot never saw (an unknown pocket 12 px deep) stays unknown."""
+    m = room()
+    m[20:26, 120:135] = UNK
+    m[23:26, 120:135] = OCC
+    m[26:38, 40:60] = UNK
+    d = draw_plan(m == OCC, m, RES, 3)
+    top = horizontal(d.segments, 21.5)
+    assert len(top) == 1 and top[0, 1] == pytest.approx(21.5, abs=0.2)
+    assert (d.map[20:23, 22:178] == OCC).all()
+    assert (d.map[23:26, 110:145] == FREE).all()
+    assert (d.map[26:38, 40:60] == UNK).all()
+
+
 def test_determinism():
     m = _rotated_room(7.0)
     m[60:64, 100:104] = OCC

@@ -69,8 +69,9 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
    room) become unknown; then every segment is drawn
    as a rectangle of ``thickness`` pixels across (exactly within 10 degrees of the grid's
    axes, drawn column by column; within half a pixel at other angles), extended by half
-   the thickness at both ends so corners close.
-   Nothing else is occupied.
+   the thickness at both ends so corners close. Unknown slivers a wall drawn off the
+   input's wall leaves between itself and a room (at most 3 pixels across) become free
+   (:func:`_slivers`). Nothing else is occupied.
 
 :func:`save_plan_dxf` writes the same segments through the one DXF writer
 (:func:`map2map.maps.dxf.save_segments_dxf`), so raster and drawing agree.
@@ -1080,7 +1081,43 @@ def render_plan(segments: np.ndarray, occupancy: np.ndarray, thickness: float,
     keep = _rooms(free, wall > 0, min_room / resolution**2, enclosed)
     out = np.where(free & ~keep, np.uint8(UNKNOWN), out)
     out[wall > 0] = OCCUPIED
+    out[_slivers(out)] = FREE
     return out
+
+
+def _slivers(out: np.ndarray, width: float = 1.5) -> np.ndarray:
+    """Unknown slivers between a drawn wall and a room: unknown regions (8-connected)
+    at most ``2 width`` pixels across (no pixel farther than ``width`` from a known
+    one) that touch both a wall and free space of ``out`` and not the map's border.
+    They are what a wall drawn off the input's wall leaves behind (the input's wall
+    pixels and the unknown beyond them, now inside the room); a wider unknown region
+    (a room's corner the robot never saw) is left as it is.
+
+    >>> m = np.full((9, 12), 127, np.uint8); m[1:8, 1:11] = 255; m[1, 1:11] = 0
+    >>> m[2, 3:9] = 127                       # the unknown beyond a wall drawn lower
+    >>> int(_slivers(m).sum())
+    6
+    >>> m[2:6, 3:9] = 127                     # a pocket 4 px deep is not a sliver
+    >>> int(_slivers(m).sum())
+    0
+    """
+    U = (out == UNKNOWN).astype(np.uint8)
+    n, lab, st, _ = cv2.connectedComponentsWithStats(U, connectivity=8)
+    if n <= 1:
+        return np.zeros(out.shape, bool)
+    H, W = out.shape
+    d = cv2.distanceTransform(np.pad(U, 1, constant_values=1), cv2.DIST_L2, 3)[1:-1, 1:-1]
+    deep = np.zeros(n, np.float32)
+    np.maximum.at(deep, lab.ravel(), d.ravel())
+    k = np.ones((3, 3), np.uint8)
+    touches = [np.bincount(lab[cv2.dilate((out == v).astype(np.uint8), k) > 0],
+                           minlength=n) > 0 for v in (OCCUPIED, FREE)]
+    x0, y0 = st[:, cv2.CC_STAT_LEFT], st[:, cv2.CC_STAT_TOP]
+    border = ((x0 == 0) | (y0 == 0) | (x0 + st[:, cv2.CC_STAT_WIDTH] == W)
+              | (y0 + st[:, cv2.CC_STAT_HEIGHT] == H))
+    ok = (deep <= width) & touches[0] & touches[1] & ~border
+    ok[0] = False
+    return ok[lab]
 
 
 #: Segments within this of the grid axes are drawn column by column (:func:`_fill_columns`).
