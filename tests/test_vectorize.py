@@ -15,7 +15,13 @@ from map2map.evaluate.drawing import (
     median_wall_thickness,
     wall_components,
 )
-from map2map.maps.vectorize import DrawOptions, draw_plan, save_plan_dxf, wall_points
+from map2map.maps.vectorize import (
+    DrawOptions,
+    _residual_lines,
+    draw_plan,
+    save_plan_dxf,
+    wall_points,
+)
 
 RES = 0.05
 FREE, UNK, OCC = 255, 127, 0
@@ -277,6 +283,30 @@ def test_no_unknown_sliver_is_left_between_a_moved_wall_and_its_room():
     assert (d.map[20:23, 22:178] == OCC).all()
     assert (d.map[23:26, 110:145] == FREE).all()
     assert (d.map[26:38, 40:60] == UNK).all()
+
+
+def test_lines_off_the_families_are_found_where_they_are_and_nowhere_else():
+    """Walls off both directions (ragged, as SLAM draws them) in two corners of a map:
+    the lines found in each do not depend on what lies in the other (the Hough
+    transform draws its points at random; run on the whole map, one pixel anywhere
+    moved every line)."""
+    rng = np.random.default_rng(3)
+
+    def ragged(img, p0, p1):
+        t = np.linspace(0, 1, 2 * int(np.hypot(p1[0] - p0[0], p1[1] - p0[1])))[:, None]
+        pts = np.array(p0) + t * np.subtract(p1, p0) + rng.normal(0, 0.3, (len(t), 2))
+        img[np.round(pts[:, 1]).astype(int), np.round(pts[:, 0]).astype(int)] = 1
+
+    a, b = np.zeros((200, 300), np.uint8), np.zeros((200, 300), np.uint8)
+    ragged(a, (10, 20), (120, 70))
+    ragged(a, (30, 150), (110, 110))
+    ragged(b, (180, 30), (280, 150))
+    ragged(b, (200, 170), (260, 120))
+    none = np.zeros(a.shape, bool)
+    apart = np.concatenate([_residual_lines(a, none, 20), _residual_lines(b, none, 20)])
+    both = _residual_lines(a | b, none, 20)
+    assert len(apart) >= 4
+    assert sorted(map(tuple, apart.round(6))) == sorted(map(tuple, both.round(6)))
 
 
 def test_determinism():

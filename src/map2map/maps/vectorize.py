@@ -538,11 +538,23 @@ def _residual_lines(E: np.ndarray, drawn: np.ndarray, min_len: int, tol_deg: flo
     from skimage.morphology import skeletonize
 
     sk = skeletonize(res).astype(np.uint8) * 255
-    lines = cv2.HoughLinesP(sk, 1, np.pi / 180, threshold=max(5, min_len // 2),
-                            minLineLength=min_len, maxLineGap=2)
-    if lines is None:
+    # each group of skeleton pixels (within the Hough's gap of each other) on its own:
+    # the probabilistic Hough transform draws its points in a random order, so a pixel
+    # more or less anywhere would otherwise move the lines it finds everywhere
+    n, lab, st, _ = cv2.connectedComponentsWithStats(
+        cv2.dilate(sk, np.ones((3, 3), np.uint8)), connectivity=8)
+    found = []
+    for i in np.flatnonzero(st[1:, cv2.CC_STAT_AREA] >= min_len) + 1:   # a few groups
+        x0, y0 = st[i, cv2.CC_STAT_LEFT], st[i, cv2.CC_STAT_TOP]
+        box = np.s_[y0:y0 + st[i, cv2.CC_STAT_HEIGHT], x0:x0 + st[i, cv2.CC_STAT_WIDTH]]
+        part = np.where(lab[box] == i, sk[box], 0).astype(np.uint8)
+        lines = cv2.HoughLinesP(part, 1, np.pi / 180, threshold=max(5, min_len // 2),
+                                minLineLength=min_len, maxLineGap=2)
+        if lines is not None:
+            found.append(np.asarray(lines, float).reshape(-1, 4) + [x0, y0, x0, y0])
+    if not found:
         return np.zeros((0, 4))
-    s = np.asarray(lines, float).reshape(-1, 4) + 0.5
+    s = np.concatenate(found) + 0.5
     ang = np.degrees(np.arctan2(s[:, 3] - s[:, 1], s[:, 2] - s[:, 0])) % 90.0
     s = s[(ang > tol_deg) & (ang < 90 - tol_deg)]
     if len(s) == 0:
