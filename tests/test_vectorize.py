@@ -86,6 +86,31 @@ def test_a_door_stays_open():
     assert (d.map[52:62, 99:102] == FREE).all()
 
 
+@pytest.mark.parametrize(("jog", "jamb", "t"), [(0, 6, 3), (1, 6, 3), (0, 4, 6)])
+def test_a_short_jamb_beside_a_door_stays_on_its_wall(jog, jamb, t):
+    """A door 0.9 m wide leaves a jamb of 0.3 or 0.2 m (6 or 4 px, shorter than a wall
+    piece; the 4 px one has both ends within the corner reach of the top wall) between
+    itself and the top wall (``t`` px thick): the jamb is drawn (the door is not widened
+    to the corner), on the line of the wall beyond the door even where SLAM saved it a
+    pixel off."""
+    m = room(t=t)
+    m[20:100, 99:102] = OCC                       # a wall between two rooms
+    face = 20 + t
+    door = face + jamb
+    m[face:door + 18, 99:102] = FREE              # the door
+    m[face:door, 99 + jog:102 + jog] = OCC        # the jamb
+    d = draw_plan(m == OCC, m, RES, 3)
+    mid = vertical(d.segments, 100.5, tol=1.5)
+    assert len(mid) == 2, d.segments
+    assert np.allclose(mid[:, 0], mid[0, 0]) and np.allclose(mid[:, 2], mid[0, 0])
+    ends = sorted([mid[0, 1], mid[0, 3], mid[1, 1], mid[1, 3]])
+    top = horizontal(d.segments, 20 + t / 2)
+    assert len(top) == 1 and ends[0] == pytest.approx(top[0, 1])
+    assert door - 2 <= ends[1] <= door + 1 and door + 17 <= ends[2] <= door + 19
+    assert (d.map[door + 2:door + 16, 99:102] == FREE).all()
+    assert (d.map[face:door - 1, 99:102] == OCC).all()
+
+
 def test_a_gap_with_free_space_into_a_speck_only_is_closed():
     m = room()
     m[17:20, 60:70] = FREE                        # a sliver of free space outside

@@ -44,7 +44,10 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
    than ``main_min`` of main evidence (the weight-1 points: with an input's own wall
    pixels handed over at a lower weight beside a corrector's walls, a line only the
    input shows is clutter the corrector dropped; those pixels still join the
-   corrector's walls).
+   corrector's walls). A segment beside a door shorter than ``2 L`` (a **jamb**) needs
+   only ``jamb_min`` beyond the walls it stands on, of evidence of any weight; its end
+   at the door stays where the door begins, and it is drawn on the line of the wall
+   beyond the door (:func:`_onto_line`): a door is not widened to the corner.
 6. **Other directions**, only where evidence is strong: evidence that no family wall
    explains is thinned and cut by a probabilistic Hough transform; lines at least
    ``other_min`` metres long, more than 4 degrees off both families, are kept.
@@ -175,6 +178,12 @@ class DrawOptions:
         Most direction families (:func:`map2map.maps.directions.angle_families`): a wing
         of the map whose walls run more than 5 degrees off the rest is drawn in its own
         frame (1: one dominant direction for the whole map, as before session 28).
+    jamb_min : float
+        A segment beside a door shorter than twice the shortest piece (a jamb) needs a
+        stretch of only this much beyond the walls it stands on, of evidence of any
+        weight, where others need the shortest piece (``min_len``, at
+        least ``thickest`` plus two pixels): a door is not drawn wider than the input
+        shows it.
     cover_run, cover_tol : float
         With :func:`draw_plan`'s ``cover``: the input's straight wall runs at least
         ``cover_run`` long lie within the drawn wall's half thickness plus ``cover_tol``
@@ -198,6 +207,7 @@ class DrawOptions:
     families: int = 3
     cover_run: float = 1.0
     cover_tol: float = 0.15
+    jamb_min: float = 0.1
 
 
 @dataclass
@@ -406,19 +416,21 @@ def _lines(p: np.ndarray, tol: float) -> np.ndarray:
 
 
 def _family(p: np.ndarray, free: np.ndarray, room: np.ndarray, tol: float, half: int,
-            door_min: int, max_gap: float) -> tuple[np.ndarray, int, int]:
+            door_min: int, max_gap: float
+            ) -> tuple[np.ndarray, int, int, np.ndarray, np.ndarray]:
     """Join the horizontal pieces ``p`` of each line across gaps without a door; returns
     segments as rows like :func:`_pieces`' (sums added up, ``c`` their weighted mean)
-    plus the number of doors kept and gaps joined and each piece's segment.
+    plus the number of doors kept and gaps joined, each piece's segment and whether
+    each segment's ends (low, high) are at a door ((n, 2) bool: a jamb may be short).
 
     ``free`` is the canvas's free mask; ``room`` marks free pixels of a room-sized
     region (every gap closed)."""
     seg_of = np.full(len(p), -1, np.int64)
     if len(p) == 0:
-        return np.zeros((0, 10)), 0, 0, seg_of
+        return np.zeros((0, 10)), 0, 0, seg_of, np.zeros((0, 2), bool)
     H, W = free.shape
     line = _lines(p, tol)
-    out, doors, joined = [], 0, 0
+    out, doors, joined, at_door = [], 0, 0, []
     order = np.lexsort((p[:, 1], line))
     starts = np.flatnonzero(np.r_[True, line[order][1:] != line[order][:-1]])
     for g in np.split(order, starts[1:]):          # one line at a time
@@ -435,6 +447,7 @@ def _family(p: np.ndarray, free: np.ndarray, room: np.ndarray, tol: float, half:
             side = above & below
         cur = q[0].copy()
         seg_of[g[0]] = len(out)
+        cur_door = False
         for k in range(1, len(q)):
             gap0, gap1 = cur[2], q[k, 1]
             if gap1 - gap0 <= 1.0:                     # overlapping or touching
@@ -451,13 +464,16 @@ def _family(p: np.ndarray, free: np.ndarray, room: np.ndarray, tol: float, half:
             if door or gap1 - gap0 > max_gap:
                 doors += int(door)
                 out.append(cur)
-                cur = q[k].copy()
+                at_door.append((cur_door, door))
+                cur, cur_door = q[k].copy(), door
             else:
                 joined += 1
                 cur = _absorb(cur, q[k])
             seg_of[g[k]] = len(out)
         out.append(cur)
-    return np.asarray(out, float).reshape(-1, 10), doors, joined, seg_of
+        at_door.append((cur_door, False))
+    return (np.asarray(out, float).reshape(-1, 10), doors, joined, seg_of,
+            np.asarray(at_door, bool).reshape(-1, 2))
 
 
 def _absorb(cur: np.ndarray, piece: np.ndarray) -> np.ndarray:
@@ -704,28 +720,46 @@ def _draw_family(pts: np.ndarray, w: np.ndarray, angle: float, occ: np.ndarray,
                        main)
     # room-sized free regions with every gap closed (pieces joined regardless of doors)
     closed = np.zeros((Hr, Wr), np.uint8)
-    hc, _, _, _ = _family(ph, np.zeros((Hr, Wr), bool), np.zeros((Hr, Wr), bool), tol, half,
-                       door_min, opt.max_gap / res)
-    vc, _, _, _ = _family(pv, np.zeros((Wr, Hr), bool), np.zeros((Wr, Hr), bool), tol, half,
-                       door_min, opt.max_gap / res)
+    hc = _family(ph, np.zeros((Hr, Wr), bool), np.zeros((Hr, Wr), bool), tol, half,
+                 door_min, opt.max_gap / res)[0]
+    vc = _family(pv, np.zeros((Wr, Hr), bool), np.zeros((Wr, Hr), bool), tol, half,
+                 door_min, opt.max_gap / res)[0]
     _fill_rects(closed, hc[:, :3], vc[:, :3], max(t, 2 * half - 1))
     region = free_c & (closed == 0)
     room = _rooms(region, (closed > 0) | (E_all > 0), min_room, opt.enclosed)
     room |= free_c & (closed > 0)                  # the wall band itself counts
-    hs, d1, j1, sh = _family(ph, free_c, room, tol, half, door_min, opt.max_gap / res)
-    vs, d2, j2, sv = _family(pv, free_c.T, room.T, tol, half, door_min, opt.max_gap / res)
+    hs, d1, j1, sh, dh = _family(ph, free_c, room, tol, half, door_min, opt.max_gap / res)
+    vs, d2, j2, sv, dv = _family(pv, free_c.T, room.T, tol, half, door_min,
+                                 opt.max_gap / res)
     hseg = np.stack([hs[:, 1], hs[:, 0], hs[:, 2], hs[:, 0]], 1).reshape(-1, 4)
     vseg = np.stack([vs[:, 0], vs[:, 1], vs[:, 0], vs[:, 2]], 1).reshape(-1, 4)
+    h0, v0 = hseg.copy(), vseg.copy()
     hseg, vseg = _join(hseg, vseg, reach)
+    # a short segment's end at a door stays where the door begins (a jamb is not
+    # pulled onto the wall it stands on)
+    for sg, s0, st, d, ends in ((hseg, h0, hs, dh, (0, 2)), (vseg, v0, vs, dv, (1, 3))):
+        short = st[:, 2] - st[:, 1] < L
+        for k, e in enumerate(ends):
+            sel = short & d[:, k]
+            sg[sel, e] = s0[sel, e]
+    dh, dv = dh.any(axis=1), dv.any(axis=1)
     kh, kv = _drop_stubs(hseg, vseg, band, L)
+    # a door's jamb: a segment beside a door, however short beyond the wall it stands
+    # on, is kept (and drawn on its wall's line, below)
+    jamb = max(2.0, opt.jamb_min / res)
+    jh, jv = _drop_stubs(hseg, vseg, band, jamb)
     kh &= hs[:, 9] >= opt.main_min / res
     kv &= vs[:, 9] >= opt.main_min / res
+    jh &= dh & ~kh & (hs[:, 8] >= jamb) & (hs[:, 2] - hs[:, 1] < 2 * L)
+    jv &= dv & ~kv & (vs[:, 8] >= jamb) & (vs[:, 2] - vs[:, 1] < 2 * L)
+    kh |= jh
+    kv |= jv
     hs = _refit(hs, _kept(sh, kh, pt_h), uv[:, 0], uv[:, 1], w)[kh]
     vs = _refit(vs, _kept(sv, kv, pt_v), uv[:, 1], uv[:, 0], w)[kv]
-    hseg, vseg = hseg[kh], vseg[kv]
+    hseg, vseg, jh, jv = hseg[kh], vseg[kv], jh[kh], jv[kv]
     sh = _seen(hs, hseg[:, 0], hseg[:, 2], free_c, opt.other_min / res)
     sv = _seen(vs, vseg[:, 1], vseg[:, 3], free_c.T, opt.other_min / res)
-    hs, hseg, vs, vseg = hs[sh], hseg[sh], vs[sv], vseg[sv]
+    hs, hseg, vs, vseg, jh, jv = hs[sh], hseg[sh], vs[sv], vseg[sv], jh[sh], jv[sv]
     drawn = np.zeros((Hr, Wr), np.uint8)
     _fill_rects(drawn, np.stack([hseg[:, 1], hseg[:, 0], hseg[:, 2]], 1).reshape(-1, 3),
                 np.stack([vseg[:, 0], vseg[:, 1], vseg[:, 3]], 1).reshape(-1, 3), t + 2 * tol)
@@ -742,6 +776,8 @@ def _draw_family(pts: np.ndarray, w: np.ndarray, angle: float, occ: np.ndarray,
         kw = {"band": t / 2 + 2 * tol, "c": t / 2 + opt.cover_tol / res}
         a = keep_runs_inside(hseg[:, 0], hseg[:, 2], a[0], a[1], C, n, **kw)
         b = keep_runs_inside(vseg[:, 1], vseg[:, 3], b[0], b[1], C.T, n, **kw)
+    a = _onto_line(hs[:, 0], hseg[:, 0], hseg[:, 2], *a, jh, tol)
+    b = _onto_line(vs[:, 0], vseg[:, 1], vseg[:, 3], *b, jv, tol)
     hseg = np.stack([hseg[:, 0], a[0], hseg[:, 2], a[1]], 1)
     vseg = np.stack([b[0], vseg[:, 1], b[1], vseg[:, 3]], 1)
     hseg, vseg, other = _snap_ends([hseg, vseg, other], reach)
@@ -753,6 +789,30 @@ def _draw_family(pts: np.ndarray, w: np.ndarray, angle: float, occ: np.ndarray,
     info = {"pieces": int(len(ph) + len(pv)), "doors": d1 + d2, "joined": j1 + j2,
             "other": int(len(other))}
     return segs, info
+
+
+def _onto_line(c: np.ndarray, lo: np.ndarray, hi: np.ndarray, a0: np.ndarray,
+               a1: np.ndarray, jamb: np.ndarray, tol: float
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Across-positions ``a0``, ``a1`` at the ends of a family's segments, with each
+    ``jamb`` moved onto the wall it belongs to: the nearest other segment along whose
+    line (``c``) lies within ``tol``, at that segment's end nearest the jamb. A jamb's
+    few pixels say less about where the wall runs than the wall beside its door.
+
+    >>> c = np.array([10.0, 11.0]); lo, hi = np.array([0.0, 60.0]), np.array([50.0, 66.0])
+    >>> _onto_line(c, lo, hi, c.copy(), c.copy(), np.array([False, True]), 2.0)[0]
+    array([10., 10.])
+    """
+    a0, a1 = a0.copy(), a1.copy()
+    wall = np.flatnonzero(~jamb)
+    for i in np.flatnonzero(jamb):                 # the few jambs, not pixels
+        near = wall[np.abs(c[wall] - c[i]) <= tol]
+        if len(near) == 0:
+            continue
+        gap = np.maximum(lo[near] - hi[i], lo[i] - hi[near])
+        j = near[np.argmin(gap)]
+        a0[i] = a1[i] = a1[j] if hi[j] <= lo[i] else a0[j]
+    return a0, a1
 
 
 def _samples(segs: np.ndarray):
@@ -968,21 +1028,29 @@ def _snap_ends(groups: list[np.ndarray], reach: float) -> list[np.ndarray]:
     """Move every segment end onto the intersection with another segment's line (one
     more than 30 degrees off its own) when that point lies within ``reach`` of the end
     and within ``reach`` of the other segment: corners and T-junctions stay closed
-    after walls are leaned or moved onto their faces."""
+    after walls are leaned or moved onto their faces. Where both ends of a segment
+    would move onto the same segment's line, only the nearer one does."""
     st = _stack(groups)
     if st is None:
         return [np.asarray(g, float).reshape(-1, 4) for g in groups]
     s, p0, u, ln, sizes = st
     out = s.copy()
     rows = np.arange(len(s))
+    hits = []
     for e in (0, 2):                           # each end: all other segments at once
         P = s[:, e:e + 2]
         ti, sj, ok = _crossings(P, p0, u)
         ok &= (np.abs(ti) <= reach) & (sj >= -reach) & (sj <= ln[None, :] + reach)
         dist = np.where(ok, np.abs(ti), np.inf)
         k = np.argmin(dist, axis=1)
-        hit = np.isfinite(dist[rows, k])
-        out[hit, e:e + 2] = P[hit] + ti[rows, k][hit, None] * u[hit]
+        hits.append((k, dist[rows, k], ti[rows, k]))
+    # a segment shorter than twice the reach (a door's jamb) whose both ends find the
+    # same wall moves only its nearer end onto it
+    (k0, d0, t0), (k1, d1, t1) = hits
+    same = np.isfinite(d0) & np.isfinite(d1) & (k0 == k1)
+    for e, d, t, far in ((0, d0, t0, same & (d0 > d1)), (2, d1, t1, same & (d1 >= d0))):
+        hit = np.isfinite(d) & ~far
+        out[hit, e:e + 2] = s[hit, e:e + 2] + t[hit, None] * u[hit]
     keep = np.hypot(out[:, 2] - out[:, 0], out[:, 3] - out[:, 1]) > 1e-6
     return [g[k] for g, k in zip(_split(out, sizes), _split(keep, sizes), strict=True)]
 
