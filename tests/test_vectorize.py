@@ -111,6 +111,21 @@ def test_a_short_jamb_beside_a_door_stays_on_its_wall(jog, jamb, t):
     assert (d.map[face:door - 1, 99:102] == OCC).all()
 
 
+@pytest.mark.parametrize("t", [3, 6])
+def test_a_door_is_drawn_as_wide_as_the_input_shows_it(t):
+    """A wall's end at a door covers its last pixel and no more (every end is drawn
+    extended by half the thickness so corners close; at a door that narrowed the door
+    by the thickness), while its corners stay closed."""
+    m = room()
+    m[20:100, 99:102] = OCC
+    m[50:64, 99:102] = FREE                       # the door: rows 50-63
+    d = draw_plan(m == OCC, m, RES, t)
+    col = d.map[:, 100]
+    assert (col[50:64] == FREE).all() and col[49] == OCC and col[64] == OCC
+    assert wall_components(d.map) == 1                       # corners and T closed
+    assert (d.map[22:50, 99:102] == OCC).all()
+
+
 def test_a_gap_with_free_space_into_a_speck_only_is_closed():
     m = room()
     m[17:20, 60:70] = FREE                        # a sliver of free space outside

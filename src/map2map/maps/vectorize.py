@@ -72,7 +72,9 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
    room) become unknown; then every segment is drawn
    as a rectangle of ``thickness`` pixels across (exactly within 10 degrees of the grid's
    axes, drawn column by column; within half a pixel at other angles), extended by half
-   the thickness at both ends so corners close. Unknown slivers a wall drawn off the
+   the thickness at both ends so corners close; an end no other wall reaches (a door's
+   side) only covers its last pixel (:func:`_free_ends_in`), so doors keep the input's
+   width. Unknown slivers a wall drawn off the
    input's wall leaves between itself and a room (at most 3 pixels across) become free
    (:func:`_slivers`). Nothing else is occupied.
 
@@ -1116,7 +1118,7 @@ def render_plan(segments: np.ndarray, occupancy: np.ndarray, thickness: float,
     >>> m = np.full((20, 30), 255, np.uint8); m[9, :] = 0
     >>> out = render_plan(np.array([[2.0, 10.0, 28.0, 10.0]]), m, 2, 0.05, min_room=0.01)
     >>> int((out == 0).sum(axis=0)[5]), int((out[9] == 0).sum()), int((out[10] == 0).sum())
-    (2, 28, 28)
+    (2, 27, 27)
     """
     occ = np.asarray(occupancy)
     H, W = occ.shape
@@ -1128,7 +1130,7 @@ def render_plan(segments: np.ndarray, occupancy: np.ndarray, thickness: float,
              if (occ == v).any() else np.full((H, W), np.inf, np.float32)
              for v in (FREE, UNKNOWN)]
         out[walls] = np.where(d[0][walls] <= d[1][walls], FREE, UNKNOWN)
-    segs = np.asarray(segments, float).reshape(-1, 4)
+    segs = _free_ends_in(np.asarray(segments, float).reshape(-1, 4), thickness)
     wall = np.zeros((H, W), np.uint8)
     axis = np.abs(segs[:, 1] - segs[:, 3]) < 1e-9
     vert = np.abs(segs[:, 0] - segs[:, 2]) < 1e-9
@@ -1198,6 +1200,38 @@ def _slivers(out: np.ndarray, width: float = 1.5) -> np.ndarray:
     ok = (deep <= width) & touches[0] & touches[1] & ~border
     ok[0] = False
     return ok[lab]
+
+
+def _free_ends_in(segs: np.ndarray, t: float) -> np.ndarray:
+    """Segments with each free end moved inwards by ``t / 2 - 0.5``, at most to the
+    segment's middle: drawn extended by ``t / 2`` as every end is (so that corners
+    close), a free end then covers its last evidence pixel and no more, and a door is
+    drawn as wide as the input shows it, not ``t`` narrower. An end is free when no
+    other segment's line comes within ``t + 1`` pixels of it (a door's side, a wall
+    ending in a room); nearer, its extension reaches that wall, and it keeps it (an
+    end that stops short of a corner still closes it).
+
+    >>> segs = np.array([[10.0, 20.0, 40.0, 20.0], [40.0, 20.0, 40.0, 60.0]])
+    >>> _free_ends_in(segs, 6.0)      # (10, 20) and (40, 60) are free, (40, 20) a corner
+    array([[12.5, 20. , 40. , 20. ],
+           [40. , 20. , 40. , 57.5]])
+    """
+    n = len(segs)
+    if n == 0 or t <= 1:
+        return segs
+    P = segs.reshape(-1, 2)                                   # ends: 2 per segment
+    a, d = segs[:, :2], segs[:, 2:] - segs[:, :2]
+    L2 = np.maximum((d**2).sum(axis=1), 1e-12)
+    f = np.clip(((P[:, None, :] - a[None]) * d[None]).sum(-1) / L2[None], 0.0, 1.0)
+    dist = np.hypot(*(P[:, None, :] - a[None] - f[..., None] * d[None]).transpose(2, 0, 1))
+    dist[np.arange(2 * n), np.repeat(np.arange(n), 2)] = np.inf      # not its own wall
+    free = (dist > t + 1.0).all(axis=1).reshape(n, 2)
+    length = np.sqrt(L2)
+    step = np.minimum(t / 2 - 0.5, length / 2)[:, None] / length[:, None] * d
+    out = segs.copy()
+    out[:, :2] += np.where(free[:, :1], step, 0.0)
+    out[:, 2:] -= np.where(free[:, 1:], step, 0.0)
+    return out
 
 
 #: Segments within this of the grid axes are drawn column by column (:func:`_fill_columns`).
