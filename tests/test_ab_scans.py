@@ -1,4 +1,5 @@
-"""``synthesize --model scans`` (issue #33): the robot's own scans mapped at drifted poses."""
+"""``synthesize --model scans`` (issue #33): the robot's own scans mapped at the particle
+filter's poses (the default) or at drawn ones."""
 
 import json
 import math
@@ -93,7 +94,7 @@ def test_jitter_correlated_in_time_keeps_its_size_and_makes_neighbours_alike(pla
 
 
 def test_scan_maps_are_seeded_and_differ_between_hypotheses(plan):
-    sp = ScanMapParams(duration=40.0)
+    sp = ScanMapParams(duration=40.0, pose_error="drawn")
     a, b = scan_map(plan, 5, 0, sp), scan_map(plan, 5, 0, sp)
     c = scan_map(plan, 5, 1, sp)
     assert np.array_equal(a.map.data, b.map.data)
@@ -104,7 +105,7 @@ def test_scan_maps_are_seeded_and_differ_between_hypotheses(plan):
     # plan wall; the drift moves them off
     from scipy import ndimage
     near = ndimage.distance_transform_edt(plan.data != 0) <= 1
-    exact = scan_map(plan, 5, 0, ScanMapParams(duration=40.0, **STILL,
+    exact = scan_map(plan, 5, 0, ScanMapParams(duration=40.0, **STILL, pose_error="drawn",
                                                rooms=RoomDriftParams(parametric=False,
                                                                      scale=0.0)))
     assert exact.info["pose_error_m"]["max"] == 0.0
@@ -138,6 +139,7 @@ def test_cli_synthesize_scans_writes_maps_and_its_summary(tmp_path, plan):
     assert r.returncode == 0, r.stderr
     summary = json.loads((out / "apt_synthesize.json").read_text())
     assert summary["model"] == "scans" and len(summary["hypotheses"]) == 2
+    assert summary["scans"]["pose_error"] == "filter"                    # the default
     assert (out / "apt_hyp01.pgm").is_file()
     bad = subprocess.run(cmd[:-1] + ["--render", "plain", "--out", str(tmp_path / "x")],
                          capture_output=True, text=True, timeout=600)
@@ -153,11 +155,11 @@ def test_cli_synthesize_scans_writes_maps_and_its_summary(tmp_path, plan):
                          capture_output=True, text=True, timeout=600)
     assert net.returncode == 2 and "--explore-map" in net.stderr and "Traceback" not in net.stderr
     assert not (tmp_path / "n").exists()
-    filt = subprocess.run(cmd + ["--pose-error", "filter", "--out", str(tmp_path / "f")],
-                          capture_output=True, text=True, timeout=600)
-    assert filt.returncode == 0, filt.stderr
+    drawn = subprocess.run(cmd + ["--pose-error", "drawn", "--out", str(tmp_path / "f")],
+                           capture_output=True, text=True, timeout=600)
+    assert drawn.returncode == 0, drawn.stderr
     summary = json.loads((tmp_path / "f" / "apt_synthesize.json").read_text())
-    assert summary["scans"]["pose_error"] == "filter"
+    assert summary["scans"]["pose_error"] == "drawn"
     bad = subprocess.run(cmd + ["--pose-error", "filter", "--explore-map", "grid",
                                 "--out", str(tmp_path / "fg")], capture_output=True, text=True,
                          timeout=600)
@@ -233,6 +235,7 @@ def test_the_robot_explores_on_the_grid_that_is_drawn(plan):
     from map2map.sim.runner import simulate
 
     still = dict(STILL, duration=40.0, rooms=RoomDriftParams(parametric=False, scale=0.0))
+    assert ScanMapParams(**still, explore_map="grid").pose_error == "drawn"
     h = scan_map(plan, 3, 0, ScanMapParams(**still, explore_map="grid"))
     m = GridOracle(plan.resolution)
     res = simulate(plan, seed=int(explore_rng(3, 0).integers(1 << 32)), duration=40.0,
@@ -255,7 +258,8 @@ def test_the_robot_may_explore_on_its_particle_filters_map(plan):
     from map2map.robotlog.mappers import make_mapper
     from map2map.sim.runner import simulate
 
-    still = dict(STILL, duration=40.0, rooms=RoomDriftParams(parametric=False, scale=0.0))
+    still = dict(STILL, duration=40.0, rooms=RoomDriftParams(parametric=False, scale=0.0),
+                 pose_error="drawn")
     h = scan_map(plan, 3, 0, ScanMapParams(**still, explore_map="rbpf"))
     seed = int(explore_rng(3, 0).integers(1 << 32))
     m = make_mapper("rbpf", resolution=plan.resolution, seed=seed)
@@ -280,6 +284,7 @@ def test_with_the_filters_own_poses_a_hypothesis_is_a_simulated_runs_map(plan):
     from map2map.sim.runner import simulate
 
     sp = ScanMapParams(duration=40.0, pose_error="filter")
+    assert ScanMapParams(duration=40.0) == sp                 # the default since session 31
     h = scan_map(plan, 3, 0, sp)
     seed = int(explore_rng(3, 0).integers(1 << 32))
     m = make_mapper("rbpf", resolution=plan.resolution, seed=seed)

@@ -1,5 +1,5 @@
 """``map2map synthesize``: K SLAM-map hypotheses for a CAD plan (the robot's own scans at
-drifted poses by default, or Model_AB)."""
+its particle filter's poses by default, or Model_AB)."""
 
 from __future__ import annotations
 
@@ -17,8 +17,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="CAD -> SLAM: K SLAM-map hypotheses of a plan (scans, or Model_AB)",
         description="Generate --samples SLAM-map hypotheses of a CAD plan, in the plan's "
         "frame, resolution and origin: by default each is the simulated robot's own "
-        "exploration mapped at drifted poses (no network); with --model pretrained or a "
-        "run, Model_AB's output (test-time dropout, seeded). Writes "
+        "exploration mapped at its particle filter's poses (no network); with --model "
+        "pretrained or a run, Model_AB's output (test-time dropout, seeded). Writes "
         "OUT/<plan>_hypNN.yaml (+ .pgm; or .png with --format png), OUT/<plan>_synthesize.json "
         "(diversity: mean pairwise pixel disagreement) and OUT/<plan>_synthesize.png.",
     )
@@ -29,7 +29,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="number of hypotheses K (default %(default)s)")
     p.add_argument("--model", default=d.model,
                    help="'scans' (the default): no network, the robot's own exploration "
-                   "mapped at drifted poses (the rendering, drift, coverage and traces "
+                   "mapped at its particle filter's poses (the rendering, drift, coverage "
+                   "and traces "
                    "options below do not apply); 'pretrained': the shipped Model_AB weights; "
                    "or a 'train ab' run folder or weights file (default %(default)s)")
     p.add_argument("--seed", type=int, default=d.seed,
@@ -44,9 +45,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "(as a simulated run's robot; the default); grid, GMapping's grid at the "
                    "true poses (faster); oracle, the simulator's perfect map")
     p.add_argument("--pose-error", choices=("drawn", "filter"), default=d.pose_error,
-                   help="scans: the poses the scans are mapped at: drawn (room drift, turn "
-                   "and jitter; the default) or the exploring particle filter's own (each "
-                   "hypothesis is then a simulated rbpf run's map; needs --explore-map rbpf)")
+                   help="scans: the poses the scans are mapped at: the exploring particle "
+                   "filter's own (each hypothesis is then a simulated rbpf run's map; the "
+                   "default with --explore-map rbpf) or drawn (room drift, turn and jitter; "
+                   "the default with the other exploration maps)")
     p.add_argument("--format", choices=("ros", "png"), default=d.format,
                    help="ros: .yaml + .pgm; png: pictures (default %(default)s)")
     p.add_argument("--render", choices=("slam", "plain"), default=d.render,

@@ -1,6 +1,6 @@
 """``map2map synthesize`` as a job: a CAD plan in, K SLAM-map hypotheses out
-(:func:`map2map.learn.ab.synthesize.synthesize`: the robot's own scans at drifted poses
-by default, or Model_AB), with a JSON summary and a figure.
+(:func:`map2map.learn.ab.synthesize.synthesize`: the robot's own scans at its particle
+filter's poses by default, or Model_AB), with a JSON summary and a figure.
 
 Every output path is checked before the plan is read; each file is written atomically.
 
@@ -49,7 +49,8 @@ class SynthesizeSpec:
         (:class:`~map2map.learn.ab.scans.ScanMapParams`; None: its default).
     pose_error : {"drawn", "filter"} or None
         With ``model="scans"``: the poses its scans are mapped at, drawn or the exploring
-        particle filter's (:class:`~map2map.learn.ab.scans.ScanMapParams`; None: drawn).
+        particle filter's (:class:`~map2map.learn.ab.scans.ScanMapParams`; None: the
+        filter's when exploring on ``rbpf``, else drawn).
     format : {"ros", "png"}
         The hypotheses' file format.
     figure : bool

@@ -12,7 +12,7 @@ the table.
         [--traces none|lidar] [--explore-at square|native] [--as-synthesize]
 
 ``--model scans`` draws ``map2map synthesize``'s default instead of Model_AB: the robot's
-own scans at drifted poses, no network (the Model_AB options do not apply).
+own scans at its particle filter's poses, no network (the Model_AB options do not apply).
 ``--as-synthesize`` draws Model_AB as ``map2map synthesize --model pretrained`` makes it
 (session 13: ``--drift rooms --coverage explore --traces lidar --explore-at native``);
 without it the defaults stay session 9's (parametric drift, the network's extent, no

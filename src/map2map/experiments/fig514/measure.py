@@ -302,8 +302,8 @@ def run_fig514(source: str | os.PathLike | Sequence[OccupancyMap], n: int = 6,
         Number of plans (the first ``n`` of the split; all given plans otherwise).
     model : "pretrained", "scans", run folder, weights file or ABModel
         Model_AB, or ``"scans"``: ``synthesize``'s default, the robot's own scans at
-        drifted poses (:mod:`map2map.learn.ab.scans`; hypothesis 0 with seed ``seed`` +
-        the pair's index; the Model_AB options below do not apply).
+        its particle filter's poses (:mod:`map2map.learn.ab.scans`; hypothesis 0 with
+        seed ``seed`` + the pair's index; the Model_AB options below do not apply).
     seed : int
         Seeds the parametric model (and the simulations of plans given in memory).
     split : str
@@ -394,7 +394,9 @@ def _scans_squares(made, size: int, seed: int, progress: bool):
             res = synthesize(m[6], SCANS, samples=1, seed=int(seed) + idx)
             out.append(preprocess_pair(m[6], res.maps[0], size, 0, m[7])[1])
     sp = ScanMapParams()
-    how = (f"scans: the robot's own scans at drifted poses (rooms {sp.room_order}, "
+    how = ("scans: the robot's own scans at its particle filter's poses"
+           if sp.pose_error == "filter" else
+           f"scans: the robot's own scans at drifted poses (rooms {sp.room_order}, "
            f"{sp.rooms.rot_deg:g} deg a room step; jitter {100 * sp.jitter_m:g} cm / "
            f"{sp.jitter_deg:g} deg)")
     return np.stack(out), SCANS, sorted({str(w.message) for w in caught}), how

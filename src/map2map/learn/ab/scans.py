@@ -1,19 +1,22 @@
-"""SLAM-map hypotheses of a plan mapped from the robot's own scans at drifted poses
-(issue #33: ``synthesize --model scans``, a generator with no network).
+"""SLAM-map hypotheses of a plan mapped from the robot's own scans at its particle filter's
+or at drifted poses (issue #33: ``synthesize --model scans``, a generator with no network).
 
 Model_AB's network draws a 64 px map; upsampled, its walls come out wobbly, its corners
 round and its free space in blobs, and a small CNN tells its maps from simulated ones
 (docs/synthesize.md). What a SLAM run's map looks like is set by how it was made: a LIDAR's
 beams, cropped at the usable range, counted into a grid at poses that err. This module
-makes a hypothesis the same way, its pose error drawn, not estimated:
+makes a hypothesis the same way. By default (``pose_error="filter"``, since session 31)
+the scans are mapped at the exploring particle filter's own estimate, so each hypothesis
+is the map of a simulated ``rbpf`` run of the plan; with ``pose_error="drawn"`` (the
+default until then) its pose error is drawn, not estimated (step 2):
 
 1. **exploration** (:func:`explore`, :func:`map2map.sim.runner.simulate`): the
    simulator's robot explores the plan (frontier exploration, ``duration`` simulated
    seconds, 180 degree LIDAR with its range noise) on the map of the datasets' ``rbpf``
    particle filter, steered by its pose estimate, exactly as a run's robot explores
    (``explore_map="rbpf"``, the default since session 26), recording its true poses, its
-   scans and which of them the filter processed; the filter's own map and poses are not
-   used. ``"grid"`` (:class:`GridOracle`, the default in session 25) explores on
+   scans, which of them the filter processed and the filter's estimate of their poses
+   (its map is not used). ``"grid"`` (:class:`GridOracle`, the default in session 25) explores on
    GMapping's grid at the true poses instead: its walls are one cell thick, so the
    no-return beams that cross them open frontiers behind them, and its robot turns back
    at doors to chase those (it finished 28 % of 40 dev plans within 420 s, the particle
@@ -21,7 +24,8 @@ makes a hypothesis the same way, its pose error drawn, not estimated:
    its maps. ``"oracle"`` (the default until session 25) explores on the simulator's
    perfect map out to the full range and leaves walls seen only from 3 to 3.5 m away
    unmapped, free space ending in range arcs in front of them (docs/synthesize.md);
-2. **pose error** (:func:`drifted_poses`): every scan's pose is moved by the room-wise
+2. **pose error**: the particle filter's best trajectory (``"filter"``), or drawn
+   (``"drawn"``, :func:`drifted_poses`): every scan's pose is moved by the room-wise
    rigid drift of :mod:`map2map.learn.ab.room_drift` (the transform of the room the robot
    is in, chained along its route: the start room is where the map is anchored, each
    room steps from the one the robot entered it from, so rooms reached late are off the
@@ -116,12 +120,16 @@ class ScanMapParams:
         half the particle filter's CPU time); or the simulator's log-odds oracle out to
         the full range (``"oracle"``; one scan every ``temporal_update`` seconds is
         mapped).
-    pose_error : {"drawn", "filter"}
-        Where the poses the scans are mapped at come from: drawn (step 2 of the module
-        doc: room drift, whole-run turn, jitter; the default) or the exploring particle
-        filter's own estimate (``"filter"``, needs ``explore_map="rbpf"``: the best
-        particle's trajectory, so the hypothesis is the map of a simulated ``rbpf`` run of
-        the plan, as the datasets' pairs are; the drift settings are not used).
+    pose_error : {"filter", "drawn"} or None
+        Where the poses the scans are mapped at come from: the exploring particle filter's
+        own estimate (``"filter"``, needs ``explore_map="rbpf"``: the best particle's
+        trajectory, so the hypothesis is the map of a simulated ``rbpf`` run of the plan,
+        as the datasets' pairs are; the drift settings are not used) or drawn (step 2 of
+        the module doc: room drift, whole-run turn, jitter). None (the default):
+        ``"filter"`` when exploring on ``"rbpf"``, else ``"drawn"``. ``"filter"`` is the
+        default since session 31: on the 640 plans of the eighth frozen test (seed
+        20261209) a classifier tells its maps from simulated runs with AUC 0.511 (two
+        runs: 0.508), the drawn pose error's with 0.727 (docs/synthesize.md).
 
     The defaults were chosen on 160 plans of the seed-20261127 dev set among eight
     settings by the per-plan ranks and the classifier AUC; ``room_order="visits"`` on
@@ -148,7 +156,7 @@ class ScanMapParams:
     room_order: str = "visits"
     explore_map: str = "rbpf"
     jitter_s: float = 1.0
-    pose_error: str = "drawn"
+    pose_error: str | None = None
 
     def __post_init__(self):
         for name in ("duration", "fov", "jitter_m", "jitter_deg", "global_deg",
@@ -163,6 +171,9 @@ class ScanMapParams:
         if self.explore_map not in ("grid", "oracle", "rbpf"):
             raise InputError("explore_map",
                              f"must be 'grid', 'oracle' or 'rbpf', got {self.explore_map!r}")
+        if self.pose_error is None:                 # frozen: set the resolved default
+            object.__setattr__(self, "pose_error",
+                               "filter" if self.explore_map == "rbpf" else "drawn")
         if self.pose_error not in ("drawn", "filter"):
             raise InputError("pose_error",
                              f"must be 'drawn' or 'filter', got {self.pose_error!r}")

@@ -2,9 +2,11 @@
 5.1, Fig. 5.3), in the plan's frame and resolution.
 
 The default model is ``"scans"`` (:data:`SCANS`, :mod:`map2map.learn.ab.scans`): no
-network, each hypothesis the simulated robot's own exploration mapped at drifted poses.
-On the frozen tests of docs/synthesize.md its maps are told from simulated ones less often
-than the network's; ``model="pretrained"`` (or a run) is Model_AB, below.
+network, each hypothesis the simulated robot's own exploration mapped at its particle
+filter's poses (a simulated ``rbpf`` run's map; ``ScanMapParams(pose_error="drawn")``
+draws the pose error instead). On the frozen tests of docs/synthesize.md its maps are
+told from simulated ones far less often than the network's; ``model="pretrained"`` (or a
+run) is Model_AB, below.
 
 The thesis's Model_AB gives one SLAM map per plan and calls that a weakness against the
 parametric model (sec. 5.2). Here one plan gives ``K`` hypotheses: the generator's
@@ -209,7 +211,8 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = S
         The CAD plan (internal convention; any size and resolution).
     model : "scans", "pretrained", run folder, weights file or ABModel
         ``"scans"`` (:data:`SCANS`, the default): no network; each hypothesis is the robot's own
-        exploration mapped at drifted poses (:mod:`map2map.learn.ab.scans`, settings
+        exploration mapped at its particle filter's poses (:mod:`map2map.learn.ab.scans`,
+        settings
         ``scans``); ``render``, ``drift``, ``coverage``, ``traces`` and their options do
         not apply and are refused when changed.
     samples : int
@@ -272,7 +275,7 @@ def synthesize(plan: OccupancyMap, model: str | os.PathLike | ABModel | None = S
                    if not (v in d if isinstance(d, tuple) else v == d)]
         if changed:
             raise InputError(changed[0], "does not apply to model 'scans' (the robot's own "
-                             "scans mapped at drifted poses, no network)")
+                             "scans mapped at its particle filter's poses, no network)")
         return _synthesize_scans(plan, samples, seed, scans or ScanMapParams(), start)
     for name, v in (("scans", scans), ("start", start)):
         if v is not None:

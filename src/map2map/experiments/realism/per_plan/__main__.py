@@ -12,7 +12,7 @@ nearest-neighbour upsampling) and the whole ``map2map synthesize`` (its defaults
 on, rooms drift, coverage of its own exploration, LIDAR traces) run on the pair's plan at
 its own resolution and cut with the pair's window, as the simulated runs are; its first
 of three hypotheses is the generated map. ``--model scans`` is ``synthesize --model
-scans`` (no network: the robot's own exploration mapped at drifted poses,
+scans`` (no network: the robot's own exploration mapped at its particle filter's poses,
 :mod:`map2map.learn.ab.scans`), one generator.
 
 Printed, per generator:
