@@ -1189,15 +1189,15 @@ def _slivers(out: np.ndarray, width: float = 1.5) -> np.ndarray:
         return np.zeros(out.shape, bool)
     H, W = out.shape
     d = cv2.distanceTransform(np.pad(U, 1, constant_values=1), cv2.DIST_L2, 3)[1:-1, 1:-1]
-    deep = np.zeros(n, np.float32)
-    np.maximum.at(deep, lab.ravel(), d.ravel())
+    deep = np.zeros(n, bool)
+    deep[lab[d > width]] = True
     k = np.ones((3, 3), np.uint8)
     touches = [np.bincount(lab[cv2.dilate((out == v).astype(np.uint8), k) > 0],
                            minlength=n) > 0 for v in (OCCUPIED, FREE)]
     x0, y0 = st[:, cv2.CC_STAT_LEFT], st[:, cv2.CC_STAT_TOP]
     border = ((x0 == 0) | (y0 == 0) | (x0 + st[:, cv2.CC_STAT_WIDTH] == W)
               | (y0 + st[:, cv2.CC_STAT_HEIGHT] == H))
-    ok = (deep <= width) & touches[0] & touches[1] & ~border
+    ok = ~deep & touches[0] & touches[1] & ~border
     ok[0] = False
     return ok[lab]
 
