@@ -1207,9 +1207,9 @@ def _free_ends_in(segs: np.ndarray, t: float) -> np.ndarray:
     segment's middle: drawn extended by ``t / 2`` as every end is (so that corners
     close), a free end then covers its last evidence pixel and no more, and a door is
     drawn as wide as the input shows it, not ``t`` narrower. An end is free when no
-    other segment's line comes within ``t + 1`` pixels of it (a door's side, a wall
-    ending in a room); nearer, its extension reaches that wall, and it keeps it (an
-    end that stops short of a corner still closes it).
+    other segment comes within ``t + 1`` pixels of it (a door's side, a wall ending in
+    a room); nearer, its extension reaches that wall, and it keeps it (an end that
+    stops short of a corner still closes it).
 
     >>> segs = np.array([[10.0, 20.0, 40.0, 20.0], [40.0, 20.0, 40.0, 60.0]])
     >>> _free_ends_in(segs, 6.0)      # (10, 20) and (40, 60) are free, (40, 20) a corner
