@@ -12,6 +12,8 @@
   :func:`affine_distortion` and :func:`transform_normals` -- the building blocks of the
   alignment chains of the appendix paper (paper sec. 3.2) and of the trajectory error
   (ATE) of :mod:`map2map.slam.quality`;
+* points against line segments: :func:`point_segment_distances` (the wall inspection's
+  nearest wall, the plan drawer's free wall ends);
 * displacement fields (thesis sec. 3.2, "(d_x, d_y) used to deform the map"):
   :func:`invert_displacement` finds, for every output pixel ``q``, the source ``p`` with
   ``p + d(p) = q``; the parametric model (:mod:`map2map.parametric.field`) and the
@@ -54,6 +56,7 @@ __all__ = [
     "fit_affine",
     "affine_distortion",
     "transform_normals",
+    "point_segment_distances",
     "invert_displacement",
 ]
 
@@ -445,6 +448,36 @@ def transform_normals(T: np.ndarray, normals: np.ndarray) -> np.ndarray:
     ok = (norm > 0) & (np.hypot(n[:, 0], n[:, 1]) > 0)
     out[ok] = m[ok] / norm[ok, None]
     return out
+
+
+def point_segment_distances(points: np.ndarray, segs: np.ndarray
+                            ) -> tuple[np.ndarray, np.ndarray]:
+    """Distance from every point to every segment, and where along it the nearest point
+    lies (0 at the segment's start, 1 at its end).
+
+    Parameters
+    ----------
+    points : (N, 2) array-like
+    segs : (K, 4) array-like
+        ``x0, y0, x1, y1``; a segment of zero length is its start point.
+
+    Returns
+    -------
+    dist, t : (N, K) ndarray
+
+    Examples
+    --------
+    >>> d, t = point_segment_distances([[5.0, 3.0], [-4.0, 0.0]], [[0.0, 0.0, 10.0, 0.0]])
+    >>> d.ravel().tolist(), t.ravel().tolist()
+    ([3.0, 4.0], [0.5, 0.0])
+    """
+    p = np.asarray(points, float).reshape(-1, 1, 2)
+    s = np.asarray(segs, float).reshape(-1, 4)
+    a, d = s[:, :2], s[:, 2:] - s[:, :2]
+    ll = np.maximum((d**2).sum(1), 1e-12)
+    t = np.clip(((p - a) * d).sum(2) / ll, 0.0, 1.0)
+    q = a + t[..., None] * d
+    return np.hypot(*(p - q).transpose(2, 0, 1)), t
 
 
 # ------------------------------------------------------------ displacement fields

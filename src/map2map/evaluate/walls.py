@@ -73,6 +73,7 @@ import numpy as np
 
 from ..core._io import atomic_path
 from ..core.errors import InputError
+from ..core.geometry import point_segment_distances
 from ..core.grid import OCCUPIED, OccupancyMap
 from ..maps.segments import straight_segments
 
@@ -253,14 +254,10 @@ def _to_segments(
     along = np.zeros(n)
     if n == 0 or len(segs) == 0:
         return best, dist, along
-    a = segs[:, :2]
-    d = segs[:, 2:] - a
+    d = segs[:, 2:] - segs[:, :2]
     ll = np.maximum((d**2).sum(1), 1e-12)
     for i in range(0, n, chunk):
-        p = points[i : i + chunk, None, :]
-        t = np.clip(((p - a) * d).sum(2) / ll, 0.0, 1.0)
-        q = a + t[..., None] * d
-        r = np.hypot(*(p - q).transpose(2, 0, 1))
+        r, t = point_segment_distances(points[i : i + chunk], segs)
         k = np.argmin(r, axis=1)
         rows = np.arange(len(k))
         best[i : i + chunk] = k

@@ -102,6 +102,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from ..core.geometry import point_segment_distances
 from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from ..core.runs import open_runs, run_through
 from .cover import keep_runs_inside
@@ -1219,14 +1220,11 @@ def _free_ends_in(segs: np.ndarray, t: float) -> np.ndarray:
     n = len(segs)
     if n == 0 or t <= 1:
         return segs
-    P = segs.reshape(-1, 2)                                   # ends: 2 per segment
-    a, d = segs[:, :2], segs[:, 2:] - segs[:, :2]
-    L2 = np.maximum((d**2).sum(axis=1), 1e-12)
-    f = np.clip(((P[:, None, :] - a[None]) * d[None]).sum(-1) / L2[None], 0.0, 1.0)
-    dist = np.hypot(*(P[:, None, :] - a[None] - f[..., None] * d[None]).transpose(2, 0, 1))
+    dist, _ = point_segment_distances(segs.reshape(-1, 2), segs)   # ends: 2 a segment
     dist[np.arange(2 * n), np.repeat(np.arange(n), 2)] = np.inf      # not its own wall
     free = (dist > t + 1.0).all(axis=1).reshape(n, 2)
-    length = np.sqrt(L2)
+    d = segs[:, 2:] - segs[:, :2]
+    length = np.sqrt(np.maximum((d**2).sum(axis=1), 1e-12))
     step = np.minimum(t / 2 - 0.5, length / 2)[:, None] / length[:, None] * d
     out = segs.copy()
     out[:, :2] += np.where(free[:, :1], step, 0.0)
