@@ -542,8 +542,9 @@ def scan_map(plan: OccupancyMap, seed: int, k: int,
 def drawn_hypothesis(plan: OccupancyMap, ex: Exploration, seed: int, k: int,
                      params: ScanMapParams | None = None) -> ScanHypothesis:
     """Steps 2 and 3 of the module doc for a recorded exploration ``ex`` (of
-    :func:`explore`): hypothesis ``k``'s pose error drawn from :func:`scan_rng`
-    ``(seed, k)``, its scans mapped. ``scan_map(plan, seed, k, params)`` is
+    :func:`explore`): hypothesis ``k``'s scans mapped at the particle filter's poses
+    (``pose_error "filter"``, the default) or at a pose error drawn from
+    :func:`scan_rng` ``(seed, k)`` (``"drawn"``). ``scan_map(plan, seed, k, params)`` is
     ``drawn_hypothesis(plan, explore(plan, seed, k, params), seed, k, params)``, so one
     exploration serves any pose-error settings (``params.duration``, ``fov`` and
     ``explore_map`` are the exploration's and not read here): tuning the pose error
