@@ -263,6 +263,66 @@ def test_walls_turned_by_half_a_degree_keep_the_thickness(t):
     assert set(cols.tolist()) == {2 * t}
 
 
+def _two_rooms(t_in: int, wall_top: int = 58) -> np.ndarray:
+    """A room with 3 px outer walls cut in two by a horizontal interior wall ``t_in`` px
+    thick (rows ``wall_top`` to ``wall_top + t_in - 1``), free on both sides."""
+    m = room(t=3)
+    m[wall_top:wall_top + t_in, 20:180] = OCC
+    return m
+
+
+@pytest.mark.parametrize("t_in", [1, 2, 3, 4])
+def test_a_wall_seen_from_both_sides_is_drawn_between_its_faces_grown_by_a_pixel(t_in):
+    m = _two_rooms(t_in)
+    d = draw_plan(m == OCC, m, RES, 7)
+    col = d.map[:, 100] == OCC
+    rows = np.flatnonzero(col[30:90]) + 30                 # the interior wall only
+    assert rows.tolist() == list(range(57, 58 + t_in + 1))   # one pixel beyond each face
+    assert d.info["two_sided"] == 1
+    i = np.argmin(np.abs(d.segments[:, 1] - (58 + t_in / 2)) + np.abs(
+        d.segments[:, 1] - d.segments[:, 3]))
+    assert d.thicknesses[i] == t_in + 2
+    # the outer walls, seen from one side, keep the drawing's thickness behind their face
+    assert (col[:30]).sum() == 7 and (col[90:]).sum() == 7
+    assert (d.map[21:58, 100] == FREE).sum() >= 58 - 21 - 3
+    # off: every wall at one thickness
+    d0 = draw_plan(m == OCC, m, RES, 7, options=DrawOptions(two_sided=False))
+    assert (d0.map[30:90, 100] == OCC).sum() == 7 and d0.info["two_sided"] == 0
+    # grown by 0: between the faces the input saw (at least 2 px)
+    d1 = draw_plan(m == OCC, m, RES, 7, options=DrawOptions(grow_px=0.0))
+    assert (d1.map[30:90, 100] == OCC).sum() == max(2, t_in)
+
+
+def test_a_wall_saved_twice_is_not_taken_for_a_thin_wall_seen_from_both_sides():
+    m = _two_rooms(1)
+    m[60, 20:180] = OCC                     # the same wall saved again 2 px lower
+    d = draw_plan(m == OCC, m, RES, 7)
+    assert len(d.segments) == 5
+    # its faces are the rooms' (rows 58 and 60 are its outer lines), not the free row
+    # between the lines: both lines are inside, grown by a pixel
+    rows = np.flatnonzero(d.map[30:90, 100] == OCC) + 30
+    assert rows.tolist() == [57, 58, 59, 60, 61]
+
+
+def test_a_wall_thicker_than_the_drawing_keeps_the_drawing_thickness():
+    m = _two_rooms(6)
+    d = draw_plan(m == OCC, m, RES, 5)
+    assert (d.map[30:90, 100] == OCC).sum() == 5
+    assert d.info["two_sided"] == 0
+
+
+def test_render_plan_takes_one_thickness_per_segment():
+    from map2map.maps.vectorize import render_plan
+
+    m = np.full((40, 60), FREE, np.uint8)
+    segs = np.array([[5.0, 10.5, 55.0, 10.5], [5.0, 30.5, 55.0, 30.5]])
+    out = render_plan(segs, m, np.array([3.0, 5.0]), RES, min_room=0.01)
+    assert (out[:, 30] == OCC).sum() == 8
+    assert np.flatnonzero(out[:, 30] == OCC).tolist() == [9, 10, 11, 28, 29, 30, 31, 32]
+    assert np.array_equal(render_plan(segs, m, 4.0, RES, min_room=0.01),
+                          render_plan(segs, m, np.array([4.0, 4.0]), RES, min_room=0.01))
+
+
 def test_raster_and_dxf_agree(tmp_path):
     ezdxf = pytest.importorskip("ezdxf")
     m = room()

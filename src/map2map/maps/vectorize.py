@@ -66,6 +66,11 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
    (:func:`_cut_free`): the input saw through the drawn wall (a tick's ends beyond its
    evidence, a line joined across a corridor whose sides are no rooms by their
    outline).
+   A wall the input saw from **both sides** (an interior wall: free space within
+   half the thickness plus 2 pixels of its line on both sides, along at least half of
+   it) is drawn between the faces the input saw, grown by ``grow_px`` on each side,
+   the plans' convention (:func:`_two_sided`): an interior wall is thinner than the
+   outer walls whose thickness the others are drawn at.
 8. **Drawing** (:func:`render_plan`): free and unknown space come from the input map, its
    occupied pixels taking the value of their nearest non-occupied pixel; free regions
    that are not rooms (small ones, ray fans; the largest free region always counts as a
@@ -191,6 +196,14 @@ class DrawOptions:
         With :func:`draw_plan`'s ``cover``: the input's straight wall runs at least
         ``cover_run`` long lie within the drawn wall's half thickness plus ``cover_tol``
         of its line (:func:`map2map.maps.cover.keep_runs_inside`; ``cover_run`` 0: off).
+    two_sided : bool
+        A wall the input saw from both sides is drawn between the faces it saw, grown
+        by ``grow_px`` on each side, at most the drawing's thickness (:func:`_two_sided`);
+        off: every wall at the one thickness, centred on its evidence.
+    grow_px : float
+        Pixels (not metres) a two-sided wall is drawn beyond each face the input saw:
+        the plans' convention, whose walls the dataset grows by a pixel on each side
+        into free space (``map2map dataset build``'s ``thicken``, thesis sec. 4.1).
     """
 
     tol: float = 0.12
@@ -211,6 +224,8 @@ class DrawOptions:
     cover_run: float = 1.0
     cover_tol: float = 0.15
     jamb_min: float = 0.1
+    two_sided: bool = True
+    grow_px: float = 1.0
 
 
 @dataclass
@@ -230,8 +245,12 @@ class PlanDrawing:
     info : dict
         Counts: ``pieces`` (straight pieces found), ``doors`` (gaps kept open), ``joined``
         (gaps closed), ``other`` (segments off the dominant directions), ``cut`` (segments
-        more (or fewer) after :func:`_cut_free`); ``angles``, the direction families'
-        angles (the dominant one first).
+        more (or fewer) after :func:`_cut_free`), ``two_sided`` (segments drawn thinner,
+        between the faces the input saw); ``angles``, the direction families' angles
+        (the dominant one first).
+    thicknesses : (K,) float, optional
+        Each segment's thickness (pixels): ``thickness``, or less for a wall seen from
+        both sides (``DrawOptions.two_sided``).
     """
 
     segments: np.ndarray
@@ -239,6 +258,7 @@ class PlanDrawing:
     angle: float
     thickness: float
     info: dict = field(default_factory=dict)
+    thicknesses: np.ndarray | None = None
 
 
 def wall_points(mask: np.ndarray) -> np.ndarray:
@@ -529,13 +549,16 @@ def _drop_stubs(h: np.ndarray, v: np.ndarray, band: float, min_len: float
     return keep(h, v, 0), keep(v, h, 1)
 
 
-def _fill_rects(img: np.ndarray, segs_h: np.ndarray, segs_v: np.ndarray, t: float,
+def _fill_rects(img: np.ndarray, segs_h: np.ndarray, segs_v: np.ndarray, t: float | tuple,
                 value: int = 1) -> None:
     """Draw axis-aligned segments (rows ``c, lo, hi``) ``t`` pixels thick, ends extended by
-    ``t / 2``; pixel rows whose centres lie in ``[c - t/2, c + t/2)``."""
+    ``t / 2``; pixel rows whose centres lie in ``[c - t/2, c + t/2)``. ``t`` is one
+    thickness, or a pair of per-row thicknesses ``(t_h, t_v)``."""
     H, W = img.shape
-    for segs, horiz in ((segs_h, True), (segs_v, False)):
-        for c, lo, hi in segs:
+    th, tv = t if isinstance(t, tuple) else (t, t)
+    for segs, horiz, ts in ((segs_h, True, th), (segs_v, False, tv)):
+        for (c, lo, hi), t in zip(segs, np.broadcast_to(np.asarray(ts, float), (len(segs),)),
+                                  strict=True):
             a0 = math.ceil(c - t / 2 - 0.5)
             b0 = math.ceil(lo - t / 2 - 0.5)
             b1 = math.ceil(hi + t / 2 - 0.5)
@@ -681,9 +704,84 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
     if opt.cut_free and len(segs):
         segs = _cut_free(segs, occ == FREE, _splat(pts, w, (H, W)) > 0, tol + t / 4,
                          max(2, int(round(tol))), L, t, opt.min_room / res**2, reach)
-    out = render_plan(segs, occ, t, res, min_room=opt.min_room, enclosed=opt.enclosed)
-    info.update(cut=int(len(segs) - n0), angles=[float(a) for a in angles])
-    return PlanDrawing(segs, out, angle, t, info)
+    tk = np.full(len(segs), t)
+    if opt.two_sided and len(segs):
+        segs, tk = _two_sided(segs, occ == FREE, t, opt.grow_px)
+    out = render_plan(segs, occ, tk, res, min_room=opt.min_room, enclosed=opt.enclosed)
+    info.update(cut=int(len(segs) - n0), angles=[float(a) for a in angles],
+                two_sided=int((tk < t).sum()))
+    return PlanDrawing(segs, out, angle, t, info, tk)
+
+
+def _two_sided(segs: np.ndarray, free: np.ndarray, t: float, grow: float,
+               share: float = 0.5, step: float = 0.25, depth: float = 2.0
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Walls the input saw from both sides, drawn between the faces it saw.
+
+    Across each segment (``segs``, image frame), one sample a pixel along it: the
+    nearest free pixel of the input (``free``) on either side within ``t / 2 + 2``
+    pixels of its line, from which the input is free for ``depth`` pixels on (not the
+    sliver between the two lines of a wall SLAM saved twice); the face lies half a
+    ``step`` before it. A segment with a face
+    on both sides on at least ``share`` of its samples is seen from both sides (an
+    interior wall): it is moved across onto the median middle of its faces and drawn
+    ``grow`` pixels beyond each of them (the median distance between its faces plus
+    ``2 grow``, at least 2 and at most ``t`` pixels; thicker, it is left as it is). The
+    others keep ``t``; a wall seen from one side keeps the face :func:`_place` gave it.
+
+    Why: a plan's interior walls are thinner than its outer walls (the generated plans'
+    0.10-0.15 m against 0.20-0.30 m), and drawn as thick as the outer walls both faces
+    of an interior wall stood in the rooms beside it. ``grow`` is the plans' own
+    convention: the dataset's plans have their walls grown by a pixel on each side into
+    free space (``map2map dataset build``'s ``thicken``, thesis sec. 4.1), the SLAM
+    maps not.
+
+    Returns the segments and their thicknesses (pixels).
+
+    >>> free = np.ones((20, 30), bool); free[8:11, :] = False     # a 3 px wall, rows 8-10
+    >>> segs, tk = _two_sided(np.array([[2.0, 9.0, 28.0, 9.0]]), free, 6.0, 1.0)
+    >>> segs.round(2).tolist(), tk.tolist()                         # rows 7-11 drawn
+    ([[2.0, 9.5, 28.0, 9.5]], [5.0])
+    """
+    n = len(segs)
+    H, W = free.shape
+    idx, _, p, _ = _samples(segs)
+    d = segs[idx, 2:] - segs[idx, :2]
+    nrm = np.stack([-d[:, 1], d[:, 0]], 1) / np.maximum(np.hypot(d[:, 0], d[:, 1]),
+                                                        1e-9)[:, None]
+    m = int(math.ceil((t / 2 + 2) / step)) + 1          # where a face may lie
+    deep = int(round(depth / step))                     # free beyond it
+    ks = (np.arange(m + deep) + 0.5) * step
+
+    def nearest_free(sign: float) -> tuple[np.ndarray, np.ndarray]:
+        q = p[:, None, :] + sign * ks[None, :, None] * nrm[:, None, :]
+        r, c = np.floor(q[..., 1]).astype(np.int64), np.floor(q[..., 0]).astype(np.int64)
+        ok = (r >= 0) & (r < H) & (c >= 0) & (c < W)
+        f = np.zeros(ok.shape, bool)
+        f[ok] = free[r[ok], c[ok]]
+        # free for ``depth`` pixels from there on: not the sliver between a doubled wall
+        run = np.lib.stride_tricks.sliding_window_view(f, deep, axis=1)[:, :m].all(axis=2)
+        return run.any(axis=1), ks[np.argmax(run, axis=1)] - step / 2
+
+    hp, dp = nearest_free(1.0)
+    hm, dm = nearest_free(-1.0)
+    both = hp & hm
+    tk = np.full(n, float(t))
+    out = segs.copy()
+    two = np.bincount(idx, both, minlength=n) >= share * np.maximum(
+        np.bincount(idx, minlength=n), 1)
+    for i in np.flatnonzero(two):                  # walls, not pixels
+        sel = both & (idx == i)
+        thick = float(np.median(dp[sel] + dm[sel])) + 2 * grow
+        if thick >= t:
+            continue
+        tk[i] = max(2.0, thick)
+        e = segs[i, 2:] - segs[i, :2]
+        mid = float(np.median(dp[sel] - dm[sel])) / 2 * np.array([-e[1], e[0]]) / max(
+            math.hypot(*e), 1e-9)
+        out[i, :2] += mid
+        out[i, 2:] += mid
+    return out, tk
 
 
 def _scales(opt: DrawOptions, res: float) -> tuple[float, float, int, float]:
@@ -1105,14 +1203,15 @@ def _order(s: np.ndarray) -> np.ndarray:
     return s[np.lexsort((s[:, 2], s[:, 0], s[:, 1]))]
 
 
-def render_plan(segments: np.ndarray, occupancy: np.ndarray, thickness: float,
+def render_plan(segments: np.ndarray, occupancy: np.ndarray, thickness: float | np.ndarray,
                 resolution: float, *, min_room: float = 0.5, enclosed: float = 0.2
                 ) -> np.ndarray:
     """The drawn map (step 7 of the module doc): free and unknown from ``occupancy``
     (its occupied pixels take their nearest non-occupied pixel's value; free regions
     under ``min_room`` m^2, or with less than ``enclosed`` of their outline along a wall,
     become unknown), walls ``thickness`` pixels thick along
-    ``segments`` (continuous pixel coordinates), nothing else occupied.
+    ``segments`` (continuous pixel coordinates; ``thickness`` one for all, or one per
+    segment), nothing else occupied.
 
     Examples
     --------
@@ -1131,7 +1230,9 @@ def render_plan(segments: np.ndarray, occupancy: np.ndarray, thickness: float,
              if (occ == v).any() else np.full((H, W), np.inf, np.float32)
              for v in (FREE, UNKNOWN)]
         out[walls] = np.where(d[0][walls] <= d[1][walls], FREE, UNKNOWN)
-    segs = _free_ends_in(np.asarray(segments, float).reshape(-1, 4), thickness)
+    segs = np.asarray(segments, float).reshape(-1, 4)
+    tk = np.broadcast_to(np.asarray(thickness, float), (len(segs),)).copy()
+    segs = _free_ends_in(segs, tk)
     wall = np.zeros((H, W), np.uint8)
     axis = np.abs(segs[:, 1] - segs[:, 3]) < 1e-9
     vert = np.abs(segs[:, 0] - segs[:, 2]) < 1e-9
@@ -1140,22 +1241,23 @@ def render_plan(segments: np.ndarray, occupancy: np.ndarray, thickness: float,
     _fill_rects(wall, np.stack([h[:, 1], np.minimum(h[:, 0], h[:, 2]),
                                 np.maximum(h[:, 0], h[:, 2])], 1).reshape(-1, 3),
                 np.stack([v[:, 0], np.minimum(v[:, 1], v[:, 3]),
-                          np.maximum(v[:, 1], v[:, 3])], 1).reshape(-1, 3), thickness)
-    rest = segs[~(axis ^ vert)]
+                          np.maximum(v[:, 1], v[:, 3])], 1).reshape(-1, 3),
+                (tk[axis & ~vert], tk[vert & ~axis]))
+    rest, tr = segs[~(axis ^ vert)], tk[~(axis ^ vert)]
     if len(rest):
         d = rest[:, 2:] - rest[:, :2]
         ang = np.degrees(np.arctan2(np.abs(d[:, 1]), np.abs(d[:, 0])))
         xm, ym = ang <= _NEAR_AXIS_DEG, ang >= 90 - _NEAR_AXIS_DEG
-        _fill_columns(wall, rest[xm], thickness)
-        _fill_columns(wall.T, rest[ym][:, [1, 0, 3, 2]], thickness)
-        rest = rest[~xm & ~ym]
+        _fill_columns(wall, rest[xm], tr[xm])
+        _fill_columns(wall.T, rest[ym][:, [1, 0, 3, 2]], tr[ym])
+        rest, tr = rest[~xm & ~ym], tr[~xm & ~ym]
     if len(rest):
         d = rest[:, 2:] - rest[:, :2]
         n = np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9)[:, None]
-        along = d / n * (thickness / 2)
+        along = d / n * (tr[:, None] / 2)
         # OpenCV fills the pixels the outline touches: a quarter pixel less each side
         # measures ``thickness`` across at any angle (within 0.2 px)
-        across = np.stack([-along[:, 1], along[:, 0]], 1) * (1 - 0.5 / thickness)
+        across = np.stack([-along[:, 1], along[:, 0]], 1) * (1 - 0.5 / tr[:, None])
         a, b = rest[:, :2] - along, rest[:, 2:] + along
         quads = np.stack([a - across, b - across, b + across, a + across], 1) - 0.5
         for q in np.round(quads * 16).astype(np.int32):   # one call per wall: one call
@@ -1218,11 +1320,12 @@ def _free_ends_in(segs: np.ndarray, t: float) -> np.ndarray:
            [40. , 20. , 40. , 57.5]])
     """
     n = len(segs)
-    if n == 0 or t <= 1:
+    t = np.broadcast_to(np.asarray(t, float), (n,))
+    if n == 0 or (t <= 1).all():
         return segs
     dist, _ = point_segment_distances(segs.reshape(-1, 2), segs)   # ends: 2 a segment
     dist[np.arange(2 * n), np.repeat(np.arange(n), 2)] = np.inf      # not its own wall
-    free = (dist > t + 1.0).all(axis=1).reshape(n, 2)
+    free = (dist > np.repeat(t, 2)[:, None] + 1.0).all(axis=1).reshape(n, 2) & (t > 1)[:, None]
     d = segs[:, 2:] - segs[:, :2]
     length = np.sqrt(np.maximum((d**2).sum(axis=1), 1e-12))
     step = np.minimum(t / 2 - 0.5, length / 2)[:, None] / length[:, None] * d
@@ -1236,14 +1339,17 @@ def _free_ends_in(segs: np.ndarray, t: float) -> np.ndarray:
 _NEAR_AXIS_DEG = 10.0
 
 
-def _fill_columns(img: np.ndarray, segs: np.ndarray, t: float) -> None:
+def _fill_columns(img: np.ndarray, segs: np.ndarray, t: float | np.ndarray) -> None:
     """Draw segments that run within 45 degrees of the rows, column by column: in every
     column whose centre lies within the segment (extended by ``t / 2`` along), the
     ``round(t / cos)`` pixels whose centres are nearest the segment's line, so a wall
     turned by a fraction of a degree is ``t`` pixels thick everywhere (OpenCV's polygon
-    fill makes it ``t + 1`` along half its length). ``img`` may be a transposed view."""
+    fill makes it ``t + 1`` along half its length). ``t``: one thickness, or one per
+    segment. ``img`` may be a transposed view."""
     H, W = img.shape
-    for x0, y0, x1, y1 in np.asarray(segs, float).reshape(-1, 4):   # walls, not pixels
+    segs = np.asarray(segs, float).reshape(-1, 4)
+    ts = np.broadcast_to(np.asarray(t, float), (len(segs),))
+    for (x0, y0, x1, y1), tw in zip(segs, ts, strict=True):         # walls, not pixels
         if x1 < x0:
             x0, y0, x1, y1 = x1, y1, x0, y0
         dx, dy = x1 - x0, y1 - y0
@@ -1251,8 +1357,8 @@ def _fill_columns(img: np.ndarray, segs: np.ndarray, t: float) -> None:
         if length == 0:
             continue
         cosa = dx / length
-        n = max(1, int(round(t / cosa)))
-        e = t / 2 * cosa
+        n = max(1, int(round(tw / cosa)))
+        e = tw / 2 * cosa
         c0 = max(0, math.ceil(x0 - e - 0.5))
         c1 = min(W - 1, math.ceil(x1 + e - 0.5) - 1)
         if c1 < c0:
@@ -1312,6 +1418,8 @@ def draw_plan_map(m: OccupancyMap, evidence: np.ndarray | None = None,
     out = m.copy(d.map)
     out.meta["plan_drawer"] = {"segments_px": d.segments.tolist(), "angle": d.angle,
                                "thickness_px": d.thickness, **d.info}
+    if d.thicknesses is not None:
+        out.meta["plan_drawer"]["thicknesses_px"] = d.thicknesses.tolist()
     s = d.segments
     x0, y0 = m.pixel_to_world(s[:, 1] - 0.5, s[:, 0] - 0.5)
     x1, y1 = m.pixel_to_world(s[:, 3] - 0.5, s[:, 2] - 0.5)
