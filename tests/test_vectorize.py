@@ -304,6 +304,16 @@ def test_a_wall_saved_twice_is_not_taken_for_a_thin_wall_seen_from_both_sides():
     assert rows.tolist() == [57, 58, 59, 60, 61]
 
 
+def test_an_outer_wall_with_laser_rays_beyond_it_keeps_its_seen_face():
+    m = room(t=1)                           # 1 px walls: the top one is row 20
+    for x in range(25, 175, 4):             # rays through it, into the unknown outside
+        m[8:20, x] = FREE
+    d = draw_plan(m == OCC, m, RES, 7)
+    rows = np.flatnonzero(d.map[:40, 102] == OCC)
+    assert rows.tolist() == list(range(14, 21))       # grown outward, not into the room
+    assert (d.map[21:99, 102] == FREE).all()
+
+
 def test_a_wall_thicker_than_the_drawing_keeps_the_drawing_thickness():
     m = _two_rooms(6)
     d = draw_plan(m == OCC, m, RES, 5)

@@ -54,7 +54,8 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
 7. **Placing** (:func:`_place`): each wall's line is refitted to its own points near it
    (:func:`_refit`); a long wall that SLAM drift turned a little follows its
    least-squares line, and a wall seen from one side keeps its seen face (its thickness
-   grows away from the free side). With ``cover`` (the input's own wall pixels), a wall
+   grows away from the free side; a side is free where a room lies, not where laser
+   rays passed through an outer wall into the unknown outside). With ``cover`` (the input's own wall pixels), a wall
    whose line leaves a straight run of the input beside it (at least ``cover_run``
    long) by more than half the thickness plus ``cover_tol`` moves as little as it must
    to keep the run inside (:mod:`map2map.maps.cover`): a wall the input shows whole is
@@ -868,8 +869,10 @@ def _draw_family(pts: np.ndarray, w: np.ndarray, angle: float, occ: np.ndarray,
     # slant (drifted walls) and one-sided walls' faces, in each family's own frame
     slant = (1.5, opt.other_min / res, math.tan(math.radians(6.0)))
     faces = t if opt.keep_faces else 0.0
-    a = _place(hs, hseg[:, 0], hseg[:, 2], free_c, faces, half, slant)
-    b = _place(vs, vseg[:, 1], vseg[:, 3], free_c.T, faces, half, slant)
+    # a wall is seen from the side its rooms lie on: laser rays through an outer wall
+    # into the unknown outside are free space, but no side it was seen from
+    a = _place(hs, hseg[:, 0], hseg[:, 2], room, faces, half, slant)
+    b = _place(vs, vseg[:, 1], vseg[:, 3], room.T, faces, half, slant)
     if cover is not None and opt.cover_run > 0:
         # the input's straight runs stay inside the walls drawn for them (maps.cover)
         C = fr.warp(cover.view(np.uint8), 0) > 0
@@ -1056,7 +1059,8 @@ def _seen(st: np.ndarray, lo: np.ndarray, hi: np.ndarray, free: np.ndarray,
 def _place(st: np.ndarray, lo: np.ndarray, hi: np.ndarray, free: np.ndarray, t: float,
            half: int, slant: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
     """Across-positions at the ends ``lo`` and ``hi`` of a family's segments (rows of
-    :func:`_family`, family frame: horizontal, ``free`` its free mask).
+    :func:`_family`, family frame: horizontal; ``free``: the free space of its rooms,
+    :func:`_rooms`, without the ray fans beyond outer walls).
 
     A segment at least ``slant[1]`` long whose points' least-squares line leans by at
     least ``slant[0]`` pixels over its length (and less than ``slant[2]``, a tangent)
