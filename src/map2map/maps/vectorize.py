@@ -54,19 +54,18 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
 7. **Placing** (:func:`_place`): each wall's line is refitted to its own points near it
    (:func:`_refit`); a long wall that SLAM drift turned a little follows its
    least-squares line, and a wall seen from one side keeps its seen face (its thickness
-   grows away from the free side; a side is free where a room lies, not where laser
-   rays passed through an outer wall into the unknown outside). With ``cover`` (the input's own wall pixels), a wall
-   whose line leaves a straight run of the input beside it (at least ``cover_run``
-   long) by more than half the thickness plus ``cover_tol`` moves as little as it must
-   to keep the run inside (:mod:`map2map.maps.cover`): a wall the input shows whole is
-   not drawn leaving it at one end. Ends are then moved onto the lines they meet again
-   (:func:`_snap_ends`), so corners stay closed. Where a segment's centre line runs over
-   the input's free space more than ``tol`` plus a quarter of the thickness from any
-   evidence (for more than ``reach`` at an end, where corners close across free
-   space), with no speck of free space on either side, it is cut there
+   grows away from the free side; a side is free where a room lies, not where laser rays
+   passed through an outer wall into the unknown outside). With ``cover`` (the input's
+   own wall pixels), a wall whose line leaves a straight run of the input beside it (at
+   least ``cover_run`` long) by more than half the thickness plus ``cover_tol`` moves as
+   little as it must to keep the run inside (:mod:`map2map.maps.cover`): a wall the
+   input shows whole is not drawn leaving it at one end. Ends are then moved onto the
+   lines they meet again (:func:`_snap_ends`), so corners stay closed. Where a segment's
+   centre line runs over the input's free space more than ``tol`` plus a quarter of the
+   thickness from any evidence (for more than ``reach`` at an end, where corners close
+   across free space), with no speck of free space on either side, it is cut there
    (:func:`_cut_free`): the input saw through the drawn wall (a tick's ends beyond its
-   evidence, a line joined across a corridor whose sides are no rooms by their
-   outline).
+   evidence, a line joined across a corridor whose sides are no rooms by their outline).
    A wall the input saw from **both sides** (an interior wall: free space within
    half the thickness plus 2 pixels of its line on both sides, along at least half of
    it) is drawn between the faces the input saw, grown by ``grow_px`` on each side,
