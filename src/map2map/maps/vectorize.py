@@ -557,12 +557,12 @@ def _fill_rects(img: np.ndarray, segs_h: np.ndarray, segs_v: np.ndarray, t: floa
     H, W = img.shape
     th, tv = t if isinstance(t, tuple) else (t, t)
     for segs, horiz, ts in ((segs_h, True, th), (segs_v, False, tv)):
-        for (c, lo, hi), t in zip(segs, np.broadcast_to(np.asarray(ts, float), (len(segs),)),
-                                  strict=True):
-            a0 = math.ceil(c - t / 2 - 0.5)
-            b0 = math.ceil(lo - t / 2 - 0.5)
-            b1 = math.ceil(hi + t / 2 - 0.5)
-            a0, a1 = max(0, a0), min(H if horiz else W, a0 + int(round(t)))
+        for (c, lo, hi), tw in zip(segs, np.broadcast_to(np.asarray(ts, float), (len(segs),)),
+                                   strict=True):
+            a0 = math.ceil(c - tw / 2 - 0.5)
+            b0 = math.ceil(lo - tw / 2 - 0.5)
+            b1 = math.ceil(hi + tw / 2 - 0.5)
+            a0, a1 = max(0, a0), min(H if horiz else W, a0 + int(round(tw)))
             b0, b1 = max(0, b0), min(W if horiz else H, b1)
             if horiz:
                 img[a0:a1, b0:b1] = value
@@ -722,12 +722,12 @@ def _two_sided(segs: np.ndarray, free: np.ndarray, t: float, grow: float,
     nearest free pixel of the input (``free``) on either side within ``t / 2 + 2``
     pixels of its line, from which the input is free for ``depth`` pixels on (not the
     sliver between the two lines of a wall SLAM saved twice); the face lies half a
-    ``step`` before it. A segment with a face
-    on both sides on at least ``share`` of its samples is seen from both sides (an
-    interior wall): it is moved across onto the median middle of its faces and drawn
-    ``grow`` pixels beyond each of them (the median distance between its faces plus
-    ``2 grow``, at least 2 and at most ``t`` pixels; thicker, it is left as it is). The
-    others keep ``t``; a wall seen from one side keeps the face :func:`_place` gave it.
+    ``step`` before it. A segment with a face on both sides on at least ``share`` of its
+    samples is seen from both sides (an interior wall): it is moved across onto the
+    median middle of its faces and drawn ``grow`` pixels beyond each of them (the median
+    distance between its faces plus ``2 grow``, at least 2 and at most ``t`` pixels;
+    thicker, it is left as it is). The others keep ``t``; a wall seen from one side
+    keeps the face :func:`_place` gave it.
 
     Why: a plan's interior walls are thinner than its outer walls (the generated plans'
     0.10-0.15 m against 0.20-0.30 m), and drawn as thick as the outer walls both faces
