@@ -1209,7 +1209,7 @@ def _order(s: np.ndarray) -> np.ndarray:
 def render_plan(segments: np.ndarray, occupancy: np.ndarray, thickness: float | np.ndarray,
                 resolution: float, *, min_room: float = 0.5, enclosed: float = 0.2
                 ) -> np.ndarray:
-    """The drawn map (step 7 of the module doc): free and unknown from ``occupancy``
+    """The drawn map (step 8 of the module doc): free and unknown from ``occupancy``
     (its occupied pixels take their nearest non-occupied pixel's value; free regions
     under ``min_room`` m^2, or with less than ``enclosed`` of their outline along a wall,
     become unknown), walls ``thickness`` pixels thick along
