@@ -531,3 +531,21 @@ def test_continuous_walls_are_never_broken(seed):
     assert runs > 0 and broken == 0
     assert wall_components(d.map) <= wall_components(m)
     assert median_wall_thickness(d.map) == 3
+
+
+def test_many_maps_are_drawn_alike_in_worker_processes_and_in_this_one():
+    from map2map.core.grid import OccupancyMap
+    from map2map.maps.vectorize import draw_plan_maps
+
+    maps = [OccupancyMap(_two_rooms(t), RES) for t in (1, 2, 3, 4)]
+    maps.append(OccupancyMap(room(t=2), RES))
+    one = draw_plan_maps(maps, wall_thickness=[7, 7, 5, 6, None], workers=1)
+    two = draw_plan_maps(maps, wall_thickness=[7, 7, 5, 6, None], workers=2, min_maps=2)
+    for (m1, w1), (m2, w2) in zip(one, two, strict=True):
+        assert np.array_equal(m1.data, m2.data) and np.array_equal(w1, w2)
+        assert m1.meta["plan_drawer"] == m2.meta["plan_drawer"]
+    # one per map, as draw_plan_map draws it
+    d = draw_plan(maps[2].occupied, maps[2].data, RES, 5)
+    assert np.array_equal(one[2][0].data, d.map)
+    with pytest.raises(ValueError, match="one entry per map"):
+        draw_plan_maps(maps, wall_thickness=[7, 7])

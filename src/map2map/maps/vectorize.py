@@ -109,6 +109,7 @@ import numpy as np
 
 from ..core.geometry import point_segment_distances
 from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from ..core.parallel import process_map
 from ..core.runs import open_runs, run_through
 from .cover import keep_runs_inside
 from .directions import angle_families, orientation, sharp_angle
@@ -116,8 +117,8 @@ from .directions import splat as _splat
 from .segments import _join
 
 __all__ = ["DrawOptions", "PlanDrawing", "default_wall_thickness", "wall_points",
-           "dominant_angle", "draw_plan", "draw_plan_map", "render_plan", "save_plan_dxf",
-           "PLAN_WALL_M"]
+           "dominant_angle", "draw_plan", "draw_plan_map", "draw_plan_maps", "render_plan",
+           "save_plan_dxf", "PLAN_WALL_M"]
 
 #: Wall thickness (metres) that :func:`default_wall_thickness` draws: the plans' convention.
 #: The generated plans' outer walls are 0.20-0.30 m thick, their interior ones 0.10-0.15 m
@@ -1427,6 +1428,51 @@ def draw_plan_map(m: OccupancyMap, evidence: np.ndarray | None = None,
     x0, y0 = m.pixel_to_world(s[:, 1] - 0.5, s[:, 0] - 0.5)
     x1, y1 = m.pixel_to_world(s[:, 3] - 0.5, s[:, 2] - 0.5)
     return out, np.stack([x0, y0, x1, y1], axis=1).reshape(-1, 4)
+
+
+def _draw_job(job: tuple) -> tuple[OccupancyMap, np.ndarray]:
+    """One :func:`draw_plan_maps` item (a module-level function: it runs in a worker)."""
+    m, evidence, thickness, weights, options = job
+    return draw_plan_map(m, evidence, thickness, weights=weights, options=options)
+
+
+def draw_plan_maps(maps: list[OccupancyMap], evidence: list | None = None,
+                   wall_thickness: list | float | None = None, *,
+                   weights: list | None = None, options: DrawOptions | None = None,
+                   workers: int | None = None, min_maps: int = 16
+                   ) -> list[tuple[OccupancyMap, np.ndarray]]:
+    """:func:`draw_plan_map` for many maps, on the CPU's cores.
+
+    The drawer holds the GIL (threads draw no faster), so from ``min_maps`` maps on it
+    runs in ``workers`` processes (:func:`map2map.core.parallel.process_map`; default one
+    per core, 1: in this process). The results do not depend on ``workers``.
+
+    Parameters
+    ----------
+    maps : list of OccupancyMap
+        The maps to draw.
+    evidence, weights : list, optional
+        Per map, as :func:`draw_plan_map`'s (None: each map's own walls, weight 1).
+    wall_thickness : float or list, optional
+        One thickness in pixels for all maps, or one per map (None: the default).
+
+    Examples
+    --------
+    >>> m = OccupancyMap(np.full((40, 60), 255, np.uint8), resolution=0.05)
+    >>> m.data[20:22, 5:55] = 0
+    >>> [w.round(3).tolist() for _, w in draw_plan_maps([m, m], wall_thickness=2)]
+    [[[0.275, 0.95, 2.725, 0.95]], [[0.275, 0.95, 2.725, 0.95]]]
+    """
+    n = len(maps)
+    ev = [None] * n if evidence is None else list(evidence)
+    w = [None] * n if weights is None else list(weights)
+    t = (list(wall_thickness) if isinstance(wall_thickness, (list, tuple, np.ndarray))
+         else [wall_thickness] * n)
+    if not len(ev) == len(w) == len(t) == n:
+        raise ValueError("draw_plan_maps: evidence, weights and wall_thickness need one "
+                         "entry per map")
+    jobs = [(m, e, tk, wk, options) for m, e, tk, wk in zip(maps, ev, t, w, strict=True)]
+    return process_map(_draw_job, jobs, workers=workers, min_items=min_maps)
 
 
 def save_plan_dxf(drawing: PlanDrawing | np.ndarray, path, resolution: float,

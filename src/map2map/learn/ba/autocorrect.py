@@ -259,9 +259,11 @@ def autocorrect_many(maps: list[OccupancyMap], model: str | os.PathLike | BAMode
     The per-map work around the network (squaring, deskewing, post-processing, the way
     back to the input's frame) runs on ``workers`` threads (default: one per CPU core, at
     most 8; OpenCV and the numba kernels release the GIL: post-processing measured 1.6x
-    faster on 2 cores). The results do not depend on ``workers``. ``thickness``,
-    ``open_frontiers`` and ``large`` as :func:`autocorrect` (``None``: :data:`THICKNESS`,
-    :data:`OPEN_FRONTIERS` (True for a map corrected in tiles), :data:`LARGE`).
+    faster on 2 cores; the plan drawer after it,
+    :class:`~map2map.learn.ba.correctors.DrawnCorrector`, uses as many processes). The
+    results do not depend on ``workers``. ``thickness``, ``open_frontiers`` and ``large``
+    as :func:`autocorrect` (``None``: :data:`THICKNESS`, :data:`OPEN_FRONTIERS` (True for
+    a map corrected in tiles), :data:`LARGE`).
     """
     net = _network(model, device)
     if not getattr(net, "learnt", True) and not (anchor and straighten):

@@ -116,7 +116,10 @@ class DrawnCorrector:
     have dropped a wall piece as clutter, which is no reason to open the wall). The
     output's ``meta["autocorrect"]["segments_px"]`` are the drawer's segments, so the map
     and its DXF (``map2map autocorrect --dxf``) show the same walls. A map ``base``
-    returned as it is (``large="refuse"``, or nothing known) stays as it is.
+    returned as it is (``large="refuse"``, or nothing known) stays as it is. From 16
+    maps on, the drawer runs in worker processes, one per core
+    (:func:`map2map.maps.vectorize.draw_plan_maps`; the option ``workers`` sets how
+    many, 1: none); the outputs do not depend on it.
 
     Parameters
     ----------
@@ -149,27 +152,32 @@ class DrawnCorrector:
         self.name, self.source = base.name, base.source
 
     def correct_many(self, maps: list[OccupancyMap], **options) -> list[OccupancyMap]:
-        from ...maps.vectorize import draw_plan_map, wall_points
+        from ...maps.vectorize import draw_plan_maps, wall_points
 
-        out = []
-        for m, src in zip(self.base.correct_many(maps, **options), maps, strict=True):
-            ac0 = m.meta.get("autocorrect", {})
-            if "refused" in ac0:      # returned as it is (large="refuse", nothing known)
-                out.append(m)
-                continue
-            t = None if self.wall_thickness is None else max(1.0, self.wall_thickness
-                                                              / m.resolution)
+        bases = self.base.correct_many(maps, **options)
+        todo = [i for i, m in enumerate(bases)       # "refused": returned as it is
+                if "refused" not in m.meta.get("autocorrect", {})]
+        ev, ws, ts = [], [], []
+        for i in todo:
+            m, src = bases[i], maps[i]
+            ts.append(None if self.wall_thickness is None
+                      else max(1.0, self.wall_thickness / m.resolution))
             if self.input_weight > 0:
                 p0, p1 = wall_points(m.occupied), wall_points(src.occupied)
-                ev = np.concatenate([p0, p1])
-                w = np.concatenate([np.ones(len(p0)), np.full(len(p1), self.input_weight)])
-                drawn, _ = draw_plan_map(src, ev, wall_thickness=t, weights=w)
+                ev.append(np.concatenate([p0, p1]))
+                ws.append(np.concatenate([np.ones(len(p0)),
+                                          np.full(len(p1), self.input_weight)]))
             else:
-                drawn, _ = draw_plan_map(src, m.occupied, wall_thickness=t)
+                ev.append(m.occupied)
+                ws.append(None)
+        drawn_all = draw_plan_maps([maps[i] for i in todo], ev, ts, weights=ws,
+                                   workers=options.get("workers"))
+        out = list(bases)
+        for i, (drawn, _) in zip(todo, drawn_all, strict=True):
             info = drawn.meta.pop("plan_drawer")
-            ac = dict(m.meta.get("autocorrect", {}))
+            ac = dict(bases[i].meta.get("autocorrect", {}))
             ac.update(segments_px=info["segments_px"], drawn={
                 k: v for k, v in info.items() if k != "segments_px"})
             drawn.meta["autocorrect"] = ac
-            out.append(drawn)
+            out[i] = drawn
         return out
