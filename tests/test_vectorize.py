@@ -549,3 +549,23 @@ def test_many_maps_are_drawn_alike_in_worker_processes_and_in_this_one():
     assert np.array_equal(one[2][0].data, d.map)
     with pytest.raises(ValueError, match="one entry per map"):
         draw_plan_maps(maps, wall_thickness=[7, 7])
+
+
+def test_a_maps_interior_walls_are_drawn_at_one_thickness():
+    """Two interior walls seen 2 px thick and one SLAM blurred to 6 px: all three are
+    drawn at the median of the sharp ones (2 px plus a pixel each side), the blurred one
+    centred between its faces; without ``one_interior`` it keeps the drawing's 7 px."""
+    m = room(t=3)
+    m[40:42, 20:180] = OCC
+    m[60:62, 20:180] = OCC
+    m[78:84, 20:180] = OCC                                  # blurred: rows 78-83
+    col = lambda d: np.flatnonzero(d.map[30:95, 100] == OCC) + 30   # noqa: E731
+    d = draw_plan(m == OCC, m, RES, 7)
+    assert col(d).tolist() == [*range(39, 43), *range(59, 63), *range(79, 83)]
+    assert sorted(d.thicknesses.tolist()).count(4.0) == 3
+    d0 = draw_plan(m == OCC, m, RES, 7, options=DrawOptions(one_interior=False))
+    rows = col(d0).tolist()
+    assert rows[:8] == [*range(39, 43), *range(59, 63)] and len(rows) == 8 + 7
+    # one interior wall alone keeps its own thickness (nothing to take a median of)
+    m1 = _two_rooms(4)
+    assert (draw_plan(m1 == OCC, m1, RES, 7).map[30:90, 100] == OCC).sum() == 6

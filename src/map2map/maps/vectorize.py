@@ -70,7 +70,9 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
    half the thickness plus 2 pixels of its line on both sides, along at least half of
    it) is drawn between the faces the input saw, grown by ``grow_px`` on each side,
    the plans' convention (:func:`_two_sided`): an interior wall is thinner than the
-   outer walls whose thickness the others are drawn at.
+   outer walls whose thickness the others are drawn at. A map's interior walls are
+   drawn at one thickness (``one_interior``), the median of those the input shows
+   sharply: a wall SLAM blurred or saved twice measures thicker than it is.
 8. **Drawing** (:func:`render_plan`): free and unknown space come from the input map, its
    occupied pixels taking the value of their nearest non-occupied pixel; free regions
    that are not rooms (small ones, ray fans; the largest free region always counts as a
@@ -205,6 +207,10 @@ class DrawOptions:
         Pixels (not metres) a two-sided wall is drawn beyond each face the input saw:
         the plans' convention, whose walls the dataset grows by a pixel on each side
         into free space (``map2map dataset build``'s ``thicken``, thesis sec. 4.1).
+    one_interior : bool
+        With ``two_sided``: every interior wall of a map is drawn at one thickness, the
+        median of those the input shows thinner than the drawing (at least two), centred
+        between its faces; off: each at its own measured thickness.
     """
 
     tol: float = 0.12
@@ -227,6 +233,7 @@ class DrawOptions:
     jamb_min: float = 0.1
     two_sided: bool = True
     grow_px: float = 1.0
+    one_interior: bool = True
 
 
 @dataclass
@@ -707,7 +714,7 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
                          max(2, int(round(tol))), L, t, opt.min_room / res**2, reach)
     tk = np.full(len(segs), t)
     if opt.two_sided and len(segs):
-        segs, tk = _two_sided(segs, occ == FREE, t, opt.grow_px)
+        segs, tk = _two_sided(segs, occ == FREE, t, opt.grow_px, one=opt.one_interior)
     out = render_plan(segs, occ, tk, res, min_room=opt.min_room, enclosed=opt.enclosed)
     info.update(cut=int(len(segs) - n0), angles=[float(a) for a in angles],
                 two_sided=int((tk < t).sum()))
@@ -715,8 +722,8 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
 
 
 def _two_sided(segs: np.ndarray, free: np.ndarray, t: float, grow: float,
-               share: float = 0.5, step: float = 0.25, depth: float = 2.0
-               ) -> tuple[np.ndarray, np.ndarray]:
+               share: float = 0.5, step: float = 0.25, depth: float = 2.0,
+               one: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Walls the input saw from both sides, drawn between the faces it saw.
 
     Across each segment (``segs``, image frame), one sample a pixel along it: the
@@ -726,9 +733,12 @@ def _two_sided(segs: np.ndarray, free: np.ndarray, t: float, grow: float,
     ``step`` before it. A segment with a face on both sides on at least ``share`` of its
     samples is seen from both sides (an interior wall): it is moved across onto the
     median middle of its faces and drawn ``grow`` pixels beyond each of them (the median
-    distance between its faces plus ``2 grow``, at least 2 and at most ``t`` pixels;
-    thicker, it is left as it is). The others keep ``t``; a wall seen from one side
-    keeps the face :func:`_place` gave it.
+    distance between its faces plus ``2 grow``, at least 2 pixels). With ``one`` and at
+    least two interior walls thinner than ``t`` so measured, every interior wall is
+    drawn at the median of those (a plan draws its interior walls at one thickness; a
+    wall SLAM blurred or saved twice measures thicker than it is); else each at its
+    own, and one measured at ``t`` or more is left as it is. The others keep ``t``; a
+    wall seen from one side keeps the face :func:`_place` gave it.
 
     Why: a plan's interior walls are thinner than its outer walls (the generated plans'
     0.10-0.15 m against 0.20-0.30 m), and drawn as thick as the outer walls both faces
@@ -771,17 +781,21 @@ def _two_sided(segs: np.ndarray, free: np.ndarray, t: float, grow: float,
     out = segs.copy()
     two = np.bincount(idx, both, minlength=n) >= share * np.maximum(
         np.bincount(idx, minlength=n), 1)
+    thick, mid = {}, {}
     for i in np.flatnonzero(two):                  # walls, not pixels
         sel = both & (idx == i)
-        thick = float(np.median(dp[sel] + dm[sel])) + 2 * grow
-        if thick >= t:
-            continue
-        tk[i] = max(2.0, thick)
+        thick[i] = float(np.median(dp[sel] + dm[sel])) + 2 * grow
         e = segs[i, 2:] - segs[i, :2]
-        mid = float(np.median(dp[sel] - dm[sel])) / 2 * np.array([-e[1], e[0]]) / max(
+        mid[i] = float(np.median(dp[sel] - dm[sel])) / 2 * np.array([-e[1], e[0]]) / max(
             math.hypot(*e), 1e-9)
-        out[i, :2] += mid
-        out[i, 2:] += mid
+    seen = [v for v in thick.values() if v < t]     # the faces the input shows sharply
+    typical = max(2.0, float(np.median(seen))) if one and len(seen) >= 2 else None
+    for i, v in thick.items():
+        if typical is None and v >= t:
+            continue                                # as thick as the drawing: left as it is
+        tk[i] = typical if typical is not None else max(2.0, v)
+        out[i, :2] += mid[i]
+        out[i, 2:] += mid[i]
     return out, tk
 
 
