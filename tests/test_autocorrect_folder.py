@@ -77,3 +77,31 @@ def test_the_command_refuses_in_one_line(tmp_path, capsys):
     assert rc == 2 and len(lines) == 1, err
     assert "would write" in lines[0] and "Traceback" not in err
     assert not (tmp_path / "out").exists()
+
+
+def test_the_default_model_needs_no_pytorch(tmp_path):
+    """``autocorrect`` with the default ``none`` runs where torch cannot be imported (the
+    base install); ``--model thesis`` then fails with one line naming the extra, exit 2."""
+    import subprocess
+    import sys
+
+    d = np.full((90, 140), 127, np.uint8)
+    d[10:80, 10:130] = 255
+    d[10, 10:130] = d[79, 10:130] = 0
+    d[10:80, 10] = d[10:80, 129] = 0
+    save_map(OccupancyMap(d, 0.05), tmp_path / "in.yaml")
+    run = ("import sys; sys.modules['torch'] = None; from map2map.cli.main import main; "
+           "sys.exit(main(sys.argv[1:]))")
+
+    def cli(*args):
+        return subprocess.run([sys.executable, "-c", run, "autocorrect",
+                               str(tmp_path / "in.yaml"), *args],
+                              capture_output=True, text=True, timeout=300)
+
+    ok = cli("--out", str(tmp_path / "o.yaml"), "--dxf", str(tmp_path / "o.dxf"))
+    assert ok.returncode == 0, ok.stderr
+    assert (tmp_path / "o.yaml").exists() and (tmp_path / "o.dxf").exists()
+    bad = cli("--out", str(tmp_path / "t.yaml"), "--model", "thesis")
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr
+    assert "map2map[learn]" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "t.yaml").exists()

@@ -14,10 +14,8 @@ from map2map.learn.ba.autocorrect import LARGE_SHRINK, autocorrect_many, drawn_w
 from map2map.learn.ba.model import BAModel  # noqa: E402
 from map2map.learn.ba.pieces import frontier_walls  # noqa: E402
 from map2map.learn.ba.squares import TILE_SHRINK, stitch_tiles, tile_grid  # noqa: E402
-from map2map.learn.training.data import (
-    downsample_target,  # noqa: E402
-    wall_thickness_px,  # noqa: E402
-)
+from map2map.learn.training.data import downsample_target  # noqa: E402
+from map2map.maps.preprocess import wall_thickness_px  # noqa: E402
 
 
 class _Identity(BAModel):

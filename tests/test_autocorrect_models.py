@@ -62,7 +62,6 @@ def test_none_reads_no_weights(tmp_path, capsys, monkeypatch, slam_map):
         raise AssertionError("load_model called")
 
     monkeypatch.setattr(model_mod, "load_model", refuse)
-    monkeypatch.setattr("map2map.learn.ba.autocorrect.load_model", refuse)
     save_map(slam_map, tmp_path / "in.yaml")
     rc = main(["autocorrect", str(tmp_path / "in.yaml"), "--out", str(tmp_path / "o.yaml"),
                "--model", "none"])

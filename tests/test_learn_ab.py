@@ -334,7 +334,7 @@ def test_synthesize_drift_none_is_the_previous_output_and_parametric_drifts(tiny
     from map2map.learn.ab.model import load_ab_model
     from map2map.learn.ab.render import render
     from map2map.learn.ab.synthesize import pairwise_disagreement, synthesize
-    from map2map.learn.training.data import content_square
+    from map2map.maps.preprocess import content_square
 
     net = load_ab_model(tiny_run)
     plan = _plan()
@@ -493,7 +493,7 @@ def test_synthesize_at_two_px_per_cell_draws_target_walls_without_the_coarse_war
     from map2map.core.grid import OccupancyMap
     from map2map.learn.ab.model import ABModel
     from map2map.learn.ab.synthesize import synthesize
-    from map2map.learn.training.data import wall_thickness_px
+    from map2map.maps.preprocess import wall_thickness_px
 
     S = 64
     data = np.full((S, S), UNKNOWN, np.uint8)

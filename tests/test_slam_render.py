@@ -16,7 +16,7 @@ from map2map.learn.ab.render import (
     save_render_figure,
     snap,
 )
-from map2map.learn.training.data import wall_thickness_px
+from map2map.maps.preprocess import wall_thickness_px
 
 
 def _rooms(n: int = 16) -> np.ndarray:

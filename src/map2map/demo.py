@@ -357,8 +357,8 @@ def stage_autocorrect(ctx: DemoContext) -> None:
     classical cleaning drawn like a plan; ``--model thesis`` is the thesis's Model_BA).
 
     Writes ``autocorrect/cad.yaml`` (+ ``.pgm``), ``autocorrect/walls.dxf`` (the same walls
-    as line segments) and ``autocorrect/before_after.png``. Skipped, saying so, when
-    PyTorch is not installed (``pip install -e '.[learn]'``) or no SLAM map was made.
+    as line segments) and ``autocorrect/before_after.png``. The default model needs no
+    network (no PyTorch). Skipped, saying so, when no SLAM map was made.
     """
     import warnings
 
@@ -366,14 +366,10 @@ def stage_autocorrect(ctx: DemoContext) -> None:
     if not isinstance(slam, OccupancyMap):
         ctx.say("autocorrect: no SLAM map in this demo run; skipped")
         return
-    try:
-        from .learn.ba.autocorrect import Correction
-        from .learn.training.figures import save_before_after
-        from .maps.dxf import save_segments_dxf
-    except ImportError:
-        ctx.say("autocorrect: PyTorch not installed (pip install -e '.[learn]'); skipped")
-        return
     from .jobs.autocorrect import DEFAULT_MODEL, corrector
+    from .learn.ba.autocorrect import Correction
+    from .learn.training.figures import save_before_after
+    from .maps.dxf import save_segments_dxf
     from .maps.formats import save_map
 
     out = ctx.out / "autocorrect"

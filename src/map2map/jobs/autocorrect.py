@@ -132,16 +132,20 @@ def corrector(model: str | os.PathLike | Corrector | None = None,
     if not isinstance(model, str | os.PathLike):
         return model
     key = ALIASES.get(os.fspath(model), os.fspath(model))
-    if key in MODELS:
-        made, drawn = MODELS[key].make(device), MODELS[key].drawn
-    elif not Path(model).exists():
+    if key not in MODELS and not Path(model).exists():
         names = ", ".join(repr(k) for k in MODELS)
         raise InputError(model, f"not a model name ({names}) nor a Model_BA training run "
                                 "folder or weights file")
-    else:
-        from ..learn.ba.correctors import ThesisCorrector
+    try:
+        if key in MODELS:
+            made, drawn = MODELS[key].make(device), MODELS[key].drawn
+        else:
+            from ..learn.ba.correctors import ThesisCorrector
 
-        made, drawn = ThesisCorrector(model, device), False
+            made, drawn = ThesisCorrector(model, device), False
+    except ImportError as exc:      # a network needs the learn extra; 'none' does not
+        raise InputError(os.fspath(model), f"needs PyTorch: pip install 'map2map[learn]' "
+                                           f"({exc})") from None
     if draw_thickness is not None and draw_thickness <= 0:
         raise InputError("draw_thickness", f"must be > 0 metres, got {draw_thickness}")
     if draw if draw is not None else drawn:
@@ -296,15 +300,11 @@ def _refuse_shared_outputs(files: list[Path], outs: list[dict[str, Path]]) -> No
 def autocorrect(spec: AutocorrectSpec) -> AutocorrectRun:
     """Run ``map2map autocorrect`` (module docstring); the warnings of each correction are
     in ``run.corrections[i].warnings`` (not issued)."""
+    from ..learn.ba.autocorrect import Correction
+    from ..learn.training.figures import save_before_after
     from ..maps.dxf import save_segments_dxf
     from ..maps.formats import check_output_path, load_map, save_map
 
-    try:
-        from ..learn.ba.autocorrect import Correction
-        from ..learn.training.figures import save_before_after
-    except ImportError as exc:
-        raise InputError("autocorrect", f"needs PyTorch: pip install 'map2map[learn]' ({exc})"
-                         ) from None
     thickness = parse_thickness(spec.thickness)
     files, outs = _plan_paths(spec)
     for o in outs:

@@ -27,6 +27,9 @@ Examples
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
+
 import cv2
 import numpy as np
 
@@ -34,6 +37,10 @@ from ..core.errors import InputError
 from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 
 __all__ = [
+    "wall_thickness_px",
+    "MARGIN_PX",
+    "ContentSquare",
+    "content_square",
     "reduce_plan",
     "square_resize",
     "harmonise",
@@ -420,3 +427,70 @@ def reduce_plan(plan: OccupancyMap, max_side: int = MAX_SIDE) -> OccupancyMap:
     out[free] = FREE
     out[occ] = OCCUPIED
     return OccupancyMap(out, plan.resolution * f, plan.origin, dict(plan.meta))
+
+
+#: Crop margin, pixels at the dataset's size (``learn.training.synthetic``, ``dataset build``).
+MARGIN_PX = 4
+
+
+@dataclass
+class ContentSquare:
+    """The known part of a map padded to a square, as the dataset crops its maps.
+
+    ``data`` is the ``side x side`` square (unknown outside the map); its top-left pixel is
+    the map's pixel (``row0``, ``col0``), which may lie outside the map (negative)."""
+
+    data: np.ndarray
+    row0: int
+    col0: int
+    side: int
+
+
+def content_square(m: OccupancyMap, data_size: int) -> ContentSquare | None:
+    """The map's content box plus a margin of :data:`MARGIN_PX` pixels at the dataset's
+    size ``data_size``, padded to a square with unknown cells and centred on the content
+    (the crop the dataset build makes); None for a map without known cells.
+
+    Examples
+    --------
+    >>> from map2map.core.grid import OccupancyMap
+    >>> d = np.full((50, 80), UNKNOWN, np.uint8); d[10:20, 10:70] = FREE
+    >>> sq = content_square(OccupancyMap(d, 0.05), 256)
+    >>> sq.side, sq.row0, sq.col0, sq.data.shape
+    (62, -16, 9, (62, 62))
+    """
+    bbox = m.content_bbox()
+    if bbox is None:
+        return None
+    r0, r1, c0, c1 = bbox
+    side = max(r1 - r0, c1 - c0)
+    margin = math.ceil(MARGIN_PX * side / max(1, data_size - 2 * MARGIN_PX))
+    side += 2 * margin
+    row0 = r0 - (side - (r1 - r0)) // 2
+    col0 = c0 - (side - (c1 - c0)) // 2
+    sq = np.full((side, side), UNKNOWN, np.uint8)
+    H, W = m.shape
+    rs, re = max(0, row0), min(H, row0 + side)
+    cs, ce = max(0, col0), min(W, col0 + side)
+    sq[rs - row0:re - row0, cs - col0:ce - col0] = m.data[rs:re, cs:ce]
+    return ContentSquare(sq, row0, col0, side)
+
+
+def wall_thickness_px(maps: np.ndarray, limit: int = 64) -> float:
+    """Median wall thickness (pixels) of ternary maps: occupied area / centre-line length.
+
+    Examples
+    --------
+    >>> m = np.full((1, 40, 40), 255, np.uint8); m[0, 10:13, 5:35] = 0
+    >>> round(wall_thickness_px(m), 1)       # a 3-px wall (its centre line is a bit short)
+    3.1
+    """
+    from skimage.morphology import skeletonize
+
+    out = []
+    for m in np.asarray(maps)[:limit]:
+        occ = m == OCCUPIED
+        skel = skeletonize(occ).sum()
+        if skel:
+            out.append(occ.sum() / skel)
+    return float(np.median(out)) if out else 1.0

@@ -13,7 +13,7 @@ per map, on the dataset's square (``N x N`` px, thesis 4.1 preprocessing):
 * ``free_mapped``  share of plan free pixels that are free in the map;
 * ``unknown``      unknown share of the plan's known pixels;
 * ``spurious``     occupied 8-connected fragments farther than 3 px from every plan wall;
-* ``thickness``    wall thickness (px), :func:`map2map.learn.ba.postprocess.wall_thickness_px`;
+* ``thickness``    wall thickness (px), :func:`map2map.maps.preprocess.wall_thickness_px`;
 * ``bend``         bent-wall curvature: along the map's wall centre lines (skeleton), the
   RMS distance (px) of the centre line within a disc of radius :data:`BEND_RADIUS` px to
   its own best-fitting line (the square root of the local scatter's smaller eigenvalue),
@@ -134,7 +134,7 @@ def map_stats(m: np.ndarray, plan: np.ndarray, rooms: np.ndarray | None = None
         occupied cells; the SLAM-error statistics are NaN where
         :mod:`~map2map.experiments.realism.slam_errors` says).
     """
-    from ...learn.training.data import wall_thickness_px
+    from ...maps.preprocess import wall_thickness_px
 
     m, plan = np.asarray(m), np.asarray(plan)
     if m.shape != plan.shape:

@@ -164,8 +164,8 @@ def real_pair_row(name: str, sensor: OccupancyMap, corrected: OccupancyMap,
     from ...core.geometry import apply, decompose_similarity
     from ...evaluate.nonrigid import warp_image
     from ...evaluate.wallmetrics import wall_metrics
-    from ...learn.training.data import wall_thickness_px
     from ...maps.halmstad import robust_similarity
+    from ...maps.preprocess import wall_thickness_px
 
     t0 = time.perf_counter()
     ks, kt = np.asarray(ks, float), np.asarray(kt, float)
@@ -517,7 +517,6 @@ def run_table53_real(root: str | os.PathLike, names: list[str] | None = None,
     """
     from tqdm import tqdm
 
-    from ...learn.training.data import content_square
     from ...maps.halmstad import (
         halmstad_pairs,
         load_association,
@@ -525,6 +524,7 @@ def run_table53_real(root: str | os.PathLike, names: list[str] | None = None,
         load_keypoints,
         robust_similarity,
     )
+    from ...maps.preprocess import content_square
 
     t_all = time.perf_counter()
     root = Path(root)

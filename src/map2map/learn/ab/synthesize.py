@@ -96,8 +96,7 @@ import numpy as np
 
 from ...core.errors import InputError
 from ...core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
-from ...maps.preprocess import square_resize, thicken
-from ..training.data import content_square
+from ...maps.preprocess import content_square, square_resize, thicken
 from . import render as slam_render
 from .coverage import (
     ExploreParams,

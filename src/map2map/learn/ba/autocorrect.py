@@ -75,13 +75,13 @@ from concurrent.futures import ThreadPoolExecutor
 from contextlib import nullcontext
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ...core.errors import InputError
 from ...core.grid import OCCUPIED, UNKNOWN, OccupancyMap
 from ...maps.preprocess import square_resize
-from .model import BAModel, load_model, pretrained_path
 from .null import NullNetwork
 from .pieces import drawn_pieces
 from .postprocess import postprocess
@@ -96,6 +96,9 @@ from .squares import (
     tile_grid,
     unrotate_segments,
 )
+
+if TYPE_CHECKING:
+    from .model import BAModel
 
 __all__ = ["autocorrect", "autocorrect_many", "Correction",
            "dominant_angle", "drawn_wall_px", "tile_grid", "stitch_tiles"]
@@ -141,6 +144,10 @@ def _weights_caveat(net: BAModel, anchor: bool) -> list[str]:
     """What the shipped weights were measured to do (weights whose note says PROVISIONAL,
     or the shipped file): a warning on every correction made with them, since a map from
     a real robot is outside what they were trained and measured on."""
+    if not getattr(net, "learnt", True):          # the null network: nothing learnt
+        return []
+    from .model import pretrained_path
+
     provisional = "PROVISIONAL" in str(net.header.get("note", ""))
     try:
         shipped = Path(net.source).resolve() == pretrained_path().resolve()
@@ -218,6 +225,7 @@ def drawn_wall_px(net: BAModel, m: OccupancyMap, shrink: float, thickness: str |
 
     Examples
     --------
+    >>> from map2map.learn.ba.model import load_model
     >>> net = load_model()
     >>> m = OccupancyMap(np.full((10, 10), 255, np.uint8), 0.025)
     >>> drawn_wall_px(net, m, 5.0, "shrink") == 5 * net.target_wall_px
@@ -235,7 +243,7 @@ def drawn_wall_px(net: BAModel, m: OccupancyMap, shrink: float, thickness: str |
         ident = net.header.get("dataset", {}).get("identity", {})
         return t * float(ident.get("resolution") or 0.05) / float(m.resolution)
     if thickness == "input":
-        from ..training.data import wall_thickness_px
+        from ...maps.preprocess import wall_thickness_px
 
         if shrink <= 1.0:  # the bound: no need to measure the input's walls (2 ms a map)
             return t * shrink
@@ -322,6 +330,8 @@ def _network(model, device: str):
         return NullNetwork()
     if isinstance(model, str) and model == "thesis":
         model = "pretrained"
+    from .model import load_model  # torch: only for a network
+
     return load_model(model, device)
 
 
@@ -329,8 +339,7 @@ def _is_network(model) -> bool:
     """``model`` is a loaded network (a :class:`BAModel`, or a stand-in with its
     ``predict``, ``size``, ``data_size``, ``target_wall_px``, ``header`` and ``source``,
     e.g. :class:`~map2map.learn.ba.null.NullNetwork`), not a name or path."""
-    return isinstance(model, BAModel) or (hasattr(model, "predict")
-                                          and hasattr(model, "target_wall_px"))
+    return hasattr(model, "predict") and hasattr(model, "target_wall_px")
 
 
 def _open(open_frontiers: bool | None, tiled: bool) -> bool:

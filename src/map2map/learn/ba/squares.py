@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit
 
 from ...core.grid import OCCUPIED, UNKNOWN, OccupancyMap
-from ..training.data import ContentSquare, content_square
+from ...maps.preprocess import ContentSquare, content_square
 
 __all__ = ["Prepared", "prepare", "dominant_angle", "tile_grid", "stitch_tiles",
            "MIN_SKEW_DEG", "TILE_SHRINK"]
@@ -84,7 +84,7 @@ def rotate_square(data: np.ndarray, angle: float) -> np.ndarray:
 
 @dataclass
 class Prepared:
-    """A map's content square (:func:`~map2map.learn.training.data.content_square`) and
+    """A map's content square (:func:`~map2map.maps.preprocess.content_square`) and
     the square the model sees: the same, or turned by ``angle`` degrees (padded by
     ``pad`` pixels a side first, so nothing is cut) to bring its walls onto the axes."""
 

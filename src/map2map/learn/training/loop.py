@@ -412,7 +412,7 @@ class GANRun:
     def header_fields(targets, data_size: int, nets) -> dict:
         """The model-header fields both models carry: the training targets' wall
         thickness, the dataset's map size and the networks' parameter counts."""
-        from .data import wall_thickness_px
+        from ...maps.preprocess import wall_thickness_px
 
         g, dd, dr = nets
         return {"target_wall_px": wall_thickness_px(targets), "data_size": int(data_size),
