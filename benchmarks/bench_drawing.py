@@ -167,7 +167,8 @@ def _summary(label: str, rows: list[dict], ms: list[float], cpu: list[float] = (
           f"{share('ok_segments'):.0f} %")
     print(f"  broken runs      {med('broken'):.0f} of {med('runs'):.0f} runs >= 1 m; "
           f"none broken: {share('ok_broken'):.0f} %  (total {sum(r['broken'] for r in rows)}"
-          f" of {sum(r['runs'] for r in rows)}; shortened at an end: "
+          f" of {sum(r['runs'] for r in rows)}, of which {sum(r['opened'] for r in rows)}"
+          f" opened: no output wall within 9 px; shortened at an end: "
           f"{sum(r['shortened'] for r in rows)})")
     print(f"  all four targets {share('targets_met'):.0f} %")
     if ms:

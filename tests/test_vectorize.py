@@ -569,3 +569,18 @@ def test_a_maps_interior_walls_are_drawn_at_one_thickness():
     # one interior wall alone keeps its own thickness (nothing to take a median of)
     m1 = _two_rooms(4)
     assert (draw_plan(m1 == OCC, m1, RES, 7).map[30:90, 100] == OCC).sum() == 6
+
+
+def test_a_run_is_opened_only_where_no_output_wall_lies_near_it():
+    """A wall drawn 5 px beside part of an input run breaks it by the 3 px measure but
+    opens nothing; a hole in the wall opens it."""
+    m = np.full((60, 120), FREE, np.uint8)
+    m[30:32, 10:110] = OCC                                   # a 5 m run
+    beside = m.copy()
+    beside[30:32, 50:70] = FREE
+    beside[35:37, 48:72] = OCC                               # that part drawn 5 px off
+    assert broken_runs(m, beside, RES, opened=True) == (1, 1, 0)
+    hole = m.copy()
+    hole[30:32, 50:70] = FREE                                # a 1 m opening
+    assert broken_runs(m, hole, RES, opened=True) == (1, 1, 1)
+    assert broken_runs(m, hole, RES, shortened=True, opened=True) == (1, 1, 0, 1)

@@ -112,14 +112,19 @@ def _run_mask(w: np.ndarray, n: int, axis: int) -> np.ndarray:
 
 def broken_runs(inp: np.ndarray, out: np.ndarray, resolution: float, *,
                 min_run: float = 1.0, max_gap: int = 2, across: int = 3,
-                shortened: bool = False) -> tuple[int, ...]:
+                shortened: bool = False, opened: bool = False,
+                wide: int = 9) -> tuple[int, ...]:
     """``(runs, broken)``: the input's straight wall runs at least ``min_run`` metres long
     (horizontal or vertical; the runs of one wall, 8-connected, count once) and how many
     of them the output breaks: more than ``max_gap`` consecutive pixels along the run
     without an output wall within ``across`` pixels across, with output wall along the
     run on both sides of that gap. With ``shortened=True`` also the number of runs whose
     output stops short of an end of the run by more than ``max_gap`` pixels (a corner
-    whose overshoot the drawer cut back, a wall end drawn shorter): not breaks.
+    whose overshoot the drawer cut back, a wall end drawn shorter): not breaks. With
+    ``opened=True`` also (last) how many of the broken runs the output *opens*: a gap
+    with no output wall within ``wide`` pixels across either (a wall drawn a few pixels
+    beside the run, e.g. once between the two lines of a wall SLAM saved twice, breaks
+    the run by this measure but opens nothing).
 
     Examples
     --------
@@ -127,8 +132,8 @@ def broken_runs(inp: np.ndarray, out: np.ndarray, resolution: float, *,
     >>> broken_runs(inp, inp, 0.05)
     (1, 0)
     >>> out = inp.copy(); out[20:22, 40:44] = 255            # a 4 px gap: broken
-    >>> broken_runs(inp, out, 0.05)
-    (1, 1)
+    >>> broken_runs(inp, out, 0.05, opened=True)              # and opened
+    (1, 1, 1)
     >>> out = inp.copy(); out[20:22, 40:42] = 255            # 2 px: not broken
     >>> broken_runs(inp, out, 0.05)
     (1, 0)
@@ -138,13 +143,15 @@ def broken_runs(inp: np.ndarray, out: np.ndarray, resolution: float, *,
     """
     wi, wo = _walls(inp), _walls(out)
     n = max(2, int(round(min_run / float(resolution))))
-    runs, broken, short = 0, 0, 0
+    runs, broken, short, opens = 0, 0, 0, 0
     for axis in (0, 1):
         r = _run_mask(wi, n, axis)
         if not r.any():
             continue
         k = np.ones((2 * across + 1, 1) if axis == 0 else (1, 2 * across + 1), np.uint8)
         near = cv2.dilate(wo.astype(np.uint8), k) > 0
+        kw = np.ones((2 * wide + 1, 1) if axis == 0 else (1, 2 * wide + 1), np.uint8)
+        near_wide = cv2.dilate(wo.astype(np.uint8), kw) > 0 if opened else near
         miss = (r & ~near).astype(np.uint8)
         gap = _run_mask(miss, max_gap + 1, axis)
         cnt, lab = cv2.connectedComponents(r.astype(np.uint8), connectivity=8)
@@ -159,7 +166,11 @@ def broken_runs(inp: np.ndarray, out: np.ndarray, resolution: float, *,
             broken += bool(inner)
             short += bool(len(covered) == 0 or gp.min() < covered.min()
                           or gp.max() > covered.max())
-    return (int(runs), int(broken), int(short)) if shortened else (int(runs), int(broken))
+            if inner and opened:
+                g = gap[rr, cc] & (pos > covered.min()) & (pos < covered.max())
+                opens += bool((~near_wide[rr[g], cc[g]]).any())
+    out_ = (int(runs), int(broken)) + ((int(short),) if shortened else ())
+    return out_ + ((int(opens),) if opened else ())
 
 
 def drawing_report(out: np.ndarray, inp: np.ndarray, plan: np.ndarray, resolution: float,
@@ -180,7 +191,8 @@ def drawing_report(out: np.ndarray, inp: np.ndarray, plan: np.ndarray, resolutio
     dict
         ``components``, ``components_input``, ``thickness_px``, ``thickness_plan_px``,
         ``segments``, ``plan_walls``, ``segments_ratio``, ``runs``, ``broken``,
-        ``shortened`` (runs whose output stops short of an end: reported, no target) and
+        ``shortened`` (runs whose output stops short of an end: reported, no target),
+        ``opened`` (broken runs with no output wall within 9 pixels at a gap: reported) and
         ``ok_components``, ``ok_thickness``, ``ok_segments``, ``ok_broken``,
         ``targets_met``.
     """
@@ -188,11 +200,12 @@ def drawing_report(out: np.ndarray, inp: np.ndarray, plan: np.ndarray, resolutio
     t_out, t_plan = median_wall_thickness(out), median_wall_thickness(plan)
     n_seg = int(len(segments)) if segments is not None else straight_wall_count(out)
     n_plan = straight_wall_count(plan)
-    runs, broken, short = broken_runs(inp, out, resolution, shortened=True)
+    runs, broken, short, opens = broken_runs(inp, out, resolution, shortened=True,
+                                             opened=True)
     r = {"components": c_out, "components_input": c_in, "thickness_px": t_out,
          "thickness_plan_px": t_plan, "segments": n_seg, "plan_walls": n_plan,
          "segments_ratio": n_seg / n_plan if n_plan else float("inf"),
-         "runs": runs, "broken": broken, "shortened": short}
+         "runs": runs, "broken": broken, "shortened": short, "opened": opens}
     r["ok_components"] = c_out <= c_in
     r["ok_thickness"] = bool(abs(t_out - t_plan) <= TARGETS["thickness_px"])
     r["ok_segments"] = bool(r["segments_ratio"] <= TARGETS["segments_ratio"])
