@@ -111,3 +111,34 @@ def test_the_default_model_needs_no_pytorch(tmp_path):
     assert bad.returncode == 2 and "Traceback" not in bad.stderr
     assert "map2map[learn]" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "t.yaml").exists()
+
+
+def test_workers_change_nothing_but_the_speed(tmp_path, capsys):
+    """A folder of 16 maps (the drawer then runs in worker processes): the same files
+    with ``--workers 1`` and ``--workers 2``; ``--workers 0`` is refused in one line."""
+    from map2map.cli.main import main
+
+    src = tmp_path / "in"
+    src.mkdir()
+    rng = np.random.default_rng(0)
+    for i in range(16):
+        d = np.full((90, 140), 127, np.uint8)
+        r0, c0 = rng.integers(5, 15, 2)
+        d[r0:80, c0:130] = 255
+        d[r0, c0:130] = d[79, c0:130] = 0
+        d[r0:80, c0] = d[r0:80, 129] = 0
+        d[r0:80, 60 + i] = 0                                  # an interior wall
+        d[40:44, 60 + i] = 255                                # with a door
+        save_map(OccupancyMap(d, 0.05), src / f"m{i:02d}.yaml")
+    got = {}
+    for w in (1, 2):
+        assert main(["autocorrect", str(src), "--out", str(tmp_path / f"o{w}"),
+                     "--workers", str(w)]) == 0
+        got[w] = {p.name: p.read_bytes() for p in sorted((tmp_path / f"o{w}").iterdir())}
+    assert len(got[1]) == 32 and got[1] == got[2]
+    capsys.readouterr()
+    assert main(["autocorrect", str(src), "--out", str(tmp_path / "o0"), "--workers",
+                 "0"]) == 2
+    err = capsys.readouterr().err
+    assert "workers" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "o0").exists()

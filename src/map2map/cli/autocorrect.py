@@ -59,6 +59,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="metres of every wall a drawn output draws (default: 0.30, the "
                         "plans'; map2map.maps.vectorize.PLAN_WALL_M)")
     p.add_argument("--device", default="cpu", help="torch device (default cpu)")
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="CPU threads for the per-map work and processes for drawing a "
+                        "folder of 16 maps or more (default: one per core, at most 8; 1: "
+                        "this process only); the outputs are the same")
     add_input_options(p)
     p.set_defaults(func=run)
 
@@ -71,7 +75,7 @@ def run(args: argparse.Namespace) -> int:
         straighten=not args.no_straighten, anchor=not args.no_anchor,
         thickness=args.thickness, open_frontiers=args.open_frontiers, large=args.large,
         device=args.device, read_options=read_options_from_args(args), draw=args.draw,
-        draw_thickness=args.draw_thickness))
+        draw_thickness=args.draw_thickness, workers=args.workers))
     for f, m in zip(run.sources, run.inputs, strict=True):
         say_how_read(f, m)
     for f, r in zip(run.sources, run.corrections, strict=True):

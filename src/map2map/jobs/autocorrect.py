@@ -193,6 +193,10 @@ class AutocorrectSpec:
         Draw the output like a plan (:func:`corrector`); None: the model's choice.
     draw_thickness : float or None
         Metres of every wall the plan drawer draws; None: the plans' 0.30 m.
+    workers : int or None
+        Threads for the per-map work and processes for the plan drawer (from 16 maps
+        on); None: one per CPU core (at most 8); 1: this process only. The outputs do not
+        depend on it.
     """
 
     input: str | os.PathLike
@@ -209,6 +213,7 @@ class AutocorrectSpec:
     read_options: Any = None
     draw: bool | None = None
     draw_thickness: float | None = None
+    workers: int | None = None
 
 
 @dataclass
@@ -312,8 +317,11 @@ def autocorrect(spec: AutocorrectSpec) -> AutocorrectRun:
     maps = [load_map(f, spec.read_options) for f in files]
     model = corrector(spec.model, spec.device, draw=spec.draw,
                       draw_thickness=spec.draw_thickness)
+    if spec.workers is not None and spec.workers < 1:
+        raise InputError("workers", f"must be at least 1, got {spec.workers}")
     options = dict(straighten=spec.straighten, anchor=spec.anchor, thickness=thickness,
-                   open_frontiers=spec.open_frontiers, large=spec.large)
+                   open_frontiers=spec.open_frontiers, large=spec.large,
+                   workers=spec.workers)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         results = [Correction.of(o) for o in model.correct_many(maps, **options)]
