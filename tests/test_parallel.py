@@ -24,6 +24,20 @@ def test_results_and_their_order_do_not_depend_on_the_workers():
     assert two == one == [np.sqrt(i) for i in items]
 
 
+def _pid(_: int) -> int:
+    import os
+
+    return os.getpid()
+
+
+def test_the_items_run_in_other_processes_from_min_items_on():
+    import os
+
+    assert set(process_map(_pid, range(3), workers=2)) == {os.getpid()}   # < min_items
+    pids = set(process_map(_pid, range(40), workers=2, min_items=8))
+    assert os.getpid() not in pids and 1 <= len(pids) <= 2
+
+
 def test_a_workers_warnings_are_raised_in_the_caller_in_order():
     with pytest.warns(UserWarning) as got:
         out = process_map(_warn_odd, range(20), workers=2, min_items=2)

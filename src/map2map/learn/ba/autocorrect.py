@@ -81,6 +81,7 @@ import numpy as np
 
 from ...core.errors import InputError
 from ...core.grid import OCCUPIED, UNKNOWN, OccupancyMap
+from ...core.parallel import default_workers
 from ...maps.preprocess import square_resize
 from .null import NullNetwork
 from .pieces import drawn_pieces
@@ -283,7 +284,7 @@ def autocorrect_many(maps: list[OccupancyMap], model: str | os.PathLike | BAMode
     large = LARGE if large is None else large
     if large not in ("resize", "tile", "refuse"):
         raise ValueError(f"large: 'resize', 'tile' or 'refuse', not {large!r}")
-    n_workers = max(1, min(8, os.cpu_count() or 1) if workers is None else int(workers))
+    n_workers = default_workers() if workers is None else max(1, int(workers))
     with ThreadPoolExecutor(n_workers) if n_workers > 1 else nullcontext() as pool:
         run = pool.map if pool is not None else map
         min_skew = MIN_SKEW_ANCHORED_DEG if anchor and straighten else MIN_SKEW_DEG
