@@ -3,12 +3,14 @@ they are normalised by. Tiny maps and a 2-pair, 8 s simulated dataset."""
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
 import pytest
 from _realism_data import room_dataset
 
+from map2map.core.errors import InputError
 from map2map.core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from map2map.datasets.pair import BuildParams, read_pair_meta
 from map2map.datasets.pairfolder import pair_dir
@@ -102,6 +104,55 @@ def test_rerun_reproduces_run_1_and_run_2_is_another_run_on_the_same_pixels(tiny
     assert two.meta["sim_seed"] != meta["sim_seed"]
     assert tuple(two.meta["start_pose"]) == tuple(meta["start_pose"])
     assert np.array_equal(rerun_pair(ds, 0, 2).b_n, two.b_n)   # seeded
+
+
+def test_a_rerun_started_where_its_seed_puts_the_robot_is_drawn_as_the_build_drew(
+        tiny_dataset):
+    """``start="own"``: the start is drawn from the run's seed as the build drew run 1's
+    (so run 1's own seed gives run 1 again, pixel for pixel), not the pair's pose."""
+    import cv2
+
+    ds = tiny_dataset
+    meta = read_pair_meta(pair_dir(ds, 0))
+    b1 = cv2.imread(str(pair_dir(ds, 0) / "B.png"), 0)
+    again = rerun_pair(ds, 0, sim_seed=meta["sim_seed"], start="own")
+    assert np.array_equal(again.b_n, b1) and again.meta["start_from"] == "own"
+    own = rerun_pair(ds, 0, 2, start="own")
+    pair = rerun_pair(ds, 0, 2)
+    assert own.meta["sim_seed"] == pair.meta["sim_seed"] != meta["sim_seed"]
+    assert tuple(pair.meta["start_pose"]) == tuple(meta["start_pose"])
+    assert tuple(own.meta["start_pose"]) != tuple(meta["start_pose"])
+    assert np.array_equal(rerun_pair(ds, 0, 2, start="own").b_n, own.b_n)     # seeded
+    with pytest.raises(InputError, match="start: must be one of pair, own"):
+        rerun_pair(ds, 0, 2, start="random")
+
+
+def test_references_start_where_asked_and_do_not_depend_on_the_workers(tiny_dataset,
+                                                                       tmp_path):
+    """Runs 2 drawn on two worker processes are those drawn in this one; ``start`` is
+    part of the cache's key (a ``pair`` cache is not read as an ``own`` one)."""
+    from map2map.datasets.build import open_dataset
+
+    with open_dataset(tiny_dataset) as man:
+        rows = man.rows("done")
+    split = "all" if len({r["split"] for r in rows}) > 1 else rows[0]["split"]
+    cache = tmp_path / "own.npz"
+    one = simulated_references(tiny_dataset, split=split, cache=cache, progress=False)
+    two = simulated_references(tiny_dataset, split=split, progress=False, workers=2)
+    assert len(one.indices) == 2 and np.array_equal(one.indices, two.indices)
+    assert np.array_equal(one.sim2, two.sim2)
+    assert np.array_equal(one.parametric, two.parametric)
+    assert one.meta == two.meta
+    starts = [tuple(read_pair_meta(pair_dir(tiny_dataset, int(i)))["start_pose"])
+              for i in one.indices]
+    assert all(tuple(m["start_pose"]) != s for m, s in zip(one.meta, starts, strict=True))
+    pair = simulated_references(tiny_dataset, split=split, cache=cache, progress=False,
+                                start="pair")
+    assert [tuple(m["start_pose"]) for m in pair.meta] == starts
+    with np.load(cache) as z:                      # rewritten for the pair's start
+        assert "start" not in json.loads(str(z["key"]))
+    with pytest.raises(InputError, match="start: must be one of"):
+        simulated_references(tiny_dataset, split=split, progress=False, start="random")
 
 
 def test_simulated_references_are_cached(tiny_dataset, tmp_path, monkeypatch):

@@ -247,12 +247,25 @@ def test_per_plan_benchmark_measures_synthesize_scans(small_dataset, tmp_path, c
         for c in r["classifier"].values():
             c.pop("seconds")
     assert rep2 == rep
-    # --same-start: the hypotheses start where the plan's runs do (its own cache key)
-    assert mod.main(args + ["--same-start", "--classifier-steps", "0"]) == 0
+    # --samples 1 (no diversity) on one process: hypothesis 0 of each plan is the one
+    # that three hypotheses on two processes began with
+    one = tmp_path / "one.npz"
+    capsys.readouterr()
+    assert mod.main(args[:-2] + ["--samples", "1", "--workers", "1", "--classifier-steps",
+                                 "0", "--maps-cache", str(one)]) == 0
+    assert "Diversity" not in capsys.readouterr().out
+    with np.load(one) as z1, np.load(tmp_path / "maps.npz") as z3:
+        assert json.loads(str(z1["key"]))["samples"] == 1
+        assert z1["synthesize"].shape[1] == 1 and z3["synthesize"].shape[1] == 3
+        assert np.array_equal(z1["synthesize"][:, 0], z3["synthesize"][:, 0])
+    # --start pair: runs 2, 3 and the hypotheses start at run 1's pose (their own keys)
+    assert mod.main(args + ["--start", "pair", "--classifier-steps", "0"]) == 0
     rep3 = json.loads(out_json.read_text())
-    assert "scans synthesize, runs' start" in {r for r in rep3["ranks"]}
+    assert "scans synthesize, pair's start" in {r for r in rep3["ranks"]}
     with np.load(tmp_path / "maps.npz") as z:
         assert json.loads(str(z["key"]))["start"] == "pair"
+    with np.load(tmp_path / "c2.npz") as z:
+        assert "start" not in json.loads(str(z["key"]))
 
 
 def test_per_plan_variants_takes_a_model_per_variant_and_the_classifier(small_dataset,

@@ -1,15 +1,18 @@
-"""A second simulated run of a dataset pair: the same plan, the same start pose, another
-simulation seed (issue #15's realism reference: two independent simulated SLAM maps of
-one plan).
+"""A second simulated run of a dataset pair: the same plan, another simulation seed, the
+pair's start pose or one of its own (issue #15's realism reference: two independent
+simulated SLAM maps of one plan).
 
 :func:`rerun_pair` rebuilds pair ``index`` of a ``map2map dataset build`` dataset exactly
 as the build made it (:func:`~map2map.datasets.pair.make_pair`'s plan, simulator, SLAM
 backend and build parameters, read from the dataset's manifest and the pair's
 ``meta.json``), except for the simulation seed (:func:`~map2map.datasets.pair.rerun_seed`
 of the pair's ``sim_seed``): new sensor and odometry noise, new SLAM particles, a new
-exploration. The start pose is the pair's (``meta.json``'s ``start_pose``, rounded to
-1e-6; with the pair's own ``sim_seed`` the start is drawn from it as the build did, and
-the re-run gives the pair's map pixel for pixel). The new SLAM map is cut with the
+exploration. The start pose is the pair's (``start="pair"``: ``meta.json``'s
+``start_pose``, rounded to 1e-6) or drawn from the new seed as the build drew the pair's
+(``start="own"``, :func:`~map2map.sim.runner.choose_start`: then the re-run and the pair
+are exchangeable, two runs of one plan that each start where their seed put the robot).
+With the pair's own ``sim_seed`` the start is drawn from it as the build did, and the
+re-run gives the pair's map pixel for pixel. The new SLAM map is cut with the
 pair's own crop window (the union of the plan's and the pair's ``B``'s content) and
 preprocessed as the pair's ``B`` (thesis 4.1), so it lies on the same pixels as the
 dataset's ``A.png``/``B.png``.
@@ -49,7 +52,7 @@ from .pair import (
 )
 from .plans import PlanSource, load_plan
 
-__all__ = ["RerunResult", "rerun_pair", "parametric_on_trajectory", "parametric_on_run"]
+__all__ = ["STARTS", "RerunResult", "rerun_pair", "parametric_on_trajectory", "parametric_on_run"]
 
 
 @dataclass
@@ -72,8 +75,12 @@ class RerunResult:
     sim: object = None
 
 
+#: Where a re-run starts: the pair's start pose, or one drawn from the re-run's own seed.
+STARTS = ("pair", "own")
+
+
 def rerun_pair(ds: str | os.PathLike, index: int, run: int = 2, *,
-               sim_seed: int | None = None) -> RerunResult:
+               sim_seed: int | None = None, start: str = "pair") -> RerunResult:
     """Simulate pair ``index`` of dataset ``ds`` again with seed ``rerun_seed(sim_seed, run)``.
 
     Parameters
@@ -87,6 +94,9 @@ def rerun_pair(ds: str | os.PathLike, index: int, run: int = 2, *,
     sim_seed : int, optional
         Use this simulation seed instead (the pair's own ``sim_seed`` rebuilds run 1,
         with its trajectory).
+    start : {"pair", "own"}
+        ``"pair"``: start at the pair's start pose (``meta.json``); ``"own"``: at a start
+        drawn from the run's seed, as the build drew the pair's.
 
     Returns
     -------
@@ -101,6 +111,8 @@ def rerun_pair(ds: str | os.PathLike, index: int, run: int = 2, *,
     from .build import open_dataset
     from .pairfolder import PLAN_PNG, SLAM_YAML, pair_dir, read_picture
 
+    if start not in STARTS:
+        raise InputError("start", f"must be one of {', '.join(STARTS)}, got {start!r}")
     if run < 2 and sim_seed is None:
         raise InputError("run", f"must be >= 2 (run 1 is the dataset's map), got {run}")
     with open_dataset(ds) as man:
@@ -120,16 +132,17 @@ def rerun_pair(ds: str | os.PathLike, index: int, run: int = 2, *,
     keep: list = []
     # the pair's own seed draws the pair's start exactly; meta.json's start_pose is
     # rounded to 1e-6, and an exploration started 1e-7 rad off goes another way
-    start = None if seed == int(meta["sim_seed"]) else tuple(meta["start_pose"])
+    at = (None if start == "own" or seed == int(meta["sim_seed"])
+          else tuple(meta["start_pose"]))
     b2, _, info = _simulate(spec, plan, pair_seed(spec.seed, spec.index), sim_seed=seed,
-                            start=start, keep=keep)
+                            start=at, keep=keep)
     b1 = load_map(folder / SLAM_YAML)
     box = crop_box(plan, b1)
     a_n, b_n = preprocess_pair(plan, b2, params.size, params.thicken, box=box)
     a_file = read_picture(folder / PLAN_PNG)
     err, err95 = wall_error(plan, b2)
-    info.update(run=int(run), index=int(index), plan_id=plan_id, wall_error_m=err,
-                wall_error_p95_m=err95, size=params.size, thicken=params.thicken,
+    info.update(run=int(run), index=int(index), plan_id=plan_id, start_from=start,
+                wall_error_m=err, wall_error_p95_m=err95, size=params.size, thicken=params.thicken,
                 fov=params.fov)
     return RerunResult(int(index), int(run), a_n, b_n, bool(np.array_equal(a_n, a_file)),
                        info, plan, box, keep[0])

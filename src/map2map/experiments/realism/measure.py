@@ -40,7 +40,7 @@ and five statistics of SLAM errors (issue #33; exact definitions in
 Each statistic's distribution over the generated maps is compared with its distribution
 over simulated run 1 (the dataset's own SLAM maps) by the 1-D Wasserstein distance, and
 normalised by the same distance between simulated run 2 (:func:`map2map.datasets.rerun.
-rerun_pair`: same plan, same start pose, another simulation seed) and run 1:
+rerun_pair`: same plan, another simulation seed and the start that seed draws) and run 1:
 
     ratio = W(generated, run 1) / W(run 2, run 1)
 
@@ -486,7 +486,8 @@ class References:
         Preprocessed plans (the dataset's ``A.png``).
     sim1, sim2 : (N, S, S) uint8
         Run 1 (the dataset's ``B.png``) and run 2 (:func:`~map2map.datasets.rerun.
-        rerun_pair`), same pixels.
+        rerun_pair`), same pixels; run 2 starts where :func:`simulated_references`'s
+        ``start`` says.
     parametric : (N, S, S) uint8
         :func:`map2map.parametric.pipeline.deform` (additive) driven along run 2's true
         trajectory, cut and preprocessed as the pair's ``B``.
@@ -528,9 +529,27 @@ def split_indices(ds: str | os.PathLike, split: str = "test") -> list[int]:
                   if split in ("all", r["split"]) and r["kind"] == "simulate")
 
 
+def _reference(item) -> tuple[int, dict | str]:
+    """Run ``run`` of pair ``index`` (``item = (ds, index, run, start)``) as
+    :func:`simulated_references` keeps it, or the reason it failed (a worker's task)."""
+    from ...core.errors import InputError
+    from ...datasets import rerun
+
+    ds, i, run, start = item
+    try:
+        rr = rerun.rerun_pair(ds, i, run, start=start)
+    except InputError as exc:
+        return i, exc.problem
+    return i, {"sim2": rr.b_n, "parametric": rerun.parametric_on_run(rr),
+               "meta": {k: rr.meta.get(k) for k in (
+                   "sim_seed", "coverage", "ate_rmse_m", "path_length_m", "stop_reason",
+                   "wall_error_m", "plan_id", "start_pose")}}
+
+
 def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int | None = None,
                          run: int = 2, cache: str | os.PathLike | None = None,
-                         progress: bool = True) -> References:
+                         progress: bool = True, start: str = "own",
+                         workers: int | None = 1) -> References:
     """Two simulated SLAM maps (and the parametric model's) of the ``split`` plans of
     dataset ``ds`` (see :class:`References`).
 
@@ -547,9 +566,19 @@ def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int |
     cache : path, optional
         An ``.npz`` kept between calls (written atomically at most every
         :data:`SAVE_EVERY_S` seconds and at the end): plans already there are not
-        simulated again. Tied to the dataset's folder and ``run``.
+        simulated again. Tied to the dataset's folder, ``run`` and ``start``.
     progress : bool
         tqdm bar over the plans.
+    start : {"own", "pair"}
+        Where the second run starts (:func:`~map2map.datasets.rerun.rerun_pair`):
+        ``"own"`` (default), drawn from its seed as the build drew run 1's, so the
+        dataset's run and the re-runs are exchangeable and a generator that draws its
+        own start is compared with runs that do; ``"pair"``, at run 1's start pose (the
+        protocol until 2026-11-28; compare a generator started there too).
+    workers : int, optional
+        Worker processes (:func:`map2map.core.parallel.process_map`; None: one per
+        core). Each plan is simulated alone from its seeds, so the maps do not depend on
+        it.
 
     Returns
     -------
@@ -560,9 +589,12 @@ def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int |
     """
     from ...core._io import atomic_path
     from ...core.errors import InputError
+    from ...core.parallel import default_workers, process_map
     from ...datasets.pairfolder import pair_dir, read_pair
-    from ...datasets.rerun import parametric_on_run, rerun_pair
+    from ...datasets.rerun import STARTS
 
+    if start not in STARTS:
+        raise InputError("start", f"must be one of {', '.join(STARTS)}, got {start!r}")
     ds = Path(ds)
     idx = split_indices(ds, split)
     if n is not None:
@@ -570,6 +602,8 @@ def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int |
     have: dict[int, dict] = {}
     failed: dict[int, str] = {}
     key = {"dataset": str(ds.resolve()), "run": int(run), "version": 1}
+    if start != "pair":         # a cache made before the option started at the pair's
+        key["start"] = start
     if cache is not None and Path(cache).is_file():
         with np.load(cache, allow_pickle=False) as z:
             if json.loads(str(z["key"])) == key:
@@ -603,23 +637,21 @@ def simulated_references(ds: str | os.PathLike, *, split: str = "test", n: int |
 
         bar = tqdm(total=len(todo), desc=f"simulating run {run}", unit="plan")
     last = time.monotonic()
-    for done, i in enumerate(todo, 1):
-        try:
-            rr = rerun_pair(ds, i, run)
-        except InputError as exc:
-            failed[i] = exc.problem
-            rr = None
-        if rr is not None:
-            have[i] = {"sim2": rr.b_n, "parametric": parametric_on_run(rr),
-                       "meta": {k: rr.meta.get(k) for k in (
-                           "sim_seed", "coverage", "ate_rmse_m", "path_length_m",
-                           "stop_reason", "wall_error_m", "plan_id")}}
+    nw = default_workers() if workers is None else max(1, int(workers))
+    step = 1 if nw == 1 else 4 * nw       # a few plans a worker between saves
+    for c in range(0, len(todo), step):
+        chunk = [(str(ds), i, int(run), start) for i in todo[c:c + step]]
+        for i, got in process_map(_reference, chunk, workers=nw, min_items=2):
+            if isinstance(got, str):
+                failed[i] = got
+            else:
+                have[i] = got
         # the whole cache is rewritten each time: every minute, not every plan
-        if time.monotonic() - last > SAVE_EVERY_S or done == len(todo):
+        if time.monotonic() - last > SAVE_EVERY_S or c + step >= len(todo):
             save()
             last = time.monotonic()
         if bar is not None:
-            bar.update(1)
+            bar.update(len(chunk))
     if bar is not None:
         bar.close()
     gone = [i for i in idx if i in failed]

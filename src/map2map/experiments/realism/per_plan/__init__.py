@@ -50,3 +50,38 @@ def classifier_auc(args: argparse.Namespace, plans, a, b):
     seeds = [args.seed + k for k in range(args.classifier_seeds)]
     return repeated_auc(plans, a, b, seeds, steps=args.classifier_steps,
                         patience=args.classifier_patience)
+
+
+def plan_hypotheses(item) -> tuple[int, list]:
+    """``synthesize``'s hypotheses of pair ``i``'s plan, cut to the pair's square (one of
+    ``per_plan``'s tasks, run in a worker process for ``--model scans``).
+
+    ``item = (ds, i, model, seed, size, samples, start, runs)``: the plan (``A.yaml``, its
+    own resolution) is synthesized with ``samples`` hypotheses and seed ``seed + i`` once
+    per keyword set in ``runs`` (e.g. ``[{}]``, or the network's dropout alone as well);
+    with ``model="scans"``, ``start == "pair"`` starts each at the pair's start pose
+    (``meta.json``), ``"own"`` where its seed draws one (a network's exploration for its
+    coverage always draws its own). Returns ``(i, [(samples, size, size) uint8 per run])``.
+    """
+    import warnings
+
+    import numpy as np
+
+    from map2map.datasets.pair import crop_box, preprocess_pair, read_pair_meta
+    from map2map.datasets.pairfolder import PLAN_YAML, SLAM_YAML, pair_dir
+    from map2map.learn.ab.synthesize import synthesize
+    from map2map.maps.formats import load_map
+
+    ds, i, model, seed, size, samples, start, runs = item
+    folder = pair_dir(ds, i)
+    a, b = load_map(folder / PLAN_YAML), load_map(folder / SLAM_YAML)
+    box = crop_box(a, b)
+    pair = start == "pair" and isinstance(model, str)   # a network's coverage: its own
+    at = {"start": tuple(read_pair_meta(folder)["start_pose"])} if pair else {}
+    got = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for kw in runs:
+            res = synthesize(a, model, samples=samples, seed=seed + i, **at, **kw)
+            got.append(np.stack([preprocess_pair(a, h, size, 0, box)[1] for h in res.maps]))
+    return i, got

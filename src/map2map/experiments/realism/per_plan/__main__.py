@@ -3,9 +3,15 @@ same plan?
 
 On the plans of a ``map2map dataset build`` dataset no model was trained on (``--split
 all`` of a dataset built with a new seed; ``test`` of the training dataset), each plan has
-three simulated SLAM maps: run 1 (the dataset's pair), runs 2 and 3 (the same plan and
-start, other simulation seeds; :func:`map2map.experiments.realism.measure.
-simulated_references`, slow, cached in ``--cache2`` / ``--cache3``). Generators: the
+three simulated SLAM maps: run 1 (the dataset's pair), runs 2 and 3 (the same plan, other
+simulation seeds, each starting where its seed puts the robot as run 1's did: ``--start
+own``; :func:`map2map.experiments.realism.measure.simulated_references`, slow, cached in
+``--cache2`` / ``--cache3``, on ``--workers`` processes). A generator that draws its own
+start is compared with runs that draw theirs: all four maps of a plan are exchangeable
+for a perfect generator. (Until 2026-11-28 runs 2 and 3 started at run 1's start pose
+while ``synthesize``'s hypotheses drew their own, so even the simulator failed the rank
+targets on the statistics a start moves; ``--start pair`` starts runs 2, 3 and the
+scans hypotheses at run 1's pose.) Generators: the
 parametric model (thesis 3.2, along run 2's true path), and per ``--model`` the network
 alone (on the pair's square as trained; dropout off, no drift, no coverage, no traces,
 nearest-neighbour upsampling) and the whole ``map2map synthesize`` (its defaults: dropout
@@ -39,6 +45,7 @@ Printed, per generator:
 
     python -m map2map.experiments.realism.per_plan --data DS --split all \\
         --cache2 refs2.npz --cache3 refs3.npz [--plans N] [--model pretrained ...] \\
+        [--start own] [--samples 3] [--workers N] \\
         [--classifier-steps 12000] [--classifier-patience 5] [--classifier-seeds 3] \\
         [--maps-cache maps.npz] \\
         [--figure F.png] [--json F]
@@ -50,7 +57,6 @@ import argparse
 import json
 import sys
 import time
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -80,9 +86,16 @@ def main(argv=None) -> int:
                            f"most (0: no classifier test; default {CONVERGED_STEPS})",
                            patience=CONVERGED_PATIENCE)
     ap.add_argument("--maps-cache", help=".npz keeping synthesize's hypotheses of every plan")
-    ap.add_argument("--same-start", action="store_true",
-                    help="scans: start each hypothesis where the plan's runs start "
-                    "(synthesize --start; the runs share the pair's start pose)")
+    ap.add_argument("--start", choices=("own", "pair"), default="own",
+                    help="where runs 2 and 3 and --model scans's hypotheses start: own (each "
+                    "where its seed draws a start, as the dataset's run 1 did; default) or "
+                    "pair (all at run 1's start pose; the network's hypotheses draw their own)")
+    ap.add_argument("--samples", type=int, default=3,
+                    help="hypotheses per plan (default 3; the first is ranked, all give the "
+                    "diversity; 1: no diversity, and --model scans 3x faster)")
+    ap.add_argument("--workers", type=int, default=None,
+                    help="processes simulating runs 2, 3 and --model scans's hypotheses "
+                    "(default one per core; the maps do not depend on it)")
     ap.add_argument("--figure", help="PNG: plan, runs 1-3 and each generator on 6 plans")
     ap.add_argument("--json", help="write every figure printed here")
     args = ap.parse_args(argv)
@@ -96,10 +109,15 @@ def main(argv=None) -> int:
     )
 
     check_classifier_options(ap, args)
+    if args.samples < 1:
+        ap.error("--samples must be >= 1")
+    if args.workers is not None and args.workers < 1:
+        ap.error("--workers must be >= 1")
     t0 = time.perf_counter()
-    r2 = simulated_references(args.data, split=args.split, n=args.plans, cache=args.cache2)
+    r2 = simulated_references(args.data, split=args.split, n=args.plans, cache=args.cache2,
+                              start=args.start, workers=args.workers)
     r3 = simulated_references(args.data, split=args.split, n=args.plans, cache=args.cache3,
-                              run=3)
+                              run=3, start=args.start, workers=args.workers)
     both = np.intersect1d(r2.indices, r3.indices)
     r2, r3 = r2.only(both), r3.only(both)
     plans = r2.a
@@ -157,7 +175,7 @@ def main(argv=None) -> int:
             print(f"  {name}: AUC {auc:.3f} - floor {floor:.3f} = {auc - floor:+.3f} "
                   f"(target <= +0.05: {'met' if auc - floor <= 0.05 else 'NOT met'})")
 
-    if hyps:
+    if hyps and args.samples > 1:
         sims = _diversity(np.stack(list(runs.values()), 1), plans)
         print(f"\nDiversity: mean pairwise disagreement of a plan's 3 maps (share of its "
               f"known pixels), mean over {len(plans)} plans; simulated runs 1-3: "
@@ -197,42 +215,45 @@ def _model_maps(model: str, args, refs, cache=None) -> tuple[dict, dict]:
 
     if model == SCANS:                   # no network: the pipeline is all there is
         hyp = _native_hypotheses(args.data, refs.indices, SCANS, args.seed,
-                                 refs.a.shape[-1], cache, same_start=args.same_start)
-        name = "scans synthesize" + (", runs' start" if args.same_start else "")
+                                 refs.a.shape[-1], cache, start=args.start,
+                                 samples=args.samples, workers=args.workers)
+        name = "scans synthesize" + (", pair's start" if args.start == "pair" else "")
         return {name: hyp["synthesize"][:, 0]}, hyp
     net = load_ab_model(model)
     base = "Model_AB" if model == "pretrained" else f"AB:{Path(model).name}"
     alone = synthesize_squares(net, refs.a, seed=args.seed, render="plain", drift="none",
                                coverage="none", traces="none")
     hyp = _native_hypotheses(args.data, refs.indices, net, args.seed, refs.a.shape[-1],
-                             cache)
+                             cache, samples=args.samples)
     return ({f"{base} network alone": alone, f"{base} synthesize": hyp["synthesize"][:, 0]},
             hyp)
 
 
 def _native_hypotheses(ds, indices, net, seed: int, size: int, cache=None,
-                       same_start: bool = False) -> dict:
-    """Per pair: ``synthesize`` (3 hypotheses, its defaults) and the same with drift,
-    coverage and traces off (the network's dropout alone) of the pair's plan (``A.yaml``,
-    its own resolution), cut with the pair's window to its ``size`` px square;
-    ``same_start`` (scans only): started at the pair's start pose (``meta.json``).
+                       start: str = "own", samples: int = 3, workers: int | None = 1) -> dict:
+    """Per pair: ``synthesize`` (``samples`` hypotheses, its defaults) and the same with
+    drift, coverage and traces off (the network's dropout alone) of the pair's plan
+    (``A.yaml``, its own resolution), cut with the pair's window to its ``size`` px square
+    (:func:`~map2map.experiments.realism.per_plan.plan_hypotheses`); ``start="pair"``
+    (scans only): started at the pair's start pose (``meta.json``). ``--model scans``
+    runs on ``workers`` processes (a network in this one).
 
     ``cache`` (an ``.npz``, optional) keeps them between calls, tied to the dataset's
-    folder, the weights, ``seed`` and ``size`` (rewritten at most every minute and at the
-    end): pairs already there are not synthesized again."""
+    folder, the weights, ``seed``, ``size``, ``start`` and ``samples`` (rewritten at most
+    every minute and at the end): pairs already there are not synthesized again."""
     from tqdm.auto import tqdm
 
     from map2map.core._io import atomic_path
-    from map2map.datasets.pair import crop_box, preprocess_pair, read_pair_meta
-    from map2map.datasets.pairfolder import PLAN_YAML, SLAM_YAML, pair_dir
-    from map2map.learn.ab.synthesize import synthesize
-    from map2map.maps.formats import load_map
+    from map2map.core.parallel import default_workers, process_map
+    from map2map.experiments.realism.per_plan import plan_hypotheses
 
     scans = isinstance(net, str)
     key = {"dataset": str(Path(ds).resolve()), "model": net if scans else str(net.source),
            "seed": int(seed), "size": int(size), "version": 1}
-    if same_start:
+    if start == "pair":             # a cache made before these options: own start, 3
         key["start"] = "pair"
+    if samples != 3:
+        key["samples"] = int(samples)
     have: dict[int, tuple] = {}
     if cache is not None and Path(cache).is_file():
         with np.load(cache, allow_pickle=False) as z:
@@ -251,24 +272,20 @@ def _native_hypotheses(ds, indices, net, seed: int, size: int, cache=None,
                                 synthesize=np.stack([have[i][0] for i in ks]), **more)
 
     todo = [int(i) for i in indices if int(i) not in have]
+    runs = [{}] if scans else [{}, {"drift": "none", "coverage": "none", "traces": "none"}]
+    nw = (default_workers() if workers is None else max(1, int(workers))) if scans else 1
+    step = 1 if nw == 1 else 4 * nw
     last = time.monotonic()
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        for n, i in enumerate(tqdm(todo, desc="synthesize", unit="plan"), 1):
-            folder = pair_dir(ds, i)
-            a, b = load_map(folder / PLAN_YAML), load_map(folder / SLAM_YAML)
-            box = crop_box(a, b)
-            got = []
-            at = {"start": tuple(read_pair_meta(folder)["start_pose"])} if same_start else {}
-            for kw in (at,) if scans else ({}, {"drift": "none", "coverage": "none",
-                                                "traces": "none"}):
-                res = synthesize(a, net, samples=3, seed=seed + i, **kw)
-                got.append(np.stack([preprocess_pair(a, h, size, 0, box)[1]
-                                     for h in res.maps]))
-            have[i] = (got[0], got[-1])
-            if time.monotonic() - last > 60.0 or n == len(todo):
+    with tqdm(total=len(todo), desc="synthesize", unit="plan") as bar:
+        for c in range(0, len(todo), step):
+            chunk = [(str(ds), i, net, int(seed), int(size), int(samples), start, runs)
+                     for i in todo[c:c + step]]
+            for i, got in process_map(plan_hypotheses, chunk, workers=nw, min_items=2):
+                have[i] = (got[0], got[-1])
+            if time.monotonic() - last > 60.0 or c + step >= len(todo):
                 save()
                 last = time.monotonic()
+            bar.update(len(chunk))
     return {"synthesize": np.stack([have[int(i)][0] for i in indices]),
             "dropout": np.stack([have[int(i)][1] for i in indices])}
 

@@ -111,6 +111,9 @@ def main(argv=None) -> int:
     ap.add_argument("--cache3", required=True, help=".npz keeping run 3 of every plan")
     ap.add_argument("--model", default="pretrained", help="Model_AB weights")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--start", choices=("own", "pair"), default="own",
+                    help="where runs 2 and 3 and the scans variants' robot start: each where "
+                    "its seed draws a start (default) or at run 1's start pose (as per_plan)")
     ap.add_argument("--samples", type=int, default=3,
                     help="hypotheses made per plan, the first ranked (default 3, as per_plan; "
                     "with --model scans the first does not depend on it: 1 is 3x faster)")
@@ -129,7 +132,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     check_classifier_options(ap, args)
 
-    from map2map.datasets.pair import crop_box, preprocess_pair
+    from map2map.datasets.pair import crop_box, preprocess_pair, read_pair_meta
     from map2map.datasets.pairfolder import PLAN_YAML, SLAM_YAML, pair_dir
     from map2map.experiments.realism.measure import simulated_references, stats_of_sets
     from map2map.experiments.realism.ranks import format_rank_table, plan_ranks, rank_table
@@ -139,9 +142,10 @@ def main(argv=None) -> int:
     from map2map.maps.formats import load_map
 
     variants = {name: _kwargs(text) for name, text in args.variant}
-    r2 = simulated_references(args.data, split=args.split, cache=args.cache2, progress=False)
+    r2 = simulated_references(args.data, split=args.split, cache=args.cache2, progress=False,
+                              start=args.start)
     r3 = simulated_references(args.data, split=args.split, cache=args.cache3, run=3,
-                              progress=False)
+                              progress=False, start=args.start)
     both = np.intersect1d(r2.indices, r3.indices)[:args.plans]
     r2, r3 = r2.only(both), r3.only(both)
     nets = {}
@@ -159,6 +163,8 @@ def main(argv=None) -> int:
             folder = pair_dir(args.data, int(i))
             a, b = load_map(folder / PLAN_YAML), load_map(folder / SLAM_YAML)
             explored = {}              # one exploration per plan serves every scans variant
+            at = (tuple(read_pair_meta(folder)["start_pose"]) if args.start == "pair"
+                  else None)
             for name, kw in variants.items():
                 t0 = time.perf_counter()
                 if models[name] == SCANS and set(kw) <= {"scans"}:
@@ -166,10 +172,12 @@ def main(argv=None) -> int:
                     sp = kw.get("scans") or ScanMapParams()
                     key = (sp.duration, sp.fov, sp.explore_map)
                     if key not in explored:
-                        explored[key] = explore(a, args.seed + int(i), 0, sp)
+                        explored[key] = explore(a, args.seed + int(i), 0, sp, at)
                     m = drawn_hypothesis(a, explored[key], args.seed + int(i), 0, sp).map
                 else:
                     net = nets.get(models[name], SCANS)
+                    if net == SCANS and at is not None:
+                        kw = {**kw, "start": at}
                     m = synthesize(a, net, samples=args.samples, seed=args.seed + int(i),
                                    **kw).maps[0]
                 gens[name].append(preprocess_pair(a, m, size, 0, crop_box(a, b))[1])
