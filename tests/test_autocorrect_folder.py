@@ -142,3 +142,21 @@ def test_workers_change_nothing_but_the_speed(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "workers" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "o0").exists()
+
+
+def test_only_a_missing_extra_reads_as_needs_pytorch(monkeypatch):
+    """A model whose import fails on torch is refused in one line naming the extra; one
+    that fails on anything else is a fault and keeps its own error (not 'needs PyTorch')."""
+    import map2map.jobs.autocorrect as J
+
+    def failing(name):
+        def make(device):
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+        return make
+
+    monkeypatch.setitem(J.MODELS, "thesis", J.ModelEntry(failing("torch.nn"), "x"))
+    with pytest.raises(InputError, match=r"needs PyTorch: pip install 'map2map\[learn\]'"):
+        J.corrector("thesis")
+    monkeypatch.setitem(J.MODELS, "thesis", J.ModelEntry(failing("map2map.gone"), "x"))
+    with pytest.raises(ModuleNotFoundError, match="map2map.gone"):
+        J.corrector("thesis")

@@ -92,6 +92,9 @@ MODELS: dict[str, ModelEntry] = {
 DEFAULT_MODEL = "none"
 #: Other names of :data:`MODELS` entries (``pretrained``: the shipped weights, as before).
 ALIASES = {"pretrained": "thesis"}
+#: The learn extra's top-level modules: a network model that cannot import one of them
+#: is refused in one line naming the extra (any other ImportError is a fault).
+LEARN_MODULES = ("torch", "safetensors")
 
 
 def model_names_help() -> str:
@@ -144,6 +147,8 @@ def corrector(model: str | os.PathLike | Corrector | None = None,
 
             made, drawn = ThesisCorrector(model, device), False
     except ImportError as exc:      # a network needs the learn extra; 'none' does not
+        if (getattr(exc, "name", None) or "").split(".")[0] not in LEARN_MODULES:
+            raise                       # not a missing extra: a fault, shown as one
         raise InputError(os.fspath(model), f"needs PyTorch: pip install 'map2map[learn]' "
                                            f"({exc})") from None
     if draw_thickness is not None and draw_thickness <= 0:
