@@ -132,3 +132,30 @@ def test_a_cover_of_another_shape_is_refused():
     m, corr = _room_with_a_drifted_wall()
     with pytest.raises(ValueError, match="cover must be shaped like the map"):
         draw_plan(corr, m, RES, 4, cover=np.zeros((10, 10), bool))
+
+
+def test_walls_run_in_their_familys_direction_unless_lean_px_is_set():
+    """A room whose bottom wall drift turned by 1.2 degrees (about 3.4 px over its
+    length): drawn parallel to the top wall, in the map's one direction, by default;
+    with ``lean_px`` 1.5 (the default until 2026-11-28) it follows its points."""
+    m = np.full((140, 220), UNK, np.uint8)
+    m[20:120, 20:200] = FREE
+    m[20:22, 20:200] = OCC
+    m[20:120, 20:22] = OCC
+    m[20:120, 198:200] = OCC
+    uu = np.arange(20, 200)
+    rows = np.round(112 + np.tan(np.radians(1.2)) * (uu - 110)).astype(int)
+    m[:, 20:200][np.arange(140)[:, None] > rows[None, :] + 1] = UNK
+    for dr in (0, 1):
+        m[rows + dr, uu] = OCC
+
+    def rise(d, pick):                                     # along the wall's length
+        s = d.segments[pick(np.minimum(d.segments[:, 1], d.segments[:, 3]))]
+        return (s[3] - s[1]) / (s[2] - s[0])
+
+    flat = draw_plan(m == OCC, m, RES, 4, cover=m == OCC)
+    assert len(flat.info["angles"]) == 1              # one family (its angle: 0.4 deg)
+    assert rise(flat, np.argmax) == pytest.approx(rise(flat, np.argmin), abs=1e-9)
+    lean = draw_plan(m == OCC, m, RES, 4, cover=m == OCC,
+                     options=DrawOptions(lean_px=1.5))
+    assert (rise(lean, np.argmax) - rise(lean, np.argmin)) * 180 > 2.0

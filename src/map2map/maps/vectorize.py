@@ -52,8 +52,9 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
    explains is thinned and cut by a probabilistic Hough transform; lines at least
    ``other_min`` metres long, more than 4 degrees off both families, are kept.
 7. **Placing** (:func:`_place`): each wall's line is refitted to its own points near it
-   (:func:`_refit`); a long wall that SLAM drift turned a little follows its
-   least-squares line, and a wall seen from one side keeps its seen face (its thickness
+   (:func:`_refit`) and runs exactly in its family's direction (``lean_px``: a long
+   wall that SLAM drift turned a little may follow its least-squares line instead), and
+   a wall seen from one side keeps its seen face (its thickness
    grows away from the free side; a side is free where a room lies, not where laser rays
    passed through an outer wall into the unknown outside). With ``cover`` (the input's
    own wall pixels), a wall whose line leaves a straight run of the input beside it (at
@@ -211,6 +212,14 @@ class DrawOptions:
         With ``two_sided``: every interior wall of a map is drawn at one thickness, the
         median of those the input shows thinner than the drawing (at least two), centred
         between its faces; off: each at its own measured thickness.
+    lean_px : float or None
+        None (default): every wall of a family runs exactly in its direction, as a
+        plan's do, unless ``cover`` turns it to keep the input's run inside. A number:
+        a wall at least ``other_min`` long whose points' least-squares line leans by at
+        least this many pixels over its length (under 6 degrees) follows that line,
+        where SLAM drift turned it (:func:`_place`; 1.5 until 2026-11-28: on the
+        seed-20261205 dev maps Table 5.3's error was lower without on 101 maps and
+        higher on 49, and the leaning walls rendered with one-pixel steps).
     """
 
     tol: float = 0.12
@@ -234,6 +243,7 @@ class DrawOptions:
     two_sided: bool = True
     grow_px: float = 1.0
     one_interior: bool = True
+    lean_px: float | None = None
 
 
 @dataclass
@@ -881,7 +891,8 @@ def _draw_family(pts: np.ndarray, w: np.ndarray, angle: float, occ: np.ndarray,
                 np.stack([vseg[:, 0], vseg[:, 1], vseg[:, 3]], 1).reshape(-1, 3), t + 2 * tol)
     other = _residual_lines(E, drawn > 0, int(round(opt.other_min / res)))
     # slant (drifted walls) and one-sided walls' faces, in each family's own frame
-    slant = (1.5, opt.other_min / res, math.tan(math.radians(6.0)))
+    slant = (math.inf if opt.lean_px is None else float(opt.lean_px), opt.other_min / res,
+             math.tan(math.radians(6.0)))
     faces = t if opt.keep_faces else 0.0
     # a wall is seen from the side its rooms lie on: laser rays through an outer wall
     # into the unknown outside are free space, but no side it was seen from
