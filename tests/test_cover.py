@@ -134,10 +134,10 @@ def test_a_cover_of_another_shape_is_refused():
         draw_plan(corr, m, RES, 4, cover=np.zeros((10, 10), bool))
 
 
-def test_walls_run_in_their_familys_direction_unless_lean_px_is_set():
+def test_a_drifted_wall_follows_its_points_unless_lean_px_is_none():
     """A room whose bottom wall drift turned by 1.2 degrees (about 3.4 px over its
-    length): drawn parallel to the top wall, in the map's one direction, by default;
-    with ``lean_px`` 1.5 (the default until 2026-11-28) it follows its points."""
+    length): drawn along its points by default (``lean_px`` 1.5); with ``lean_px``
+    None parallel to the top wall, in the map's one direction."""
     m = np.full((140, 220), UNK, np.uint8)
     m[20:120, 20:200] = FREE
     m[20:22, 20:200] = OCC
@@ -153,9 +153,8 @@ def test_walls_run_in_their_familys_direction_unless_lean_px_is_set():
         s = d.segments[pick(np.minimum(d.segments[:, 1], d.segments[:, 3]))]
         return (s[3] - s[1]) / (s[2] - s[0])
 
-    flat = draw_plan(m == OCC, m, RES, 4, cover=m == OCC)
+    flat = draw_plan(m == OCC, m, RES, 4, cover=m == OCC, options=DrawOptions(lean_px=None))
     assert len(flat.info["angles"]) == 1              # one family (its angle: 0.4 deg)
     assert rise(flat, np.argmax) == pytest.approx(rise(flat, np.argmin), abs=1e-9)
-    lean = draw_plan(m == OCC, m, RES, 4, cover=m == OCC,
-                     options=DrawOptions(lean_px=1.5))
+    lean = draw_plan(m == OCC, m, RES, 4, cover=m == OCC)
     assert (rise(lean, np.argmax) - rise(lean, np.argmin)) * 180 > 2.0

@@ -52,10 +52,9 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
    explains is thinned and cut by a probabilistic Hough transform; lines at least
    ``other_min`` metres long, more than 4 degrees off both families, are kept.
 7. **Placing** (:func:`_place`): each wall's line is refitted to its own points near it
-   (:func:`_refit`) and runs exactly in its family's direction (``lean_px``: a long
-   wall that SLAM drift turned a little may follow its least-squares line instead), and
-   a wall seen from one side keeps its seen face (its thickness
-   grows away from the free side; a side is free where a room lies, not where laser rays
+   (:func:`_refit`); a long wall that SLAM drift turned a little follows its least-
+   squares line (``lean_px``), and a wall seen from one side keeps its seen face (its
+   thickness grows away from the free side; a side is free where a room lies, not where laser rays
    passed through an outer wall into the unknown outside). With ``cover`` (the input's
    own wall pixels), a wall whose line leaves a straight run of the input beside it (at
    least ``cover_run`` long) by more than half the thickness plus ``cover_tol`` moves as
@@ -213,13 +212,16 @@ class DrawOptions:
         median of those the input shows thinner than the drawing (at least two), centred
         between its faces; off: each at its own measured thickness.
     lean_px : float or None
-        None (default): every wall of a family runs exactly in its direction, as a
-        plan's do, unless ``cover`` turns it to keep the input's run inside. A number:
-        a wall at least ``other_min`` long whose points' least-squares line leans by at
+        A wall at least ``other_min`` long whose points' least-squares line leans by at
         least this many pixels over its length (under 6 degrees) follows that line,
-        where SLAM drift turned it (:func:`_place`; 1.5 until 2026-11-28: on the
-        seed-20261205 dev maps Table 5.3's error was lower without on 101 maps and
-        higher on 49, and the leaning walls rendered with one-pixel steps).
+        where SLAM drift turned it (:func:`_place`). None: every wall of a family runs
+        exactly in its direction, unless ``cover`` turns it to keep the input's run
+        inside. Measured 2026-11-28 (Table 5.3 ``--models none``): None lowers the error
+        per map (dev: on 101 maps, raises it on 49; a fresh build, seed 20261216: 187
+        against 135, medians 0.902 / 0.911 -> 0.871 / 0.888 px) but drops or cuts walls
+        drift turned by a few degrees where a straight line runs over the input's free
+        space (fresh build: broken input runs 123 -> 141, opened 64 -> 74; a courtyard
+        wall of 000040 gone), so 1.5 stays the default.
     """
 
     tol: float = 0.12
@@ -243,7 +245,7 @@ class DrawOptions:
     two_sided: bool = True
     grow_px: float = 1.0
     one_interior: bool = True
-    lean_px: float | None = None
+    lean_px: float | None = 1.5
 
 
 @dataclass
