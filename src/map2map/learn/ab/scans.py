@@ -129,7 +129,9 @@ class ScanMapParams:
         ``"filter"`` when exploring on ``"rbpf"``, else ``"drawn"``. ``"filter"`` is the
         default since session 31: on the 640 plans of the eighth frozen test (seed
         20261209) a classifier tells its maps from simulated runs with AUC 0.511 (two
-        runs: 0.508), the drawn pose error's with 0.727 (docs/synthesize.md).
+        runs: 0.508), the drawn pose error's with 0.727; on the ninth (seed 20261216,
+        runs from their own starts) 0.501 (0.493), 12 of 12 rank targets met
+        (docs/synthesize.md).
 
     The defaults were chosen on 160 plans of the seed-20261127 dev set among eight
     settings by the per-plan ranks and the classifier AUC; ``room_order="visits"`` on

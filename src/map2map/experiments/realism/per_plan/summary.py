@@ -72,7 +72,9 @@ def sentences(report: dict) -> list[str]:
             continue
         what = (f"the network's dropout makes {100 * d['network_share']:.0f} % of that spread"
                 if "network_share" in d else "no network is involved")
+        on = (f", on the first {report['diversity_plans']} plans"
+              if "diversity_plans" in report else "")
         out.append(f"Three synthesize{'' if m == 'scans' else ' --model ' + m} hypotheses "
                    f"of a plan differ {d['ratio']:.2f} times as much as three simulated runs "
-                   f"(target 0.8-1.25); {what}.")
+                   f"(target 0.8-1.25{on}); {what}.")
     return out
