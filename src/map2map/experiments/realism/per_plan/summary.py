@@ -38,6 +38,9 @@ def sentences(report: dict) -> list[str]:
     >>> r["classifier"]["Model_AB synthesize"].update(sd=0.012, aucs=[0.98, 0.99, 1.0])
     >>> sentences(r)[1].split(" on plans")[0][-40:]
     'AUC 0.99 +- 0.01 over 3 classifier seeds'
+    >>> r.update(diversity={"scans": {"ratio": 1.01}}, diversity_plans=200)
+    >>> sentences(r)[-1].split("(")[1]   # a diversity measured on fewer plans says so
+    'target 0.8-1.25, on the first 200 plans); no network is involved.'
     """
     out = []
     n = report.get("plans")
