@@ -75,16 +75,16 @@ def test_each_run_goes_to_its_nearest_wall():
     assert b1.tolist() == pytest.approx([32.5, 22.5])
 
 
-def _room_with_a_drifted_wall() -> tuple[np.ndarray, np.ndarray]:
-    """A SLAM-like map whose bottom wall drift turned by 4 degrees, and a corrector's
-    walls (straight, the bottom one on the wall's mean line) for it."""
+def _room_with_a_drifted_wall(deg: float = 4.0) -> tuple[np.ndarray, np.ndarray]:
+    """A SLAM-like map whose bottom wall drift turned by ``deg`` degrees, and a
+    corrector's walls (straight, the bottom one on the wall's mean line) for it."""
     m = np.full((140, 220), UNK, np.uint8)
     m[20:120, 20:200] = FREE
     m[20:22, 20:200] = OCC
     m[20:120, 20:22] = OCC
     m[20:120, 198:200] = OCC
     uu = np.arange(20, 200)
-    rows = np.round(112 + np.tan(np.radians(4.0)) * (uu - 110)).astype(int)
+    rows = np.round(112 + np.tan(np.radians(deg)) * (uu - 110)).astype(int)
     below = np.arange(140)[:, None] > rows[None, :] + 1
     m[:, 20:200][below] = UNK
     for dr in (0, 1):
@@ -138,16 +138,7 @@ def test_a_drifted_wall_follows_its_points_unless_lean_px_is_none():
     """A room whose bottom wall drift turned by 1.2 degrees (about 3.4 px over its
     length): drawn along its points by default (``lean_px`` 1.5); with ``lean_px``
     None parallel to the top wall, in the map's one direction."""
-    m = np.full((140, 220), UNK, np.uint8)
-    m[20:120, 20:200] = FREE
-    m[20:22, 20:200] = OCC
-    m[20:120, 20:22] = OCC
-    m[20:120, 198:200] = OCC
-    uu = np.arange(20, 200)
-    rows = np.round(112 + np.tan(np.radians(1.2)) * (uu - 110)).astype(int)
-    m[:, 20:200][np.arange(140)[:, None] > rows[None, :] + 1] = UNK
-    for dr in (0, 1):
-        m[rows + dr, uu] = OCC
+    m, _ = _room_with_a_drifted_wall(1.2)
 
     def rise(d, pick):                                     # along the wall's length
         s = d.segments[pick(np.minimum(d.segments[:, 1], d.segments[:, 3]))]
