@@ -61,6 +61,7 @@ from pathlib import Path
 
 import numpy as np
 
+from map2map.datasets.rerun import STARTS
 from map2map.experiments.realism.per_plan import (
     CONVERGED_PATIENCE,
     CONVERGED_STEPS,
@@ -86,7 +87,7 @@ def main(argv=None) -> int:
                            f"most (0: no classifier test; default {CONVERGED_STEPS})",
                            patience=CONVERGED_PATIENCE)
     ap.add_argument("--maps-cache", help=".npz keeping synthesize's hypotheses of every plan")
-    ap.add_argument("--start", choices=("own", "pair"), default="own",
+    ap.add_argument("--start", choices=STARTS, default="own",
                     help="where runs 2 and 3 and --model scans's hypotheses start: own (each "
                     "where its seed draws a start, as the dataset's run 1 did; default) or "
                     "pair (all at run 1's start pose; the network's hypotheses draw their own)")

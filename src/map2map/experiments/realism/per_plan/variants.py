@@ -40,6 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
+from map2map.datasets.rerun import STARTS
 from map2map.experiments.realism.per_plan import (
     add_classifier_options,
     check_classifier_options,
@@ -111,7 +112,7 @@ def main(argv=None) -> int:
     ap.add_argument("--cache3", required=True, help=".npz keeping run 3 of every plan")
     ap.add_argument("--model", default="pretrained", help="Model_AB weights")
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--start", choices=("own", "pair"), default="own",
+    ap.add_argument("--start", choices=STARTS, default="own",
                     help="where runs 2 and 3 and the scans variants' robot start: each where "
                     "its seed draws a start (default) or at run 1's start pose (as per_plan)")
     ap.add_argument("--samples", type=int, default=3,
