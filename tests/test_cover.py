@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from map2map.evaluate.drawing import broken_runs
-from map2map.maps.cover import keep_runs_inside, straight_runs
+from map2map.maps.cover import bridge_gaps, keep_runs_inside, straight_runs
 from map2map.maps.vectorize import DrawOptions, draw_plan, wall_points
 
 RES = 0.05
@@ -124,8 +124,13 @@ def test_cover_is_deterministic_and_off_means_off():
     b = draw_plan(corr, m, RES, 4, cover=m == OCC)
     assert np.array_equal(a.segments, b.segments) and np.array_equal(a.map, b.map)
     none = draw_plan(corr, m, RES, 4)
-    off = draw_plan(corr, m, RES, 4, cover=m == OCC, options=DrawOptions(cover_run=0.0))
+    off = draw_plan(corr, m, RES, 4, cover=m == OCC,
+                    options=DrawOptions(cover_run=0.0, bridge_run=0.0))
     assert np.array_equal(none.segments, off.segments)
+    # cover off, bridges on: the drawn wall leaves the turned run at its left end,
+    # between the corner and where it crosses the run, and a bridge follows the run
+    bridged = draw_plan(corr, m, RES, 4, cover=m == OCC, options=DrawOptions(cover_run=0.0))
+    assert bridged.info["bridged"] == 1 and broken_runs(m, bridged.map, RES) == (4, 0)
 
 
 def test_a_cover_of_another_shape_is_refused():
@@ -149,3 +154,69 @@ def test_a_drifted_wall_follows_its_points_unless_lean_px_is_none():
     assert rise(flat, np.argmax) == pytest.approx(rise(flat, np.argmin), abs=1e-9)
     lean = draw_plan(m == OCC, m, RES, 4, cover=m == OCC)
     assert (rise(lean, np.argmax) - rise(lean, np.argmin)) * 180 > 2.0
+
+
+def _z_wall(jog: int = 14, door: bool = False) -> np.ndarray:
+    """A walled room cut by an interior wall with a jog: down at x = 40 + ``jog`` to
+    row 50, across to x = 40, down to the bottom (the drawer's pieces: two vertical
+    walls and a jog too short beyond them to keep as a wall of its own). With ``door``,
+    a 0.6 m door in the lower vertical wall."""
+    m = np.full((100, 120), UNK, np.uint8)
+    m[5:96, 5:115] = FREE
+    m[5, 5:115] = m[95, 5:115] = OCC
+    m[5:96, 5] = m[5:96, 114] = OCC
+    x1 = 40 + jog
+    m[10:51, x1] = OCC
+    m[50, 40:x1 + 1] = OCC
+    m[50:91, 40] = OCC
+    if door:
+        m[65:77, 40] = FREE
+    return m
+
+
+def test_a_jog_the_drawer_drops_is_bridged():
+    """The jog is 0.7 m: bridged from ``bridge_run`` 0.5 m (the default, 1 m, leaves it)."""
+    m = _z_wall()
+    off = draw_plan(m == OCC, m, RES, 6, cover=m == OCC,
+                    options=DrawOptions(bridge_run=0.0))
+    assert np.array_equal(draw_plan(m == OCC, m, RES, 6, cover=m == OCC).map, off.map)
+    on = draw_plan(m == OCC, m, RES, 6, cover=m == OCC, options=DrawOptions(bridge_run=0.5))
+    # without bridges the jog (0.7 m) is dropped: the two rooms open into each other
+    # where the input shows a continuous wall
+    assert broken_runs(m, off.map, RES, min_run=0.5, opened=True) == (7, 1, 1)
+    assert (off.map[50, 42:52] == FREE).all() and off.info["bridged"] == 0
+    assert broken_runs(m, on.map, RES, min_run=0.5, opened=True) == (7, 0, 0)
+    assert on.info["bridged"] == 1 and len(on.segments) == len(off.segments) + 1
+    u0, v0, u1, v1 = on.segments[-1]                      # along the jog, end to end
+    assert v0 == v1 == pytest.approx(50.5) and sorted([u0, u1]) == pytest.approx(
+        [40.5, 54.5], abs=1.0)
+    # as thin as the interior walls it joins
+    assert on.thicknesses[-1] == pytest.approx(on.thicknesses[-2])
+    same = np.ones(m.shape, bool)
+    same[44:57, 36:60] = False                            # nothing else moved
+    assert np.array_equal(on.map[same], off.map[same])
+
+
+def test_a_bridge_closes_no_door():
+    m = _z_wall(door=True)
+    d = draw_plan(m == OCC, m, RES, 6, cover=m == OCC, options=DrawOptions(bridge_run=0.5))
+    assert d.info["doors"] >= 1
+    assert (d.map[66:76, 38:43] == FREE).all()            # the door is open
+    assert (d.map[50, 42:52] == OCC).all()                # the jog is closed
+
+
+def test_bridge_gaps_leaves_short_gaps_uncovered_runs_and_walls_beside():
+    canvas = np.zeros((30, 60), bool)
+    canvas[10, 5:55] = True
+    drawn = np.zeros((30, 60), bool)
+    drawn[9:12, 5:30] = True
+    drawn[9:12, 32:55] = True                             # a 2 px gap: left
+    assert bridge_gaps(canvas, drawn, 20, near=2, open_=6).shape == (0, 4)
+    drawn[9:12, 30:32] = True
+    drawn[9:12, 20:40] = False                            # a 20 px gap: bridged
+    assert bridge_gaps(canvas, drawn, 20, near=2, open_=6).tolist() == [
+        [19.5, 10.5, 40.5, 10.5]]
+    drawn[:] = False
+    drawn[9:12, 5:20] = True                              # drawn on one side only
+    assert bridge_gaps(canvas, drawn, 20, near=2, open_=6).shape == (0, 4)
+    assert bridge_gaps(canvas, drawn, 51, near=2, open_=6).shape == (0, 4)  # too short

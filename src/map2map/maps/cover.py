@@ -25,6 +25,12 @@ This module moves such a wall as little as it must:
    as it must at the run's two ends, into the band within which every column lies
    within ``c`` (:func:`_least_move`; a run too bent for any straight line: its own
    least-squares line).
+4. **Bridges** (:func:`bridge_gaps`): where the walls drawn after all that still leave a
+   run open (no drawn wall within ``open_`` across for more than ``max_gap`` pixels
+   along it, with drawn wall along it on both sides: a jog SLAM drift put in a wall, a
+   wall piece too short to keep, two pieces of a leaning wall drawn on two lines), a
+   segment along the run's own pixels closes the gap. The input's wall is continuous
+   there, so no door is closed.
 
 Examples
 --------
@@ -48,7 +54,7 @@ import numpy as np
 
 from ..core.runs import open_runs
 
-__all__ = ["straight_runs", "keep_runs_inside"]
+__all__ = ["straight_runs", "keep_runs_inside", "bridge_gaps"]
 
 
 def straight_runs(canvas: np.ndarray, n: int, slack: int = 1) -> tuple[np.ndarray, int]:
@@ -197,3 +203,84 @@ def _least_move(a0: float, a1: float, f: np.ndarray, mid: np.ndarray, c: float
         ends.append(float(np.clip(a0 + (a1 - a0) * fe, fit - room, fit + room)))
     k = (ends[1] - ends[0]) / (f1 - f0)
     return ends[0] - k * f0, ends[0] + k * (1.0 - f0)
+
+
+def bridge_gaps(canvas: np.ndarray, drawn: np.ndarray, n: int, *, near: float,
+                open_: float, max_gap: int = 2, slack: int = 1) -> np.ndarray:
+    """Segments that close the gaps drawn walls leave in the straight runs of
+    ``canvas`` (module doc, step 4), in the canvas frame (walls along the rows).
+
+    Parameters
+    ----------
+    canvas : (H, W) bool
+        The input's wall pixels.
+    drawn : (H, W) bool
+        The drawn walls, in the same frame.
+    n : int
+        Shortest run (pixels) kept whole.
+    near : float
+        A column of a run is covered where a drawn wall lies within this many pixels
+        across of one of its pixels.
+    open_ : float
+        A gap is bridged only where, in some column of it, no drawn wall lies within
+        this many pixels across (a wall drawn a few pixels beside a run, e.g. between
+        the two lines of a wall SLAM saved twice, is not doubled).
+    max_gap : int
+        Gaps of at most this many columns are left.
+    slack : int
+        Steps across allowed within a run (:func:`straight_runs`).
+
+    Returns
+    -------
+    (K, 4) float
+        ``u0, v0, u1, v1`` (continuous coordinates: pixel ``(r, c)``'s centre is
+        ``(c + 0.5, r + 0.5)``), from the last covered column before each gap to the
+        first after it, through the middle of the run's pixels there.
+
+    Examples
+    --------
+    A wall drawn in two pieces on two lines, 4 pixels apart, that the input shows
+    whole, with a step:
+
+    >>> canvas = np.zeros((30, 60), bool); canvas[10, 5:30] = True; canvas[11, 30:55] = True
+    >>> drawn = np.zeros((30, 60), bool); drawn[9:12, 5:24] = True; drawn[13:16, 36:55] = True
+    >>> bridge_gaps(canvas, drawn, 20, near=2, open_=3).tolist()
+    [[23.5, 10.5, 36.5, 11.5]]
+    >>> drawn[13:16, 24:36] = True                   # a wall beside the gap: left as it is
+    >>> bridge_gaps(canvas, drawn, 20, near=2, open_=3).tolist()
+    []
+    """
+    c = np.ascontiguousarray(canvas, bool)
+    rr, cc, run, k = _runs(c, n, slack)
+    if k == 0:
+        return np.zeros((0, 4))
+    d8 = np.ascontiguousarray(drawn, bool).view(np.uint8)
+
+    def within(r: float) -> np.ndarray:
+        m = int(np.floor(r))
+        return cv2.dilate(d8, np.ones((2 * m + 1, 1), np.uint8))[rr, cc] > 0 if m > 0 \
+            else d8[rr, cc] > 0
+
+    cov, opn = within(near), ~within(open_)
+    W = c.shape[1]
+    # per (run, column): covered by a drawn wall; open (nothing drawn beside it); middle
+    key = run * W + cc
+    uk, inv = np.unique(key, return_inverse=True)
+    kc = np.zeros(len(uk), bool)
+    ko = np.ones(len(uk), bool)
+    np.logical_or.at(kc, inv, cov)
+    np.logical_and.at(ko, inv, opn)
+    mid = np.bincount(inv, rr + 0.5) / np.bincount(inv)
+    kr, kcol = uk // W, uk % W
+    out = []
+    for i in np.unique(kr[~kc]):                        # the runs with a gap (a few)
+        sel = np.flatnonzero(kr == i)
+        col, hit = kcol[sel], kc[sel]
+        if not hit.any():
+            continue
+        j = np.flatnonzero(hit)
+        for a, b in zip(j[:-1], j[1:], strict=True):    # consecutive covered columns
+            if col[b] - col[a] - 1 <= max_gap or not ko[sel[a + 1:b]].any():
+                continue
+            out.append([col[a] + 0.5, mid[sel[a]], col[b] + 0.5, mid[sel[b]]])
+    return np.asarray(out, float).reshape(-1, 4)
