@@ -325,3 +325,22 @@ def test_per_plan_variants_takes_a_model_per_variant_and_the_classifier(small_da
     assert [r.split()[0] for r in medians[1:5]] == ["run", "run", "run", "scans"]
     assert all(len(r.split()) == len(medians[0].split()) + (r.startswith(" run")) for r in
                medians[1:5])
+
+
+def test_per_plan_variants_maps_do_not_depend_on_workers(small_dataset, tmp_path, capsys):
+    pytest.importorskip("torch")
+    mod = importlib.import_module("map2map.experiments.realism.per_plan.__main__")
+    caches = ["--cache2", str(tmp_path / "c2.npz"), "--cache3", str(tmp_path / "c3.npz")]
+    assert mod.main(["--data", str(small_dataset), "--split", "all", *caches,
+                     "--classifier-steps", "0"]) == 0
+    from map2map.experiments.realism.per_plan.variants import main
+
+    for w in (1, 2):
+        assert main(["--data", str(small_dataset), *caches, "--plans", "4", "--samples", "1",
+                     "--workers", str(w), "--save-maps", str(tmp_path / f"w{w}"),
+                     "--variant", "drawn", '{"model": "scans", "scans": {"duration": 60, '
+                     '"pose_error": "drawn"}}']) == 0
+    capsys.readouterr()
+    with np.load(tmp_path / "w1" / "drawn.npz") as a, np.load(tmp_path / "w2" / "drawn.npz") as b:
+        assert np.array_equal(a["indices"], b["indices"]) and len(a["indices"]) == 4
+        assert np.array_equal(a["maps"], b["maps"])

@@ -80,6 +80,61 @@ def _kwargs(text: str) -> dict:
     return kw
 
 
+_NETS: dict = {}
+
+
+def variant_maps(item) -> tuple[int, dict]:
+    """One plan's map of every variant, cut to its pair's square (a task of
+    :func:`main`, run in a worker process for the scans variants).
+
+    ``item = (ds, i, variants, models, seed, size, samples, start)``: ``variants`` maps a
+    name to ``synthesize``'s keyword arguments (:func:`_kwargs`, without ``"model"``),
+    ``models`` a name to its model (``"scans"`` or Model_AB weights). A scans variant
+    whose only setting is ``"scans"`` is ``synthesize``'s first hypothesis made as
+    :func:`~map2map.learn.ab.scans.drawn_hypothesis` makes it, the variants of one
+    exploration setting sharing the plan's exploration. Returns ``(i, {name: (map,
+    seconds)})``.
+    """
+    from map2map.datasets.pair import crop_box, preprocess_pair, read_pair_meta
+    from map2map.datasets.pairfolder import PLAN_YAML, SLAM_YAML, pair_dir
+    from map2map.learn.ab.model import load_ab_model
+    from map2map.learn.ab.scans import ScanMapParams, drawn_hypothesis, explore
+    from map2map.learn.ab.synthesize import SCANS, synthesize
+    from map2map.maps.formats import load_map
+
+    ds, i, variants, models, seed, size, samples, start = item
+    folder = pair_dir(ds, i)
+    a, b = load_map(folder / PLAN_YAML), load_map(folder / SLAM_YAML)
+    box = crop_box(a, b)
+    explored = {}                  # one exploration per plan serves every scans variant
+    at = tuple(read_pair_meta(folder)["start_pose"]) if start == "pair" else None
+    got = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for name, kw in variants.items():
+            t0 = time.perf_counter()
+            if models[name] == SCANS and set(kw) <= {"scans"}:
+                # the first hypothesis of synthesize(a, SCANS, seed=...): scan_map's
+                sp = kw.get("scans") or ScanMapParams()
+                key = (sp.duration, sp.fov, sp.explore_map)
+                if key not in explored:
+                    explored[key] = explore(a, seed + i, 0, sp, at)
+                m = drawn_hypothesis(a, explored[key], seed + i, 0, sp).map
+            else:
+                if models[name] == SCANS:
+                    net = SCANS
+                    if at is not None:
+                        kw = {**kw, "start": at}
+                else:
+                    if models[name] not in _NETS:
+                        _NETS[models[name]] = load_ab_model(models[name])
+                    net = _NETS[models[name]]
+                m = synthesize(a, net, samples=samples, seed=seed + i, **kw).maps[0]
+            got[name] = (preprocess_pair(a, m, size, 0, box)[1],
+                         time.perf_counter() - t0)
+    return i, got
+
+
 def format_medians(st: dict) -> str:
     """One row per map set (runs, then variants), the median of every statistic over its
     plans (NaN left out): the tells' sizes, beside the ranks' directions.
@@ -127,20 +182,21 @@ def main(argv=None) -> int:
     ap.add_argument("--floor", action="store_true",
                     help="with --classifier-steps: also the same classifier on run 2 against "
                     "run 3 (the floor a generator is measured against; per_plan prints it)")
+    ap.add_argument("--workers", type=int, default=None,
+                    help="worker processes making the scans variants' maps (default one per "
+                    "core; the maps do not depend on it; with a network variant: 1)")
     ap.add_argument("--save-maps", metavar="DIR",
                     help="write each variant's maps (and the plans and runs) to "
                     "DIR/NAME.npz, to score them again without making them again")
     args = ap.parse_args(argv)
     check_classifier_options(ap, args)
 
-    from map2map.datasets.pair import crop_box, preprocess_pair, read_pair_meta
-    from map2map.datasets.pairfolder import PLAN_YAML, SLAM_YAML, pair_dir
+    from tqdm.auto import tqdm
+
+    from map2map.core.parallel import default_workers, process_map
     from map2map.experiments.realism.measure import simulated_references, stats_of_sets
     from map2map.experiments.realism.ranks import format_rank_table, plan_ranks, rank_table
-    from map2map.learn.ab.model import load_ab_model
-    from map2map.learn.ab.scans import ScanMapParams, drawn_hypothesis, explore
-    from map2map.learn.ab.synthesize import SCANS, synthesize
-    from map2map.maps.formats import load_map
+    from map2map.learn.ab.synthesize import SCANS
 
     variants = {name: _kwargs(text) for name, text in args.variant}
     r2 = simulated_references(args.data, split=args.split, cache=args.cache2, progress=False,
@@ -149,40 +205,24 @@ def main(argv=None) -> int:
                               progress=False, start=args.start)
     both = np.intersect1d(r2.indices, r3.indices)[:args.plans]
     r2, r3 = r2.only(both), r3.only(both)
-    nets = {}
     size = r2.a.shape[-1]
-    models = {}
-    for name, kw in variants.items():
-        models[name] = kw.pop("model", args.model)
-        if models[name] != SCANS and models[name] not in nets:
-            nets[models[name]] = load_ab_model(models[name])
+    models = {name: kw.pop("model", args.model) for name, kw in variants.items()}
     gens = {name: [] for name in variants}
     took = dict.fromkeys(variants, 0.0)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        for i in both:
-            folder = pair_dir(args.data, int(i))
-            a, b = load_map(folder / PLAN_YAML), load_map(folder / SLAM_YAML)
-            explored = {}              # one exploration per plan serves every scans variant
-            at = (tuple(read_pair_meta(folder)["start_pose"]) if args.start == "pair"
-                  else None)
-            for name, kw in variants.items():
-                t0 = time.perf_counter()
-                if models[name] == SCANS and set(kw) <= {"scans"}:
-                    # the first hypothesis of synthesize(a, SCANS, seed=...): scan_map's
-                    sp = kw.get("scans") or ScanMapParams()
-                    key = (sp.duration, sp.fov, sp.explore_map)
-                    if key not in explored:
-                        explored[key] = explore(a, args.seed + int(i), 0, sp, at)
-                    m = drawn_hypothesis(a, explored[key], args.seed + int(i), 0, sp).map
-                else:
-                    net = nets.get(models[name], SCANS)
-                    if net == SCANS and at is not None:
-                        kw = {**kw, "start": at}
-                    m = synthesize(a, net, samples=args.samples, seed=args.seed + int(i),
-                                   **kw).maps[0]
-                gens[name].append(preprocess_pair(a, m, size, 0, crop_box(a, b))[1])
-                took[name] += time.perf_counter() - t0
+    nets = {m for m in models.values() if m != SCANS}
+    # a network is loaded once per process: with one, the maps are made in this one
+    workers = 1 if nets else (default_workers() if args.workers is None else args.workers)
+    items = [(args.data, int(i), variants, models, args.seed, size, args.samples,
+              args.start) for i in both]
+    step = max(1, 8 * workers)
+    with tqdm(total=len(items), desc="variants", unit="plan", file=sys.stderr) as bar:
+        for c in range(0, len(items), step):
+            for _, got in process_map(variant_maps, items[c:c + step], workers=workers,
+                                      min_items=2):
+                for name, (m, sec) in got.items():
+                    gens[name].append(m)
+                    took[name] += sec
+            bar.update(len(items[c:c + step]))
     for name in variants:
         gens[name] = np.stack(gens[name])
         print(f"{name}: {len(both)} plans in {took[name]:.0f} s")
