@@ -127,10 +127,13 @@ def test_cover_is_deterministic_and_off_means_off():
     off = draw_plan(corr, m, RES, 4, cover=m == OCC,
                     options=DrawOptions(cover_run=0.0, bridge_run=0.0))
     assert np.array_equal(none.segments, off.segments)
-    # cover off, bridges on: the drawn wall leaves the turned run at its left end,
-    # between the corner and where it crosses the run, and a bridge follows the run
-    bridged = draw_plan(corr, m, RES, 4, cover=m == OCC, options=DrawOptions(cover_run=0.0))
-    assert bridged.info["bridged"] == 1 and broken_runs(m, bridged.map, RES) == (4, 0)
+    # cover off, bridges on: the straight wall leaves the turned run at its left end
+    # but runs beside it along most of the gap: a bridge would double the wall
+    beside = draw_plan(corr, m, RES, 4, cover=m == OCC, options=DrawOptions(cover_run=0.0))
+    assert beside.info["bridged"] == 0 and np.array_equal(beside.map, off.map)
+    half = draw_plan(corr, m, RES, 4, cover=m == OCC,       # open along 20 % of it: bridged
+                     options=DrawOptions(cover_run=0.0, bridge_share=0.2))
+    assert half.info["bridged"] == 1 and broken_runs(m, half.map, RES) == (4, 0)
 
 
 def test_a_cover_of_another_shape_is_refused():

@@ -206,7 +206,8 @@ def _least_move(a0: float, a1: float, f: np.ndarray, mid: np.ndarray, c: float
 
 
 def bridge_gaps(canvas: np.ndarray, drawn: np.ndarray, n: int, *, near: float,
-                open_: float, max_gap: int = 2, slack: int = 1) -> np.ndarray:
+                open_: float, open_share: float = 0.5, max_gap: int = 2,
+                slack: int = 1) -> np.ndarray:
     """Segments that close the gaps drawn walls leave in the straight runs of
     ``canvas`` (module doc, step 4), in the canvas frame (walls along the rows).
 
@@ -221,10 +222,11 @@ def bridge_gaps(canvas: np.ndarray, drawn: np.ndarray, n: int, *, near: float,
     near : float
         A column of a run is covered where a drawn wall lies within this many pixels
         across of one of its pixels.
-    open_ : float
-        A gap is bridged only where, in some column of it, no drawn wall lies within
-        this many pixels across (a wall drawn a few pixels beside a run, e.g. between
-        the two lines of a wall SLAM saved twice, is not doubled).
+    open_, open_share : float
+        A gap is bridged only where, in at least ``open_share`` of its columns, no drawn
+        wall lies within ``open_`` pixels across: a wall drawn beside the run (between
+        the two lines of a wall SLAM saved twice, or straight beside a run drift turned,
+        leaving it at one end) is not doubled.
     max_gap : int
         Gaps of at most this many columns are left.
     slack : int
@@ -280,7 +282,9 @@ def bridge_gaps(canvas: np.ndarray, drawn: np.ndarray, n: int, *, near: float,
             continue
         j = np.flatnonzero(hit)
         for a, b in zip(j[:-1], j[1:], strict=True):    # consecutive covered columns
-            if col[b] - col[a] - 1 <= max_gap or not ko[sel[a + 1:b]].any():
+            gap = ko[sel[a + 1:b]]                       # the gap's columns the run holds
+            if col[b] - col[a] - 1 <= max_gap or col[b] - col[a] - 1 > len(gap) \
+                    or gap.mean() < open_share:
                 continue
             out.append([col[a] + 0.5, mid[sel[a]], col[b] + 0.5, mid[sel[b]]])
     return np.asarray(out, float).reshape(-1, 4)

@@ -87,8 +87,9 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
 9. **Bridges** (:func:`_bridges`, :func:`map2map.maps.cover.bridge_gaps`): where the
    input shows a wall as a straight run of wall pixels at least ``bridge_run`` long (in
    a family's frame) and the drawn walls cover it on both sides of a gap with no drawn
-   wall within the thickness across (a jog too short beyond the walls it joins to keep
-   as a wall of its own, two pieces of a leaning wall drawn on two lines), a segment
+   wall within the thickness across along at least ``bridge_share`` of it (a jog too
+   short beyond the walls it joins to keep as a wall of its own, two pieces of a
+   leaning wall drawn on two lines), a segment
    along the run's own pixels closes the gap, as thin as the thinner wall it joins, and
    the map is drawn again. The input's wall is continuous there, so no door closes; a
    wall drawn beside the run (between the two lines of a wall SLAM saved twice) is not
@@ -267,6 +268,7 @@ class DrawOptions:
     one_interior: bool = True
     lean_px: float | None = 1.5
     bridge_run: float = 1.0
+    bridge_share: float = 0.5
 
 
 @dataclass
@@ -768,9 +770,9 @@ def _bridges(segs: np.ndarray, tk: np.ndarray, drawn: np.ndarray, cover: np.ndar
     (``drawn``, image frame) leave in the input's straight wall runs (``cover``), in the
     frame of each direction family, along both its directions
     (:func:`map2map.maps.cover.bridge_gaps`, step 4): a run column is covered where a
-    drawn wall lies within ``tol`` across, and a gap is closed only where somewhere in
-    it no drawn wall lies within the drawing's thickness ``t``. A bridge is drawn as
-    thin as the thinner of the walls nearest its ends."""
+    drawn wall lies within ``tol`` across, and a gap is closed only where along at
+    least ``bridge_share`` of it no drawn wall lies within the drawing's thickness
+    ``t``. A bridge is drawn as thin as the thinner of the walls nearest its ends."""
     tol = _scales(opt, res)[0]
     n = max(2, int(round(opt.bridge_run / res)))
     drawn = drawn.astype(np.uint8)
@@ -780,7 +782,8 @@ def _bridges(segs: np.ndarray, tk: np.ndarray, drawn: np.ndarray, cover: np.ndar
         C = fr.warp(cover.view(np.uint8), 0) > 0
         D = fr.warp(drawn, 0) > 0
         for tr in (False, True):
-            b = bridge_gaps(C.T if tr else C, D.T if tr else D, n, near=tol, open_=t)
+            b = bridge_gaps(C.T if tr else C, D.T if tr else D, n, near=tol, open_=t,
+                            open_share=opt.bridge_share)
             if not len(b):
                 continue
             b = b[:, [1, 0, 3, 2]] if tr else b
