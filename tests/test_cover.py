@@ -131,8 +131,9 @@ def test_cover_is_deterministic_and_off_means_off():
     # but runs beside it along most of the gap: a bridge would double the wall
     beside = draw_plan(corr, m, RES, 4, cover=m == OCC, options=DrawOptions(cover_run=0.0))
     assert beside.info["bridged"] == 0 and np.array_equal(beside.map, off.map)
-    half = draw_plan(corr, m, RES, 4, cover=m == OCC,       # open along 20 % of it: bridged
-                     options=DrawOptions(cover_run=0.0, bridge_share=0.2))
+    # nothing within one thickness (4 px) along a fifth of it: bridged when that is enough
+    half = draw_plan(corr, m, RES, 4, cover=m == OCC,
+                     options=DrawOptions(cover_run=0.0, bridge_share=0.2, bridge_beside=1.0))
     assert half.info["bridged"] == 1 and broken_runs(m, half.map, RES) == (4, 0)
 
 

@@ -232,17 +232,20 @@ class DrawOptions:
         drift turned by a few degrees where a straight line runs over the input's free
         space (fresh build: broken input runs 123 -> 141, opened 64 -> 74; a courtyard
         wall of 000040 gone), so 1.5 stays the default.
-    bridge_run : float
+    bridge_run, bridge_share, bridge_beside : float
         With :func:`draw_plan`'s ``cover``: a straight run of the input's wall pixels at
-        least this long that the drawn walls leave open between two of them is closed
-        by a segment along it (module doc, step 9; 0: off). Measured 2026-11-28 on the
-        320 maps of a dev build (seed 20261205; ``bench_drawing --model none`` and
-        Table 5.3 ``--models none`` on its 207 maps at coverage >= 0.8): input runs of
-        1 m or more that the output breaks 46 -> 17, opens 25 -> 4 (of 0.5 m or more:
-        opens 45 -> 12); Table 5.3 error lower on 3 maps, higher on 5, wall recall
-        higher on 8. ``bridge_run`` 0.5 opens still fewer short runs (10) but raises the
-        error on 19 maps (lower on 5, p = 0.007): a bridge along a short run is more
-        often a wall the plan does not have.
+        least ``bridge_run`` long that the drawn walls leave open between two of them
+        is closed by a segment along it (module doc, step 9; 0: off), where along at
+        least ``bridge_share`` of the gap no drawn wall lies within ``bridge_beside``
+        thicknesses across (a wall drawn beside the run, straight where drift turned
+        it or between the two lines of a wall saved twice, is not doubled). Measured
+        2026-11-28 (``bench_drawing --model none``; Table 5.3 ``--models none``) on a
+        dev build (seed 20261205, 320 maps): input runs of 1 m or more broken 46 -> 22,
+        opened 25 -> 5; on a second (seed 20261216, 640 maps) 123 -> 74, opened 64 ->
+        16; Table 5.3's median unchanged. ``bridge_run`` 0.5 raised the error on 19 of
+        207 dev maps (lower on 5): a bridge along a short run is more often a wall the
+        plan does not have. With ``bridge_beside`` 1 by eye about a third of the
+        bridges doubled a wall drawn a little more than a thickness beside the run.
     """
 
     tol: float = 0.12
@@ -269,6 +272,7 @@ class DrawOptions:
     lean_px: float | None = 1.5
     bridge_run: float = 1.0
     bridge_share: float = 0.5
+    bridge_beside: float = 2.0
 
 
 @dataclass
@@ -782,8 +786,8 @@ def _bridges(segs: np.ndarray, tk: np.ndarray, drawn: np.ndarray, cover: np.ndar
         C = fr.warp(cover.view(np.uint8), 0) > 0
         D = fr.warp(drawn, 0) > 0
         for tr in (False, True):
-            b = bridge_gaps(C.T if tr else C, D.T if tr else D, n, near=tol, open_=t,
-                            open_share=opt.bridge_share)
+            b = bridge_gaps(C.T if tr else C, D.T if tr else D, n, near=tol,
+                            open_=opt.bridge_beside * t, open_share=opt.bridge_share)
             if not len(b):
                 continue
             b = b[:, [1, 0, 3, 2]] if tr else b
