@@ -240,12 +240,15 @@ class DrawOptions:
         thicknesses across (a wall drawn beside the run, straight where drift turned
         it or between the two lines of a wall saved twice, is not doubled). Measured
         2026-11-28 (``bench_drawing --model none``; Table 5.3 ``--models none``) on a
-        dev build (seed 20261205, 320 maps): input runs of 1 m or more broken 46 -> 22,
-        opened 25 -> 5; on a second (seed 20261216, 640 maps) 123 -> 74, opened 64 ->
-        16; Table 5.3's median unchanged. ``bridge_run`` 0.5 raised the error on 19 of
-        207 dev maps (lower on 5): a bridge along a short run is more often a wall the
-        plan does not have. With ``bridge_beside`` 1 by eye about a third of the
-        bridges doubled a wall drawn a little more than a thickness beside the run.
+        dev build (seed 20261205, 320 maps): input runs of 1 m or more broken 46 -> 27,
+        opened 25 -> 6; on a second (seed 20261216, 640 maps) 123 -> 74, opened 64 ->
+        16; on a fresh build measured once (seed 20261219, 640 maps) 104 -> 63, opened
+        61 -> 18, Table 5.3's median unchanged (0.881 / 0.897 px; per map lower on 8,
+        higher on 16 of 438, wall recall higher on 23). ``bridge_run`` 0.5 raised the
+        error on 19 of 207 dev maps (lower on 5): a bridge along a short run is more
+        often a wall the plan does not have. With ``bridge_beside`` 1 by eye about a
+        third of the bridges doubled a wall drawn a little more than a thickness beside
+        the run (docs/autocorrect.md, "Bridges").
     """
 
     tol: float = 0.12
