@@ -26,8 +26,9 @@ This module moves such a wall as little as it must:
    within ``c`` (:func:`_least_move`; a run too bent for any straight line: its own
    least-squares line).
 4. **Bridges** (:func:`bridge_gaps`): where the walls drawn after all that still leave a
-   run open (no drawn wall within ``open_`` across for more than ``max_gap`` pixels
-   along it, with drawn wall along it on both sides: a jog SLAM drift put in a wall, a
+   run open (a gap of more than ``max_gap`` pixels with no drawn wall near the run,
+   drawn wall along it on both sides, and along at least ``open_share`` of the gap none
+   within ``open_`` across: a jog SLAM drift put in a wall, a
    wall piece too short to keep, two pieces of a leaning wall drawn on two lines), a
    segment along the run's own pixels closes the gap. The input's wall is continuous
    there, so no door is closed.

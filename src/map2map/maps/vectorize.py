@@ -87,7 +87,8 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
 9. **Bridges** (:func:`_bridges`, :func:`map2map.maps.cover.bridge_gaps`): where the
    input shows a wall as a straight run of wall pixels at least ``bridge_run`` long (in
    a family's frame) and the drawn walls cover it on both sides of a gap with no drawn
-   wall within the thickness across along at least ``bridge_share`` of it (a jog too
+   wall within ``bridge_beside`` thicknesses (two) across along at least
+   ``bridge_share`` (half) of it (a jog too
    short beyond the walls it joins to keep as a wall of its own, two pieces of a
    leaning wall drawn on two lines), a segment
    along the run's own pixels closes the gap, as thin as the thinner wall it joins, and
@@ -778,8 +779,9 @@ def _bridges(segs: np.ndarray, tk: np.ndarray, drawn: np.ndarray, cover: np.ndar
     frame of each direction family, along both its directions
     (:func:`map2map.maps.cover.bridge_gaps`, step 4): a run column is covered where a
     drawn wall lies within ``tol`` across, and a gap is closed only where along at
-    least ``bridge_share`` of it no drawn wall lies within the drawing's thickness
-    ``t``. A bridge is drawn as thin as the thinner of the walls nearest its ends."""
+    least ``bridge_share`` of it no drawn wall lies within ``bridge_beside`` times the
+    drawing's thickness ``t``. A bridge is drawn as thin as the thinner of the walls
+    nearest its ends."""
     tol = _scales(opt, res)[0]
     n = max(2, int(round(opt.bridge_run / res)))
     drawn = drawn.astype(np.uint8)
