@@ -275,17 +275,14 @@ def bridge_gaps(canvas: np.ndarray, drawn: np.ndarray, n: int, *, near: float,
     np.logical_and.at(ko, inv, opn)
     mid = np.bincount(inv, rr + 0.5) / np.bincount(inv)
     kr, kcol = uk // W, uk % W
-    out = []
-    for i in np.unique(kr[~kc]):                        # the runs with a gap (a few)
-        sel = np.flatnonzero(kr == i)
-        col, hit = kcol[sel], kc[sel]
-        if not hit.any():
-            continue
-        j = np.flatnonzero(hit)
-        for a, b in zip(j[:-1], j[1:], strict=True):    # consecutive covered columns
-            gap = ko[sel[a + 1:b]]                       # the gap's columns the run holds
-            if col[b] - col[a] - 1 <= max_gap or col[b] - col[a] - 1 > len(gap) \
-                    or gap.mean() < open_share:
-                continue
-            out.append([col[a] + 0.5, mid[sel[a]], col[b] + 0.5, mid[sel[b]]])
-    return np.asarray(out, float).reshape(-1, 4)
+    # consecutive covered (run, column) entries p < q of one run (the keys are sorted by
+    # run, then column): a gap of more than max_gap columns, every one of them held by
+    # the run (q - p - 1 entries between), open along at least open_share of them
+    p = np.flatnonzero(kc)
+    p, q = p[:-1], p[1:]
+    gap = kcol[q] - kcol[p] - 1
+    held = np.r_[0, np.cumsum(ko)]
+    share = (held[q] - held[p + 1]) / np.maximum(gap, 1)
+    ok = (kr[p] == kr[q]) & (gap > max_gap) & (q - p - 1 == gap) & (share >= open_share)
+    p, q = p[ok], q[ok]
+    return np.stack([kcol[p] + 0.5, mid[p], kcol[q] + 0.5, mid[q]], 1).astype(float)
