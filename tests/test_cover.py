@@ -131,10 +131,15 @@ def test_cover_is_deterministic_and_off_means_off():
     # but runs beside it along most of the gap: a bridge would double the wall
     beside = draw_plan(corr, m, RES, 4, cover=m == OCC, options=DrawOptions(cover_run=0.0))
     assert beside.info["bridged"] == 0 and np.array_equal(beside.map, off.map)
-    # nothing within one thickness (4 px) along a fifth of it: bridged when that is enough
+    # nothing within one thickness (4 px) along a fifth of it: bridged when that is
+    # enough and the wall beside counts as another wall (bridge_same 0); by default it
+    # is the same wall (no free space between it and the run)
+    kw = {"cover_run": 0.0, "bridge_share": 0.2, "bridge_beside": 1.0}
     half = draw_plan(corr, m, RES, 4, cover=m == OCC,
-                     options=DrawOptions(cover_run=0.0, bridge_share=0.2, bridge_beside=1.0))
+                     options=DrawOptions(**kw, bridge_same=0.0))
     assert half.info["bridged"] == 1 and broken_runs(m, half.map, RES) == (4, 0)
+    same = draw_plan(corr, m, RES, 4, cover=m == OCC, options=DrawOptions(**kw))
+    assert same.info["bridged"] == 0 and np.array_equal(same.map, off.map)
 
 
 def test_a_cover_of_another_shape_is_refused():
@@ -224,3 +229,28 @@ def test_bridge_gaps_leaves_short_gaps_uncovered_runs_and_walls_beside():
     drawn[9:12, 5:20] = True                              # drawn on one side only
     assert bridge_gaps(canvas, drawn, 20, near=2, open_=6).shape == (0, 4)
     assert bridge_gaps(canvas, drawn, 51, near=2, open_=6).shape == (0, 4)  # too short
+
+
+def test_bridge_gaps_leaves_the_other_line_of_a_wall_saved_twice():
+    """A run whose gap has a drawn wall 10 px beside it (beyond ``open_``): bridged
+    when free space lies between the two (two walls), left when only the wall's
+    unobserved inside does (one wall saved twice), unless ``same`` is 0."""
+    canvas = np.zeros((40, 60), bool)
+    canvas[10, 5:55] = True                               # the run
+    drawn = np.zeros((40, 60), bool)
+    drawn[9:12, 5:20] = drawn[9:12, 40:55] = True         # on it, with a 20 px gap
+    drawn[20:23, 15:45] = True                            # a wall 10 px beside the gap
+    free = np.zeros((40, 60), bool)
+    free[:9] = True                                       # a room above the run
+    kw = {"near": 2, "open_": 6, "same": 14}
+    assert bridge_gaps(canvas, drawn, 20, free=free, **kw).shape == (0, 4)
+    assert bridge_gaps(canvas, drawn, 20, free=free, **{**kw, "same": 0}).tolist() == [
+        [19.5, 10.5, 40.5, 10.5]]
+    free[12:20] = True                                    # a corridor between: two walls
+    assert bridge_gaps(canvas, drawn, 20, free=free, **kw).tolist() == [
+        [19.5, 10.5, 40.5, 10.5]]
+    free[12:20] = False
+    free[13, ::4] = True                                  # a few specks: still one wall
+    assert bridge_gaps(canvas, drawn, 20, free=free, **kw).shape == (0, 4)
+    assert bridge_gaps(canvas, drawn, 20, free=free, **{**kw, "same": 8}).tolist() == [
+        [19.5, 10.5, 40.5, 10.5]]                         # 10 px apart: beyond same

@@ -28,7 +28,8 @@ This module moves such a wall as little as it must:
 4. **Bridges** (:func:`bridge_gaps`): where the walls drawn after all that still leave a
    run open (a gap of more than ``max_gap`` pixels with no drawn wall near the run,
    drawn wall along it on both sides, and along at least ``open_share`` of the gap none
-   within ``open_`` across: a jog SLAM drift put in a wall, a
+   within ``open_`` across, nor within ``same`` with none of the input's free space
+   between (the same wall): a jog SLAM drift put in a wall, a
    wall piece too short to keep, two pieces of a leaning wall drawn on two lines), a
    segment along the run's own pixels closes the gap. The input's wall is continuous
    there, so no door is closed.
@@ -208,7 +209,8 @@ def _least_move(a0: float, a1: float, f: np.ndarray, mid: np.ndarray, c: float
 
 def bridge_gaps(canvas: np.ndarray, drawn: np.ndarray, n: int, *, near: float,
                 open_: float, open_share: float = 0.5, max_gap: int = 2,
-                slack: int = 1) -> np.ndarray:
+                slack: int = 1, free: np.ndarray | None = None, same: float = 0.0,
+                same_free: float = 0.25) -> np.ndarray:
     """Segments that close the gaps drawn walls leave in the straight runs of
     ``canvas`` (module doc, step 4), in the canvas frame (walls along the rows).
 
@@ -232,6 +234,14 @@ def bridge_gaps(canvas: np.ndarray, drawn: np.ndarray, n: int, *, near: float,
         Gaps of at most this many columns are left.
     slack : int
         Steps across allowed within a run (:func:`straight_runs`).
+    free : (H, W) bool, optional
+        The input's free pixels. With ``same``: a column of the gap is not open either
+        where a drawn wall lies within ``same`` pixels across with at most a
+        ``same_free`` share of free pixels between it and the run: that wall and the
+        run are one wall (the other line of a wall SLAM saved twice, with the wall's
+        unobserved inside between), however far drift put them apart.
+    same, same_free : float
+        See ``free`` (``same`` 0: off).
 
     Returns
     -------
@@ -265,6 +275,8 @@ def bridge_gaps(canvas: np.ndarray, drawn: np.ndarray, n: int, *, near: float,
             else d8[rr, cc] > 0
 
     cov, opn = within(near), ~within(open_)
+    if free is not None and same > 0:
+        opn &= ~_one_wall(d8 > 0, np.asarray(free, bool), rr, cc, same, same_free)
     W = c.shape[1]
     # per (run, column): covered by a drawn wall; open (nothing drawn beside it); middle
     key = run * W + cc
@@ -286,3 +298,32 @@ def bridge_gaps(canvas: np.ndarray, drawn: np.ndarray, n: int, *, near: float,
     ok = (kr[p] == kr[q]) & (gap > max_gap) & (q - p - 1 == gap) & (share >= open_share)
     p, q = p[ok], q[ok]
     return np.stack([kcol[p] + 0.5, mid[p], kcol[q] + 0.5, mid[q]], 1).astype(float)
+
+
+def _one_wall(drawn: np.ndarray, free: np.ndarray, rr: np.ndarray, cc: np.ndarray,
+              same: float, share: float) -> np.ndarray:
+    """Whether pixel ``(rr[i], cc[i])`` has a drawn pixel within ``same`` rows of it,
+    above or below in its column, with at most a ``share`` of free pixels between
+    (:func:`bridge_gaps`' ``free``). Column-wise running maxima and sums, no loops.
+
+    Examples
+    --------
+    >>> drawn = np.zeros((20, 3), bool); drawn[4] = True
+    >>> free = np.zeros((20, 3), bool); free[10:, 2] = True; free[5:10, 1] = True
+    >>> _one_wall(drawn, free, np.array([10, 10, 10, 16]), np.array([0, 1, 2, 0]), 8,
+    ...           0.25).tolist()
+    [True, False, True, False]
+    """
+    H = drawn.shape[0]
+    rows = np.arange(H)[:, None]
+    F = np.vstack([np.zeros((1, drawn.shape[1]), np.int64), np.cumsum(free, 0)])
+    # nearest drawn row at or above each pixel (-1: none), and at or below (H: none)
+    up = np.maximum.accumulate(np.where(drawn, rows, -1), axis=0)[rr, cc]
+    dn = np.minimum.accumulate(np.where(drawn, rows, H)[::-1], axis=0)[::-1][rr, cc]
+    out = np.zeros(len(rr), bool)
+    for near, lo, hi in ((up, up + 1, rr), (dn, rr + 1, dn)):
+        ok = (near >= 0) & (near < H) & (np.abs(near - rr) <= same)
+        lo_, hi_ = np.clip(lo, 0, H), np.clip(hi, 0, H)
+        n_free = F[hi_, cc] - F[lo_, cc]
+        out |= ok & (n_free <= share * np.maximum(np.abs(near - rr) - 1, 1))
+    return out

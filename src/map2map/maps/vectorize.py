@@ -88,7 +88,8 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
    input shows a wall as a straight run of wall pixels at least ``bridge_run`` long (in
    a family's frame) and the drawn walls cover it on both sides of a gap with no drawn
    wall within ``bridge_beside`` thicknesses (two) across along at least
-   ``bridge_share`` (half) of it (a jog too
+   ``bridge_share`` (half) of it, nor one within ``bridge_same`` (1 m) with none of the
+   input's free space between it and the run (the same wall) (a jog too
    short beyond the walls it joins to keep as a wall of its own, two pieces of a
    leaning wall drawn on two lines), a segment
    along the run's own pixels closes the gap, as thin as the thinner wall it joins, and
@@ -250,6 +251,18 @@ class DrawOptions:
         often a wall the plan does not have. With ``bridge_beside`` 1 by eye about a
         third of the bridges doubled a wall drawn a little more than a thickness beside
         the run (docs/autocorrect.md, "Bridges").
+    bridge_same : float
+        Metres. Nor is a gap bridged where a drawn wall lies within this distance across
+        with (almost: at most a quarter of the pixels) none of the input's free space
+        between it and the run: the two are one wall, however far apart the drawer put
+        them (0: off). Measured 2026-11-29: it changes no drawing of 320 dev maps (seed
+        20261205; ``bench_drawing`` and Table 5.3 unchanged) and, on the Halmstad maps
+        (``table53_real --model none``), removes the second line of E5_10's outer wall:
+        the input shows it as two lines 1.2-1.5 m apart with unknown between; the
+        drawer draws one wall between them and a bridge added the inner, leaning line
+        again. The layout's wall is that inner line, so the wall Chamfer against the
+        layout rises (6.73 -> 6.80 px), as does the metric's Error (4.30 -> 4.62 px;
+        median of the 18 maps 4.04 -> 4.20).
     """
 
     tol: float = 0.12
@@ -277,6 +290,7 @@ class DrawOptions:
     bridge_run: float = 1.0
     bridge_share: float = 0.5
     bridge_beside: float = 2.0
+    bridge_same: float = 1.0
 
 
 @dataclass
@@ -762,7 +776,8 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
     info.update(cut=int(len(segs) - n0), angles=[float(a) for a in angles],
                 two_sided=int((tk < t).sum()), bridged=0)
     if cover is not None and opt.bridge_run > 0 and len(segs):
-        extra, tx = _bridges(segs, tk, out == OCCUPIED, cover, angles, res, opt, t)
+        extra, tx = _bridges(segs, tk, out == OCCUPIED, cover, occ == FREE, angles, res,
+                             opt, t)
         if len(extra):
             segs, tk = np.concatenate([segs, extra]), np.concatenate([tk, tx])
             out = render_plan(segs, occ, tk, res, min_room=opt.min_room,
@@ -772,16 +787,17 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
 
 
 def _bridges(segs: np.ndarray, tk: np.ndarray, drawn: np.ndarray, cover: np.ndarray,
-             angles: list[float], res: float, opt: DrawOptions, t: float
-             ) -> tuple[np.ndarray, np.ndarray]:
+             free: np.ndarray, angles: list[float], res: float, opt: DrawOptions,
+             t: float) -> tuple[np.ndarray, np.ndarray]:
     """Segments (image frame) and thicknesses that close the gaps the drawn walls
     (``drawn``, image frame) leave in the input's straight wall runs (``cover``), in the
     frame of each direction family, along both its directions
     (:func:`map2map.maps.cover.bridge_gaps`, step 4): a run column is covered where a
     drawn wall lies within ``tol`` across, and a gap is closed only where along at
     least ``bridge_share`` of it no drawn wall lies within ``bridge_beside`` times the
-    drawing's thickness ``t``. A bridge is drawn as thin as the thinner of the walls
-    nearest its ends."""
+    drawing's thickness ``t``, nor within ``bridge_same`` with (almost) none of the
+    input's ``free`` pixels between. A bridge is drawn as thin as the thinner of the
+    walls nearest its ends."""
     tol = _scales(opt, res)[0]
     n = max(2, int(round(opt.bridge_run / res)))
     drawn = drawn.astype(np.uint8)
@@ -790,9 +806,11 @@ def _bridges(segs: np.ndarray, tk: np.ndarray, drawn: np.ndarray, cover: np.ndar
         fr = _Frame(a, drawn.shape)
         C = fr.warp(cover.view(np.uint8), 0) > 0
         D = fr.warp(drawn, 0) > 0
+        Fr = fr.warp(free.view(np.uint8), 0) > 0
         for tr in (False, True):
             b = bridge_gaps(C.T if tr else C, D.T if tr else D, n, near=tol,
-                            open_=opt.bridge_beside * t, open_share=opt.bridge_share)
+                            open_=opt.bridge_beside * t, open_share=opt.bridge_share,
+                            free=Fr.T if tr else Fr, same=opt.bridge_same / res)
             if not len(b):
                 continue
             b = b[:, [1, 0, 3, 2]] if tr else b
