@@ -255,14 +255,16 @@ class DrawOptions:
         Metres. Nor is a gap bridged where a drawn wall lies within this distance across
         with (almost: at most a quarter of the pixels) none of the input's free space
         between it and the run: the two are one wall, however far apart the drawer put
-        them (0: off). Measured 2026-11-29: it changes no drawing of 320 dev maps (seed
-        20261205; ``bench_drawing`` and Table 5.3 unchanged) and, on the Halmstad maps
-        (``table53_real --model none``), removes the second line of E5_10's outer wall:
-        the input shows it as two lines 1.2-1.5 m apart with unknown between; the
-        drawer draws one wall between them and a bridge added the inner, leaning line
-        again. The layout's wall is that inner line, so the wall Chamfer against the
-        layout rises (6.73 -> 6.80 px), as does the metric's Error (4.30 -> 4.62 px;
-        median of the 18 maps 4.04 -> 4.20).
+        them (0: off). Measured 2026-11-29: it changes none of 320 dev maps' drawings
+        (seed 20261205) and 5 of 640 on a fresh build (seed 20261220: wedges, an
+        interior wall drift split into two lines with unknown between, whose second
+        line a bridge drew again). On the Halmstad maps (``table53_real --model none``)
+        it removes the second line of E5_10's outer wall: the input shows it as two
+        lines 1.1-1.3 m apart (read at 0.05 m/px) with unknown between; the drawer draws
+        one wall between them and a bridge added the inner, leaning line again. The
+        layout's wall is that inner line, so the wall Chamfer against the layout rises
+        (6.73 -> 6.80 px), as does the metric's Error (4.30 -> 4.62 px; median of the
+        18 maps 4.04 -> 4.20).
     """
 
     tol: float = 0.12
