@@ -171,6 +171,8 @@ def _summary(label: str, rows: list[dict], ms: list[float], cpu: list[float] = (
           f" opened: no output wall within 9 px; shortened at an end: "
           f"{sum(r['shortened'] for r in rows)})")
     print(f"  all four targets {share('targets_met'):.0f} %")
+    print(f"  none opened      {share('ok_opened'):.0f} %; all four with 'none opened' for "
+          f"'none broken': {share('targets_met_opened'):.0f} %")
     if ms:
         print(f"  drawer time      median {statistics.median(ms):.1f} ms/map wall, "
               f"{statistics.median(cpu):.1f} ms CPU (mean {statistics.mean(ms):.1f} / "

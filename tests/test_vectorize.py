@@ -484,8 +484,25 @@ def test_report_on_the_drawer_output():
     assert r["thickness_px"] == r["thickness_plan_px"] == 4
     assert r["segments"] == 4 and r["plan_walls"] == 4
     assert r["broken"] == 0 and r["targets_met"]
+    assert r["ok_opened"] and r["targets_met_opened"]
     r_in = drawing_report(slam, slam, plan, RES)
     assert not r_in["ok_thickness"]
+
+
+def test_report_tells_a_wall_drawn_beside_its_run_from_an_opened_one():
+    """A wall drawn 5 px beside the input's run breaks the run (no output wall within
+    3 px) but opens nothing; a gap in the drawn wall opens it."""
+    plan = room(t=4)
+    slam = room(t=2)
+    out = slam.copy()
+    out[20:22, 60:120] = FREE                    # the top wall's middle, moved 5 px down
+    out[25:27, 60:120] = OCC
+    r = drawing_report(out, slam, plan, RES)
+    assert r["broken"] == 1 and not r["ok_broken"] and not r["targets_met"]
+    assert r["opened"] == 0 and r["ok_opened"]
+    out[25:27, 80:100] = FREE                    # and a hole in it: opened
+    r = drawing_report(out, slam, plan, RES)
+    assert r["opened"] == 1 and not r["ok_opened"] and not r["targets_met_opened"]
 
 
 def _random_apartment(seed: int) -> np.ndarray:

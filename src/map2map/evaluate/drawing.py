@@ -194,7 +194,10 @@ def drawing_report(out: np.ndarray, inp: np.ndarray, plan: np.ndarray, resolutio
         ``shortened`` (runs whose output stops short of an end: reported, no target),
         ``opened`` (broken runs with no output wall within 9 pixels at a gap: reported) and
         ``ok_components``, ``ok_thickness``, ``ok_segments``, ``ok_broken``,
-        ``targets_met``.
+        ``targets_met``; ``ok_opened`` (no run opened) and ``targets_met_opened`` (the
+        four with ``ok_opened`` for ``ok_broken``): the break target read as "no wall
+        the input shows whole is opened", which a wall saved twice and drawn once
+        between its two lines meets though its runs count as broken.
     """
     c_out, c_in = wall_components(out), wall_components(inp)
     t_out, t_plan = median_wall_thickness(out), median_wall_thickness(plan)
@@ -212,4 +215,7 @@ def drawing_report(out: np.ndarray, inp: np.ndarray, plan: np.ndarray, resolutio
     r["ok_broken"] = broken == 0
     r["targets_met"] = bool(r["ok_components"] and r["ok_thickness"] and r["ok_segments"]
                             and r["ok_broken"])
+    r["ok_opened"] = opens == 0
+    r["targets_met_opened"] = bool(r["ok_components"] and r["ok_thickness"]
+                                   and r["ok_segments"] and r["ok_opened"])
     return r
