@@ -4,6 +4,8 @@ shows whole is never broken in the output)."""
 
 from __future__ import annotations
 
+import warnings
+
 import cv2
 import numpy as np
 import pytest
@@ -254,3 +256,18 @@ def test_bridge_gaps_leaves_the_other_line_of_a_wall_saved_twice():
     assert bridge_gaps(canvas, drawn, 20, free=free, **kw).shape == (0, 4)
     assert bridge_gaps(canvas, drawn, 20, free=free, **{**kw, "same": 8}).tolist() == [
         [19.5, 10.5, 40.5, 10.5]]                         # 10 px apart: beyond same
+
+
+def test_a_widened_run_without_canvas_pixels_is_no_run():
+    """Two short pieces one row apart widen (``slack``) into a long run on the row
+    between, which holds none of the canvas's pixels: no run, and no 0 / 0 warning."""
+    c = np.zeros((10, 30), bool)
+    c[3, 0:10] = True
+    c[5, 10:20] = True
+    lab, k = straight_runs(c, 15)
+    assert k == 0 and not lab.any()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        a0, a1 = keep_runs_inside(np.array([0.5]), np.array([19.5]), np.array([4.5]),
+                                  np.array([4.5]), c, 15, band=6, c=2)
+    assert a0.tolist() == a1.tolist() == [4.5]

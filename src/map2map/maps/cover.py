@@ -86,9 +86,12 @@ def _runs(c: np.ndarray, n: int, slack: int
     c8 = c.view(np.uint8)
     wide = cv2.dilate(c8, np.ones((2 * slack + 1, 1), np.uint8)) if slack > 0 else c8
     opened = open_runs(wide, int(n) | 1, axis=1)
-    k, lab = cv2.connectedComponents(opened.view(np.uint8), connectivity=8)
+    _, lab = cv2.connectedComponents(opened.view(np.uint8), connectivity=8)
     rr, cc = np.nonzero(c & opened)
-    return rr, cc, lab[rr, cc].astype(np.int64) - 1, int(k - 1)
+    # a component of the widened runs may hold none of the canvas's own pixels: runs
+    # are numbered over those that do (no empty run, whose mean would be 0 / 0)
+    ids, run = np.unique(lab[rr, cc], return_inverse=True)
+    return rr, cc, run.astype(np.int64).reshape(-1), int(len(ids))
 
 
 def keep_runs_inside(lo: np.ndarray, hi: np.ndarray, a0: np.ndarray, a1: np.ndarray,
