@@ -58,6 +58,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--draw-thickness", type=float, default=None, metavar="M",
                    help="metres of every wall a drawn output draws (default: 0.30, the "
                         "plans'; map2map.maps.vectorize.PLAN_WALL_M)")
+    p.add_argument("--draw-option", action="append", default=[], metavar="KEY=VALUE",
+                   help="a tolerance of the plan drawer (repeatable), a field of "
+                        "map2map.maps.vectorize.DrawOptions, e.g. bridge_run=0 (no "
+                        "bridges), lean_px=none (every wall straight in its direction)")
     p.add_argument("--device", default="cpu", help="torch device (default cpu)")
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help="CPU threads for the per-map work and processes for drawing a "
@@ -68,14 +72,15 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..jobs.autocorrect import AutocorrectSpec, autocorrect
+    from ..jobs.autocorrect import AutocorrectSpec, autocorrect, parse_draw_options
 
     run = autocorrect(AutocorrectSpec(
         args.input, args.out, model=args.model, dxf=args.dxf, figure=args.figure,
         straighten=not args.no_straighten, anchor=not args.no_anchor,
         thickness=args.thickness, open_frontiers=args.open_frontiers, large=args.large,
         device=args.device, read_options=read_options_from_args(args), draw=args.draw,
-        draw_thickness=args.draw_thickness, workers=args.workers))
+        draw_thickness=args.draw_thickness,
+        draw_options=parse_draw_options(args.draw_option), workers=args.workers))
     for f, m in zip(run.sources, run.inputs, strict=True):
         say_how_read(f, m)
     for f, r in zip(run.sources, run.corrections, strict=True):

@@ -35,8 +35,8 @@ if TYPE_CHECKING:
     from ..core.grid import OccupancyMap
 
 __all__ = ["AutocorrectSpec", "AutocorrectRun", "autocorrect", "MAP_SUFFIXES",
-           "parse_thickness", "Corrector", "ModelEntry", "MODELS", "DEFAULT_MODEL",
-           "ALIASES", "corrector", "model_names_help"]
+           "parse_thickness", "parse_draw_options", "Corrector", "ModelEntry", "MODELS",
+           "DEFAULT_MODEL", "ALIASES", "corrector", "model_names_help"]
 
 
 @runtime_checkable
@@ -110,7 +110,7 @@ def model_names_help() -> str:
 
 def corrector(model: str | os.PathLike | Corrector | None = None,
               device: str = "cpu", *, draw: bool | None = None,
-              draw_thickness: float | None = None) -> Corrector:
+              draw_thickness: float | None = None, draw_options: Any = None) -> Corrector:
     """The :class:`Corrector` of a ``--model`` value: a name of :data:`MODELS` (or an
     alias), a Model_BA training run folder or weights file, or a corrector (returned as
     it is); None is :data:`DEFAULT_MODEL`.
@@ -119,7 +119,9 @@ def corrector(model: str | os.PathLike | Corrector | None = None,
     (:class:`~map2map.learn.ba.correctors.DrawnCorrector`: straight walls at one
     thickness, ``draw_thickness`` metres, the same segments in the DXF); None: the
     model's own choice (:attr:`ModelEntry.drawn`: ``none`` is drawn, ``thesis`` and
-    weights files are the thesis's output as it is).
+    weights files are the thesis's output as it is). ``draw_options``: the drawer's
+    :class:`~map2map.maps.vectorize.DrawOptions` (None: its defaults;
+    :func:`parse_draw_options` reads them from ``KEY=VALUE`` text).
 
     Examples
     --------
@@ -156,8 +158,65 @@ def corrector(model: str | os.PathLike | Corrector | None = None,
     if draw if draw is not None else drawn:
         from ..learn.ba.correctors import DrawnCorrector
 
-        return DrawnCorrector(made, draw_thickness)
+        return DrawnCorrector(made, draw_thickness, options=draw_options)
+    if draw_options is not None:
+        raise InputError("--draw-option", f"the {key} model's output is not drawn like a "
+                                          "plan: add --draw")
     return made
+
+
+def parse_draw_options(items: list[str] | None) -> Any:
+    """``KEY=VALUE`` texts (``--draw-option``) -> the plan drawer's
+    :class:`~map2map.maps.vectorize.DrawOptions` (its defaults for the keys not given;
+    None when there are none). A value is read as the field's type: a number, ``true`` /
+    ``false``, or ``none`` where the field may be None. An unknown key or a value of the
+    wrong type is an :class:`~map2map.core.errors.InputError` naming it.
+
+    Examples
+    --------
+    >>> o = parse_draw_options(["bridge_run=0", "lean_px=none", "two_sided=false"])
+    >>> o.bridge_run, o.lean_px, o.two_sided, o.families
+    (0.0, None, False, 3)
+    >>> parse_draw_options(["bridge=0.2", "no_such=1"])  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    map2map.core.errors.InputError: --draw-option no_such=1: not an option of the drawer (...
+    """
+    import dataclasses
+
+    from ..maps.vectorize import DrawOptions
+
+    if not items:
+        return None
+    fields = {f.name: f for f in dataclasses.fields(DrawOptions)}
+    defaults = DrawOptions()
+    values: dict[str, Any] = {}
+    for item in items:
+        key, eq, text = (x.strip() for x in item.partition("="))
+        where = f"--draw-option {item}"
+        if not eq or key not in fields:
+            raise InputError(where, "not an option of the drawer ("
+                             + ", ".join(fields) + "), as KEY=VALUE")
+        default, low = getattr(defaults, key), text.lower()
+        nullable = "None" in str(fields[key].type)
+        if low == "none" and nullable:
+            values[key] = None
+        elif isinstance(default, bool):
+            if low not in ("true", "false"):
+                raise InputError(where, f"{key} is true or false, not {text!r}")
+            values[key] = low == "true"
+        else:
+            try:
+                num = float(text) if not isinstance(default, int) else int(text)
+            except ValueError:
+                kind = "an integer" if isinstance(default, int) else "a number"
+                raise InputError(where, f"{key} is {kind}"
+                                 + (" or none" if nullable else "") + f", not {text!r}"
+                                 ) from None
+            if not num == num or num < 0:
+                raise InputError(where, f"{key} must be 0 or more, not {text!r}")
+            values[key] = num
+    return dataclasses.replace(defaults, **values)
 
 #: Files of a folder input that are read as maps.
 MAP_SUFFIXES = (".yaml", ".yml", ".png", ".pgm", ".jpg", ".jpeg", ".tif", ".tiff", ".json")
@@ -198,6 +257,8 @@ class AutocorrectSpec:
         Draw the output like a plan (:func:`corrector`); None: the model's choice.
     draw_thickness : float or None
         Metres of every wall the plan drawer draws; None: the plans' 0.30 m.
+    draw_options : DrawOptions or None
+        The plan drawer's tolerances (:func:`parse_draw_options`); None: its defaults.
     workers : int or None
         Threads for the per-map work and processes for the plan drawer (from 16 maps
         on); None: one per CPU core (at most 8); 1: this process only. The outputs do not
@@ -218,6 +279,7 @@ class AutocorrectSpec:
     read_options: Any = None
     draw: bool | None = None
     draw_thickness: float | None = None
+    draw_options: Any = None
     workers: int | None = None
 
 
@@ -321,7 +383,7 @@ def autocorrect(spec: AutocorrectSpec) -> AutocorrectRun:
         check_output_path(o["map"])
     maps = [load_map(f, spec.read_options) for f in files]
     model = corrector(spec.model, spec.device, draw=spec.draw,
-                      draw_thickness=spec.draw_thickness)
+                      draw_thickness=spec.draw_thickness, draw_options=spec.draw_options)
     if spec.workers is not None and spec.workers < 1:
         raise InputError("workers", f"must be at least 1, got {spec.workers}")
     options = dict(straighten=spec.straighten, anchor=spec.anchor, thickness=thickness,

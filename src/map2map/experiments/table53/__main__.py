@@ -89,6 +89,9 @@ def main(argv=None) -> int:
     ap.add_argument("--ac", action="append", default=[], metavar="KEY=VALUE",
                     help="an option of autocorrect (repeatable), e.g. thickness=resolution, "
                          "open_frontiers=true")
+    ap.add_argument("--draw-option", action="append", default=[], metavar="KEY=VALUE",
+                    help="a tolerance of the plan drawer for the drawn models (repeatable; "
+                         "map2map autocorrect --draw-option), e.g. bridge_run=0")
     args = ap.parse_args(argv)
     n = 12 if args.quick else args.n
     out = Path(args.out)
@@ -110,6 +113,12 @@ def main(argv=None) -> int:
                             pairs.meta)
     save_packed(out / "heldout.npz", pairs)
     models = list(args.models or DEFAULT_MODELS) + ([args.model] if args.model else [])
+    if args.draw_option:
+        from map2map.jobs.autocorrect import MODELS, corrector, parse_draw_options
+
+        drawn = parse_draw_options(args.draw_option)
+        models = [corrector(m, draw_options=drawn) if m in MODELS and MODELS[m].drawn
+                  else m for m in models]
     table = run_table53(pairs, models, seed=args.seed, anchor=not args.no_anchor,
                         margin=args.margin, autocorrect_kw=ac_options(args.ac))
     text = table.format()

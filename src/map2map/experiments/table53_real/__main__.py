@@ -55,6 +55,9 @@ def main(argv=None) -> int:
     ap.add_argument("--ac", action="append", default=[], metavar="KEY=VALUE",
                     help="an option of autocorrect (repeatable), e.g. thickness=resolution, "
                          "open_frontiers=true")
+    ap.add_argument("--draw-option", action="append", default=[], metavar="KEY=VALUE",
+                    help="with --model none or thesis, drawn: a tolerance of the plan "
+                         "drawer (repeatable; map2map autocorrect --draw-option)")
     args = ap.parse_args(argv)
     root = Path(args.data) / "halmstad"
     if not root.is_dir():
@@ -63,9 +66,10 @@ def main(argv=None) -> int:
     names = [n for n in args.maps.split(",") if n] or None
     model = args.model
     if model in ("none", "thesis"):
-        from map2map.jobs.autocorrect import corrector
+        from map2map.jobs.autocorrect import corrector, parse_draw_options
 
-        model = corrector(model, draw=False if args.no_draw else None)
+        model = corrector(model, draw=False if args.no_draw else None,
+                          draw_options=parse_draw_options(args.draw_option))
     t = run_table53_real(root, names, model, seed=args.seed, anchor=not args.no_anchor,
                          autocorrect_kw=ac_options(args.ac))
     out = Path(args.out)

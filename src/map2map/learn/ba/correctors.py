@@ -133,6 +133,8 @@ class DrawnCorrector:
         Weight of the input's own wall pixels in the evidence, beside ``base``'s walls
         (weight 1): a wall the input shows whole is drawn whole
         (:data:`INPUT_EVIDENCE_WEIGHT`; 0: ``base``'s walls alone).
+    options : DrawOptions, optional
+        The drawer's tolerances (default: its defaults).
 
     Examples
     --------
@@ -146,9 +148,9 @@ class DrawnCorrector:
     """
 
     def __init__(self, base, wall_thickness: float | None = None,
-                 input_weight: float = INPUT_EVIDENCE_WEIGHT):
+                 input_weight: float = INPUT_EVIDENCE_WEIGHT, options=None):
         self.base, self.wall_thickness = base, wall_thickness
-        self.input_weight = input_weight
+        self.input_weight, self.options = input_weight, options
         self.name, self.source = base.name, base.source
 
     def correct_many(self, maps: list[OccupancyMap], **options) -> list[OccupancyMap]:
@@ -171,7 +173,7 @@ class DrawnCorrector:
                 ev.append(m.occupied)
                 ws.append(None)
         drawn_all = draw_plan_maps([maps[i] for i in todo], ev, ts, weights=ws,
-                                   workers=options.get("workers"))
+                                   options=self.options, workers=options.get("workers"))
         out = list(bases)
         for i, (drawn, _) in zip(todo, drawn_all, strict=True):
             info = drawn.meta.pop("plan_drawer")
