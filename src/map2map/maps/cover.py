@@ -277,28 +277,41 @@ def bridge_gaps(canvas: np.ndarray, drawn: np.ndarray, n: int, *, near: float,
         return cv2.dilate(d8, np.ones((2 * m + 1, 1), np.uint8))[rr, cc] > 0 if m > 0 \
             else d8[rr, cc] > 0
 
-    cov, opn = within(near), ~within(open_)
-    if free is not None and same > 0:
-        opn &= ~_one_wall(d8 > 0, np.asarray(free, bool), rr, cc, same, same_free)
+    cov = within(near)
     W = c.shape[1]
-    # per (run, column): covered by a drawn wall; open (nothing drawn beside it); middle
+    # per (run, column): covered by a drawn wall; middle of the run's pixels there
     key = run * W + cc
     uk, inv = np.unique(key, return_inverse=True)
     kc = np.zeros(len(uk), bool)
-    ko = np.ones(len(uk), bool)
     np.logical_or.at(kc, inv, cov)
-    np.logical_and.at(ko, inv, opn)
-    mid = np.bincount(inv, rr + 0.5) / np.bincount(inv)
     kr, kcol = uk // W, uk % W
     # consecutive covered (run, column) entries p < q of one run (the keys are sorted by
     # run, then column): a gap of more than max_gap columns, every one of them held by
-    # the run (q - p - 1 entries between), open along at least open_share of them
+    # the run (q - p - 1 entries between) ...
     p = np.flatnonzero(kc)
     p, q = p[:-1], p[1:]
     gap = kcol[q] - kcol[p] - 1
+    ok = (kr[p] == kr[q]) & (gap > max_gap) & (q - p - 1 == gap)
+    if not ok.any():
+        return np.zeros((0, 4))
+    p, q, gap = p[ok], q[ok], gap[ok]
+    # ... open along at least open_share of them: nothing drawn within open_ across,
+    # nor (free, same) the same wall; looked at only in the gaps' pixels
+    inside = np.zeros(len(uk) + 1, np.int64)
+    np.add.at(inside, p + 1, 1)
+    np.add.at(inside, q, -1)
+    sel = np.cumsum(inside[:-1])[inv] > 0
+    opn = np.ones(len(rr), bool)
+    opn[sel] = ~within(open_)[sel]
+    if free is not None and same > 0 and sel.any():
+        opn[sel] &= ~_one_wall(d8 > 0, np.asarray(free, bool), rr[sel], cc[sel], same,
+                               same_free)
+    ko = np.ones(len(uk), bool)
+    np.logical_and.at(ko, inv, opn)
     held = np.r_[0, np.cumsum(ko)]
     share = (held[q] - held[p + 1]) / np.maximum(gap, 1)
-    ok = (kr[p] == kr[q]) & (gap > max_gap) & (q - p - 1 == gap) & (share >= open_share)
+    ok = share >= open_share
+    mid = np.bincount(inv, rr + 0.5) / np.bincount(inv)
     p, q = p[ok], q[ok]
     return np.stack([kcol[p] + 0.5, mid[p], kcol[q] + 0.5, mid[q]], 1).astype(float)
 
@@ -318,8 +331,10 @@ def _one_wall(drawn: np.ndarray, free: np.ndarray, rr: np.ndarray, cc: np.ndarra
     [True, False, True, False]
     """
     H = drawn.shape[0]
+    cols, cc = np.unique(cc, return_inverse=True)  # only the columns asked about
+    drawn, free = drawn[:, cols], free[:, cols]
     rows = np.arange(H)[:, None]
-    F = np.vstack([np.zeros((1, drawn.shape[1]), np.int64), np.cumsum(free, 0)])
+    F = np.vstack([np.zeros((1, len(cols)), np.int64), np.cumsum(free, 0)])
     # nearest drawn row at or above each pixel (-1: none), and at or below (H: none)
     up = np.maximum.accumulate(np.where(drawn, rows, -1), axis=0)[rr, cc]
     dn = np.minimum.accumulate(np.where(drawn, rows, H)[::-1], axis=0)[::-1][rr, cc]
