@@ -183,12 +183,14 @@ def parse_draw_options(items: list[str] | None) -> Any:
     map2map.core.errors.InputError: --draw-option no_such=1: not an option of the drawer (...
     """
     import dataclasses
+    import types
+    import typing
 
     from ..maps.vectorize import DrawOptions
 
     if not items:
         return None
-    fields = {f.name: f for f in dataclasses.fields(DrawOptions)}
+    fields = typing.get_type_hints(DrawOptions)
     defaults = DrawOptions()
     values: dict[str, Any] = {}
     for item in items:
@@ -198,7 +200,8 @@ def parse_draw_options(items: list[str] | None) -> Any:
             raise InputError(where, "not an option of the drawer ("
                              + ", ".join(fields) + "), as KEY=VALUE")
         default, low = getattr(defaults, key), text.lower()
-        nullable = "None" in str(fields[key].type)
+        hint = fields[key]
+        nullable = isinstance(hint, types.UnionType) and type(None) in hint.__args__
         if low == "none" and nullable:
             values[key] = None
         elif isinstance(default, bool):
