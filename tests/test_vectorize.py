@@ -253,6 +253,20 @@ def test_walls_are_drawn_at_the_requested_thickness(t):
     assert median_wall_thickness(d.map) == t
 
 
+@pytest.mark.parametrize("res, t", [(0.1, 4), (0.05, 6), (0.03, 9)])
+def test_outer_walls_are_drawn_at_the_plans_convention_by_default(res, t):
+    # a room seen from inside only: its walls at 0.20 m plus a pixel on each side (the
+    # dataset's plans at that resolution), not 0.30 m (3, 6 and 10 px)
+    m = room(t=3)
+    d = draw_plan(m == OCC, m, res)
+    assert d.thickness == t
+    assert median_wall_thickness(d.map) == t
+    assert (d.map[:, 100] == OCC).sum() == 2 * t
+    # grown by 0: 0.20 m alone
+    d0 = draw_plan(m == OCC, m, res, options=DrawOptions(grow_px=0.0))
+    assert d0.thickness == max(2, round(0.2 / res))
+
+
 @pytest.mark.parametrize("t", [2, 3, 6])
 def test_walls_turned_by_half_a_degree_keep_the_thickness(t):
     m = _rotated_room(0.6)

@@ -56,8 +56,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "DXF (default: on for 'none', off for 'thesis' and weights files, "
                         "the thesis's output as it is)")
     p.add_argument("--draw-thickness", type=float, default=None, metavar="M",
-                   help="metres of every wall a drawn output draws (default: 0.30, the "
-                        "plans'; map2map.maps.vectorize.PLAN_WALL_M)")
+                   help="metres of every wall a drawn output draws (default: the "
+                        "plans' convention, 0.20 m plus a pixel on each side; "
+                        "map2map.maps.vectorize.default_wall_thickness)")
     p.add_argument("--draw-option", action="append", default=[], metavar="KEY=VALUE",
                    help="a tolerance of the plan drawer (repeatable), a field of "
                         "map2map.maps.vectorize.DrawOptions, e.g. bridge_run=0 (no "

@@ -259,7 +259,9 @@ class AutocorrectSpec:
     draw : bool or None
         Draw the output like a plan (:func:`corrector`); None: the model's choice.
     draw_thickness : float or None
-        Metres of every wall the plan drawer draws; None: the plans' 0.30 m.
+        Metres of every wall the plan drawer draws; None: the plans' convention
+        (:func:`map2map.maps.vectorize.default_wall_thickness`: 0.20 m plus a pixel on
+        each side for a wall seen from one side, interior walls as measured).
     draw_options : DrawOptions or None
         The plan drawer's tolerances (:func:`parse_draw_options`); None: its defaults.
     workers : int or None

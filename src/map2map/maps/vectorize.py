@@ -134,23 +134,32 @@ __all__ = ["DrawOptions", "PlanDrawing", "default_wall_thickness", "wall_points"
            "dominant_angle", "draw_plan", "draw_plan_map", "draw_plan_maps", "render_plan",
            "save_plan_dxf", "PLAN_WALL_M"]
 
-#: Wall thickness (metres) that :func:`default_wall_thickness` draws: the plans' convention.
+#: Wall thickness (metres) that :func:`default_wall_thickness` draws, before the plans'
+#: pixel of thickening on each side (``DrawOptions.grow_px``): the plans' convention for a
+#: wall seen from one side only (an outer wall; :func:`_two_sided` measures the others).
 #: The generated plans' outer walls are 0.20-0.30 m thick, their interior ones 0.10-0.15 m
-#: (:mod:`map2map.maps.plans.layout`), and the dataset build thickens walls by a pixel;
-#: the median wall thickness of the dataset's 256 px plans is 0.31 m (5.2 px at a median
-#: 0.055 m/px, :func:`map2map.evaluate.drawing.median_wall_thickness` on 80 plans of a
-#: dataset built by ``map2map dataset build``), the demo's plan's 0.30 m (6 px at 0.05).
-PLAN_WALL_M = 0.30
+#: (:mod:`map2map.maps.plans.layout`), drawn at 0.05 m/px; the dataset build resizes each
+#: plan to 256 px (area-averaged where it shrinks, keeping a pixel that is at least half
+#: wall) and thickens its walls by a pixel. On 320 plans of a dataset built by ``map2map
+#: dataset build`` (seed 20261205), the outer walls' median thickness
+#: (:func:`map2map.evaluate.drawing.median_wall_thickness` on the skeleton next to
+#: unknown) fits 0.206 m / resolution + 1.98 px (least squares over 0.026-0.115 m/px),
+#: the same as the demo plan's 6 px at 0.05 m/px. Until 2026-11-29 the drawer drew
+#: 0.30 m without the thickening, too thick at fine resolutions and too thin at coarse
+#: ones (``bench_drawing``: thickness within 1 px on 86 % of those maps against 92 %).
+PLAN_WALL_M = 0.20
 
 
-def default_wall_thickness(resolution: float) -> int:
-    """Pixels a plan's wall is drawn with at ``resolution`` (m/px): :data:`PLAN_WALL_M`
-    rounded, at least 2.
+def default_wall_thickness(resolution: float, grow_px: float = 1.0) -> int:
+    """Pixels a plan's wall seen from one side is drawn with at ``resolution`` (m/px):
+    :data:`PLAN_WALL_M` plus ``grow_px`` on each side, rounded, at least 2.
 
     >>> default_wall_thickness(0.075), default_wall_thickness(0.05), default_wall_thickness(0.2)
-    (4, 6, 2)
+    (5, 6, 3)
+    >>> default_wall_thickness(0.05, grow_px=0)
+    4
     """
-    return max(2, int(round(PLAN_WALL_M / float(resolution))))
+    return max(2, int(round(PLAN_WALL_M / float(resolution) + 2 * float(grow_px))))
 
 
 @dataclass(frozen=True)
@@ -740,7 +749,7 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
     H, W = occ.shape
     res = float(resolution)
     t = float(wall_thickness) if wall_thickness is not None else float(
-        default_wall_thickness(res))
+        default_wall_thickness(res, opt.grow_px))
     if not t > 0:
         raise ValueError(f"wall thickness must be positive, not {wall_thickness}")
     pts, w = _as_points(evidence, weights)

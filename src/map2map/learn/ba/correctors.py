@@ -127,8 +127,8 @@ class DrawnCorrector:
         What finds the walls (``none``: the input's own, cleaned; ``thesis``: the input's
         and the network's).
     wall_thickness : float, optional
-        Thickness of every wall in metres (default: the plans' 0.30 m,
-        :data:`map2map.maps.vectorize.PLAN_WALL_M`), at least one pixel.
+        Thickness of every wall in metres, at least one pixel (default: the plans'
+        convention, :func:`map2map.maps.vectorize.default_wall_thickness`).
     input_weight : float
         Weight of the input's own wall pixels in the evidence, beside ``base``'s walls
         (weight 1): a wall the input shows whole is drawn whole
