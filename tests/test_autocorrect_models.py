@@ -93,8 +93,8 @@ def test_none_is_the_anchored_cleaning_alone(slam_map):
 
 
 def test_a_batch_is_drawn_alike_in_worker_processes_and_in_this_one():
-    """From 16 maps on, the drawer runs in worker processes (``workers``): same maps,
-    same segments, in order."""
+    """From 16 maps on, ``none`` cleans and draws in worker processes (``workers``): same
+    maps, same segments and record, in order."""
     maps = [OccupancyMap(b, 0.05) for b in make_pairs(16, 96, seed=5).b]
     none = corrector("none")
     one = none.correct_many(maps, workers=1)
@@ -102,6 +102,7 @@ def test_a_batch_is_drawn_alike_in_worker_processes_and_in_this_one():
     for a, b in zip(one, two, strict=True):
         assert np.array_equal(a.data, b.data)
         assert a.meta["autocorrect"]["segments_px"] == b.meta["autocorrect"]["segments_px"]
+        assert repr(a.meta) == repr(b.meta) and a.resolution == b.resolution
     assert len({a.data.tobytes() for a in one}) > 8               # the maps differ
 
 
