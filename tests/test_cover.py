@@ -208,6 +208,25 @@ def test_a_jog_the_drawer_drops_is_bridged():
     assert np.array_equal(on.map[same], off.map[same])
 
 
+def test_a_run_along_the_grid_is_bridged_in_a_map_whose_walls_drift_turned():
+    """The drawer's frames are its direction families' (here one, turned 5 degrees); a
+    jog the input shows along the grid's columns, 1.25 m between two drawn walls, is a
+    straight run in the grid's own frame only, and is closed there along its pixels."""
+    from map2map.maps.vectorize import _bridges
+
+    cover = np.zeros((80, 100), bool)
+    cover[20, 10:51] = cover[45, 50:90] = True
+    cover[20:46, 50] = True                                # the jog
+    drawn = np.zeros_like(cover)
+    drawn[18:23, 10:51] = drawn[43:48, 50:90] = True       # the walls, not the jog
+    free = np.zeros_like(cover)
+    free[23:70, 10:50] = True
+    segs = np.array([[10.0, 20.5, 51.0, 20.5], [50.0, 45.5, 90.0, 45.5]])
+    b, tk = _bridges(segs, np.array([5.0, 4.0]), drawn, cover, free, [-5.0], RES,
+                     DrawOptions(), 5.0)
+    assert b.tolist() == [[50.5, 22.5, 50.5, 43.5]] and tk.tolist() == [4.0]
+
+
 def test_a_bridge_closes_no_door():
     m = _z_wall(door=True)
     d = draw_plan(m == OCC, m, RES, 6, cover=m == OCC, options=DrawOptions(bridge_run=0.5))

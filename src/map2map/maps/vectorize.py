@@ -802,7 +802,7 @@ def _bridges(segs: np.ndarray, tk: np.ndarray, drawn: np.ndarray, cover: np.ndar
              t: float) -> tuple[np.ndarray, np.ndarray]:
     """Segments (image frame) and thicknesses that close the gaps the drawn walls
     (``drawn``, image frame) leave in the input's straight wall runs (``cover``), in the
-    frame of each direction family, along both its directions
+    frame of each direction family and in the grid's own, along both their directions
     (:func:`map2map.maps.cover.bridge_gaps`, step 4): a run column is covered where a
     drawn wall lies within ``tol`` across, and a gap is closed only where along at
     least ``bridge_share`` of it no drawn wall lies within ``bridge_beside`` times the
@@ -813,7 +813,10 @@ def _bridges(segs: np.ndarray, tk: np.ndarray, drawn: np.ndarray, cover: np.ndar
     n = max(2, int(round(opt.bridge_run / res)))
     drawn = drawn.astype(np.uint8)
     found = []
-    for a in angles:                              # a few families
+    # and the grid's own frame: a run along the rows or columns of a map whose walls
+    # drift turned a few degrees (a jog the turn left straight) is a run there only
+    frames = list(angles) + ([] if 0.0 in angles else [0.0])
+    for a in frames:                              # a few families
         fr = _Frame(a, drawn.shape)
         C = fr.warp(cover.view(np.uint8), 0) > 0
         D = fr.warp(drawn, 0) > 0
