@@ -34,6 +34,7 @@ target and all four, and the drawer's milliseconds per map (one OpenCV thread; t
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import statistics
 import sys
@@ -160,8 +161,12 @@ def _summary(label: str, rows: list[dict], ms: list[float], cpu: list[float] = (
     print(f"  wall components  output {med('components'):.0f} vs input "
           f"{med('components_input'):.0f} (medians); output <= input: "
           f"{share('ok_components'):.0f} %")
+    miss = [r["thickness_px"] - r["thickness_plan_px"] for r in rows]
+    miss = [m for m in miss if math.isfinite(m)]
     print(f"  wall thickness   output {med('thickness_px'):.1f} px vs plan "
-          f"{med('thickness_plan_px'):.1f} px; within 1 px: {share('ok_thickness'):.0f} %")
+          f"{med('thickness_plan_px'):.1f} px; within 1 px: {share('ok_thickness'):.0f} %"
+          + (f"; mean miss {statistics.mean(abs(m) for m in miss):.2f} px (output - plan "
+             f"{statistics.mean(miss):+.2f})" if miss else ""))
     print(f"  segments         output {med('segments'):.0f} vs plan walls "
           f"{med('plan_walls'):.0f} (ratio {med('segments_ratio'):.2f}); <= 1.5x: "
           f"{share('ok_segments'):.0f} %")
