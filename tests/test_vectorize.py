@@ -253,8 +253,8 @@ def test_walls_are_drawn_at_the_requested_thickness(t):
     assert median_wall_thickness(d.map) == t
 
 
-@pytest.mark.parametrize("res, t", [(0.1, 4), (0.05, 6), (0.03, 9)])
-def test_outer_walls_are_drawn_at_the_plans_convention_by_default(res, t):
+@pytest.mark.parametrize("res, t, t0", [(0.1, 4, 2), (0.05, 6, 4), (0.03, 9, 7)])
+def test_outer_walls_are_drawn_at_the_plans_convention_by_default(res, t, t0):
     # a room seen from inside only: its walls at 0.20 m plus a pixel on each side (the
     # dataset's plans at that resolution), not 0.30 m (3, 6 and 10 px)
     m = room(t=3)
@@ -264,7 +264,7 @@ def test_outer_walls_are_drawn_at_the_plans_convention_by_default(res, t):
     assert (d.map[:, 100] == OCC).sum() == 2 * t
     # grown by 0: 0.20 m alone
     d0 = draw_plan(m == OCC, m, res, options=DrawOptions(grow_px=0.0))
-    assert d0.thickness == max(2, round(0.2 / res))
+    assert d0.thickness == t0
 
 
 @pytest.mark.parametrize("t", [2, 3, 6])

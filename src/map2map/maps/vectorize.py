@@ -86,8 +86,8 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
    (:func:`_slivers`). Nothing else is occupied.
 9. **Bridges** (:func:`_bridges`, :func:`map2map.maps.cover.bridge_gaps`): where the
    input shows a wall as a straight run of wall pixels at least ``bridge_run`` long (in
-   a family's frame) and the drawn walls cover it on both sides of a gap with no drawn
-   wall within ``bridge_beside`` thicknesses (two) across along at least
+   a family's frame, or the grid's) and the drawn walls cover it on both sides of a
+   gap with no drawn wall within ``bridge_beside`` thicknesses (two) across along at least
    ``bridge_share`` (half) of it, nor one within ``bridge_same`` (1 m) with none of the
    input's free space between it and the run (the same wall) (a jog too
    short beyond the walls it joins to keep as a wall of its own, two pieces of a
