@@ -252,6 +252,28 @@ def test_bridge_gaps_leaves_short_gaps_uncovered_runs_and_walls_beside():
     assert bridge_gaps(canvas, drawn, 51, near=2, open_=6).shape == (0, 4)  # too short
 
 
+def test_a_corner_wall_ending_short_of_the_run_closes_its_end():
+    """HELD25 000590's case: a 1.2 m outer wall run between two perpendicular walls; its
+    own piece was dropped, the wall on the left ends 2 px short of the run (beyond
+    ``near``) and the one on the right crosses it. Within ``end_near`` of the run's ends
+    the corner counts as covered, so the gap between the corners is found."""
+    canvas = np.zeros((40, 60), bool)
+    canvas[20, 10:50] = True                              # the run
+    drawn = np.zeros((40, 60), bool)
+    drawn[:18, 8:13] = True                               # ends 2 px above the run
+    drawn[10:30, 47:52] = True                            # crosses it
+    kw = {"near": 1.5, "open_": 8}
+    assert bridge_gaps(canvas, drawn, 20, **kw).shape == (0, 4)
+    assert bridge_gaps(canvas, drawn, 20, **kw, end_near=4).tolist() == [
+        [12.5, 20.5, 47.5, 20.5]]
+    # not beyond the run's ends: the same wall 2 px short in the run's middle is no cover
+    drawn[:] = False
+    drawn[:18, 28:33] = True
+    drawn[10:30, 47:52] = True
+    canvas[20, 5:10] = True
+    assert bridge_gaps(canvas, drawn, 20, **kw, end_near=4).shape == (0, 4)
+
+
 def test_bridge_gaps_leaves_the_other_line_of_a_wall_saved_twice():
     """A run whose gap has a drawn wall 10 px beside it (beyond ``open_``): bridged
     when free space lies between the two (two walls), left when only the wall's

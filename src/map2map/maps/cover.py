@@ -213,7 +213,7 @@ def _least_move(a0: float, a1: float, f: np.ndarray, mid: np.ndarray, c: float
 def bridge_gaps(canvas: np.ndarray, drawn: np.ndarray, n: int, *, near: float,
                 open_: float, open_share: float = 0.5, max_gap: int = 2,
                 slack: int = 1, free: np.ndarray | None = None, same: float = 0.0,
-                same_free: float = 0.25) -> np.ndarray:
+                same_free: float = 0.25, end_near: float = 0.0) -> np.ndarray:
     """Segments that close the gaps drawn walls leave in the straight runs of
     ``canvas`` (module doc, step 4), in the canvas frame (walls along the rows).
 
@@ -245,6 +245,13 @@ def bridge_gaps(canvas: np.ndarray, drawn: np.ndarray, n: int, *, near: float,
         unobserved inside between), however far drift put them apart.
     same, same_free : float
         See ``free`` (``same`` 0: off).
+    end_near : float
+        In a run's first and last ``end_near`` columns a column is covered where a
+        drawn wall lies within ``end_near`` across (0: ``near`` there too): a
+        perpendicular wall that ends that close to the run (the drawer passes half
+        its wall thickness plus a pixel: it would touch the run's wall, had that been
+        drawn) closes the run's corner, so the gap between that corner and the rest of
+        the run is found (a run whose own piece was dropped between two corners).
 
     Returns
     -------
@@ -278,6 +285,12 @@ def bridge_gaps(canvas: np.ndarray, drawn: np.ndarray, n: int, *, near: float,
             else d8[rr, cc] > 0
 
     cov = within(near)
+    if end_near > near:
+        lo = np.full(k, c.shape[1]); hi = np.full(k, -1)
+        np.minimum.at(lo, run, cc)
+        np.maximum.at(hi, run, cc)
+        end = (cc - lo[run] < end_near) | (hi[run] - cc < end_near)
+        cov |= end & within(end_near)
     W = c.shape[1]
     # per (run, column): covered by a drawn wall; middle of the run's pixels there
     key = run * W + cc

@@ -87,7 +87,9 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
 9. **Bridges** (:func:`_bridges`, :func:`map2map.maps.cover.bridge_gaps`): where the
    input shows a wall as a straight run of wall pixels at least ``bridge_run`` long (in
    a family's frame, or the grid's) and the drawn walls cover it on both sides of a
-   gap with no drawn wall within ``bridge_beside`` thicknesses (two) across along at least
+   gap (a corner counts: a perpendicular wall ending within half a thickness and a
+   pixel of the run's end) with no drawn wall within ``bridge_beside`` thicknesses
+   (two) across along at least
    ``bridge_share`` (half) of it, nor one within ``bridge_same`` (1 m) with none of the
    input's free space between it and the run (the same wall) (a jog too
    short beyond the walls it joins to keep as a wall of its own, two pieces of a
@@ -806,7 +808,9 @@ def _bridges(segs: np.ndarray, tk: np.ndarray, drawn: np.ndarray, cover: np.ndar
     (``drawn``, image frame) leave in the input's straight wall runs (``cover``), in the
     frame of each direction family and in the grid's own, along both their directions
     (:func:`map2map.maps.cover.bridge_gaps`, step 4): a run column is covered where a
-    drawn wall lies within ``tol`` across, and a gap is closed only where along at
+    drawn wall lies within ``tol`` across (within ``t / 2 + 1`` in the run's first and
+    last ``t / 2 + 1`` columns: a corner whose perpendicular wall ends just short of
+    the run), and a gap is closed only where along at
     least ``bridge_share`` of it no drawn wall lies within ``bridge_beside`` times the
     drawing's thickness ``t``, nor within ``bridge_same`` with (almost) none of the
     input's ``free`` pixels between. A bridge is drawn as thin as the thinner of the
@@ -826,7 +830,8 @@ def _bridges(segs: np.ndarray, tk: np.ndarray, drawn: np.ndarray, cover: np.ndar
         for tr in (False, True):
             b = bridge_gaps(C.T if tr else C, D.T if tr else D, n, near=tol,
                             open_=opt.bridge_beside * t, open_share=opt.bridge_share,
-                            free=Fr.T if tr else Fr, same=opt.bridge_same / res)
+                            free=Fr.T if tr else Fr, same=opt.bridge_same / res,
+                            end_near=t / 2 + 1)
             if not len(b):
                 continue
             b = b[:, [1, 0, 3, 2]] if tr else b
