@@ -286,7 +286,7 @@ def bridge_gaps(canvas: np.ndarray, drawn: np.ndarray, n: int, *, near: float,
 
     cov = within(near)
     if end_near > near:
-        lo = np.full(k, c.shape[1]); hi = np.full(k, -1)
+        lo, hi = np.full(k, c.shape[1]), np.full(k, -1)
         np.minimum.at(lo, run, cc)
         np.maximum.at(hi, run, cc)
         end = (cc - lo[run] < end_near) | (hi[run] - cc < end_near)
