@@ -41,11 +41,12 @@ uncorrected with a warning. The walls seen from one side are drawn as thick as t
 training plans' walls scaled by the input's own walls (``thickness="input"``, default
 since 2026-11-26: at most the shrink, see :func:`drawn_wall_px`), not by the shrink
 alone, which made the walls of a real office map 15-24 px thick against the plan's 3.
-Measured on the 18 real Halmstad maps and the gen1500 val split in docs/autocorrect.md,
-"Real maps beyond the training scale". A result the model is unsure of carries a
-warning in ``meta["autocorrect"]["warnings"]`` (and on the command line): content
-more than 4x the dataset's size corrected whole (a building much larger than those the
-model learnt: walls below a model cell are lost and the layout may be invented), or
+Measured on the 18 real Halmstad maps and the gen1500 val split in ``git show
+e59abf4^:docs/learn.md``, "Real maps beyond the training scale". A result the model is
+unsure of carries a warning in ``meta["autocorrect"]["warnings"]`` (and on the
+command line): content more than 4x the dataset's size corrected whole (a building much
+larger than those the model learnt: walls below a model cell are lost and the layout may
+be invented), or
 output walls that the input's walls do not support (fewer than half of the output wall
 pixels within half a wall plus 2 dataset pixels of an input wall means the network
 invented structure).
@@ -107,11 +108,11 @@ __all__ = ["autocorrect", "autocorrect_many", "Correction",
 #: With anchored walls (``anchor=True``) the faces follow the map's own angle up to
 #: ``ANCHOR.tilt_max_deg`` (:mod:`~map2map.learn.ba.anchor`), so only larger rotations are
 #: deskewed: the
-#: nearest-neighbour rotation there and back moves wall pixels (docs/autocorrect.md, "Why 43 %
-#: of the maps were not improved": 28 -> 31 of 38 val maps improved).
+#: nearest-neighbour rotation there and back moves wall pixels (``git show e59abf4^:docs/learn.md``,
+#: "Why 43 % of the maps were not improved": 28 -> 31 of 38 val maps improved).
 MIN_SKEW_ANCHORED_DEG = 6.0
 MAX_SHRINK = 4.0  # content squares more than 4x the dataset's size get a warning
-#: what the shipped weights measured (docs/autocorrect.md, "Trained on a GPU", "Table 5.3 on real
+#: what the shipped weights measured (docs/autocorrect.md, "The shipped weights", "Real
 #: maps"), said with every correction they make
 REAL_MAPS_ANCHORED = ("walls anchored on the input lowered the appendix-metric error on 192 "
                       "of 200 held-out simulated maps; on 18 real Halmstad maps against "
@@ -125,8 +126,8 @@ REAL_MAPS_ANCHORED = ("walls anchored on the input lowered the appendix-metric e
 #: the dataset's 256 px (200 train maps of gen1500: 2.07 px, 5-95 % 1.84-2.93; their
 #: plans' walls 5.61): how thick the dataset's SLAM maps draw a wall (``thickness="input"``).
 SLAM_WALL_PX = 2.07
-#: Default of :func:`autocorrect`'s ``thickness`` (docs/autocorrect.md, "Real maps beyond the
-#: training scale": on the 18 real Halmstad maps the output's alignment failed on 1
+#: Default of :func:`autocorrect`'s ``thickness`` (``git show e59abf4^:docs/learn.md``, "Real maps
+#: beyond the training scale": on the 18 real Halmstad maps the output's alignment failed on 1
 #: instead of 6, observed-part Chamfer 8.5 px instead of 10.2; gen1500 val unchanged).
 THICKNESS = "input"
 #: Default of :func:`autocorrect`'s ``open_frontiers`` for maps corrected whole; maps
@@ -137,7 +138,7 @@ OPEN_FRONTIERS = False
 #: more than :data:`LARGE_SHRINK` times the dataset's size.
 LARGE = "tile"
 #: Shrink (content side / dataset size) beyond which ``large`` applies: the training
-#: plans reach 2.39 (docs/autocorrect.md, "Table 5.3 on real maps").
+#: plans reach 2.39 (docs/autocorrect.md, "Real maps").
 LARGE_SHRINK = 2.5
 
 
@@ -345,9 +346,10 @@ def _is_network(model) -> bool:
 
 def _open(open_frontiers: bool | None, tiled: bool) -> bool:
     """``open_frontiers`` for one map: as given, else on for a map corrected in tiles
-    and :data:`OPEN_FRONTIERS` for one corrected whole (docs/autocorrect.md, "Real maps beyond
-    the training scale": tiles without it invent walls in the unknown space around the
-    building, 25-28 px observed Chamfer on the real maps against 6.4 for the input)."""
+    and :data:`OPEN_FRONTIERS` for one corrected whole (``git show
+    e59abf4^:docs/learn.md``, "Real maps beyond the training scale": tiles without it
+    invent walls in the unknown space around the building, 25-28 px observed Chamfer on
+    the real maps against 6.4 for the input)."""
     if open_frontiers is not None:
         return bool(open_frontiers)
     return True if tiled else OPEN_FRONTIERS

@@ -260,8 +260,8 @@ def collinear_faces(horiz: np.ndarray, side: np.ndarray, face: np.ndarray,
     the line. Every face of a group moves to the group's line, weighted by its length
     ``hi - lo + 1`` (long pieces dominate), rounded to whole pixels. The mean, not the
     median: the pieces' drift scatters them about the plan's line; measured on the
-    gen6300 val split (docs/autocorrect.md, "Moving drifted walls"), the mean line is closer
-    to the plan's (median: no closer than the pieces themselves).
+    gen6300 val split (``git show e59abf4^:docs/learn.md``, "Moving drifted walls"), the
+    mean line is closer to the plan's (median: no closer than the pieces themselves).
 
     Parameters
     ----------

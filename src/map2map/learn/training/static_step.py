@@ -1,10 +1,10 @@
 """The eq. 3.2 training step with static buffers, ready to run as one CUDA graph replay.
 
 A Model_32 :func:`~map2map.learn.training.step.gan_step` costs ~62-68 ms on an H200 from batch 32
-to 256 because it is bound by host overhead (``docs/autocorrect.md``, "Trained on a GPU": about
-2,200 top-level operator calls a step, ~900 of them the spectral norms' power
-iterations). A CUDA graph records every kernel of a step once and replays them with one
-call. :class:`StaticStep` is that step:
+to 256 because it is bound by host overhead (``git show e59abf4^:docs/learn.md``,
+"Trained on a GPU": about 2,200 top-level operator calls a step, ~900 of them the
+spectral norms' power iterations). A CUDA graph records every kernel of a step once
+and replays them with one call. :class:`StaticStep` is that step:
 
 * it owns **static buffers** per (input shape, fade-in or not): ``x``, ``y``, the
   generator's input ``g_input`` (decoder growth), ``alpha`` (a 0-d tensor) and the

@@ -1,6 +1,6 @@
 """Where a SLAM map's appendix-metric error comes from: whole walls displaced, or scatter
-of the wall faces about their wall's position? (docs/autocorrect.md, "Table 5.3 on 104
-held-out builder maps".)
+of the wall faces about their wall's position? (``git show e59abf4^:docs/learn.md``,
+"Table 5.3 on 104 held-out builder maps".)
 
 For each held-out pair, Error(sim) (the chosen chain's mean local error, px, as in
 :mod:`map2map.experiments.table53.measure`) is split: the metric's points are grouped by the plan
