@@ -312,3 +312,47 @@ def test_a_widened_run_without_canvas_pixels_is_no_run():
         a0, a1 = keep_runs_inside(np.array([0.5]), np.array([19.5]), np.array([4.5]),
                                   np.array([4.5]), c, 15, band=6, c=2)
     assert a0.tolist() == a1.tolist() == [4.5]
+
+
+def _room_with_a_stub() -> tuple[np.ndarray, np.ndarray]:
+    """A walled room with a 1.5 m interior wall hanging from its top wall at x = 60 (a
+    wall the plan has), and a corrector's walls that lost it (the cleaning dropped it)."""
+    m = np.full((100, 120), UNK, np.uint8)
+    m[5:96, 5:115] = FREE
+    m[5:7, 5:115] = m[94:96, 5:115] = OCC
+    m[5:96, 5:7] = m[5:96, 113:115] = OCC
+    corr = m == OCC
+    m[7:37, 60:62] = OCC
+    return m, corr
+
+
+def test_a_wall_the_cleaning_dropped_is_drawn_along_the_input_run():
+    m, corr = _room_with_a_stub()
+    off = draw_plan(corr, m, RES, 4, cover=m == OCC, options=DrawOptions(bridge_ends=0.0))
+    on = draw_plan(corr, m, RES, 4, cover=m == OCC)
+    assert not (off.map[12:30, 58:64] == OCC).any()          # the stub is lost
+    assert (on.map[12:30, 60:62] == OCC).all()               # drawn where the input has it
+    assert on.info["bridged"] == 1 and len(on.segments) == len(off.segments) + 1
+    _, _, short_off = broken_runs(m, off.map, RES, shortened=True)
+    _, _, short_on = broken_runs(m, on.map, RES, shortened=True)
+    assert (short_off, short_on) == (1, 0)
+    same = np.ones(m.shape, bool)
+    same[5:40, 55:67] = False                                 # nothing else moved
+    assert np.array_equal(on.map[same], off.map[same])
+
+
+def test_bridge_gaps_ends_close_an_open_end_or_a_lost_run_unless_a_wall_is_beside():
+    canvas = np.zeros((30, 60), bool)
+    canvas[10, 5:55] = True
+    drawn = np.zeros((30, 60), bool)
+    kw = {"near": 2, "open_": 6}
+    assert bridge_gaps(canvas, drawn, 20, **kw).shape == (0, 4)
+    assert bridge_gaps(canvas, drawn, 20, **kw, ends=5).tolist() == [
+        [5.5, 10.5, 54.5, 10.5]]                              # lost: drawn whole, once
+    drawn[9:12, 30:40] = True                                 # covered in its middle
+    assert bridge_gaps(canvas, drawn, 20, **kw, ends=5).tolist() == [
+        [5.5, 10.5, 30.5, 10.5], [39.5, 10.5, 54.5, 10.5]]
+    assert bridge_gaps(canvas, drawn, 20, **kw, ends=20).tolist() == [
+        [5.5, 10.5, 30.5, 10.5]]                              # the 15-column end: left
+    drawn[14:17, 5:55] = True                                 # a wall drawn 4 px beside
+    assert bridge_gaps(canvas, drawn, 20, **kw, ends=5).shape == (0, 4)

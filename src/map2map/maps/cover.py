@@ -32,7 +32,8 @@ This module moves such a wall as little as it must:
    between (the same wall): a jog SLAM drift put in a wall, a
    wall piece too short to keep, two pieces of a leaning wall drawn on two lines), a
    segment along the run's own pixels closes the gap. The input's wall is continuous
-   there, so no door is closed.
+   there, so no door is closed. Optionally (``ends``) a run's end left open beyond its
+   last covered column, and a run no drawn wall covers, are drawn the same way.
 
 Examples
 --------
@@ -213,7 +214,8 @@ def _least_move(a0: float, a1: float, f: np.ndarray, mid: np.ndarray, c: float
 def bridge_gaps(canvas: np.ndarray, drawn: np.ndarray, n: int, *, near: float,
                 open_: float, open_share: float = 0.5, max_gap: int = 2,
                 slack: int = 1, free: np.ndarray | None = None, same: float = 0.0,
-                same_free: float = 0.25, end_near: float = 0.0) -> np.ndarray:
+                same_free: float = 0.25, end_near: float = 0.0, ends: float = 0.0
+                ) -> np.ndarray:
     """Segments that close the gaps drawn walls leave in the straight runs of
     ``canvas`` (module doc, step 4), in the canvas frame (walls along the rows).
 
@@ -252,6 +254,10 @@ def bridge_gaps(canvas: np.ndarray, drawn: np.ndarray, n: int, *, near: float,
         its wall thickness plus a pixel: it would touch the run's wall, had that been
         drawn) closes the run's corner, so the gap between that corner and the rest of
         the run is found (a run whose own piece was dropped between two corners).
+    ends : float
+        Also close a run's end that no drawn wall covers for more than ``ends`` columns
+        (from the run's last covered column to its end), and a run no drawn wall covers
+        at all, under the same tests (0: off): a short wall the cleaning dropped.
 
     Returns
     -------
@@ -272,6 +278,15 @@ def bridge_gaps(canvas: np.ndarray, drawn: np.ndarray, n: int, *, near: float,
     >>> drawn[13:16, 24:36] = True                   # a wall beside the gap: left as it is
     >>> bridge_gaps(canvas, drawn, 20, near=2, open_=3).tolist()
     []
+
+    A run drawn only along its first 20 columns, its end closed with ``ends``:
+
+    >>> canvas = np.zeros((30, 60), bool); canvas[10, 5:55] = True
+    >>> drawn = np.zeros((30, 60), bool); drawn[9:12, 5:25] = True
+    >>> bridge_gaps(canvas, drawn, 20, near=2, open_=6).tolist()
+    []
+    >>> bridge_gaps(canvas, drawn, 20, near=2, open_=6, ends=5).tolist()
+    [[24.5, 10.5, 54.5, 10.5]]
     """
     c = np.ascontiguousarray(canvas, bool)
     rr, cc, run, k = _runs(c, n, slack)
@@ -300,19 +315,44 @@ def bridge_gaps(canvas: np.ndarray, drawn: np.ndarray, n: int, *, near: float,
     kr, kcol = uk // W, uk % W
     # consecutive covered (run, column) entries p < q of one run (the keys are sorted by
     # run, then column): a gap of more than max_gap columns, every one of them held by
-    # the run (q - p - 1 entries between) ...
+    # the run (q - p - 1 entries between); the gap's entries are i0 = p + 1 .. i1 = q,
+    # the segment runs from entry a = p to b = q ...
     p = np.flatnonzero(kc)
     p, q = p[:-1], p[1:]
     gap = kcol[q] - kcol[p] - 1
     ok = (kr[p] == kr[q]) & (gap > max_gap) & (q - p - 1 == gap)
-    if not ok.any():
+    i0, i1, a, b = p[ok] + 1, q[ok], p[ok], q[ok]
+    if ends > 0:
+        # ... and (ends) a run's end beyond its last covered column, or a run with none
+        # covered, more than ``ends`` columns held by the run throughout
+        first = np.r_[0, np.flatnonzero(np.diff(kr)) + 1]      # each run's entries
+        last = np.r_[first[1:], len(kr)]                       # one past its last
+        cs = np.r_[0, np.cumsum(kc)]
+        n_cov = cs[last] - cs[first]
+        idx = np.r_[np.flatnonzero(kc), 0]                     # (a last entry: never empty)
+        lo_c = np.where(n_cov > 0, idx[np.minimum(cs[first], len(idx) - 1)], last)
+        hi_c = np.where(n_cov > 0, idx[np.maximum(cs[last] - 1, 0)], first - 1)
+        e0 = np.r_[first, hi_c + 1]                            # left ends, right ends
+        e1 = np.r_[lo_c, last]
+        ea = np.r_[first, hi_c]
+        eb = np.r_[lo_c, last - 1]
+        lone = np.r_[n_cov == 0, np.zeros(len(first), bool)]    # a run with none covered
+        ea = np.where(lone, np.r_[first, first], ea)
+        eb = np.where(lone, np.r_[last - 1, last - 1], eb)
+        keep = np.r_[np.ones(len(first), bool), n_cov > 0]     # a lone run once
+        ln = e1 - e0
+        ok_e = keep & (ln > ends) & (kcol[np.maximum(e1 - 1, 0)] - kcol[np.minimum(
+            e0, len(kcol) - 1)] + 1 == ln)
+        i0, i1 = np.r_[i0, e0[ok_e]], np.r_[i1, e1[ok_e]]
+        a, b = np.r_[a, ea[ok_e]], np.r_[b, eb[ok_e]]
+    if not len(i0):
         return np.zeros((0, 4))
-    p, q, gap = p[ok], q[ok], gap[ok]
+    gap = i1 - i0
     # ... open along at least open_share of them: nothing drawn within open_ across,
     # nor (free, same) the same wall; looked at only in the gaps' pixels
     inside = np.zeros(len(uk) + 1, np.int64)
-    np.add.at(inside, p + 1, 1)
-    np.add.at(inside, q, -1)
+    np.add.at(inside, i0, 1)
+    np.add.at(inside, i1, -1)
     sel = np.cumsum(inside[:-1])[inv] > 0
     opn = np.ones(len(rr), bool)
     opn[sel] = ~within(open_)[sel]
@@ -322,11 +362,11 @@ def bridge_gaps(canvas: np.ndarray, drawn: np.ndarray, n: int, *, near: float,
     ko = np.ones(len(uk), bool)
     np.logical_and.at(ko, inv, opn)
     held = np.r_[0, np.cumsum(ko)]
-    share = (held[q] - held[p + 1]) / np.maximum(gap, 1)
+    share = (held[i1] - held[i0]) / np.maximum(gap, 1)
     ok = share >= open_share
     mid = np.bincount(inv, rr + 0.5) / np.bincount(inv)
-    p, q = p[ok], q[ok]
-    return np.stack([kcol[p] + 0.5, mid[p], kcol[q] + 0.5, mid[q]], 1).astype(float)
+    a, b = a[ok], b[ok]
+    return np.stack([kcol[a] + 0.5, mid[a], kcol[b] + 0.5, mid[b]], 1).astype(float)
 
 
 def _one_wall(drawn: np.ndarray, free: np.ndarray, rr: np.ndarray, cc: np.ndarray,

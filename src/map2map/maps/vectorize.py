@@ -97,7 +97,9 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
    along the run's own pixels closes the gap, as thin as the thinner wall it joins, and
    the map is drawn again. The input's wall is continuous there, so no door closes; a
    wall drawn beside the run (between the two lines of a wall SLAM saved twice) is not
-   doubled.
+   doubled. A run's end left open for more than ``bridge_ends`` (0.35 m), and a run no
+   drawn wall covers at all, are drawn the same way (a jamb, a stub at a T-junction or
+   an outer wall piece the cleaning dropped).
 
 :func:`save_plan_dxf` writes the same segments through the one DXF writer
 (:func:`map2map.maps.dxf.save_segments_dxf`), so raster and drawing agree.
@@ -278,6 +280,15 @@ class DrawOptions:
         layout's wall is that inner line, so the wall Chamfer against the layout rises
         (6.73 -> 6.80 px), as does the metric's Error (4.30 -> 4.62 px; median of the
         18 maps 4.04 -> 4.20).
+    bridge_ends : float
+        Metres. A straight wall run of the input (at least ``bridge_run`` long) that the
+        drawn walls leave open for more than this at an end (beyond the last column a
+        drawn wall covers), or along its whole length, is drawn along its own pixels
+        there too, under the same tests as a bridge (no drawn wall beside it, not the
+        same wall as one drawn); 0: off. Equal to ``reach``: a wall end the corner snap
+        cut back (an overshoot) stays cut. The cleaning drops input wall pixels no
+        straight wall explains, and with them short walls the plan has (jambs, stubs
+        at T-junctions, an outer wall piece between two corners); these come back.
     """
 
     tol: float = 0.12
@@ -306,6 +317,7 @@ class DrawOptions:
     bridge_share: float = 0.5
     bridge_beside: float = 2.0
     bridge_same: float = 1.0
+    bridge_ends: float = 0.35
 
 
 @dataclass
@@ -810,11 +822,12 @@ def _bridges(segs: np.ndarray, tk: np.ndarray, drawn: np.ndarray, cover: np.ndar
     (:func:`map2map.maps.cover.bridge_gaps`, step 4): a run column is covered where a
     drawn wall lies within ``tol`` across (within ``t / 2 + 1`` in the run's first and
     last ``t / 2 + 1`` columns: a corner whose perpendicular wall ends just short of
-    the run), and a gap is closed only where along at
-    least ``bridge_share`` of it no drawn wall lies within ``bridge_beside`` times the
-    drawing's thickness ``t``, nor within ``bridge_same`` with (almost) none of the
-    input's ``free`` pixels between. A bridge is drawn as thin as the thinner of the
-    walls nearest its ends."""
+    the run); a gap is the columns between two covered ones and, with ``bridge_ends``, a
+    run's end beyond its last covered column or a run with none covered; it is closed
+    only where along at least ``bridge_share`` of it no drawn wall lies within
+    ``bridge_beside`` times the drawing's thickness ``t``, nor within ``bridge_same``
+    with (almost) none of the input's ``free`` pixels between. A bridge is drawn as thin
+    as the thinner of the walls nearest its ends."""
     tol = _scales(opt, res)[0]
     n = max(2, int(round(opt.bridge_run / res)))
     drawn = drawn.astype(np.uint8)
@@ -831,7 +844,9 @@ def _bridges(segs: np.ndarray, tk: np.ndarray, drawn: np.ndarray, cover: np.ndar
             b = bridge_gaps(C.T if tr else C, D.T if tr else D, n, near=tol,
                             open_=opt.bridge_beside * t, open_share=opt.bridge_share,
                             free=Fr.T if tr else Fr, same=opt.bridge_same / res,
-                            end_near=t / 2 + 1)
+                            end_near=t / 2 + 1,
+                            ends=max(2.0, opt.bridge_ends / res) if opt.bridge_ends > 0
+                            else 0.0)
             if not len(b):
                 continue
             b = b[:, [1, 0, 3, 2]] if tr else b
