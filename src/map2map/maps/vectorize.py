@@ -265,7 +265,7 @@ class DrawOptions:
         error on 19 of 207 dev maps (lower on 5): a bridge along a short run is more
         often a wall the plan does not have. With ``bridge_beside`` 1 by eye about a
         third of the bridges doubled a wall drawn a little more than a thickness beside
-        the run (docs/autocorrect.md, "Bridges").
+        the run (CHANGELOG.md, 2026-11-28; the commits of session 35).
     bridge_same : float
         Metres. Nor is a gap bridged where a drawn wall lies within this distance across
         with (almost: at most a quarter of the pixels) none of the input's free space
