@@ -356,3 +356,20 @@ def test_bridge_gaps_ends_close_an_open_end_or_a_lost_run_unless_a_wall_is_besid
         [5.5, 10.5, 30.5, 10.5]]                              # the 15-column end: left
     drawn[14:17, 5:55] = True                                 # a wall drawn 4 px beside
     assert bridge_gaps(canvas, drawn, 20, **kw, ends=5).shape == (0, 4)
+
+
+def test_bridge_gaps_draws_one_line_of_a_wall_saved_twice_that_no_drawn_wall_covers():
+    """HELD27 000078: both lines of a wall SLAM saved twice, 8 px apart with unknown
+    between, were left undrawn; ``ends`` drew both. Only the longer is drawn, unless
+    free space lies between them (two walls)."""
+    canvas = np.zeros((40, 60), bool)
+    canvas[10, 5:55] = True
+    canvas[18, 8:50] = True
+    drawn = np.zeros((40, 60), bool)
+    free = np.zeros((40, 60), bool)
+    free[:10] = free[19:] = True                          # rooms above and below
+    kw = {"near": 2, "open_": 6, "ends": 5, "free": free, "same": 14}
+    assert bridge_gaps(canvas, drawn, 20, **kw).tolist() == [[5.5, 10.5, 54.5, 10.5]]
+    free[12:17] = True                                    # a corridor between
+    assert sorted(bridge_gaps(canvas, drawn, 20, **kw).tolist()) == [
+        [5.5, 10.5, 54.5, 10.5], [8.5, 18.5, 49.5, 18.5]]

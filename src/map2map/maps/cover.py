@@ -366,7 +366,48 @@ def bridge_gaps(canvas: np.ndarray, drawn: np.ndarray, n: int, *, near: float,
     ok = share >= open_share
     mid = np.bincount(inv, rr + 0.5) / np.bincount(inv)
     a, b = a[ok], b[ok]
-    return np.stack([kcol[a] + 0.5, mid[a], kcol[b] + 0.5, mid[b]], 1).astype(float)
+    segs = np.stack([kcol[a] + 0.5, mid[a], kcol[b] + 0.5, mid[b]], 1).astype(float)
+    if free is not None and same > 0 and len(segs) > 1:
+        segs = segs[_one_of_each_wall(segs, np.asarray(free, bool), same, same_free)]
+    return segs
+
+
+def _one_of_each_wall(segs: np.ndarray, free: np.ndarray, same: float,
+                      share: float) -> np.ndarray:
+    """Which of ``bridge_gaps``' segments (along the rows) to keep: of two that overlap
+    along at least half the shorter, lie within ``same`` rows of each other and have at
+    most a ``share`` of free pixels between them (the two lines of a wall SLAM saved
+    twice, both left open by the drawn walls), only the longer. A few segments: a loop
+    over pairs.
+
+    >>> free = np.zeros((30, 60), bool)
+    >>> segs = np.array([[5.5, 10.5, 50.5, 10.5], [8.5, 16.5, 40.5, 16.5]])
+    >>> _one_of_each_wall(segs, free, 8, 0.25).tolist()
+    [True, False]
+    >>> free[12:16] = True                          # a corridor between: two walls
+    >>> _one_of_each_wall(segs, free, 8, 0.25).tolist()
+    [True, True]
+    """
+    u0, u1 = np.minimum(segs[:, 0], segs[:, 2]), np.maximum(segs[:, 0], segs[:, 2])
+    v = (segs[:, 1] + segs[:, 3]) / 2
+    order = np.argsort(-(u1 - u0), kind="stable")
+    keep = np.ones(len(segs), bool)
+    H, W = free.shape
+    for n, i in enumerate(order):                   # longest first
+        for j in order[:n]:
+            if not keep[j]:
+                continue
+            lo, hi = max(u0[i], u0[j]), min(u1[i], u1[j])
+            if hi - lo < 0.5 * (u1[i] - u0[i]) or abs(v[i] - v[j]) > same:
+                continue
+            r0 = int(np.clip(np.floor(min(v[i], v[j])) + 1, 0, H))
+            r1 = int(np.clip(np.floor(max(v[i], v[j])), 0, H))
+            c0, c1 = int(np.clip(np.floor(lo), 0, W)), int(np.clip(np.ceil(hi), 0, W))
+            between = free[r0:r1, c0:c1]
+            if between.size == 0 or between.mean() <= share:
+                keep[i] = False
+                break
+    return keep
 
 
 def _one_wall(drawn: np.ndarray, free: np.ndarray, rr: np.ndarray, cc: np.ndarray,
