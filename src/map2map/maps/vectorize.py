@@ -292,7 +292,8 @@ class DrawOptions:
         Measured once on a fresh build (seed 20261226, 640 maps, against 0): runs
         shortened at an end 598 -> 299, broken 40 -> 43; Table 5.3 (447 maps) 0.831 ->
         0.834 px, wall recall higher on all 92 maps that move, the matched error higher
-        on 58 and lower on 36; Halmstad 13 -> 16 of 18 improved.
+        on 58 and lower on 36; Halmstad 13 -> 14 of 18 improved (16 with the rule
+        that draws one line of a wall saved twice, ``cover._one_of_each_wall``).
     """
 
     tol: float = 0.12
