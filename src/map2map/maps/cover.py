@@ -315,36 +315,28 @@ def bridge_gaps(canvas: np.ndarray, drawn: np.ndarray, n: int, *, near: float,
     kr, kcol = uk // W, uk % W
     # consecutive covered (run, column) entries p < q of one run (the keys are sorted by
     # run, then column): a gap of more than max_gap columns, every one of them held by
-    # the run (q - p - 1 entries between); the gap's entries are i0 = p + 1 .. i1 = q,
-    # the segment runs from entry a = p to b = q ...
+    # the run (q - p - 1 entries between); the gap's entries are i0 = p + 1 .. i1 - 1
     p = np.flatnonzero(kc)
     p, q = p[:-1], p[1:]
     gap = kcol[q] - kcol[p] - 1
     ok = (kr[p] == kr[q]) & (gap > max_gap) & (q - p - 1 == gap)
-    i0, i1, a, b = p[ok] + 1, q[ok], p[ok], q[ok]
+    i0, i1 = p[ok] + 1, q[ok]
+    first = np.r_[0, np.flatnonzero(np.diff(kr)) + 1]          # each run's entries:
+    last = np.r_[first[1:], len(kr)]                           # first .. last - 1
     if ends > 0:
-        # ... and (ends) a run's end beyond its last covered column, or a run with none
-        # covered, more than ``ends`` columns held by the run throughout
-        first = np.r_[0, np.flatnonzero(np.diff(kr)) + 1]      # each run's entries
-        last = np.r_[first[1:], len(kr)]                       # one past its last
+        # ... and (ends) a run's ends beyond its covered columns (the whole run where
+        # none is covered), more than ``ends`` columns held by the run throughout
         cs = np.r_[0, np.cumsum(kc)]
-        n_cov = cs[last] - cs[first]
-        idx = np.r_[np.flatnonzero(kc), 0]                     # (a last entry: never empty)
-        lo_c = np.where(n_cov > 0, idx[np.minimum(cs[first], len(idx) - 1)], last)
-        hi_c = np.where(n_cov > 0, idx[np.maximum(cs[last] - 1, 0)], first - 1)
+        cov_run = cs[last] > cs[first]
+        idx = np.r_[np.flatnonzero(kc), 0]                     # (one more: never empty)
+        lo_c = np.where(cov_run, idx[np.minimum(cs[first], len(idx) - 1)], last)
+        hi_c = idx[np.maximum(cs[last] - 1, 0)][cov_run]
         e0 = np.r_[first, hi_c + 1]                            # left ends, right ends
-        e1 = np.r_[lo_c, last]
-        ea = np.r_[first, hi_c]
-        eb = np.r_[lo_c, last - 1]
-        lone = np.r_[n_cov == 0, np.zeros(len(first), bool)]    # a run with none covered
-        ea = np.where(lone, np.r_[first, first], ea)
-        eb = np.where(lone, np.r_[last - 1, last - 1], eb)
-        keep = np.r_[np.ones(len(first), bool), n_cov > 0]     # a lone run once
+        e1 = np.r_[lo_c, last[cov_run]]
         ln = e1 - e0
-        ok_e = keep & (ln > ends) & (kcol[np.maximum(e1 - 1, 0)] - kcol[np.minimum(
-            e0, len(kcol) - 1)] + 1 == ln)
+        ok_e = (ln > ends) & (kcol[np.maximum(e1 - 1, 0)]
+                              - kcol[np.minimum(e0, len(kcol) - 1)] + 1 == ln)
         i0, i1 = np.r_[i0, e0[ok_e]], np.r_[i1, e1[ok_e]]
-        a, b = np.r_[a, ea[ok_e]], np.r_[b, eb[ok_e]]
     if not len(i0):
         return np.zeros((0, 4))
     gap = i1 - i0
@@ -365,7 +357,11 @@ def bridge_gaps(canvas: np.ndarray, drawn: np.ndarray, n: int, *, near: float,
     share = (held[i1] - held[i0]) / np.maximum(gap, 1)
     ok = share >= open_share
     mid = np.bincount(inv, rr + 0.5) / np.bincount(inv)
-    a, b = a[ok], b[ok]
+    # the segment: from the covered entry before the gap to the one after it (the
+    # run's own end entry where there is none)
+    i0, i1 = i0[ok], i1[ok]
+    a = np.where(i0 > first[kr[i0]], i0 - 1, i0)
+    b = np.where(i1 < last[kr[i0]], i1, i1 - 1)
     segs = np.stack([kcol[a] + 0.5, mid[a], kcol[b] + 0.5, mid[b]], 1).astype(float)
     if free is not None and same > 0 and len(segs) > 1:
         segs = segs[_one_of_each_wall(segs, np.asarray(free, bool), same, same_free)]
