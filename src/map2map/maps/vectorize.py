@@ -289,7 +289,7 @@ class DrawOptions:
         cut back (an overshoot) stays cut. The cleaning drops input wall pixels no
         straight wall explains, and with them short walls the plan has (jambs, stubs
         at T-junctions, an outer wall piece between two corners); these come back.
-        Measured once on a fresh build (seed 20261226, 640 maps, against 0): runs
+        Measured once on a fresh build (seed 20261226, 640 maps, against 0: off): runs
         shortened at an end 598 -> 299, broken 40 -> 43; Table 5.3 (447 maps) 0.831 ->
         0.834 px, wall recall higher on all 92 maps that move, the matched error higher
         on 58 and lower on 36; Halmstad 13 -> 14 of 18 improved (16 with the rule

@@ -108,8 +108,9 @@ __all__ = ["autocorrect", "autocorrect_many", "Correction",
 #: With anchored walls (``anchor=True``) the faces follow the map's own angle up to
 #: ``ANCHOR.tilt_max_deg`` (:mod:`~map2map.learn.ba.anchor`), so only larger rotations are
 #: deskewed: the
-#: nearest-neighbour rotation there and back moves wall pixels (``git show e59abf4^:docs/learn.md``,
-#: "Why 43 % of the maps were not improved": 28 -> 31 of 38 val maps improved).
+#: nearest-neighbour rotation there and back moves wall pixels (``git show
+#: e59abf4^:docs/learn.md``, "Why 43 % of the maps were not improved": 28 -> 31 of 38
+#: val maps improved).
 MIN_SKEW_ANCHORED_DEG = 6.0
 MAX_SHRINK = 4.0  # content squares more than 4x the dataset's size get a warning
 #: what the shipped weights measured (docs/autocorrect.md, "The shipped weights", "Real
@@ -126,9 +127,10 @@ REAL_MAPS_ANCHORED = ("walls anchored on the input lowered the appendix-metric e
 #: the dataset's 256 px (200 train maps of gen1500: 2.07 px, 5-95 % 1.84-2.93; their
 #: plans' walls 5.61): how thick the dataset's SLAM maps draw a wall (``thickness="input"``).
 SLAM_WALL_PX = 2.07
-#: Default of :func:`autocorrect`'s ``thickness`` (``git show e59abf4^:docs/learn.md``, "Real maps
-#: beyond the training scale": on the 18 real Halmstad maps the output's alignment failed on 1
-#: instead of 6, observed-part Chamfer 8.5 px instead of 10.2; gen1500 val unchanged).
+#: Default of :func:`autocorrect`'s ``thickness`` (``git show e59abf4^:docs/learn.md``,
+#: "Real maps beyond the training scale": on the 18 real Halmstad maps the output's
+#: alignment failed on 1 instead of 6, observed-part Chamfer 8.5 px instead of 10.2;
+#: gen1500 val unchanged).
 THICKNESS = "input"
 #: Default of :func:`autocorrect`'s ``open_frontiers`` for maps corrected whole; maps
 #: corrected in tiles (``large="tile"``) leave their frontiers open unless told otherwise

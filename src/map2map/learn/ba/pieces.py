@@ -133,8 +133,7 @@ def frontier_walls(segs: np.ndarray, guide: np.ndarray, tol: float,
     frontier: on a partial map (a robot that drove the corridors and looked into some
     rooms) the edge of what it saw is not a wall, and the model, which learnt whole
     buildings, closes it (``git show e59abf4^:docs/learn.md``, "Real maps beyond the
-    training scale"). Step
-    4b with ``open_frontiers`` leaves those out.
+    training scale"). Step 4b with ``open_frontiers`` leaves those out.
 
     Examples
     --------

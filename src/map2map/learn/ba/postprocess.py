@@ -52,18 +52,17 @@ needs 8x (or more) upsampling, and plain upsampling gives grey, blurred walls.
    their nearest non-wall pixel. Free and unknown space come from the input, except
    free space the network calls unknown more than two model cells from any wall (laser
    streaks through windows and open doors), which becomes unknown. Two more rules,
-   measured on Table 5.3 (``git show e59abf4^:docs/learn.md``, "Why 43 % of the maps were not
-   improved"):
-   free islands of the input smaller than ``ANCHOR.speck`` (30 dataset pixels squared)
-   become unknown first (:func:`drop_free_specks`: rays that slipped through or past
-   a wall, mostly beyond the outer walls; kept, they gave the anchored walls faces
-   the plan does not have), and the faces are straight lines at the map's own wall
-   angle, not along the pixel grid (``tilt``, :func:`anchored_walls`: a SLAM map is
-   turned against its plan by its heading error, and a face made exactly horizontal on
-   a wall turned by 2 degrees leaves it up to 1.7 px off across 100 px). Two more, for
-   the walls that SLAM drift displaced (``git show e59abf4^:docs/learn.md``, "Moving
-   drifted walls"): faces of one orientation and side whose lines lie within
-   ``ANCHOR.collinear`` (3 dataset pixels) of each other go to their length-weighted mean line
+   measured on Table 5.3 (``git show e59abf4^:docs/learn.md``, "Why 43 % of the maps were
+   not improved"): free islands of the input smaller than ``ANCHOR.speck`` (30 dataset
+   pixels squared) become unknown first (:func:`drop_free_specks`: rays that slipped
+   through or past a wall, mostly beyond the outer walls; kept, they gave the anchored
+   walls faces the plan does not have), and the faces are straight lines at the map's own
+   wall angle, not along the pixel grid (``tilt``, :func:`anchored_walls`: a SLAM map is
+   turned against its plan by its heading error, and a face made exactly horizontal on a
+   wall turned by 2 degrees leaves it up to 1.7 px off across 100 px). Two more, for the
+   walls that SLAM drift displaced (``git show e59abf4^:docs/learn.md``, "Moving drifted
+   walls"): faces of one orientation and side whose lines lie within ``ANCHOR.collinear``
+   (3 dataset pixels) of each other go to their length-weighted mean line
    (:func:`collinear_faces`: the pieces of one wall line, which the plan draws
    collinear), and a wall seen from both sides thinner than ``ANCHOR.min_thick`` (5
    dataset pixels) is grown to it, both faces out by the same amount
