@@ -136,7 +136,7 @@ from .segments import _join
 
 __all__ = ["DrawOptions", "PlanDrawing", "default_wall_thickness", "wall_points",
            "dominant_angle", "draw_plan", "draw_plan_map", "draw_plan_maps", "render_plan",
-           "save_plan_dxf", "PLAN_WALL_M"]
+           "wall_raster", "save_plan_dxf", "PLAN_WALL_M"]
 
 #: Wall thickness (metres) that :func:`default_wall_thickness` draws, before the plans'
 #: pixel of thickening on each side (``DrawOptions.grow_px``): the plans' convention for a
@@ -413,11 +413,8 @@ def dominant_angle(points: np.ndarray, weights: np.ndarray | None = None,
     # coarse: the structure tensor's orientation (gradient products averaged over a few
     # pixels: a 9 x 9 box), folded modulo 90 degrees, weighted by its coherence; 0.5
     # degree bins
-    ang, coh = orientation(img)
-    ang, coh = ang.ravel(), coh.ravel()
-    sel = coh > 1e-3 * max(float(coh.max()), 1e-12)
-    ang = ang[sel]
-    hist = np.bincount(np.minimum((ang * 2).astype(np.int64), 179), coh[sel], 180)
+    ang, coh = orientation(img, coherent=1e-3)
+    hist = np.bincount(np.minimum((ang * 2).astype(np.int64), 179), coh, 180)
     k = np.array([1.0, 2, 3, 4, 3, 2, 1])
     sm = np.convolve(np.concatenate([hist[-3:], hist, hist[:3]]), k, "valid")
     coarse = (int(np.argmax(sm)) + 0.5) / 2.0
@@ -804,17 +801,16 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
     tk = np.full(len(segs), t)
     if opt.two_sided and len(segs):
         segs, tk = _two_sided(segs, occ == FREE, t, opt.grow_px, one=opt.one_interior)
-    out = render_plan(segs, occ, tk, res, min_room=opt.min_room, enclosed=opt.enclosed)
+    wall = wall_raster(segs, tk, occ.shape)
     info.update(cut=int(len(segs) - n0), angles=[float(a) for a in angles],
                 two_sided=int((tk < t).sum()), bridged=0)
     if cover is not None and opt.bridge_run > 0 and len(segs):
-        extra, tx = _bridges(segs, tk, out == OCCUPIED, cover, occ == FREE, angles, res,
-                             opt, t)
+        extra, tx = _bridges(segs, tk, wall > 0, cover, occ == FREE, angles, res, opt, t)
         if len(extra):
             segs, tk = np.concatenate([segs, extra]), np.concatenate([tk, tx])
-            out = render_plan(segs, occ, tk, res, min_room=opt.min_room,
-                              enclosed=opt.enclosed)
+            wall = wall_raster(segs, tk, occ.shape)
             info["bridged"] = int(len(extra))
+    out = _render(wall, occ, res, opt.min_room, opt.enclosed)
     return PlanDrawing(segs, out, angle, t, info, tk)
 
 
@@ -917,10 +913,14 @@ def _two_sided(segs: np.ndarray, free: np.ndarray, t: float, grow: float,
         q = p[:, None, :] + sign * ks[None, :, None] * nrm[:, None, :]
         r, c = np.floor(q[..., 1]).astype(np.int64), np.floor(q[..., 0]).astype(np.int64)
         ok = (r >= 0) & (r < H) & (c >= 0) & (c < W)
-        f = np.zeros(ok.shape, bool)
-        f[ok] = free[r[ok], c[ok]]
-        # free for ``depth`` pixels from there on: not the sliver between a doubled wall
-        run = np.lib.stride_tricks.sliding_window_view(f, deep, axis=1)[:, :m].all(axis=2)
+        # free at each step (outside the map: not), counted along the normal
+        cnt = np.zeros((len(p), m + deep), np.int32)
+        cnt[:, 1:] = np.cumsum(free[np.where(ok, r, 0), np.where(ok, c, 0)] & ok,
+                               axis=1, dtype=np.int32)[:, :-1]
+        # free for ``depth`` pixels from there on (``deep`` steps from step j: the window
+        # sum is ``deep``): not the sliver between a doubled wall
+        run = (cnt[:, deep:m + deep] - cnt[:, :m]) == deep if deep > 0 else \
+            np.ones((len(p), m), bool)
         return run.any(axis=1), ks[np.argmax(run, axis=1)] - step / 2
 
     hp, dp = nearest_free(1.0)
@@ -1389,15 +1389,19 @@ def render_plan(segments: np.ndarray, occupancy: np.ndarray, thickness: float | 
     (2, 27, 27)
     """
     occ = np.asarray(occupancy)
-    H, W = occ.shape
-    walls = occ == OCCUPIED
-    out = occ.copy()
-    if walls.any():
-        # an occupied pixel takes the value (free or unknown) of its nearest other pixel
-        d = [cv2.distanceTransform((occ != v).astype(np.uint8), cv2.DIST_L2, 3)
-             if (occ == v).any() else np.full((H, W), np.inf, np.float32)
-             for v in (FREE, UNKNOWN)]
-        out[walls] = np.where(d[0][walls] <= d[1][walls], FREE, UNKNOWN)
+    return _render(wall_raster(segments, thickness, occ.shape), occ, resolution,
+                   min_room, enclosed)
+
+
+def wall_raster(segments: np.ndarray, thickness: float | np.ndarray,
+                shape: tuple[int, int]) -> np.ndarray:
+    """The walls :func:`render_plan` draws, alone: uint8, 1 on a wall (``render_plan``'s
+    occupied pixels are exactly these).
+
+    >>> wall_raster(np.array([[2.0, 10.0, 28.0, 10.0]]), 2, (20, 30)).sum(axis=0)[5].item()
+    2
+    """
+    H, W = shape
     segs = np.asarray(segments, float).reshape(-1, 4)
     tk = np.broadcast_to(np.asarray(thickness, float), (len(segs),)).copy()
     segs = _free_ends_in(segs, tk)
@@ -1430,6 +1434,21 @@ def render_plan(segments: np.ndarray, occupancy: np.ndarray, thickness: float | 
         quads = np.stack([a - across, b - across, b + across, a + across], 1) - 0.5
         for q in np.round(quads * 16).astype(np.int32):   # one call per wall: one call
             cv2.fillConvexPoly(wall, q, 1, cv2.LINE_8, shift=4)  # for all XORs overlaps
+    return wall
+
+
+def _render(wall: np.ndarray, occ: np.ndarray, resolution: float, min_room: float,
+            enclosed: float) -> np.ndarray:
+    """:func:`render_plan` given its walls (:func:`wall_raster`)."""
+    H, W = occ.shape
+    walls = occ == OCCUPIED
+    out = occ.copy()
+    if walls.any():
+        # an occupied pixel takes the value (free or unknown) of its nearest other pixel
+        d = [cv2.distanceTransform((occ != v).astype(np.uint8), cv2.DIST_L2, 3)
+             if (occ == v).any() else np.full((H, W), np.inf, np.float32)
+             for v in (FREE, UNKNOWN)]
+        out[walls] = np.where(d[0][walls] <= d[1][walls], FREE, UNKNOWN)
     free = (out == FREE) & (wall == 0)
     keep = _rooms(free, wall > 0, min_room / resolution**2, enclosed)
     out = np.where(free & ~keep, np.uint8(UNKNOWN), out)
