@@ -25,7 +25,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["open_runs", "run_through"]
+__all__ = ["open_runs", "run_through", "pixels"]
 
 
 def open_runs(mask: np.ndarray, n: int, axis: int) -> np.ndarray:
@@ -62,3 +62,24 @@ def run_through(mask: np.ndarray, rr: np.ndarray, cc: np.ndarray) -> np.ndarray:
     starts, ends = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
     k = np.searchsorted(starts, np.asarray(rr) * (W + 1) + np.asarray(cc), side="right") - 1
     return ends[k] - starts[k]
+
+
+def pixels(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.nonzero(mask)`` of a 2-D mask (bool or uint8), rows and columns as int64 in
+    the same row-major order, by OpenCV's ``findNonZero``: twice as fast on the drawer's
+    canvases (the drawer lists pixels a dozen times a map).
+
+    >>> m = np.zeros((3, 4), bool); m[0, 3] = m[2, 1] = True
+    >>> [a.tolist() for a in pixels(m)]
+    [[0, 2], [3, 1]]
+    """
+    m = np.asarray(mask)
+    if m.ndim != 2 or m.dtype not in (np.bool_, np.uint8) or 0 in m.shape:
+        return np.nonzero(m)
+    p = cv2.findNonZero(np.ascontiguousarray(m).view(np.uint8))
+    if p is None:
+        e = np.zeros(0, np.int64)
+        return e, e.copy()
+    p = p.reshape(-1, 2).astype(np.int64)
+    return p[:, 1].copy(), p[:, 0].copy()
+

@@ -55,7 +55,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from ..core.runs import open_runs
+from ..core.runs import open_runs, pixels
 
 __all__ = ["straight_runs", "keep_runs_inside", "bridge_gaps"]
 
@@ -88,7 +88,7 @@ def _runs(c: np.ndarray, n: int, slack: int
     wide = cv2.dilate(c8, np.ones((2 * slack + 1, 1), np.uint8)) if slack > 0 else c8
     opened = open_runs(wide, int(n) | 1, axis=1)
     _, lab = cv2.connectedComponents(opened.view(np.uint8), connectivity=8)
-    rr, cc = np.nonzero(c & opened)
+    rr, cc = pixels(c & opened)
     # a component of the widened runs may hold none of the canvas's own pixels: runs
     # are numbered over those that do (no empty run, whose mean would be 0 / 0)
     ids, run = np.unique(lab[rr, cc], return_inverse=True)

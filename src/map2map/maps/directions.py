@@ -46,6 +46,8 @@ import math
 import cv2
 import numpy as np
 
+from ..core.runs import pixels
+
 __all__ = ["splat", "orientation", "sharp_angle", "angle_families"]
 
 
@@ -215,7 +217,7 @@ def angle_families(points: np.ndarray, weights: np.ndarray, shape: tuple[int, in
         return [float(angle)], label
     H, W = shape
     img = splat(pts, w, shape).astype(np.float32)
-    at = np.nonzero(img > 0)                   # the wall pixels only: a few thousand
+    at = pixels(img > 0)                       # the wall pixels only: a few thousand
     ang, coh = orientation(img, at=at)
     dev = np.zeros(shape, np.float32)
     dev[at] = (ang - angle + 45.0) % 90.0 - 45.0

@@ -128,7 +128,7 @@ import numpy as np
 from ..core.geometry import point_segment_distances
 from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from ..core.parallel import process_map
-from ..core.runs import open_runs, run_through
+from ..core.runs import open_runs, pixels, run_through
 from .cover import bridge_gaps, keep_runs_inside
 from .directions import angle_families, orientation, sharp_angle
 from .directions import splat as _splat
@@ -364,7 +364,7 @@ def wall_points(mask: np.ndarray) -> np.ndarray:
     >>> wall_points(np.eye(2, dtype=bool)).tolist()
     [[0.5, 0.5], [1.5, 1.5]]
     """
-    r, c = np.nonzero(np.asarray(mask, bool))
+    r, c = pixels(np.asarray(mask, bool))
     return np.stack([c + 0.5, r + 0.5], axis=1).astype(float)
 
 
@@ -489,7 +489,7 @@ def _pieces(E: np.ndarray, u: np.ndarray, v: np.ndarray, w: np.ndarray, L: int,
     # along, so a thick perpendicular wall is neither a piece nor joined to the wall it
     # meets (a pixel of two walls belongs to the longer)
     across = cv2.morphologyEx(E, cv2.MORPH_CLOSE, np.ones((bridge, 1), np.uint8)) | E
-    rr, cc = np.nonzero(opened & open_runs(across, 2 * L, axis=0))
+    rr, cc = pixels(opened & open_runs(across, 2 * L, axis=0))
     if len(rr):
         v_run = run_through(np.ascontiguousarray(across.T), cc, rr)
         drop = v_run >= 2 * run_through(closed, rr, cc)
@@ -508,7 +508,7 @@ def _pieces(E: np.ndarray, u: np.ndarray, v: np.ndarray, w: np.ndarray, L: int,
     st = [np.bincount(lp, x, n)[1:] for x in (w, w * u, w * v, w * u * u, w * u * v)]
     nmain = np.bincount(lp, main, n)[1:]
     # share of each piece's positions along that hold evidence of its own
-    er, ec = np.nonzero(E & (lab > 0))
+    er, ec = pixels(E & (lab > 0))
     cols = np.unique(lab[er, ec].astype(np.int64) * W + ec)
     cover = np.bincount(cols // W, minlength=n)[1:] / (right - left + 1.0)
     ok = (st[0] >= min_w) & ((cover >= 0.5) | (right - left + 1 >= 2 * L))
@@ -910,8 +910,9 @@ def _two_sided(segs: np.ndarray, free: np.ndarray, t: float, grow: float,
     ks = (np.arange(m + deep) + 0.5) * step
 
     def nearest_free(sign: float) -> tuple[np.ndarray, np.ndarray]:
-        q = p[:, None, :] + sign * ks[None, :, None] * nrm[:, None, :]
-        r, c = np.floor(q[..., 1]).astype(np.int64), np.floor(q[..., 0]).astype(np.int64)
+        sk = sign * ks                            # per axis: ten times faster than (n, k, 2)
+        r = np.floor(p[:, 1, None] + sk[None, :] * nrm[:, 1, None]).astype(np.int64)
+        c = np.floor(p[:, 0, None] + sk[None, :] * nrm[:, 0, None]).astype(np.int64)
         ok = (r >= 0) & (r < H) & (c >= 0) & (c < W)
         # free at each step (outside the map: not), counted along the normal
         cnt = np.zeros((len(p), m + deep), np.int32)
