@@ -107,3 +107,16 @@ def test_the_pieces():
     t = np.radians(5.0)
     line = np.stack([np.arange(200.0), 30 + np.arange(200.0) * np.tan(t)], 1)
     assert sharp_angle(line, np.ones(200), 3.0) == pytest.approx(5.0, abs=0.15)
+
+
+def test_sharpness_of_many_angles_is_each_angle_alone():
+    """The angle search scores all candidates in one ``bincount``: bit for bit what each
+    angle scored alone gives (the refined angle must not depend on the batching)."""
+    from map2map.maps.directions import _sharpness
+
+    rng = np.random.default_rng(3)
+    pts = rng.random((700, 2)) * 200
+    w = rng.random(700) + 0.1
+    cand = 1.7 + np.arange(-3.0, 3.25, 0.5)
+    many = _sharpness(pts, w, cand)
+    assert many.tolist() == [float(_sharpness(pts, w, [a])[0]) for a in cand]

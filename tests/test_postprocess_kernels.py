@@ -445,3 +445,17 @@ def test_anchored_output_has_no_unknown_pocket_where_the_input_is_free(monkeypat
     assert (out[10:55, 10:55] == FREE).all()
     assert ((out != old) <= ((old == UNKNOWN) & (out == FREE))).all()  # only pockets move
     assert (out[:6] == UNKNOWN).all()            # outside the building stays unknown
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_fill_holes_is_scipys(seed):
+    """The cleaning's hole filling (one OpenCV labelling) is ``binary_fill_holes``."""
+    from scipy import ndimage
+
+    from map2map.learn.ba.postprocess import _fill_holes
+
+    rng = np.random.default_rng(seed)
+    for _ in range(40):
+        H, W = rng.integers(1, 50, 2)
+        m = rng.random((H, W)) < rng.random()
+        assert np.array_equal(_fill_holes(m), ndimage.binary_fill_holes(m))

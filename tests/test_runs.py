@@ -57,3 +57,18 @@ def test_run_through_matches_the_runs():
         while b < m.shape[1] - 1 and m[r, b + 1]:
             b += 1
         assert g == b - a + 1
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_pixels_is_nonzero(seed):
+    """``pixels`` lists a mask's pixels exactly as ``np.nonzero`` (order and int64), for
+    bool, uint8 (any nonzero value), transposed views, empty and full masks."""
+    from map2map.core.runs import pixels
+
+    rng = np.random.default_rng(seed)
+    H, W = rng.integers(1, 90, 2)
+    m = rng.random((H, W)) < rng.random() * 0.6
+    for x in (m, m.astype(np.uint8) * 7, m.T, np.zeros((H, W), bool), np.ones((H, W), bool)):
+        want, got = np.nonzero(x), pixels(x)
+        assert all(g.dtype == np.int64 and np.array_equal(w, g)
+                   for w, g in zip(want, got, strict=True))

@@ -615,3 +615,18 @@ def test_a_run_is_opened_only_where_no_output_wall_lies_near_it():
     hole[30:32, 50:70] = FREE                                # a 1 m opening
     assert broken_runs(m, hole, RES, opened=True) == (1, 1, 1)
     assert broken_runs(m, hole, RES, shortened=True, opened=True) == (1, 1, 0, 1)
+
+
+def test_wall_raster_is_what_render_plan_occupies():
+    """``draw_plan`` hands the bridges ``wall_raster`` instead of a rendered map: its walls
+    must be exactly ``render_plan``'s occupied pixels (axis-aligned, near-axis and
+    slanted walls, one thickness each)."""
+    from map2map.maps.vectorize import render_plan, wall_raster
+
+    rng = np.random.default_rng(5)
+    occ = rng.choice(np.array([0, 127, 255], np.uint8), (90, 120), p=[0.1, 0.3, 0.6])
+    segs = np.array([[5.0, 10.0, 100.0, 10.0], [30.0, 5.0, 30.0, 80.0],
+                     [10.0, 40.0, 110.0, 45.0], [60.0, 20.0, 90.0, 85.0]])
+    tk = np.array([5.0, 3.0, 4.0, 6.0])
+    out = render_plan(segs, occ, tk, 0.05)
+    assert np.array_equal(wall_raster(segs, tk, occ.shape) > 0, out == 0)
