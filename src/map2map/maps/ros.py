@@ -83,6 +83,10 @@ from ..core.errors import InputError
 from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from .raster import RasterImage, pgm_bytes, read_image
 
+#: PyYAML's safe loader, libyaml's C parser when PyYAML was built with it (the same
+#: documents, about ten times faster: a folder of maps reads each yaml twice)
+_SAFE_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
 __all__ = [
     "MODES",
     "FLAVORS",
@@ -373,7 +377,7 @@ def read_ros_yaml(path: str | os.PathLike) -> dict[str, Any]:
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(p, f"cannot read map yaml ({exc})") from None
     try:
-        doc = yaml.safe_load(text)
+        doc = yaml.load(text, Loader=_SAFE_LOADER)           # safe: no Python objects
     except yaml.YAMLError as exc:
         where = getattr(exc, "problem_mark", None)
         at = f" at line {where.line + 1}" if where is not None else ""
