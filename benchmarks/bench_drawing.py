@@ -27,8 +27,9 @@ is the classical cleaning drawn like a plan; ``thesis``) each map is the whole c
 output, its segments the ones its DXF holds, and the time is the corrector's per map.
 
 Prints, per set, the medians of the four measurements, the share of maps meeting each
-target and all four, and the drawer's milliseconds per map (one OpenCV thread; target
-<= 15 ms at 256 px, so that network + drawing reach 50 maps/s on 2 cores).
+target and all four, the unknown pockets (unknown enclosed between a wall and free
+space: reported, no target) and the drawer's milliseconds per map (one OpenCV thread;
+the speed target itself is ``bench_autocorrect``'s).
 """
 
 from __future__ import annotations
@@ -147,7 +148,8 @@ def _measure(items, label: str, verbose: bool, thickness: float | None = None,
             print(f"  {name}: {res:.4f} m/px, angle {angle:+.1f}, comp {r['components']}/"
                   f"{r['components_input']}, thick {r['thickness_px']:.1f}/"
                   f"{r['thickness_plan_px']:.1f}, seg {r['segments']}/{r['plan_walls']}, "
-                  f"broken {r['broken']}/{r['runs']}, {ms[-1]:.1f} ms")
+                  f"broken {r['broken']}/{r['runs']}, pockets {r['pockets']}, "
+                  f"{ms[-1]:.1f} ms")
     _summary(label, rows, ms, cpu)
 
 
@@ -178,6 +180,9 @@ def _summary(label: str, rows: list[dict], ms: list[float], cpu: list[float] = (
     print(f"  all four targets {share('targets_met'):.0f} %")
     print(f"  none opened      {share('ok_opened'):.0f} %; all four with 'none opened' for "
           f"'none broken': {share('targets_met_opened'):.0f} %")
+    print(f"  unknown pockets  {sum(r['pockets'] for r in rows)} (unknown enclosed between "
+          f"a wall and free space; no target); maps with none: "
+          f"{100.0 * sum(r['pockets'] == 0 for r in rows) / len(rows):.0f} %")
     if ms:
         print(f"  drawer time      median {statistics.median(ms):.1f} ms/map wall, "
               f"{statistics.median(cpu):.1f} ms CPU (mean {statistics.mean(ms):.1f} / "
@@ -202,13 +207,18 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--verbose", "-v", action="store_true", help="one line per map")
     ap.add_argument("--thickness", type=float, default=None,
                     help="wall thickness in pixels (default: the drawer's, 0.30 m)")
+    ap.add_argument("--draw-option", action="append", metavar="KEY=VALUE",
+                    help="with --model: a DrawOptions field, as `map2map autocorrect "
+                         "--draw-option` (repeatable), e.g. sliver=0")
     args = ap.parse_args(argv)
     cv2.setNumThreads(1)
     model = None
     if args.model:
-        from map2map.jobs.autocorrect import corrector
+        from map2map.jobs.autocorrect import corrector, parse_draw_options
 
-        model = corrector(args.model)
+        model = corrector(args.model, draw_options=parse_draw_options(args.draw_option))
+    elif args.draw_option:
+        ap.error("--draw-option needs --model")
     what = f"autocorrect --model {args.model}" if model else "drawer"
     if args.data is not None and (args.data / "manifest.sqlite").is_file():
         _measure(_dataset(args.data, args.n), f"dataset {args.data} (256 px, {what})",

@@ -630,3 +630,33 @@ def test_wall_raster_is_what_render_plan_occupies():
     tk = np.array([5.0, 3.0, 4.0, 6.0])
     out = render_plan(segs, occ, tk, 0.05)
     assert np.array_equal(wall_raster(segs, tk, occ.shape) > 0, out == 0)
+
+
+def test_an_unknown_stripe_between_a_drawn_wall_and_its_room_becomes_free():
+    """A wall drawn a few pixels off the input's face leaves the input's wall pixels and
+    the unknown beyond them between itself and the room: up to ``sliver`` wall
+    thicknesses across it becomes free (a plan has no unknown stripe along its walls);
+    wider, or open to the map's border, it stays unknown."""
+    from map2map.maps.vectorize import _render
+
+    occ = np.full((60, 100), 127, np.uint8)
+    occ[5:40, 5:95] = 255                          # the room; rows 40-43: a 4 px stripe
+    wall = np.zeros(occ.shape, np.uint8)
+    wall[44:50, 2:98] = 1                          # the drawn wall below the stripe
+    wall[2:50, 2:5] = wall[2:50, 95:98] = wall[2:5, 2:98] = 1
+    t = 6.0
+    stripe = (slice(40, 44), slice(5, 95))
+    assert (_render(wall, occ, 0.05, 0.5, 0.2, 1.5)[stripe] == 127).all()    # 3 px only
+    assert (_render(wall, occ, 0.05, 0.5, 0.2, max(1.5, 1.0 * t / 2))[stripe] == 255).all()
+    occ[5:44, 50:52] = 127                         # ... not when it is open to the border
+    wall[44:50, 50:52] = 0
+    out = _render(wall, occ, 0.05, 0.5, 0.2, t / 2)
+    assert (out[stripe] == 127).sum() > 0
+
+
+def test_draw_option_sliver_is_read_from_the_command_line():
+    """``--draw-option sliver=0`` turns the wide stripes off (3 pixels only, as before)."""
+    from map2map.jobs.autocorrect import parse_draw_options
+
+    assert parse_draw_options(["sliver=0"]).sliver == 0.0
+    assert parse_draw_options(None) is None or parse_draw_options(None).sliver == 1.0

@@ -21,6 +21,10 @@ An auto-corrected map is compared with its input (the SLAM map) and its plan:
   only stops short of an end (the drawer cuts a wall that overshoots a corner back onto
   the corner) are counted apart, as shortened.
 
+Reported beside them, with no target: **unknown pockets** (:func:`unknown_pockets`),
+unknown regions of the output enclosed between a wall and free space (a stripe along a
+wall inside a room, a room's unseen corner), which a plan does not have.
+
 :func:`drawing_report` gives the four at once, with the targets met.
 
 Examples
@@ -38,11 +42,11 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from ..core.grid import OCCUPIED
+from ..core.grid import FREE, OCCUPIED, UNKNOWN
 from ..core.runs import open_runs
 
 __all__ = ["wall_components", "median_wall_thickness", "straight_wall_count",
-           "broken_runs", "drawing_report", "TARGETS"]
+           "broken_runs", "unknown_pockets", "drawing_report", "TARGETS"]
 
 #: The issue's targets: output components <= input's, median thickness within 1 px of
 #: the plan's, segments <= 1.5 x the plan's straight walls, no input run >= 1 m broken.
@@ -173,6 +177,36 @@ def broken_runs(inp: np.ndarray, out: np.ndarray, resolution: float, *,
     return out_ + ((int(opens),) if opened else ())
 
 
+def unknown_pockets(m: np.ndarray) -> int:
+    """Unknown regions (8-connected) of a three-valued map that touch both a wall and
+    free space (within a pixel) and not the map's border: unknown enclosed between a
+    wall and a room. A map's unknown outside the building touches the border or no wall.
+
+    >>> m = np.full((12, 20), 127, np.uint8); m[2:10, 2:18] = 255; m[9:11, 1:19] = 0
+    >>> m[1, 1:19] = 0; m[1:11, 1] = 0; m[1:11, 18] = 0
+    >>> unknown_pockets(m)
+    0
+    >>> m[7:9, 4:15] = 127                        # a stripe between the room and a wall
+    >>> unknown_pockets(m)
+    1
+    """
+    m = np.asarray(m)
+    n, lab, st, _ = cv2.connectedComponentsWithStats((m == UNKNOWN).astype(np.uint8),
+                                                     connectivity=8)
+    if n <= 1:
+        return 0
+    H, W = m.shape
+    k = np.ones((3, 3), np.uint8)
+    near = [np.bincount(lab[cv2.dilate((m == v).astype(np.uint8), k) > 0], minlength=n) > 0
+            for v in (OCCUPIED, FREE)]
+    x0, y0 = st[:, cv2.CC_STAT_LEFT], st[:, cv2.CC_STAT_TOP]
+    border = ((x0 == 0) | (y0 == 0) | (x0 + st[:, cv2.CC_STAT_WIDTH] == W)
+              | (y0 + st[:, cv2.CC_STAT_HEIGHT] == H))
+    ok = near[0] & near[1] & ~border
+    ok[0] = False
+    return int(ok.sum())
+
+
 def drawing_report(out: np.ndarray, inp: np.ndarray, plan: np.ndarray, resolution: float,
                    segments: np.ndarray | None = None) -> dict:
     """The four measurements of the module doc for one output map, and the targets met.
@@ -192,7 +226,8 @@ def drawing_report(out: np.ndarray, inp: np.ndarray, plan: np.ndarray, resolutio
         ``components``, ``components_input``, ``thickness_px``, ``thickness_plan_px``,
         ``segments``, ``plan_walls``, ``segments_ratio``, ``runs``, ``broken``,
         ``shortened`` (runs whose output stops short of an end: reported, no target),
-        ``opened`` (broken runs with no output wall within 9 pixels at a gap: reported) and
+        ``opened`` (broken runs with no output wall within 9 pixels at a gap: reported),
+        ``pockets`` (:func:`unknown_pockets` of the output: reported) and
         ``ok_components``, ``ok_thickness``, ``ok_segments``, ``ok_broken``,
         ``targets_met``; ``ok_opened`` (no run opened) and ``targets_met_opened`` (the
         four with ``ok_opened`` for ``ok_broken``): the break target read as "no wall
@@ -208,7 +243,8 @@ def drawing_report(out: np.ndarray, inp: np.ndarray, plan: np.ndarray, resolutio
     r = {"components": c_out, "components_input": c_in, "thickness_px": t_out,
          "thickness_plan_px": t_plan, "segments": n_seg, "plan_walls": n_plan,
          "segments_ratio": n_seg / n_plan if n_plan else float("inf"),
-         "runs": runs, "broken": broken, "shortened": short, "opened": opens}
+         "runs": runs, "broken": broken, "shortened": short, "opened": opens,
+         "pockets": unknown_pockets(out) if np.asarray(out).dtype != bool else 0}
     r["ok_components"] = c_out <= c_in
     r["ok_thickness"] = bool(abs(t_out - t_plan) <= TARGETS["thickness_px"])
     r["ok_segments"] = bool(r["segments_ratio"] <= TARGETS["segments_ratio"])

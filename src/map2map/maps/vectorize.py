@@ -81,8 +81,8 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
    axes, drawn column by column; within half a pixel at other angles), extended by half
    the thickness at both ends so corners close; an end no other wall reaches (a door's
    side) only covers its last pixel (:func:`_free_ends_in`), so doors keep the input's
-   width. Unknown slivers a wall drawn off the
-   input's wall leaves between itself and a room (at most 3 pixels across) become free
+   width. Unknown slivers a wall drawn off the input's wall leaves between itself and a
+   room (at most a wall thickness across, ``sliver``, and at least 3 pixels) become free
    (:func:`_slivers`). Nothing else is occupied.
 9. **Bridges** (:func:`_bridges`, :func:`map2map.maps.cover.bridge_gaps`): where the
    input shows a wall as a straight run of wall pixels at least ``bridge_run`` long (in
@@ -294,6 +294,14 @@ class DrawOptions:
         0.834 px, wall recall higher on all 92 maps that move, the matched error higher
         on 58 and lower on 36; Halmstad 13 -> 14 of 18 improved (16 with the rule
         that draws one line of a wall saved twice, ``cover._one_of_each_wall``).
+    sliver : float
+        Unknown regions between a drawn wall and a room (touching both, not the map's
+        border) at most this many of the drawing's wall thicknesses across, and at least
+        3 pixels, become free (:func:`_slivers`): the input's wall pixels and the unknown
+        beyond them where the wall was drawn a little off the input's face, or the
+        unobserved inside of a wall SLAM saved twice that the drawer drew on one of its
+        lines. A plan has no unknown stripes along its walls inside a room; 0: 3 pixels
+        only (as before 2026-11-29).
     """
 
     tol: float = 0.12
@@ -323,6 +331,7 @@ class DrawOptions:
     bridge_beside: float = 2.0
     bridge_same: float = 1.0
     bridge_ends: float = 0.35
+    sliver: float = 1.0
 
 
 @dataclass
@@ -810,7 +819,8 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
             segs, tk = np.concatenate([segs, extra]), np.concatenate([tk, tx])
             wall = wall_raster(segs, tk, occ.shape)
             info["bridged"] = int(len(extra))
-    out = _render(wall, occ, res, opt.min_room, opt.enclosed)
+    out = _render(wall, occ, res, opt.min_room, opt.enclosed,
+                  max(1.5, opt.sliver * t / 2))
     return PlanDrawing(segs, out, angle, t, info, tk)
 
 
@@ -1439,8 +1449,9 @@ def wall_raster(segments: np.ndarray, thickness: float | np.ndarray,
 
 
 def _render(wall: np.ndarray, occ: np.ndarray, resolution: float, min_room: float,
-            enclosed: float) -> np.ndarray:
-    """:func:`render_plan` given its walls (:func:`wall_raster`)."""
+            enclosed: float, sliver: float = 1.5) -> np.ndarray:
+    """:func:`render_plan` given its walls (:func:`wall_raster`); unknown slivers up to
+    ``2 sliver`` pixels across become free (:func:`_slivers`)."""
     H, W = occ.shape
     walls = occ == OCCUPIED
     out = occ.copy()
@@ -1454,7 +1465,7 @@ def _render(wall: np.ndarray, occ: np.ndarray, resolution: float, min_room: floa
     keep = _rooms(free, wall > 0, min_room / resolution**2, enclosed)
     out = np.where(free & ~keep, np.uint8(UNKNOWN), out)
     out[wall > 0] = OCCUPIED
-    out[_slivers(out)] = FREE
+    out[_slivers(out, sliver)] = FREE
     return out
 
 
