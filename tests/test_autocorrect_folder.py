@@ -160,3 +160,34 @@ def test_only_a_missing_extra_reads_as_needs_pytorch(monkeypatch):
     monkeypatch.setitem(J.MODELS, "thesis", J.ModelEntry(failing("map2map.gone"), "x"))
     with pytest.raises(ModuleNotFoundError, match="map2map.gone"):
         J.corrector("thesis")
+
+
+def test_a_folder_leaves_the_cleaning_to_the_workers(tmp_path):
+    """With ``none`` on a folder of 16 maps the workers clean and draw; the calling
+    process only reads, wraps and writes, and imports neither numba nor scipy.ndimage
+    (0.3-0.5 s before the pool could start, 2026-11-29)."""
+    import subprocess
+    import sys
+
+    src = tmp_path / "in"
+    src.mkdir()
+    for i in range(16):
+        d = np.full((60, 80), 127, np.uint8)
+        d[5:55, 5:75] = 255
+        d[5, 5:75] = d[54, 5:75] = 0
+        d[5:55, 5] = d[5:55, 74] = 0
+        d[5:55, 20 + i] = 0
+        save_map(OccupancyMap(d, 0.05), src / f"m{i:02d}.yaml")
+    run = ("import sys\n"
+           "from map2map.cli.main import main\n"
+           "rc = main(sys.argv[1:])\n"
+           "heavy = sorted({m.split('.')[0] + ('.ndimage' if m.startswith('scipy.ndimage') "
+           "else '') for m in sys.modules if m.startswith(('numba', 'scipy.ndimage'))})\n"
+           "print('HEAVY', heavy)\n"
+           "sys.exit(rc)")
+    r = subprocess.run([sys.executable, "-c", run, "autocorrect", str(src), "--out",
+                        str(tmp_path / "out"), "--workers", "2"],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert "HEAVY []" in r.stdout
+    assert len(list((tmp_path / "out").glob("*.yaml"))) == 16

@@ -367,7 +367,7 @@ def stage_autocorrect(ctx: DemoContext) -> None:
         ctx.say("autocorrect: no SLAM map in this demo run; skipped")
         return
     from .jobs.autocorrect import DEFAULT_MODEL, corrector
-    from .learn.ba.autocorrect import Correction
+    from .learn.ba.correction import Correction
     from .learn.training.figures import save_before_after
     from .maps.dxf import save_segments_dxf
     from .maps.formats import save_map

@@ -377,7 +377,7 @@ def _refuse_shared_outputs(files: list[Path], outs: list[dict[str, Path]]) -> No
 def autocorrect(spec: AutocorrectSpec) -> AutocorrectRun:
     """Run ``map2map autocorrect`` (module docstring); the warnings of each correction are
     in ``run.corrections[i].warnings`` (not issued)."""
-    from ..learn.ba.autocorrect import Correction
+    from ..learn.ba.correction import Correction
     from ..learn.training.figures import save_before_after
     from ..maps.dxf import save_segments_dxf
     from ..maps.formats import check_output_path, load_map, save_map
