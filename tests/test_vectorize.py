@@ -660,3 +660,24 @@ def test_draw_option_sliver_is_read_from_the_command_line():
 
     assert parse_draw_options(["sliver=0"]).sliver == 0.0
     assert parse_draw_options(None) is None or parse_draw_options(None).sliver == 1.0
+
+
+@pytest.mark.parametrize("door", [False, True])
+def test_an_unseen_corner_is_closed_and_a_seen_opening_is_not(door):
+    """A room whose corner the robot never saw (free space cut diagonally by unknown,
+    0.6-0.75 m from the corner along both walls): the two walls are drawn on to their
+    corner (``corner_reach``). Where the input's free space runs out through the gap (the
+    robot saw through it: a door), it stays open."""
+    from map2map.maps.vectorize import DrawOptions, draw_plan
+
+    m = np.full((80, 100), 127, np.uint8)
+    m[10:70, 10:90] = 255
+    m[9, 9:91] = 0; m[9:71, 9] = 0; m[70, 9:91] = 0; m[9:71, 90] = 0   # noqa: E702
+    for k in range(12):                                    # the corner never seen
+        m[70 - k:71, 78 + k:91] = 127
+    if door:
+        m[66:75, 78:95] = 255; m[75:80, 70:99] = 255       # noqa: E702
+    closed = draw_plan(m == 0, m, 0.05, cover=m == 0)
+    off = draw_plan(m == 0, m, 0.05, options=DrawOptions(corner_reach=0), cover=m == 0)
+    assert int(off.map[70, 89]) != 0                       # open without the rule
+    assert (int(closed.map[70, 89]) == 0) == (not door)

@@ -84,6 +84,10 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
    width. Unknown slivers a wall drawn off the input's wall leaves between itself and a
    room (at most a wall thickness across, ``sliver``, and at least 3 pixels) become free
    (:func:`_slivers`). Nothing else is occupied.
+   Before the walls are drawn, two walls whose free ends stop short of their common
+   corner by up to ``corner_reach`` (beyond the corner snap's ``reach``) are drawn on to
+   it where the input's free space does not run out between them: a corner the robot
+   never saw (:func:`_close_corners`).
 9. **Bridges** (:func:`_bridges`, :func:`map2map.maps.cover.bridge_gaps`): where the
    input shows a wall as a straight run of wall pixels at least ``bridge_run`` long (in
    a family's frame, or the grid's) and the drawn walls cover it on both sides of a
@@ -302,6 +306,14 @@ class DrawOptions:
         unobserved inside of a wall SLAM saved twice that the drawer drew on one of its
         lines. A plan has no unknown stripes along its walls inside a room; 0: 3 pixels
         only (as before 2026-11-29).
+    corner_reach : float
+        Metres. Two walls more than 30 degrees apart whose free ends both stop short of
+        their crossing by more than half a thickness and a pixel and at most this much
+        are drawn on to it, where the input's free space does not run out between them
+        (at most a quarter of the extensions over free pixels): a room's corner the
+        robot never saw, free space cut across it by unknown (:func:`_close_corners`);
+        0: off. On the dev build (seed 20261205, 320 maps) it closes corners on 91
+        maps; opened runs 3 -> 1.
     """
 
     tol: float = 0.12
@@ -332,6 +344,7 @@ class DrawOptions:
     bridge_same: float = 1.0
     bridge_ends: float = 0.35
     sliver: float = 1.0
+    corner_reach: float = 1.0
 
 
 @dataclass
@@ -807,6 +820,8 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
     if opt.cut_free and len(segs):
         segs = _cut_free(segs, occ == FREE, _splat(pts, w, (H, W)) > 0, tol + t / 4,
                          max(2, int(round(tol))), L, t, opt.min_room / res**2, reach)
+    if opt.corner_reach > 0 and len(segs) > 1:
+        segs = _close_corners(segs, occ == FREE, t / 2 + 1, opt.corner_reach / res, t)
     tk = np.full(len(segs), t)
     if opt.two_sided and len(segs):
         segs, tk = _two_sided(segs, occ == FREE, t, opt.grow_px, one=opt.one_interior)
@@ -1298,6 +1313,70 @@ def _crossings(P: np.ndarray, p0: np.ndarray, u: np.ndarray):
     t = (dx[..., 0] * u[None, :, 1] - dx[..., 1] * u[None, :, 0]) / den
     s = (dx[..., 0] * u[:, None, 1] - dx[..., 1] * u[:, None, 0]) / den
     return t, s, ok
+
+
+def _close_corners(segs: np.ndarray, free: np.ndarray, lo: float, hi: float,
+                   t: float, max_free: float = 0.25) -> np.ndarray:
+    """Segments (image frame) with the open L-corners closed: two walls more than 30
+    degrees apart whose free ends (no other wall within ``t + 1``) both stop short of
+    their lines' crossing, by more than ``lo`` and at most ``hi`` pixels each, are
+    extended to it where the extensions run over at most ``max_free`` of the input's
+    ``free`` pixels: a room's corner the robot never saw (free space meeting unknown
+    across the corner), not a door beside it (the robot saw through a door). Gaps of
+    both ends within the corner snap's reach are closed before (:func:`_snap_ends`).
+
+    >>> free = np.zeros((50, 50), bool); free[12:40, 12:40] = True
+    >>> walls = np.array([[18.0, 10.0, 40.0, 10.0], [10.0, 18.0, 10.0, 40.0]])
+    >>> _close_corners(walls, free, 3.0, 20.0, 4.0).tolist()       # an unseen corner
+    [[10.0, 10.0, 40.0, 10.0], [10.0, 10.0, 10.0, 40.0]]
+    >>> free[8:12, 10:18] = True                                    # seen through: a door
+    >>> _close_corners(walls, free, 3.0, 20.0, 4.0).tolist()
+    [[18.0, 10.0, 40.0, 10.0], [10.0, 18.0, 10.0, 40.0]]
+    """
+    st = _stack([segs])
+    if st is None:
+        return segs
+    s, p0, u, ln, _ = st
+    n = len(s)
+    ends = s.reshape(-1, 2)                              # 2 i: start of i, 2 i + 1: end
+    dist, _ = point_segment_distances(ends, s)
+    dist[np.arange(2 * n), np.repeat(np.arange(n), 2)] = np.inf
+    loose = (dist > t + 1.0).all(axis=1)
+    H, W = free.shape
+
+    def free_share(a: np.ndarray, b: np.ndarray) -> float:
+        k = max(2, int(np.ceil(np.hypot(*(b - a)))) + 1)
+        q = a[None, :] + np.linspace(0.0, 1.0, k)[:, None] * (b - a)[None, :]
+        r = np.clip(np.floor(q[:, 1]).astype(np.int64), 0, H - 1)
+        c = np.clip(np.floor(q[:, 0]).astype(np.int64), 0, W - 1)
+        return float(free[r, c].mean())
+
+    cand = []
+    for e, sign in ((0, -1.0), (1, 1.0)):               # start (outward -u), end (+u)
+        P = ends[e::2]
+        ti, sj, ok = _crossings(P, p0, u)
+        di = sign * ti                                   # outward from this end
+        beyond_start, beyond_end = -sj, sj - ln[None, :]
+        dj = np.where(sj < 0, beyond_start, beyond_end)
+        fj = np.where(sj < 0, 0, 1)                      # which end of j
+        ok &= (di > lo) & (di <= hi) & (dj > lo) & (dj <= hi)
+        ok &= loose[2 * np.arange(n) + e][:, None]
+        ok &= loose[2 * np.arange(n)[None, :] + fj]
+        for i, j in zip(*np.nonzero(ok), strict=True):  # a few corners a map
+            cand.append((max(di[i, j], dj[i, j]), i, e, j, int(fj[i, j]), ti[i, j]))
+    out = s.copy()
+    used = set()
+    for _, i, e, j, f, tij in sorted(cand):
+        if (i, e) in used or (j, f) in used:
+            continue
+        x = s[i, 2 * e:2 * e + 2] + tij * u[i]
+        if max(free_share(s[i, 2 * e:2 * e + 2], x),
+               free_share(s[j, 2 * f:2 * f + 2], x)) > max_free:
+            continue
+        out[i, 2 * e:2 * e + 2] = x
+        out[j, 2 * f:2 * f + 2] = x
+        used |= {(i, e), (j, f)}
+    return out
 
 
 def _split(out: np.ndarray, sizes: list[int]) -> list[np.ndarray]:
