@@ -313,7 +313,11 @@ class DrawOptions:
         (at most a quarter of the extensions over free pixels): a room's corner the
         robot never saw, free space cut across it by unknown (:func:`_close_corners`);
         0: off. On the dev build (seed 20261205, 320 maps) it closes corners on 91
-        maps; opened runs 3 -> 1.
+        maps; opened runs 3 -> 1. Measured once on a fresh build (seed 20261230, 432
+        maps, against 0): Table 5.3's medians unchanged (0.874 / 0.891 px), wall recall
+        higher on 112 maps, Chamfer lower on 94, the matched error lower on 50 and
+        higher on 71 (p = 0.07, mean +0.003 px): the walls it adds are the plan's, where
+        drift put them.
     """
 
     tol: float = 0.12
