@@ -42,7 +42,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from ..core.grid import FREE, OCCUPIED, UNKNOWN
+from ..core.grid import OCCUPIED
 from ..core.runs import open_runs
 
 __all__ = ["wall_components", "median_wall_thickness", "straight_wall_count",
@@ -178,9 +178,9 @@ def broken_runs(inp: np.ndarray, out: np.ndarray, resolution: float, *,
 
 
 def unknown_pockets(m: np.ndarray) -> int:
-    """Unknown regions (8-connected) of a three-valued map that touch both a wall and
-    free space (within a pixel) and not the map's border: unknown enclosed between a
-    wall and a room. A map's unknown outside the building touches the border or no wall.
+    """Unknown regions of a three-valued map enclosed between a wall and free space
+    (:func:`map2map.maps.vectorize.enclosed_unknown`): a stripe along a wall inside a
+    room, an unseen corner of a room.
 
     >>> m = np.full((12, 20), 127, np.uint8); m[2:10, 2:18] = 255; m[9:11, 1:19] = 0
     >>> m[1, 1:19] = 0; m[1:11, 1] = 0; m[1:11, 18] = 0
@@ -190,21 +190,9 @@ def unknown_pockets(m: np.ndarray) -> int:
     >>> unknown_pockets(m)
     1
     """
-    m = np.asarray(m)
-    n, lab, st, _ = cv2.connectedComponentsWithStats((m == UNKNOWN).astype(np.uint8),
-                                                     connectivity=8)
-    if n <= 1:
-        return 0
-    H, W = m.shape
-    k = np.ones((3, 3), np.uint8)
-    near = [np.bincount(lab[cv2.dilate((m == v).astype(np.uint8), k) > 0], minlength=n) > 0
-            for v in (OCCUPIED, FREE)]
-    x0, y0 = st[:, cv2.CC_STAT_LEFT], st[:, cv2.CC_STAT_TOP]
-    border = ((x0 == 0) | (y0 == 0) | (x0 + st[:, cv2.CC_STAT_WIDTH] == W)
-              | (y0 + st[:, cv2.CC_STAT_HEIGHT] == H))
-    ok = near[0] & near[1] & ~border
-    ok[0] = False
-    return int(ok.sum())
+    from ..maps.vectorize import enclosed_unknown
+
+    return int(enclosed_unknown(m)[1].sum())
 
 
 def drawing_report(out: np.ndarray, inp: np.ndarray, plan: np.ndarray, resolution: float,

@@ -140,7 +140,7 @@ from .segments import _join
 
 __all__ = ["DrawOptions", "PlanDrawing", "default_wall_thickness", "wall_points",
            "dominant_angle", "draw_plan", "draw_plan_map", "draw_plan_maps", "render_plan",
-           "wall_raster", "save_plan_dxf", "PLAN_WALL_M"]
+           "wall_raster", "enclosed_unknown", "save_plan_dxf", "PLAN_WALL_M"]
 
 #: Wall thickness (metres) that :func:`default_wall_thickness` draws, before the plans'
 #: pixel of thickening on each side (``DrawOptions.grow_px``): the plans' convention for a
@@ -815,25 +815,26 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
         parts.append(segs_k)
         info = {key: info[key] + info_k[key] for key in info}
     segs = np.concatenate(parts).reshape(-1, 4)
+    free = occ == FREE
     if len(angles) > 1 and len(segs):
         # corners and junctions between the families' walls (within each family they
         # were closed in its own frame), in the map's frame
         segs = np.concatenate(_trim_overshoots(_snap_ends([segs], reach), L + band, reach,
-                                               occ == FREE, t / 2 + 2)).reshape(-1, 4)
+                                               free, t / 2 + 2)).reshape(-1, 4)
     n0 = len(segs)
     if opt.cut_free and len(segs):
-        segs = _cut_free(segs, occ == FREE, _splat(pts, w, (H, W)) > 0, tol + t / 4,
+        segs = _cut_free(segs, free, _splat(pts, w, (H, W)) > 0, tol + t / 4,
                          max(2, int(round(tol))), L, t, opt.min_room / res**2, reach)
     if opt.corner_reach > 0 and len(segs) > 1:
-        segs = _close_corners(segs, occ == FREE, t / 2 + 1, opt.corner_reach / res, t)
+        segs = _close_corners(segs, free, t / 2 + 1, opt.corner_reach / res, t)
     tk = np.full(len(segs), t)
     if opt.two_sided and len(segs):
-        segs, tk = _two_sided(segs, occ == FREE, t, opt.grow_px, one=opt.one_interior)
+        segs, tk = _two_sided(segs, free, t, opt.grow_px, one=opt.one_interior)
     wall = wall_raster(segs, tk, occ.shape)
     info.update(cut=int(len(segs) - n0), angles=[float(a) for a in angles],
                 two_sided=int((tk < t).sum()), bridged=0)
     if cover is not None and opt.bridge_run > 0 and len(segs):
-        extra, tx = _bridges(segs, tk, wall > 0, cover, occ == FREE, angles, res, opt, t)
+        extra, tx = _bridges(segs, tk, wall > 0, cover, free, angles, res, opt, t)
         if len(extra):
             segs, tk = np.concatenate([segs, extra]), np.concatenate([tk, tx])
             wall = wall_raster(segs, tk, occ.shape)
@@ -1343,9 +1344,7 @@ def _close_corners(segs: np.ndarray, free: np.ndarray, lo: float, hi: float,
     s, p0, u, ln, _ = st
     n = len(s)
     ends = s.reshape(-1, 2)                              # 2 i: start of i, 2 i + 1: end
-    dist, _ = point_segment_distances(ends, s)
-    dist[np.arange(2 * n), np.repeat(np.arange(n), 2)] = np.inf
-    loose = (dist > t + 1.0).all(axis=1)
+    loose = _loose_ends(s, t)
     H, W = free.shape
 
     def free_share(a: np.ndarray, b: np.ndarray) -> float:
@@ -1466,14 +1465,16 @@ def _order(s: np.ndarray) -> np.ndarray:
 
 
 def render_plan(segments: np.ndarray, occupancy: np.ndarray, thickness: float | np.ndarray,
-                resolution: float, *, min_room: float = 0.5, enclosed: float = 0.2
-                ) -> np.ndarray:
+                resolution: float, *, min_room: float = 0.5, enclosed: float = 0.2,
+                sliver: float = 1.5) -> np.ndarray:
     """The drawn map (step 8 of the module doc): free and unknown from ``occupancy``
     (its occupied pixels take their nearest non-occupied pixel's value; free regions
     under ``min_room`` m^2, or with less than ``enclosed`` of their outline along a wall,
     become unknown), walls ``thickness`` pixels thick along
     ``segments`` (continuous pixel coordinates; ``thickness`` one for all, or one per
-    segment), nothing else occupied.
+    segment), nothing else occupied; unknown slivers between a wall and a room up to
+    ``2 sliver`` pixels across become free (:func:`draw_plan` passes half its
+    ``DrawOptions.sliver`` thicknesses).
 
     Examples
     --------
@@ -1484,7 +1485,7 @@ def render_plan(segments: np.ndarray, occupancy: np.ndarray, thickness: float | 
     """
     occ = np.asarray(occupancy)
     return _render(wall_raster(segments, thickness, occ.shape), occ, resolution,
-                   min_room, enclosed)
+                   min_room, enclosed, sliver)
 
 
 def wall_raster(segments: np.ndarray, thickness: float | np.ndarray,
@@ -1568,23 +1569,56 @@ def _slivers(out: np.ndarray, width: float = 1.5) -> np.ndarray:
     >>> int(_slivers(m).sum())
     0
     """
-    U = (out == UNKNOWN).astype(np.uint8)
-    n, lab, st, _ = cv2.connectedComponentsWithStats(U, connectivity=8)
-    if n <= 1:
+    lab, enclosed = enclosed_unknown(out)
+    if len(enclosed) <= 1:
         return np.zeros(out.shape, bool)
-    H, W = out.shape
+    U = (out == UNKNOWN).astype(np.uint8)
     d = cv2.distanceTransform(np.pad(U, 1, constant_values=1), cv2.DIST_L2, 3)[1:-1, 1:-1]
-    deep = np.zeros(n, bool)
+    deep = np.zeros(len(enclosed), bool)
     deep[lab[d > width]] = True
+    return (enclosed & ~deep)[lab]
+
+
+def enclosed_unknown(m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The unknown regions (8-connected) of a three-valued map and which of them lie
+    between a wall and free space: they touch both (within a pixel) and not the map's
+    border (unknown outside a building touches the border or no wall). Returns the
+    regions' labels (0: not unknown) and, per label, whether it is enclosed (label 0:
+    False). :func:`_slivers` fills the thin ones; ``evaluate.drawing.unknown_pockets``
+    counts them.
+
+    >>> m = np.full((12, 20), 127, np.uint8); m[2:10, 2:18] = 255; m[9:11, 1:19] = 0
+    >>> m[1, 1:19] = 0; m[1:11, 1] = 0; m[1:11, 18] = 0; m[7:9, 4:15] = 127
+    >>> lab, enclosed = enclosed_unknown(m)
+    >>> int(enclosed.sum()), bool(enclosed[lab[7, 4]]), bool(enclosed[lab[0, 0]])
+    (1, True, False)
+    """
+    m = np.asarray(m)
+    n, lab, st, _ = cv2.connectedComponentsWithStats((m == UNKNOWN).astype(np.uint8),
+                                                     connectivity=8)
+    if n <= 1:
+        return lab, np.zeros(n, bool)
+    H, W = m.shape
     k = np.ones((3, 3), np.uint8)
-    touches = [np.bincount(lab[cv2.dilate((out == v).astype(np.uint8), k) > 0],
+    touches = [np.bincount(lab[cv2.dilate((m == v).astype(np.uint8), k) > 0],
                            minlength=n) > 0 for v in (OCCUPIED, FREE)]
     x0, y0 = st[:, cv2.CC_STAT_LEFT], st[:, cv2.CC_STAT_TOP]
     border = ((x0 == 0) | (y0 == 0) | (x0 + st[:, cv2.CC_STAT_WIDTH] == W)
               | (y0 + st[:, cv2.CC_STAT_HEIGHT] == H))
-    ok = ~deep & touches[0] & touches[1] & ~border
+    ok = touches[0] & touches[1] & ~border
     ok[0] = False
-    return ok[lab]
+    return lab, ok
+
+
+def _loose_ends(segs: np.ndarray, t: float | np.ndarray) -> np.ndarray:
+    """Per segment end (start of segment i at ``2 i``, its end at ``2 i + 1``): no other
+    segment comes within ``t + 1`` pixels of it (``t`` one for all, or one per
+    segment): a door's side or a wall ending in a room, not a corner or junction."""
+    n = len(segs)
+    t = np.broadcast_to(np.asarray(t, float), (n,))
+    dist, _ = point_segment_distances(segs.reshape(-1, 2), segs)   # ends: 2 a segment
+    dist[np.arange(2 * n), np.repeat(np.arange(n), 2)] = np.inf      # not its own wall
+    return (dist > np.repeat(t, 2)[:, None] + 1.0).all(axis=1)
 
 
 def _free_ends_in(segs: np.ndarray, t: float) -> np.ndarray:
@@ -1605,9 +1639,7 @@ def _free_ends_in(segs: np.ndarray, t: float) -> np.ndarray:
     t = np.broadcast_to(np.asarray(t, float), (n,))
     if n == 0 or (t <= 1).all():
         return segs
-    dist, _ = point_segment_distances(segs.reshape(-1, 2), segs)   # ends: 2 a segment
-    dist[np.arange(2 * n), np.repeat(np.arange(n), 2)] = np.inf      # not its own wall
-    free = (dist > np.repeat(t, 2)[:, None] + 1.0).all(axis=1).reshape(n, 2) & (t > 1)[:, None]
+    free = _loose_ends(segs, t).reshape(n, 2) & (t > 1)[:, None]
     d = segs[:, 2:] - segs[:, :2]
     length = np.sqrt(np.maximum((d**2).sum(axis=1), 1e-12))
     step = np.minimum(t / 2 - 0.5, length / 2)[:, None] / length[:, None] * d
