@@ -258,6 +258,26 @@ def test_export_writes_a_hatch_in_metres_with_the_map_frame(tmp_path):
     assert np.allclose(hi, [10 + 85 * RES, 20 + 55 * RES], atol=0.02 * RES)
 
 
+def test_the_same_map_gives_the_same_dxf_bytes(tmp_path):
+    """ezdxf stamps dates and random GUIDs unless told; map2map's writer tells it, and
+    leaves ezdxf's own option as it found it."""
+    from map2map.maps.dxf import save_segments_dxf
+
+    m = flat_map()
+    save_map(m, tmp_path / "a.dxf")
+    save_map(m, tmp_path / "b.dxf")
+    assert (tmp_path / "a.dxf").read_bytes() == (tmp_path / "b.dxf").read_bytes()
+    segs = np.array([[0.0, 0.0, 4.0, 0.0], [4.0, 0.0, 4.0, 3.0]])
+    save_segments_dxf(segs, tmp_path / "c.dxf")
+    save_segments_dxf(segs, tmp_path / "d.dxf")
+    assert (tmp_path / "c.dxf").read_bytes() == (tmp_path / "d.dxf").read_bytes()
+    assert ezdxf.options.write_fixed_meta_data_for_testing is False
+    doc = ezdxf.new()
+    doc.saveas(tmp_path / "e.dxf")  # a caller's own drawing still gets its GUIDs
+    assert ezdxf.readfile(tmp_path / "e.dxf").header["$FINGERPRINTGUID"] != (
+        ezdxf.readfile(tmp_path / "c.dxf").header["$FINGERPRINTGUID"])
+
+
 def test_export_of_a_rotated_map_is_drawn_rotated(tmp_path):
     m = flat_map(origin=(0.3, -0.2, math.pi / 2))  # a quarter turn: still on a lattice
     save_map(m, tmp_path / "rot.dxf")

@@ -54,6 +54,7 @@ import math
 import os
 from collections import Counter
 from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -660,7 +661,33 @@ def _write_drawing(path: str | os.PathLike, layer: str, *, frame: str | None = N
                    width: float | None = None) -> None:
     """The one DXF writer: a drawing in metres with ``layer``, the map frame stored when
     given, closed ``loops`` as one solid hatch, ``segments`` as lines (polylines of
-    constant ``width`` when given); written atomically."""
+    constant ``width`` when given); written atomically.
+
+    The same drawing gives the same bytes: ezdxf's creation and update dates, its
+    "written by" stamps and the drawing's two GUIDs are written as ezdxf's fixed values
+    (``ezdxf.options.write_fixed_meta_data_for_testing``, set for this write only)
+    instead of the clock and random numbers.
+    """
+    with _fixed_dxf_metadata():
+        _write_drawing_now(path, layer, frame=frame, loops=loops, segments=segments,
+                           width=width)
+
+
+@contextmanager
+def _fixed_dxf_metadata():
+    """ezdxf writes fixed dates, stamps and GUIDs inside the block (its option restored
+    after)."""
+    import ezdxf
+
+    before = ezdxf.options.write_fixed_meta_data_for_testing
+    ezdxf.options.write_fixed_meta_data_for_testing = True
+    try:
+        yield
+    finally:
+        ezdxf.options.write_fixed_meta_data_for_testing = before
+
+
+def _write_drawing_now(path, layer, *, frame, loops, segments, width) -> None:
     import ezdxf
 
     from ..core._io import atomic_path
