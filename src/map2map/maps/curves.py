@@ -1,0 +1,348 @@
+"""Curved walls of a map: the input's wall runs that bend along a circle, drawn as arcs.
+
+The plan drawer (:mod:`map2map.maps.vectorize`) draws straight walls at a map's dominant
+directions; a rotunda's wall fits none of them, and the drawer left it out or drew a few
+short straight pieces across it, so a round room the input shows closed came out open to
+the unknown. This step (:func:`curved_walls`):
+
+1. cuts the skeleton of the input's wall pixels (dotted walls closed over a pixel) at
+   its corners and junctions (:func:`cv2.cornerHarris`), so a curved wall that runs on
+   into a straight one is a run of its own, and drops the straight runs;
+2. fits each run a circle (scikit-image's :class:`skimage.measure.CircleModel`; radius
+   ``min_radius``-``max_radius``, RMS residual at most ``max_rms``), joins the runs on
+   one circle (a dotted arc) and fits them again; an arc is a stretch of them with no
+   gap over ``max_gap`` (a door keeps it open), at least ``min_len`` long, bending by at
+   least ``min_sagitta``;
+3. keeps the arcs around one room that turn by ``min_turn`` together (a third of a
+   circle: a rotunda, an apse) unless a long straight wall is drawn along one (a wall
+   that SLAM drift bent): a real map's walls wobble, and one wobble is no round room;
+4. draws each arc as a chain of chords within ``sag_tol`` of its circle, keeping the
+   face the input saw (the thickness grows away from the free side, as for straight
+   walls), and says which straight walls drawn along it go.
+
+The chords are segments like any other wall, so the raster and the DXF agree.
+
+Examples
+--------
+A round room of radius 40 px whose wall no straight wall explains:
+
+>>> import numpy as np
+>>> m = np.full((120, 120), 127, np.uint8)
+>>> yy, xx = np.mgrid[0:120, 0:120] + 0.5
+>>> r = np.hypot(xx - 60, yy - 60)
+>>> m[r < 40] = 255; m[(r >= 40) & (r < 42)] = 0
+>>> segs, _ = curved_walls(m == 0, m == 255, 0.05, 4)
+>>> len(segs) > 20                                  # one closed chain of chords
+True
+>>> d = np.hypot(segs[:, 0] - 60, segs[:, 1] - 60)
+>>> bool(np.all(np.abs(d - 42) < 1.0))              # the face at 40, grown outwards
+True
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+
+from ..core.geometry import point_segment_distances
+
+__all__ = ["curved_walls", "arc_chords"]
+
+
+def arc_chords(centre: tuple[float, float], radius: float, a0: float, span: float,
+               sag_tol: float = 0.25) -> np.ndarray:
+    """(K, 4) segments ``x0, y0, x1, y1`` along the arc from angle ``a0`` (radians, image
+    frame) over ``span``, each chord within ``sag_tol`` pixels of the circle.
+
+    >>> s = arc_chords((0.0, 0.0), 10.0, 0.0, math.pi / 2, 0.25)
+    >>> s[0, :2].round(3).tolist(), s[-1, 2:].round(3).tolist()
+    ([10.0, 0.0], [0.0, 10.0])
+    """
+    step = 2 * math.acos(max(-1.0, 1 - sag_tol / max(radius, 1e-9)))
+    n = max(1, math.ceil(abs(span) / max(step, 1e-6)))
+    a = a0 + np.linspace(0.0, span, n + 1)
+    x = centre[0] + radius * np.cos(a)
+    y = centre[1] + radius * np.sin(a)
+    return np.stack([x[:-1], y[:-1], x[1:], y[1:]], 1)
+
+
+def _arcs_of(ang: np.ndarray, max_gap: float) -> list[tuple[float, float]]:
+    """(start, span) of the runs of sorted angles ``ang`` with no gap over ``max_gap``
+    (radians): the largest gap is the arc's outside; a full circle is one run."""
+    a = np.sort(np.mod(ang, 2 * math.pi))
+    gaps = np.diff(np.concatenate([a, a[:1] + 2 * math.pi]))
+    k = int(np.argmax(gaps))
+    if gaps[k] <= max_gap:                       # a closed circle
+        return [(float(a[0]), 2 * math.pi)]
+    a = np.roll(a, -(k + 1))
+    a = np.where(a < a[0], a + 2 * math.pi, a)
+    cut = np.flatnonzero(np.diff(a) > max_gap)
+    starts = np.concatenate([[0], cut + 1])
+    ends = np.concatenate([cut, [len(a) - 1]])
+    return [(float(a[s]), float(a[e] - a[s])) for s, e in zip(starts, ends, strict=True)]
+
+
+def _circle(model, p: np.ndarray) -> tuple[float, float, float] | None:
+    """(xc, yc, r) of the least-squares circle through ``p``, or None (scikit-image's
+    fit: ``from_estimate`` from 0.26 on, ``estimate`` before)."""
+    if hasattr(model, "from_estimate"):
+        fit = model.from_estimate(p)
+        if not fit:
+            return None
+        (xc, yc), r = fit.center, fit.radius
+    else:  # pragma: no cover - scikit-image < 0.26
+        fit = model()
+        if not fit.estimate(p):
+            return None
+        xc, yc, r = fit.params
+    return float(xc), float(yc), float(r)
+
+
+def curved_walls(cover: np.ndarray, free: np.ndarray, resolution: float, thickness: float,
+                 segments: np.ndarray | None = None, *, min_len: float = 1.5,
+                 min_radius: float = 1.0, max_radius: float = 10.0, max_rms: float = 0.75,
+                 min_sagitta: float = 3.0, max_gap: float = 0.4, sag_tol: float = 0.25,
+                 min_turn: float = 2 * math.pi / 3) -> tuple[np.ndarray, np.ndarray]:
+    """Segments (continuous pixel coordinates, image frame) of the input's curved walls,
+    and which of the straight ``segments`` drawn so far lie along them.
+
+    Parameters
+    ----------
+    cover : (H, W) bool
+        The input's wall pixels.
+    free : (H, W) bool
+        The input's free space: the side an arc was seen from.
+    resolution : float
+        Metres per pixel.
+    thickness : float
+        Pixels: the drawn walls' thickness (the arc is drawn at it).
+    segments : (N, 4) float, optional
+        The straight walls drawn so far; those lying along an arc (60 % of their length
+        within half a thickness and 2 pixels of it) are its chords at the wrong angle.
+        Straight walls at least half the arc's length within half a thickness and 2
+        pixels of 60 % of it explain the run as a straight wall
+        that SLAM drift bent: no arc is drawn there (on the dev build's 320 maps, whose
+        plans have no curved wall, five such walls bend by 2.8-3.5 px over 23-46
+        degrees, as much as a rotunda's arcs).
+    min_len, min_radius, max_radius, max_gap : float
+        Metres: an arc's shortest length, its radius range, and the widest gap between
+        its pixels along it (a wider one is a door: the arc is cut there).
+    max_rms, min_sagitta, sag_tol : float
+        Pixels: the fit's largest RMS residual, an arc's least bend over its length (a
+        straight run within the fit's residual bends by about 2), and the chords'
+        largest distance from the circle.
+    min_turn : float
+        Radians: the least angle the arcs around one room (:func:`_round_rooms`) turn
+        by together (a third of a circle: a rotunda, an apse). A real map's walls
+        wobble: on the 18 Halmstad sensor maps, whose buildings have no curved wall,
+        58 runs fit a circle of 1-10 m within 0.75 px over 1.5-3.7 m bending by 3-9 px,
+        none with others around one room, each turning by at most 88 degrees; the ACES
+        rotunda's three arcs turn by 159.
+
+    Returns
+    -------
+    chords : (K, 4) float
+        The chords of every arc found, in order along each arc.
+    drop : (N,) bool
+        The ``segments`` an arc replaces.
+    """
+    res = float(resolution)
+    t = float(thickness)
+    cover = np.asarray(cover, bool)
+    free = np.asarray(free, bool)
+    segs = np.zeros((0, 4)) if segments is None else np.asarray(segments, float).reshape(-1, 4)
+    drop = np.zeros(len(segs), bool)
+    n_min = min_len / res
+    pieces = _smooth_pieces(cover, n_min / 2)
+    fits = []
+    for p in pieces:                                # a few dozen runs
+        f = _fit(p, min_radius / res, max_radius / res, max_rms)
+        if f is not None:
+            fits.append((f, p))
+    if not fits:
+        return np.zeros((0, 4)), drop
+    cand = []                                      # (centre, radius, a0, span, points)
+    for p in _same_circles(fits):
+        f = _fit(p, min_radius / res, max_radius / res, max_rms)
+        if f is None:
+            continue
+        xc, yc, r = f
+        ang = np.arctan2(p[:, 1] - yc, p[:, 0] - xc)
+        cand += [((xc, yc), r, a0, span, p) for a0, span in _arcs_of(ang, max_gap / res / r)
+                 if span * r >= n_min
+                 and r * (1 - math.cos(min(span, math.pi) / 2)) >= min_sagitta]
+    out = []
+    depth = samples = seg_len = None
+    for g in _round_rooms([(c, r) for c, r, *_ in cand]):
+        if sum(cand[k][3] for k in g) < min_turn:
+            continue                                # a wobble, not a round room
+        if depth is None:                           # a round room: rare
+            from scipy import ndimage as ndi
+
+            depth = ndi.distance_transform_edt(~free)      # px to the free space
+            samples = _samples(segs)
+            seg_len = np.hypot(segs[:, 2] - segs[:, 0], segs[:, 3] - segs[:, 1])
+        kept = []
+        for k in g:
+            (xc, yc), r, a0, span, p = cand[k]
+            ang = np.arctan2(p[:, 1] - yc, p[:, 0] - xc)
+            rc = r + _face_shift(p, (xc, yc), r, ang, free, depth, t)
+            ch = arc_chords((xc, yc), rc, a0, span, sag_tol)
+            if not _straight_along(ch, segs[seg_len >= span * r / 2], t / 2 + 2):
+                kept.append((k, ch))        # else a straight wall drawn along it: drift
+        if sum(cand[k][3] for k, _ in kept) < min_turn:
+            continue
+        for k, ch in kept:
+            (xc, yc), r, a0, span, _ = cand[k]
+            out.append(ch)
+            drop |= _along(samples, (xc, yc), r, a0, span, t / 2 + 2)
+    return (np.concatenate(out) if out else np.zeros((0, 4))), drop
+
+
+def _smooth_pieces(cover: np.ndarray, min_px: float) -> list[np.ndarray]:
+    """Pixel centres (x, y) of the input's wall runs cut at corners and junctions: the
+    skeleton of the wall pixels (dotted walls closed over a pixel) less every pixel
+    within 2 of a Harris corner (:func:`cv2.cornerHarris`, 5 x 5, over 0.008: a drawn
+    corner or T-junction answers about 0.06, the rounded corners of a real map's walls
+    0.011-0.029, an arc of radius 25 px 0.0066 and of 80 px 0.001)."""
+    from skimage.morphology import skeletonize
+
+    if cover.sum() < min_px:
+        return []
+    joined = cv2.morphologyEx(cover.view(np.uint8), cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8))
+    sk = skeletonize(joined > 0)
+    corner = cv2.cornerHarris(sk.astype(np.float32), 5, 3, 0.04) > 0.008
+    sk &= cv2.dilate(corner.view(np.uint8), np.ones((5, 5), np.uint8)) == 0
+    n, lab, st, _ = cv2.connectedComponentsWithStats(sk.view(np.uint8), connectivity=8)
+    ys, xs = np.nonzero(lab)
+    k = lab[ys, xs]
+    # a straight run (every point within about a pixel of its principal line) is no
+    # arc: the smaller eigenvalue of each run's covariance, all runs at once
+    m = np.maximum(np.bincount(k, minlength=n), 1)
+    mx, my = np.bincount(k, xs, n) / m, np.bincount(k, ys, n) / m
+    cxx = np.bincount(k, xs * xs.astype(float), n) / m - mx * mx
+    cyy = np.bincount(k, ys * ys.astype(float), n) / m - my * my
+    cxy = np.bincount(k, xs * ys.astype(float), n) / m - mx * my
+    small = (cxx + cyy) / 2 - np.sqrt(((cxx - cyy) / 2) ** 2 + cxy ** 2)
+    keep = (st[:, cv2.CC_STAT_AREA] >= min_px) & (small > 0.25)
+    keep[0] = False
+    sel = keep[k]
+    ys, xs, k = ys[sel], xs[sel], k[sel]
+    order = np.argsort(k, kind="stable")
+    pts = np.column_stack([xs[order] + 0.5, ys[order] + 0.5])
+    return np.split(pts, np.flatnonzero(np.diff(k[order])) + 1) if len(pts) else []
+
+
+def _fit(p: np.ndarray, r_min: float, r_max: float, max_rms: float
+         ) -> tuple[float, float, float] | None:
+    """(xc, yc, r) of ``p``'s circle when its radius is in range and it fits."""
+    from skimage.measure import CircleModel
+
+    f = _circle(CircleModel, p)
+    if f is None or not (r_min <= f[2] <= r_max):
+        return None
+    xc, yc, r = f
+    if float(np.sqrt(np.mean((np.hypot(p[:, 0] - xc, p[:, 1] - yc) - r) ** 2))) > max_rms:
+        return None
+    return f
+
+
+def _round_rooms(circles: list) -> list[list[int]]:
+    """Indices of the arcs around one room: circles whose centres lie within half their
+    radius of each other and whose radii differ by at most a quarter (a rotunda SLAM
+    made a little oval fits each arc with its own circle: ACES's three arcs, radii 60,
+    73 and 74 px, centres 22 px apart)."""
+    n = len(circles)
+    parent = list(range(n))
+
+    def root(i):
+        while parent[i] != i:
+            i = parent[i]
+        return i
+
+    for i in range(n):
+        (xi, yi), ri = circles[i]
+        for j in range(i + 1, n):
+            (xj, yj), rj = circles[j]
+            rm = (ri + rj) / 2
+            if math.hypot(xi - xj, yi - yj) <= rm / 2 and abs(ri - rj) <= rm / 4:
+                parent[root(j)] = root(i)
+    groups: dict[int, list[int]] = {}
+    for i in range(n):
+        groups.setdefault(root(i), []).append(i)
+    return list(groups.values())
+
+
+def _same_circles(fits: list) -> list[np.ndarray]:
+    """The pieces' points grouped by circle: centres within 5 % of the radius and 2 px,
+    radii within 2 px (the pieces of a dotted arc, the arcs of a rotunda between its
+    doors)."""
+    groups: list[list] = []
+    for f, p in fits:
+        for g in groups:
+            (xc, yc, r), _ = g[0]
+            if (math.hypot(f[0] - xc, f[1] - yc) <= 2 + 0.05 * r
+                    and abs(f[2] - r) <= 2):
+                g.append((f, p))
+                break
+        else:
+            groups.append([(f, p)])
+    return [np.concatenate([p for _, p in g]) for g in groups]
+
+
+def _face_shift(p, centre, r, ang, free, depth, t) -> float:
+    """How far the drawn centre line lies from the fitted input line (px, outwards
+    positive): the face the input saw kept, the thickness grown away from the free side;
+    seen from both sides (or neither), on the input's line."""
+    xc, yc = centre
+    side = []
+    for dr in (-2.0, 2.0):
+        qx = np.clip((xc + (r + dr) * np.cos(ang)).astype(int), 0, free.shape[1] - 1)
+        qy = np.clip((yc + (r + dr) * np.sin(ang)).astype(int), 0, free.shape[0] - 1)
+        side.append(float(free[qy, qx].mean()))
+    inside, outside = side
+    qx = np.clip(p[:, 0].astype(int), 0, free.shape[1] - 1)
+    qy = np.clip(p[:, 1].astype(int), 0, free.shape[0] - 1)
+    d = float(np.median(depth[qy, qx]))                 # the input's line to its face
+    if inside > 2 * outside:
+        return t / 2 - (d - 0.5)
+    if outside > 2 * inside:
+        return -(t / 2 - (d - 0.5))
+    return 0.0
+
+
+def _straight_along(chords: np.ndarray, long_segs: np.ndarray, band: float,
+                    share: float = 0.6) -> bool:
+    """Whether ``share`` of an arc's chord ends lie within ``band`` of the long straight
+    walls ``long_segs``."""
+    if not len(long_segs):
+        return False
+    p = np.concatenate([chords[:, :2], chords[-1:, 2:]])
+    d, _ = point_segment_distances(p, long_segs)
+    return bool((d.min(axis=1) <= band).mean() >= share)
+
+
+def _samples(segs: np.ndarray) -> list[np.ndarray]:
+    """Points every pixel or so along each segment."""
+    out = []
+    for s in segs:
+        k = max(2, int(math.hypot(s[2] - s[0], s[3] - s[1])) + 1)
+        f = np.linspace(0.0, 1.0, k)[:, None]
+        out.append(s[:2] + f * (s[2:] - s[:2]))
+    return out
+
+
+def _along(samples: list[np.ndarray], centre, r: float, a0: float, span: float,
+           band: float, share: float = 0.6) -> np.ndarray:
+    """Which segments (their ``samples``) lie along the arc: ``share`` of their points
+    within ``band`` of the circle, inside the arc's angles."""
+    xc, yc = centre
+    hit = np.zeros(len(samples), bool)
+    for k, q in enumerate(samples):
+        d = np.abs(np.hypot(q[:, 0] - xc, q[:, 1] - yc) - r)
+        a = np.mod(np.arctan2(q[:, 1] - yc, q[:, 0] - xc) - a0, 2 * math.pi)
+        on = (d <= band) & (a <= span + band / r)
+        hit[k] = on.mean() >= share
+    return hit
