@@ -3,9 +3,9 @@ the map show it? (issue #32; docs/autocorrect.md, "Why no network moves the wall
 
 A particle filter's pose error changes slowly while the robot maps a room, so much of a
 SLAM map's remaining error could be one translation per room. This diagnostic cuts the
-map's free space into rooms (:func:`rooms`: a watershed of the distance transform, the
-standard room segmentation), gives every pixel to its nearest room (a wall face to the
-room it faces), and moves each room by one translation:
+map's free space into rooms (:func:`rooms`: the watershed of the distance transform
+that Model_AB's room drift cuts plans with), gives every pixel to its nearest room (a
+wall face to the room it faces), and moves each room by one translation:
 
 - :func:`fit_rooms` fits each room's translation **knowing the plan** (the plan's
   same-side face distances, :func:`map2map.learn.ba.field.face_distances`, Charbonnier,
@@ -24,9 +24,9 @@ Two rooms side by side; the right one mapped 2 px too far right:
 >>> m[10:50, 10:48] = 255; m[10:50, 52:90] = 255
 >>> m[8:10, 8:92] = 0; m[50:52, 8:92] = 0; m[8:52, 8:10] = 0; m[8:52, 48:52] = 0
 >>> m[8:52, 90:92] = 0
->>> lab, near = rooms(m, min_dist=8, min_r=3)
->>> int(lab.max())
-2
+>>> lab, near = rooms(m)
+>>> int(lab.max()), int(near[30, 50]) in (1, 2)
+(2, True)
 """
 
 from __future__ import annotations
@@ -41,23 +41,14 @@ __all__ = ["rooms", "fit_rooms", "solve_rooms", "room_field"]
 _STEP = {0: (1, 0), 1: (0, 1), 2: (-1, 0), 3: (0, -1)}
 
 
-def rooms(m: np.ndarray, min_dist: int = 12, min_r: float = 3.0
-          ) -> tuple[np.ndarray, np.ndarray]:
-    """``(labels, nearest)``: the free space cut into rooms (watershed of the distance
-    transform from its peaks at least ``min_dist`` px apart and ``min_r`` px deep; 0
-    outside the free space), and every pixel's nearest room."""
-    from skimage.feature import peak_local_max
-    from skimage.segmentation import watershed
+def rooms(m: np.ndarray, h_px: float = 4.0) -> tuple[np.ndarray, np.ndarray]:
+    """``(labels, nearest)``: the map's free space cut into rooms by the same watershed
+    of its distance transform that cuts a plan's (:func:`map2map.learn.ab.room_drift.
+    segment_rooms`; labels 0 outside the free space), and every pixel's nearest room."""
+    from map2map.learn.ab.room_drift import segment_rooms
 
-    free = m == 255
-    dt = ndi.distance_transform_edt(free)
-    pk = peak_local_max(dt, min_distance=min_dist, threshold_abs=min_r,
-                        labels=ndi.label(free)[0])
-    mk = np.zeros(m.shape, np.int32)
-    mk[tuple(pk.T)] = np.arange(1, len(pk) + 1)
-    lab = watershed(-dt, mk, mask=free)
-    idx = ndi.distance_transform_edt(lab == 0, return_distances=False, return_indices=True)
-    return lab, lab[idx[0], idx[1]]
+    near = segment_rooms(m, h_px=h_px)
+    return np.where(m == 255, near, 0), near
 
 
 def room_field(nearest: np.ndarray, shifts: dict | np.ndarray) -> np.ndarray:
