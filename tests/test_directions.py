@@ -55,6 +55,35 @@ def test_a_wing_turned_beyond_the_lean_is_drawn_at_its_own_angle(deg):
     assert _coverage(m, one.map) < 0.9
 
 
+@pytest.mark.parametrize("deg", [44.0, 45.0, 30.0])
+def test_a_wing_at_45_degrees_is_a_family_of_its_own(deg):
+    """Deviations are folded modulo 90 degrees: walls at +44 and -44 degrees are one
+    direction, averaged around the circle (a linear average of a 45-degree wing's walls,
+    some folded to +45 and some to -45, was 0, and the wing was drawn as dashes)."""
+    m = two_wings(deg)
+    d = draw_plan(m == OCC, m, RES, 3)
+    assert len(d.info["angles"]) == 2
+    got = sorted(a % 90 for a in d.info["angles"])
+    assert got == pytest.approx(sorted([0.0, deg % 90]), abs=0.5)
+    assert _coverage(m, d.map) > 0.97
+
+
+def test_the_input_walls_decide_the_families_where_the_evidence_lacks_a_wing():
+    """A corrector's evidence may hold its walls in the main directions only, the input's
+    turned walls at a low weight; the input's own wall pixels (``votes``, the drawer's
+    ``cover``) still find the wing."""
+    m = two_wings(30.0)
+    walls = m == OCC
+    pts = wall_points(walls)
+    w = np.where(pts[:, 0] < 150, 1.0, 0.02)        # the turned room barely counts
+    alone, _ = angle_families(pts, w, m.shape, 0.0, RES)
+    assert alone == [0.0]
+    angles, label = angle_families(pts, w, m.shape, 0.0, RES,
+                                   votes=(pts, np.ones(len(pts))))
+    assert len(angles) == 2 and abs(angles[1] % 90 - 30.0) < 0.5
+    assert (label[pts[:, 0] > 170] == 1).all() and (label[pts[:, 0] < 130] == 0).all()
+
+
 def test_a_slight_turn_stays_one_family():
     m = two_wings(3.0)                   # within what a leaning wall follows
     d = draw_plan(m == OCC, m, RES, 3)

@@ -15,7 +15,9 @@ such wings apart:
 2. **Deviation field**: each wall pixel's orientation less the dominant angle, folded
    into [-45, 45), averaged over its neighbourhood (a Gaussian of ``sigma`` metres,
    weighted by coherence) so that a room's walls vote together and a ragged wall's
-   noise averages out.
+   noise averages out. The average goes around the circle (of four times the
+   deviation): a wing at 45 degrees, whose walls fold to +45 and -45 alike, averages to
+   45, not 0.
 3. **Families** (:func:`angle_families`): beside the dominant angle, a further angle
    where at least ``min_share`` of the evidence (and ``min_len`` metres of wall)
    deviates by more than ``min_dev`` degrees, around one mode; its angle is refined
@@ -158,14 +160,14 @@ def sharp_angle(pts: np.ndarray, w: np.ndarray, start: float, span: float = 3.0)
     return sharpest(best + np.arange(-0.4, 0.45, 0.1))[0]
 
 
-def _smooth(a: np.ndarray, b: np.ndarray, sigma: float) -> tuple[np.ndarray, np.ndarray]:
-    """``a`` and ``b`` (float32) smoothed by a Gaussian of ``sigma`` pixels; a wide one on
+def _smooth(sigma: float, *arrays: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The ``arrays`` (2-4, float32) smoothed by a Gaussian of ``sigma`` pixels; a wide one on
     a grid pooled by about ``sigma / 4`` (area averages) and brought back bilinearly, in
     a twentieth of the time: a smooth kernel about as wide (on the maps' walls it differs
     from the exact Gaussian by a median 7 % of the peak, at most 17 %), enough for
     averaging deviations, whose ratio is what counts."""
-    ab = cv2.merge([a, b])
-    H, W = a.shape
+    ab = cv2.merge(list(arrays))
+    H, W = arrays[0].shape
     f = int(sigma // 4)
     if f < 2:
         out = cv2.GaussianBlur(ab, (0, 0), sigma)
@@ -174,13 +176,36 @@ def _smooth(a: np.ndarray, b: np.ndarray, sigma: float) -> tuple[np.ndarray, np.
                            interpolation=cv2.INTER_AREA)
         out = cv2.resize(cv2.GaussianBlur(small, (0, 0), sigma / f), (W, H),
                          interpolation=cv2.INTER_LINEAR)
-    return out[..., 0], out[..., 1]
+    return tuple(out[..., k] for k in range(len(arrays)))
+
+
+def _wrap(x):
+    """Degrees folded into [-45, 45): a direction and the one square to it alike."""
+    return (x + 45.0) % 90.0 - 45.0
+
+
+def _mean_deviation(c: np.ndarray, dev: np.ndarray, sigma: float, r: np.ndarray,
+                    q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """At the pixels ``(r, q)``: the ``c``-weighted mean of the deviations ``dev``
+    (degrees, modulo 90) over a Gaussian of ``sigma`` pixels, as a circular mean (of
+    ``4 dev`` on the unit circle: walls at +44 and -44 degrees average to 45, not 0),
+    and where there is any weight."""
+    t = np.radians(4.0 * dev)
+    cs, sn, den = _smooth(sigma, c * np.cos(t), c * np.sin(t), c)
+    ok = den[r, q] > 1e-6 * max(float(den.max()), 1e-12)
+    return np.where(ok, _wrap(np.degrees(np.arctan2(sn[r, q], cs[r, q])) / 4.0), 0.0), ok
+
+
+def _apart(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """How far deviations lie apart, modulo 90 degrees."""
+    return np.abs(_wrap(a - b))
 
 
 def angle_families(points: np.ndarray, weights: np.ndarray, shape: tuple[int, int],
                    angle: float, resolution: float, *, min_dev: float = 5.0,
                    min_share: float = 0.15, min_len: float = 4.0, sigma: float = 1.0,
-                   max_families: int = 3) -> tuple[list[float], np.ndarray]:
+                   max_families: int = 3, votes: tuple[np.ndarray, np.ndarray] | None = None,
+                   votes_min_dev: float = 20.0) -> tuple[list[float], np.ndarray]:
     """Direction families of wall points (module doc): their angles (degrees, image
     frame, the dominant ``angle`` first) and each point's family.
 
@@ -203,6 +228,17 @@ def angle_families(points: np.ndarray, weights: np.ndarray, shape: tuple[int, in
     sigma : float
         Metres: the neighbourhood over which the deviation is averaged.
     max_families : int
+    votes : ((M, 2), (M,)) float, optional
+        Other wall points and weights that may add families the points miss, at least
+        ``votes_min_dev`` degrees off every family (a building's own second direction,
+        not a wing SLAM turned): the drawer passes the input's own wall pixels, whose
+        walls in every direction are there, where its evidence may hold a corrector's
+        walls in the main directions only. When they add one, ``points`` are labelled
+        by their field.
+    votes_min_dev : float
+        Degrees. Wings turned by drift lie 5-15 degrees off (the dev build); taken from
+        the input's walls they would be drawn at their turn, which the cleaning rightly
+        undoes (Table 5.3 on the dev build: 5 maps, all worse, 1.67 -> 3.34 px at most).
 
     Returns
     -------
@@ -215,52 +251,82 @@ def angle_families(points: np.ndarray, weights: np.ndarray, shape: tuple[int, in
     label = np.zeros(len(pts), np.int64)
     if len(pts) < 3 or max_families < 2:
         return [float(angle)], label
-    H, W = shape
-    img = splat(pts, w, shape).astype(np.float32)
-    at = pixels(img > 0)                       # the wall pixels only: a few thousand
-    ang, coh = orientation(img, at=at)
-    dev = np.zeros(shape, np.float32)
-    dev[at] = (ang - angle + 45.0) % 90.0 - 45.0
-    c = np.zeros(shape, np.float32)
-    c[at] = coh
     s = max(1.0, sigma / float(resolution))
-    num, den = _smooth(c * dev, c, s)
-    r = np.clip(np.floor(pts[:, 1]).astype(np.int64), 0, H - 1)
-    q = np.clip(np.floor(pts[:, 0]).astype(np.int64), 0, W - 1)
-    ok = den[r, q] > 1e-6 * max(float(den.max()), 1e-12)
-    d = np.where(ok, num[r, q] / np.maximum(den[r, q], 1e-12), 0.0)
-    devs = [0.0]
-    total = float(w.sum())
-    need = max(min_share * total, 2.0 * min_len / float(resolution) * float(w.max()))
-    for _ in range(max_families - 1):
-        far = np.min(np.abs(d[:, None] - np.asarray(devs)[None, :]), axis=1) >= min_dev
-        if float(w[far].sum()) < need:
-            break
-        # the mode of the far points' deviations (0.5 degree bins, smoothed)
-        b = np.clip(((d[far] + 45.0) * 2).astype(np.int64), 0, 179)
-        hist = np.convolve(np.bincount(b, w[far], 180), [1.0, 2, 3, 2, 1], "same")
-        mode = (int(np.argmax(hist)) + 0.5) / 2.0 - 45.0
-        near = far & (np.abs(d - mode) <= 2.0)
-        if float(w[near].sum()) < need:
-            break
-        a = sharp_angle(pts[near], w[near], angle + mode, 2.0)
-        dv = (a - angle + 45.0) % 90.0 - 45.0
-        if min(abs(dv - x) for x in devs) < min_dev:
-            break
-        devs.append(dv)
+    field = _Field(pts, w, shape, angle, s)
+    need = max(min_share * float(w.sum()), 2.0 * min_len / float(resolution) * float(w.max()))
+    devs = field.families([0.0], pts, w, need, min_dev, max_families, angle)
+    if votes is not None and len(devs) < max_families:
+        vp = np.asarray(votes[0], float).reshape(-1, 2)
+        vw = np.asarray(votes[1], float).reshape(-1)
+        if len(vp) >= 3:
+            vfield = _Field(vp, vw, shape, angle, s)
+            vneed = max(min_share * float(vw.sum()),
+                        2.0 * min_len / float(resolution) * float(vw.max()))
+            more = vfield.families(devs, vp, vw, vneed, votes_min_dev, max_families, angle)
+            if len(more) > len(devs):
+                devs, field = more, vfield
     if len(devs) > 1:
-        dv = np.asarray(devs)
-        label = np.argmin(np.abs(d[:, None] - dv[None, :]), axis=1)
-        # near the border of two wings the wide average mixes them: where the wall's
-        # own orientation (averaged over a fifth of ``sigma``) is clearly nearer one
-        # family, it decides
-        s2 = max(1.0, 0.2 * s)
-        num2, den2 = _smooth(c * dev, c, s2)
-        ok2 = den2[r, q] > 1e-6 * max(float(den2.max()), 1e-12)
-        d2 = num2[r, q] / np.maximum(den2[r, q], 1e-12)
-        gap = np.sort(np.abs(d2[:, None] - dv[None, :]), axis=1)
-        sure = ok2 & (gap[:, 1] - gap[:, 0] >= 0.5 * min_dev)
-        label = np.where(sure, np.argmin(np.abs(d2[:, None] - dv[None, :]), axis=1), label)
-    angles = [float(angle)] + [round(float((angle + x + 45.0) % 90.0 - 45.0), 1)
-                               for x in devs[1:]]
+        label = field.labels(pts, np.asarray(devs), min_dev)
+    angles = [float(angle)] + [round(float(_wrap(angle + x)), 1) for x in devs[1:]]
     return angles, label
+
+
+class _Field:
+    """The deviation field of wall points (module doc, step 2) and the family search
+    and labelling on it (step 3)."""
+
+    def __init__(self, pts: np.ndarray, w: np.ndarray, shape: tuple[int, int], angle: float,
+                 s: float):
+        img = splat(pts, w, shape).astype(np.float32)
+        at = pixels(img > 0)                       # the wall pixels only: a few thousand
+        ang, coh = orientation(img, at=at)
+        self.dev = np.zeros(shape, np.float32)
+        self.dev[at] = _wrap(ang - angle)
+        self.c = np.zeros(shape, np.float32)
+        self.c[at] = coh
+        self.s, self.shape = s, shape
+
+    def _at(self, pts: np.ndarray, s: float) -> tuple[np.ndarray, np.ndarray]:
+        H, W = self.shape
+        r = np.clip(np.floor(pts[:, 1]).astype(np.int64), 0, H - 1)
+        q = np.clip(np.floor(pts[:, 0]).astype(np.int64), 0, W - 1)
+        return _mean_deviation(self.c, self.dev, s, r, q)
+
+    def families(self, devs: list[float], pts: np.ndarray, w: np.ndarray, need: float,
+                 min_dev: float, max_families: int, angle: float) -> list[float]:
+        """``devs`` and the further families the points' deviations show, each at least
+        ``min_dev`` off every other, up to ``max_families``."""
+        d, _ = self._at(pts, self.s)
+        devs = list(devs)
+        while len(devs) < max_families:
+            far = np.min(_apart(d[:, None], np.asarray(devs)[None, :]), axis=1) >= min_dev
+            if float(w[far].sum()) < need:
+                break
+            # the mode of the far points' deviations (0.5 degree bins, smoothed around
+            # the circle: -45 and +45 degrees are one direction)
+            b = np.clip(((d[far] + 45.0) * 2).astype(np.int64), 0, 179)
+            h = np.bincount(b, w[far], 180)
+            hist = np.convolve(np.concatenate([h[-2:], h, h[:2]]), [1.0, 2, 3, 2, 1],
+                               "valid")
+            mode = (int(np.argmax(hist)) + 0.5) / 2.0 - 45.0
+            near = far & (_apart(d, mode) <= 2.0)
+            if float(w[near].sum()) < need:
+                break
+            a = sharp_angle(pts[near], w[near], angle + mode, 2.0)
+            dv = _wrap(a - angle)
+            if min(float(_apart(dv, x)) for x in devs) < min_dev:
+                break
+            devs.append(dv)
+        return devs
+
+    def labels(self, pts: np.ndarray, dv: np.ndarray, min_dev: float) -> np.ndarray:
+        """Each point's family: the nearest deviation of its neighbourhood's; near the
+        border of two wings the wide average mixes them, so where the wall's own
+        orientation (averaged over a fifth of the neighbourhood) is clearly nearer one
+        family, it decides."""
+        d, _ = self._at(pts, self.s)
+        label = np.argmin(_apart(d[:, None], dv[None, :]), axis=1)
+        d2, ok2 = self._at(pts, max(1.0, 0.2 * self.s))
+        gap = np.sort(_apart(d2[:, None], dv[None, :]), axis=1)
+        sure = ok2 & (gap[:, 1] - gap[:, 0] >= 0.5 * min_dev)
+        return np.where(sure, np.argmin(_apart(d2[:, None], dv[None, :]), axis=1), label)

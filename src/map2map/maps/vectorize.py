@@ -17,7 +17,10 @@ turns it into straight segments and a three-valued map that looks like a CAD pla
    filter's heading error that lasted while the robot mapped it) is a further direction
    family (:func:`map2map.maps.directions.angle_families`, at most ``families``): its
    wall points go through steps 3-7 in a frame turned by its own angle, and the
-   families' corners and junctions are closed in the map's frame.
+   families' corners and junctions are closed in the map's frame. With ``cover`` the
+   input's own wall pixels decide the families (a corrector's evidence may hold its
+   walls in the main directions only): the museum walls at 45 degrees of the FHW map
+   are a family, not dashes found by step 6.
 3. **Wall pieces** of each family: the evidence, rasterised in the turned frame, closed
    along the family's direction (holes up to ``bridge`` long: a dotted wall) and opened
    with a line of ``L = max(thickest + 2, min_len / resolution)`` pixels, keeps only the
@@ -824,7 +827,9 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
     tol, reach, L, band = _scales(opt, res)
     snap = math.degrees(math.atan(opt.snap_px / max(H, W)))
     angle = dominant_angle(pts, w, (H, W), snap) if len(pts) >= 3 else 0.0
-    angles, fam = angle_families(pts, w, (H, W), angle, res, max_families=opt.families)
+    votes = None if cover is None else (wall_points(cover), np.ones(int(cover.sum())))
+    angles, fam = angle_families(pts, w, (H, W), angle, res, max_families=opt.families,
+                                 votes=votes)
     info = {"pieces": 0, "doors": 0, "joined": 0, "other": 0}
     parts = []
     for k, a in enumerate(angles):           # one frame per direction family (a few)
