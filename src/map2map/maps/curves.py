@@ -119,13 +119,12 @@ def curved_walls(cover: np.ndarray, free: np.ndarray, resolution: float, thickne
     thickness : float
         Pixels: the drawn walls' thickness (the arc is drawn at it).
     segments : (N, 4) float, optional
-        The straight walls drawn so far; those lying along an arc (60 % of their length
-        within half a thickness and 2 pixels of it) are its chords at the wrong angle.
-        Straight walls at least half the arc's length within half a thickness and 2
-        pixels of 60 % of it explain the run as a straight wall
-        that SLAM drift bent: no arc is drawn there (on the dev build's 320 maps, whose
-        plans have no curved wall, five such walls bend by 2.8-3.5 px over 23-46
-        degrees, as much as a rotunda's arcs).
+        The straight walls drawn so far. Those lying along an arc (60 % of their length
+        within half a thickness and 2 pixels of it) are its chords at the wrong angle
+        and go. Where straight walls at least half an arc's length lie that close to 60
+        % of the arc, the run is a straight wall SLAM drift bent, and no arc is drawn
+        (on the dev build's 320 maps, whose plans have no curved wall, five such walls
+        bend by 2.8-3.5 px over 23-46 degrees, as much as a rotunda's arcs).
     min_len, min_radius, max_radius, max_gap : float
         Metres: an arc's shortest length, its radius range, and the widest gap between
         its pixels along it (a wider one is a door: the arc is cut there).

@@ -22,7 +22,9 @@ such wings apart:
    where at least ``min_share`` of the evidence (and ``min_len`` metres of wall)
    deviates by more than ``min_dev`` degrees, around one mode; its angle is refined
    like the dominant one (the sharpest projections, 0.1 degree steps). Each wall point
-   joins the family whose deviation is nearest its neighbourhood's.
+   joins the family whose deviation is nearest its neighbourhood's. Other wall points
+   (``votes``: the drawer's input wall pixels) may add a family at least 20 degrees
+   off every other, a building's own second direction.
 
 Examples
 --------
