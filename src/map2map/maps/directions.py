@@ -186,18 +186,6 @@ def _wrap(x):
     return (x + 45.0) % 90.0 - 45.0
 
 
-def _mean_deviation(c: np.ndarray, dev: np.ndarray, sigma: float, r: np.ndarray,
-                    q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """At the pixels ``(r, q)``: the ``c``-weighted mean of the deviations ``dev``
-    (degrees, modulo 90) over a Gaussian of ``sigma`` pixels, as a circular mean (of
-    ``4 dev`` on the unit circle: walls at +44 and -44 degrees average to 45, not 0),
-    and where there is any weight."""
-    t = np.radians(4.0 * dev)
-    cs, sn, den = _smooth(sigma, c * np.cos(t), c * np.sin(t), c)
-    ok = den[r, q] > 1e-6 * max(float(den.max()), 1e-12)
-    return np.where(ok, _wrap(np.degrees(np.arctan2(sn[r, q], cs[r, q])) / 4.0), 0.0), ok
-
-
 def _apart(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """How far deviations lie apart, modulo 90 degrees."""
     return np.abs(_wrap(a - b))
@@ -275,24 +263,36 @@ def angle_families(points: np.ndarray, weights: np.ndarray, shape: tuple[int, in
 
 class _Field:
     """The deviation field of wall points (module doc, step 2) and the family search
-    and labelling on it (step 3)."""
+    and labelling on it (step 3).
+
+    The deviations are averaged around the circle (of ``4 dev``: walls at +44 and -44
+    degrees average to 45, not 0), weighted by coherence: the smoothed images of
+    ``c cos(4 dev)``, ``c sin(4 dev)`` and ``c``, built at the wall pixels only and
+    smoothed once per neighbourhood size."""
 
     def __init__(self, pts: np.ndarray, w: np.ndarray, shape: tuple[int, int], angle: float,
                  s: float):
         img = splat(pts, w, shape).astype(np.float32)
         at = pixels(img > 0)                       # the wall pixels only: a few thousand
         ang, coh = orientation(img, at=at)
-        self.dev = np.zeros(shape, np.float32)
-        self.dev[at] = _wrap(ang - angle)
-        self.c = np.zeros(shape, np.float32)
-        self.c[at] = coh
-        self.s, self.shape = s, shape
+        t = np.radians(4.0 * _wrap(ang - angle))
+        self.imgs = []
+        for v in (coh * np.cos(t), coh * np.sin(t), coh):
+            im = np.zeros(shape, np.float32)
+            im[at] = v
+            self.imgs.append(im)
+        self.s, self.shape, self._smoothed = s, shape, {}
 
     def _at(self, pts: np.ndarray, s: float) -> tuple[np.ndarray, np.ndarray]:
+        """The mean deviation (degrees) around each point, and where there is weight."""
+        if s not in self._smoothed:
+            self._smoothed[s] = _smooth(s, *self.imgs)
+        cs, sn, den = self._smoothed[s]
         H, W = self.shape
         r = np.clip(np.floor(pts[:, 1]).astype(np.int64), 0, H - 1)
         q = np.clip(np.floor(pts[:, 0]).astype(np.int64), 0, W - 1)
-        return _mean_deviation(self.c, self.dev, s, r, q)
+        ok = den[r, q] > 1e-6 * max(float(den.max()), 1e-12)
+        return np.where(ok, _wrap(np.degrees(np.arctan2(sn[r, q], cs[r, q])) / 4.0), 0.0), ok
 
     def families(self, devs: list[float], pts: np.ndarray, w: np.ndarray, need: float,
                  min_dev: float, max_families: int, angle: float) -> list[float]:
