@@ -13,7 +13,8 @@
   alignment chains of the appendix paper (paper sec. 3.2) and of the trajectory error
   (ATE) of :mod:`map2map.slam.quality`;
 * points against line segments: :func:`point_segment_distances` (the wall inspection's
-  nearest wall, the plan drawer's free wall ends);
+  nearest wall, the plan drawer's free wall ends) and :func:`segment_samples` (a sample a
+  pixel along each segment: the plan drawer's cuts, its curved walls' replaced chords);
 * displacement fields (thesis sec. 3.2, "(d_x, d_y) used to deform the map"):
   :func:`invert_displacement` finds, for every output pixel ``q``, the source ``p`` with
   ``p + d(p) = q``; the parametric model (:mod:`map2map.parametric.field`) and the
@@ -57,6 +58,7 @@ __all__ = [
     "affine_distortion",
     "transform_normals",
     "point_segment_distances",
+    "segment_samples",
     "invert_displacement",
 ]
 
@@ -481,6 +483,26 @@ def point_segment_distances(points: np.ndarray, segs: np.ndarray
 
 
 # ------------------------------------------------------------ displacement fields
+def segment_samples(segs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """One sample a pixel along each segment ``x0, y0, x1, y1`` (both ends included):
+    the samples' segment, their fraction of the way from the segment's start, their
+    points, and the samples per segment.
+
+    >>> idx, f, p, n = segment_samples(np.array([[0.0, 0.0, 2.0, 0.0], [0.0, 0.0, 0.0, 1.0]]))
+    >>> idx.tolist(), f.tolist(), n.tolist()
+    ([0, 0, 0, 1, 1], [0.0, 0.5, 1.0, 0.0, 1.0], [3, 2])
+    >>> p[1].tolist()
+    [1.0, 0.0]
+    """
+    segs = np.asarray(segs, float).reshape(-1, 4)
+    d = segs[:, 2:] - segs[:, :2]
+    n = np.ceil(np.hypot(d[:, 0], d[:, 1])).astype(np.int64) + 1
+    idx = np.repeat(np.arange(len(segs)), n)
+    start = np.repeat(np.cumsum(n) - n, n)
+    f = (np.arange(len(idx)) - start) / np.maximum(n[idx] - 1, 1)
+    return idx, f, segs[idx, :2] + f[:, None] * d[idx], n
+
+
 def invert_displacement(
     dx: np.ndarray,
     dy: np.ndarray,

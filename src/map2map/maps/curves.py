@@ -46,7 +46,7 @@ import math
 import cv2
 import numpy as np
 
-from ..core.geometry import point_segment_distances
+from ..core.geometry import point_segment_distances, segment_samples
 
 __all__ = ["curved_walls", "arc_chords"]
 
@@ -84,16 +84,19 @@ def _arcs_of(ang: np.ndarray, max_gap: float) -> list[tuple[float, float]]:
     return [(float(a[s]), float(a[e] - a[s])) for s, e in zip(starts, ends, strict=True)]
 
 
-def _circle(model, p: np.ndarray) -> tuple[float, float, float] | None:
+def _circle(p: np.ndarray) -> tuple[float, float, float] | None:
     """(xc, yc, r) of the least-squares circle through ``p``, or None (scikit-image's
-    fit: ``from_estimate`` from 0.26 on, ``estimate`` before)."""
-    if hasattr(model, "from_estimate"):
-        fit = model.from_estimate(p)
+    :class:`~skimage.measure.CircleModel`: ``from_estimate`` from 0.26 on, ``estimate``
+    before)."""
+    from skimage.measure import CircleModel
+
+    if hasattr(CircleModel, "from_estimate"):
+        fit = CircleModel.from_estimate(p)
         if not fit:
             return None
         (xc, yc), r = fit.center, fit.radius
     else:  # pragma: no cover - scikit-image < 0.26
-        fit = model()
+        fit = CircleModel()
         if not fit.estimate(p):
             return None
         xc, yc, r = fit.params
@@ -181,7 +184,7 @@ def curved_walls(cover: np.ndarray, free: np.ndarray, resolution: float, thickne
             from scipy import ndimage as ndi
 
             depth = ndi.distance_transform_edt(~free)      # px to the free space
-            samples = _samples(segs)
+            samples = segment_samples(segs)
             seg_len = np.hypot(segs[:, 2] - segs[:, 0], segs[:, 3] - segs[:, 1])
         kept = []
         for k in g:
@@ -237,9 +240,7 @@ def _smooth_pieces(cover: np.ndarray, min_px: float) -> list[np.ndarray]:
 def _fit(p: np.ndarray, r_min: float, r_max: float, max_rms: float
          ) -> tuple[float, float, float] | None:
     """(xc, yc, r) of ``p``'s circle when its radius is in range and it fits."""
-    from skimage.measure import CircleModel
-
-    f = _circle(CircleModel, p)
+    f = _circle(p)
     if f is None or not (r_min <= f[2] <= r_max):
         return None
     xc, yc, r = f
@@ -253,31 +254,22 @@ def _round_rooms(circles: list) -> list[list[int]]:
     radius of each other and whose radii differ by at most a quarter (a rotunda SLAM
     made a little oval fits each arc with its own circle: ACES's three arcs, radii 60,
     73 and 74 px, centres 22 px apart)."""
-    n = len(circles)
-    parent = list(range(n))
+    from scipy.sparse.csgraph import connected_components
 
-    def root(i):
-        while parent[i] != i:
-            i = parent[i]
-        return i
-
-    for i in range(n):
-        (xi, yi), ri = circles[i]
-        for j in range(i + 1, n):
-            (xj, yj), rj = circles[j]
-            rm = (ri + rj) / 2
-            if math.hypot(xi - xj, yi - yj) <= rm / 2 and abs(ri - rj) <= rm / 4:
-                parent[root(j)] = root(i)
-    groups: dict[int, list[int]] = {}
-    for i in range(n):
-        groups.setdefault(root(i), []).append(i)
-    return list(groups.values())
+    if not circles:
+        return []
+    c = np.array([[x, y, r] for (x, y), r in circles], float).reshape(-1, 3)
+    rm = (c[:, None, 2] + c[None, :, 2]) / 2
+    near = ((np.hypot(c[:, None, 0] - c[None, :, 0], c[:, None, 1] - c[None, :, 1]) <= rm / 2)
+            & (np.abs(c[:, None, 2] - c[None, :, 2]) <= rm / 4))
+    _, lab = connected_components(near, directed=False)
+    return [np.flatnonzero(lab == g).tolist() for g in range(int(lab.max()) + 1)]
 
 
 def _same_circles(fits: list) -> list[np.ndarray]:
     """The pieces' points grouped by circle: centres within 5 % of the radius and 2 px,
-    radii within 2 px (the pieces of a dotted arc, the arcs of a rotunda between its
-    doors)."""
+    radii within 2 px (the pieces of a dotted arc; the arcs around one room, each on
+    its own circle, are grouped by :func:`_round_rooms`)."""
     groups: list[list] = []
     for f, p in fits:
         for g in groups:
@@ -323,25 +315,14 @@ def _straight_along(chords: np.ndarray, long_segs: np.ndarray, band: float,
     return bool((d.min(axis=1) <= band).mean() >= share)
 
 
-def _samples(segs: np.ndarray) -> list[np.ndarray]:
-    """Points every pixel or so along each segment."""
-    out = []
-    for s in segs:
-        k = max(2, int(math.hypot(s[2] - s[0], s[3] - s[1])) + 1)
-        f = np.linspace(0.0, 1.0, k)[:, None]
-        out.append(s[:2] + f * (s[2:] - s[:2]))
-    return out
-
-
-def _along(samples: list[np.ndarray], centre, r: float, a0: float, span: float,
-           band: float, share: float = 0.6) -> np.ndarray:
-    """Which segments (their ``samples``) lie along the arc: ``share`` of their points
-    within ``band`` of the circle, inside the arc's angles."""
+def _along(samples: tuple, centre, r: float, a0: float, span: float, band: float,
+           share: float = 0.6) -> np.ndarray:
+    """Which segments lie along the arc: ``share`` of their samples
+    (:func:`map2map.core.geometry.segment_samples`) within ``band`` of the circle, inside
+    the arc's angles."""
+    idx, _, q, n = samples
     xc, yc = centre
-    hit = np.zeros(len(samples), bool)
-    for k, q in enumerate(samples):
-        d = np.abs(np.hypot(q[:, 0] - xc, q[:, 1] - yc) - r)
-        a = np.mod(np.arctan2(q[:, 1] - yc, q[:, 0] - xc) - a0, 2 * math.pi)
-        on = (d <= band) & (a <= span + band / r)
-        hit[k] = on.mean() >= share
-    return hit
+    d = np.abs(np.hypot(q[:, 0] - xc, q[:, 1] - yc) - r)
+    a = np.mod(np.arctan2(q[:, 1] - yc, q[:, 0] - xc) - a0, 2 * math.pi)
+    on = (d <= band) & (a <= span + band / r)
+    return np.bincount(idx, on, len(n)) / np.maximum(n, 1) >= share

@@ -139,7 +139,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from ..core.geometry import point_segment_distances
+from ..core.geometry import point_segment_distances, segment_samples
 from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from ..core.parallel import process_map
 from ..core.runs import open_runs, pixels, run_through
@@ -336,8 +336,8 @@ class DrawOptions:
         turn by a third of a circle together (:func:`map2map.maps.curves.curved_walls`):
         a rotunda, an apse. The straight walls drawn along such an arc go. 0: off (as
         before 2026-11-29). On the ACES map (``map2map slam aces-corrected.log.gz``) the
-        rotunda's three observed arcs are drawn; on 1,600 simulated maps (dev build and
-        two fresh builds), the 18 Halmstad maps, FHW and BreezySLAM exp2 nothing
+        rotunda's three observed arcs are drawn; on 2,240 simulated maps (dev build and
+        three fresh builds), the 18 Halmstad maps, FHW and BreezySLAM exp2 nothing
         changes.
     """
 
@@ -961,7 +961,7 @@ def _two_sided(segs: np.ndarray, free: np.ndarray, t: float, grow: float,
     """
     n = len(segs)
     H, W = free.shape
-    idx, _, p, _ = _samples(segs)
+    idx, _, p, _ = segment_samples(segs)
     d = segs[idx, 2:] - segs[idx, :2]
     nrm = np.stack([-d[:, 1], d[:, 0]], 1) / np.maximum(np.hypot(d[:, 0], d[:, 1]),
                                                         1e-9)[:, None]
@@ -1144,17 +1144,6 @@ def _onto_line(c: np.ndarray, lo: np.ndarray, hi: np.ndarray, a0: np.ndarray,
     return a0, a1
 
 
-def _samples(segs: np.ndarray):
-    """One sample a pixel along each segment: the samples' segment, their fraction of
-    the way from the segment's start, their points, and the samples per segment."""
-    d = segs[:, 2:] - segs[:, :2]
-    n = np.ceil(np.hypot(d[:, 0], d[:, 1])).astype(np.int64) + 1
-    idx = np.repeat(np.arange(len(segs)), n)
-    start = np.repeat(np.cumsum(n) - n, n)
-    f = (np.arange(len(idx)) - start) / np.maximum(n[idx] - 1, 1)
-    return idx, f, segs[idx, :2] + f[:, None] * d[idx], n
-
-
 def _cut_free(segs: np.ndarray, free: np.ndarray, ev: np.ndarray, r: float, min_run: int,
               min_len: float, t: float, min_area: float, reach: float) -> np.ndarray:
     """Segments (image frame) cut where their centre line runs over the input's free space
@@ -1169,7 +1158,7 @@ def _cut_free(segs: np.ndarray, free: np.ndarray, ev: np.ndarray, r: float, min_
     segs = np.asarray(segs, float).reshape(-1, 4)
     H, W = free.shape
     dist = cv2.distanceTransform((~ev).astype(np.uint8), cv2.DIST_L2, 3)
-    idx, f, p, n = _samples(segs)
+    idx, f, p, n = segment_samples(segs)
 
     def at(q):
         return (np.clip(np.floor(q[:, 1]).astype(np.int64), 0, H - 1),
