@@ -71,17 +71,100 @@ def test_a_round_room_is_drawn_along_its_circle_and_its_doors_stay_open():
         assert d.map[int(y), int(x)] == FREE
 
 
-def test_the_round_wall_is_in_the_dxf_as_the_raster_draws_it(tmp_path):
+def _arc_points(e, n=200):
+    """Points along a DXF ARC entity (world units)."""
+    a0, a1 = e.dxf.start_angle, e.dxf.end_angle
+    a = np.radians(a0 + np.linspace(0.0, np.mod(a1 - a0, 360.0), n))
+    (x, y, _), r = e.dxf.center, e.dxf.radius
+    return np.stack([x + r * np.cos(a), y + r * np.sin(a)], 1)
+
+
+@pytest.mark.parametrize("origin", [(0.0, 0.0, 0.0), (1.5, -2.0, 0.7)])
+def test_the_round_wall_is_in_the_dxf_as_arcs_on_the_raster_chords(tmp_path, origin):
+    """Each arc is one DXF ARC, within the chords' tolerance of the chords the raster
+    draws (in any map frame); the straight walls stay lines."""
     import ezdxf
+
+    from map2map.core.geometry import point_segment_distances
 
     m = rotunda()
     d = draw_plan(m == OCC, m, RES, 4, cover=m == OCC)
-    world = save_plan_dxf(d, tmp_path / "w.dxf", RES)
-    lines = ezdxf.readfile(tmp_path / "w.dxf").modelspace().query("LINE")
-    assert len(lines) == len(d.segments) == len(world)
+    assert len(d.arcs) == 4 and set(d.arc_of[d.arc_of >= 0]) == {0, 1, 2, 3}
+    world = save_plan_dxf(d, tmp_path / "w.dxf", RES, origin=origin)
+    msp = ezdxf.readfile(tmp_path / "w.dxf").modelspace()
+    assert len(msp.query("LINE")) == (d.arc_of < 0).sum()
+    arcs = msp.query("ARC")
+    assert len(arcs) == 4
+    chords = world[d.arc_of >= 0]
+    for e in arcs:
+        dist, _ = point_segment_distances(_arc_points(e), chords)
+        assert dist.min(axis=1).max() <= 0.25 * RES + 1e-6          # on the raster's chords
+    # together the arcs hold every chord (none left out)
+    pts = np.concatenate([_arc_points(e) for e in arcs])
+    ends = np.concatenate([chords[:, :2], chords[:, 2:]])
+    dist, _ = point_segment_distances(ends, np.concatenate([pts[:-1], pts[1:]], 1))
+    assert dist.min(axis=1).max() < 1e-3 + RES
+
+
+def test_arc_walls_with_a_width_bulge_along_the_circle_and_load_back(tmp_path):
+    """With the thickness as width, an arc is a polyline whose bulges follow the circle;
+    the DXF loader draws it back where the raster has the wall."""
+    import ezdxf
+
+    from map2map.maps.dxf import load_dxf
+
+    m = rotunda()
+    d = draw_plan(m == OCC, m, RES, 4, cover=m == OCC)
+    save_plan_dxf(d, tmp_path / "w.dxf", RES, width=True)
+    polys = ezdxf.readfile(tmp_path / "w.dxf").modelspace().query("LWPOLYLINE")
+    bulged = [p for p in polys if any(abs(b) > 0 for *_, b in p.get_points("xyb"))]
+    assert len(bulged) == 4
+    back = load_dxf(tmp_path / "w.dxf", resolution=RES, wall_thickness=4 * RES)
     c = m.shape[0] / 2 * RES
-    r_world = np.hypot(world[:, 0] - c, world[:, 1] - c)
-    assert ((r_world > 70 * RES) & (r_world < 76 * RES)).sum() > 20   # the chords
+    x0, y0 = back.pixel_to_world(*np.nonzero(back.data == OCC))
+    r = np.hypot(x0 - c, y0 - c)
+    ring = (r > 60 * RES) & (r < 75 * RES)
+    # the round wall comes back around the drawn centre line (the face the room saw at
+    # 70 px, grown outwards by the thickness)
+    assert ring.sum() > 500
+    assert np.abs(np.median(r[ring]) / RES - np.median(d.arcs[:, 2])) < 0.5
+    assert ((r[ring] / RES > 69.5) & (r[ring] / RES < 74.5)).mean() > 0.9
+
+
+def test_a_closed_circle_is_a_dxf_circle(tmp_path):
+    import ezdxf
+
+    from map2map.maps.dxf import save_segments_dxf
+
+    save_segments_dxf(np.zeros((0, 4)), tmp_path / "c.dxf",
+                      arcs=np.array([[1.0, 2.0, 3.0, 10.0, 360.0]]))
+    (e,) = ezdxf.readfile(tmp_path / "c.dxf").modelspace()
+    assert e.dxftype() == "CIRCLE" and e.dxf.radius == 3.0
+    save_segments_dxf(np.zeros((0, 4)), tmp_path / "c.dxf", width=0.2,
+                      arcs=np.array([[1.0, 2.0, 3.0, 10.0, 360.0]]))
+    (e,) = ezdxf.readfile(tmp_path / "c.dxf").modelspace()
+    assert e.dxftype() == "LWPOLYLINE" and e.closed and len(e) == 4
+
+
+def test_the_autocorrect_dxf_holds_the_arcs(tmp_path):
+    """``map2map autocorrect --dxf`` writes the round room as arcs, in the map's frame."""
+    import ezdxf
+
+    from map2map.core.grid import OccupancyMap
+    from map2map.jobs.autocorrect import AutocorrectSpec, autocorrect
+    from map2map.maps.formats import save_map
+
+    save_map(OccupancyMap(rotunda(), RES, (-3.0, 4.0, 0.0)), tmp_path / "r.yaml")
+    run = autocorrect(AutocorrectSpec(tmp_path / "r.yaml", tmp_path / "o.yaml",
+                                      dxf=tmp_path / "o.dxf"))
+    r = run.corrections[0]
+    assert len(r.arcs) == 4
+    arcs = ezdxf.readfile(tmp_path / "o.dxf").modelspace().query("ARC")
+    assert len(arcs) == 4
+    cx, cy = -3.0 + 120 * RES, 4.0 + 120 * RES
+    for e in arcs:
+        assert math.hypot(e.dxf.center[0] - cx, e.dxf.center[1] - cy) < 3 * RES
+        assert abs(e.dxf.radius - 72 * RES) < 3 * RES
 
 
 def test_off_draws_no_arc():
@@ -110,10 +193,10 @@ def test_straight_and_drift_bent_walls_get_no_arc(bend):
 def test_one_wobble_is_not_a_round_room():
     """A single arc turning 60 degrees (a real map's wavy wall) is not drawn as one."""
     m = rotunda(doors=((math.pi / 2, 2.6),), corridor=False)   # 62 degrees of wall
-    chords, _ = curved_walls(m == OCC, m == FREE, RES, 4)
+    chords = curved_walls(m == OCC, m == FREE, RES, 4).chords
     assert len(chords) == 0
     m = rotunda(doors=((math.pi / 2, 1.4),), corridor=False)   # 200 degrees: an apse
-    chords, _ = curved_walls(m == OCC, m == FREE, RES, 4)
+    chords = curved_walls(m == OCC, m == FREE, RES, 4).chords
     assert len(chords) > 0
 
 
@@ -125,7 +208,7 @@ def test_a_dotted_round_wall_is_one_arc():
     yy, xx = np.mgrid[0:m.shape[0], 0:m.shape[1]] + 0.5
     ang = np.degrees(np.arctan2(yy - c, xx - c))
     m[(m == OCC) & (np.mod(ang, 6) < 0.8)] = FREE            # gaps of 1 px every 7
-    chords, _ = curved_walls(m == OCC, m == FREE, RES, 4)
+    chords = curved_walls(m == OCC, m == FREE, RES, 4).chords
     mid = (chords[:, :2] + chords[:, 2:]) / 2
     a = np.sort(np.degrees(np.arctan2(mid[:, 1] - c, mid[:, 0] - c)))
     assert np.diff(a).max() < 10                               # no gap left open

@@ -369,7 +369,6 @@ def stage_autocorrect(ctx: DemoContext) -> None:
     from .jobs.autocorrect import DEFAULT_MODEL, corrector
     from .learn.ba.correction import Correction
     from .learn.training.figures import save_before_after
-    from .maps.dxf import save_segments_dxf
     from .maps.formats import save_map
 
     out = ctx.out / "autocorrect"
@@ -381,8 +380,8 @@ def stage_autocorrect(ctx: DemoContext) -> None:
     save_map(res.map, out / "cad.yaml")
     ctx.wrote(f"auto-corrected plan (--model {model.name}, ROS map)", out / "cad.yaml")
     ctx.wrote(f"auto-corrected plan (--model {model.name}, ROS map pixels)", out / "cad.pgm")
-    save_segments_dxf(res.segments, out / "walls.dxf")
-    ctx.wrote("auto-corrected walls (DXF line segments)", out / "walls.dxf")
+    res.save_dxf(out / "walls.dxf")
+    ctx.wrote("auto-corrected walls (DXF lines and arcs)", out / "walls.dxf")
     save_before_after(
         slam,
         res.map,

@@ -26,8 +26,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--model", default=None, metavar="NAME|PATH",
                    help="which corrector: " + model_names_help().replace("%", "%%")
                         + " ('pretrained' is 'thesis')")
-    p.add_argument("--dxf", metavar="FILE", help="also write the walls as DXF line segments "
-                   "(with a folder INPUT: a folder)")
+    p.add_argument("--dxf", metavar="FILE", help="also write the walls as DXF lines (curved walls: "
+                   "arcs; with a folder INPUT: a folder)")
     p.add_argument("--figure", metavar="PNG", help="before/after figure (folder INPUT: folder)")
     p.add_argument("--no-straighten", action="store_true",
                    help="only upsample and snap the output (no straight walls)")

@@ -241,7 +241,7 @@ class AutocorrectSpec:
         ``"thesis"``), a Model_BA training run folder or weights file, or a corrector;
         None: :data:`DEFAULT_MODEL`.
     dxf, figure : path-like or None
-        Also write the walls as DXF line segments / a before-after figure (folder input:
+        Also write the walls as DXF lines (and arcs) / a before-after figure (folder input:
         folders).
     straighten, anchor : bool
         :func:`~map2map.learn.ba.autocorrect.autocorrect`'s options.
@@ -379,7 +379,6 @@ def autocorrect(spec: AutocorrectSpec) -> AutocorrectRun:
     in ``run.corrections[i].warnings`` (not issued)."""
     from ..learn.ba.correction import Correction
     from ..learn.training.figures import save_before_after
-    from ..maps.dxf import save_segments_dxf
     from ..maps.formats import check_output_path, load_map, save_map
 
     thickness = parse_thickness(spec.thickness)
@@ -404,7 +403,7 @@ def autocorrect(spec: AutocorrectSpec) -> AutocorrectRun:
         if o["map"].suffix.lower() in (".yaml", ".yml"):
             w["map_pgm"] = o["map"].with_suffix(".pgm")
         if "dxf" in o:
-            save_segments_dxf(r.segments, o["dxf"])
+            r.save_dxf(o["dxf"])
         if "figure" in o:
             save_before_after(m, r.map, o["figure"], r.map.meta["autocorrect"]["segments_px"],
                               title=f"{f.name} -> {o['map'].name} ({Path(model.source).name})",

@@ -20,7 +20,9 @@ the unknown. This step (:func:`curved_walls`):
    face the input saw (the thickness grows away from the free side, as for straight
    walls), and says which straight walls drawn along it go.
 
-The chords are segments like any other wall, so the raster and the DXF agree.
+The chords are segments like any other wall (the raster is drawn from them); each arc is
+also returned as its circle (:class:`CurvedWalls`), so the DXF holds it as one ``ARC``
+(:func:`map2map.maps.dxf.save_segments_dxf`), within ``sag_tol`` of the raster's chords.
 
 Examples
 --------
@@ -31,24 +33,52 @@ A round room of radius 40 px whose wall no straight wall explains:
 >>> yy, xx = np.mgrid[0:120, 0:120] + 0.5
 >>> r = np.hypot(xx - 60, yy - 60)
 >>> m[r < 40] = 255; m[(r >= 40) & (r < 42)] = 0
->>> segs, _ = curved_walls(m == 0, m == 255, 0.05, 4)
->>> len(segs) > 20                                  # one closed chain of chords
-True
->>> d = np.hypot(segs[:, 0] - 60, segs[:, 1] - 60)
+>>> cw = curved_walls(m == 0, m == 255, 0.05, 4)
+>>> len(cw.chords) > 20, len(cw.arcs)               # one closed chain of chords
+(True, 1)
+>>> d = np.hypot(cw.chords[:, 0] - 60, cw.chords[:, 1] - 60)
 >>> bool(np.all(np.abs(d - 42) < 1.0))              # the face at 40, grown outwards
 True
+>>> xc, yc, r, a0, span = cw.arcs[0]
+>>> round(float(r)), round(float(span), 2)           # its circle: closed
+(42, 6.28)
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import cv2
 import numpy as np
 
 from ..core.geometry import point_segment_distances, segment_samples
 
-__all__ = ["curved_walls", "arc_chords"]
+__all__ = ["curved_walls", "arc_chords", "CurvedWalls", "arcs_to_world"]
+
+
+class CurvedWalls(NamedTuple):
+    """What :func:`curved_walls` found.
+
+    Attributes
+    ----------
+    chords : (K, 4) float
+        The chords of every arc, in order along each arc (``x0, y0, x1, y1``,
+        continuous pixel coordinates, image frame).
+    drop : (N,) bool
+        The straight segments an arc replaces.
+    arcs : (M, 5) float
+        Each arc's drawn centre line: ``xc, yc, r, a0, span`` (pixels; angles in
+        radians in the image frame, x right and y down, ``span`` >= 0 from ``a0``;
+        ``span`` 2 pi: a closed circle).
+    arc_of : (K,) int
+        The arc each chord belongs to (an index of ``arcs``).
+    """
+
+    chords: np.ndarray
+    drop: np.ndarray
+    arcs: np.ndarray
+    arc_of: np.ndarray
 
 
 def arc_chords(centre: tuple[float, float], radius: float, a0: float, span: float,
@@ -66,6 +96,35 @@ def arc_chords(centre: tuple[float, float], radius: float, a0: float, span: floa
     x = centre[0] + radius * np.cos(a)
     y = centre[1] + radius * np.sin(a)
     return np.stack([x[:-1], y[:-1], x[1:], y[1:]], 1)
+
+
+def arcs_to_world(arcs: np.ndarray, to_world) -> np.ndarray:
+    """Arcs ``xc, yc, r, a0, span`` in pixels (image frame, :class:`CurvedWalls`) as
+    ``xc, yc, r, start, sweep`` in world units, the angles in degrees counter-clockwise
+    (a DXF ``ARC`` from ``start`` to ``start + sweep``; ``sweep`` 360: a circle).
+
+    ``to_world(x, y)`` maps continuous pixel coordinates to the world (any rotation,
+    scale and reflection: a map's rows run down, its world's y up).
+
+    >>> a = np.array([[10.0, 10.0, 4.0, 0.0, math.pi / 2]])   # x right, y down
+    >>> arcs_to_world(a, lambda x, y: (x * 0.05, (20 - y) * 0.05)).round(3).tolist()
+    [[0.5, 0.5, 0.2, 270.0, 90.0]]
+    """
+    arcs = np.asarray(arcs, float).reshape(-1, 5)
+    out = np.zeros((len(arcs), 5))
+    for i, (xc, yc, r, a0, span) in enumerate(arcs):
+        a = a0 + np.array([0.0, span / 2, span])
+        x, y = to_world(xc + r * np.cos(a), yc + r * np.sin(a))
+        cx, cy = to_world(np.array([xc]), np.array([yc]))
+        cx, cy = float(cx[0]), float(cy[0])
+        ang = np.degrees(np.arctan2(np.asarray(y) - cy, np.asarray(x) - cx))
+        rw = float(np.hypot(x[0] - cx, y[0] - cy))
+        sweep = math.degrees(span)
+        # counter-clockwise from the start (the map's rows down reverse the turn)
+        ccw = (x[0] - cx) * (y[1] - cy) - (y[0] - cy) * (x[1] - cx) > 0
+        start = ang[0] if ccw or sweep >= 360 - 1e-9 else ang[2]
+        out[i] = cx, cy, rw, float(np.mod(start, 360.0)), min(sweep, 360.0)
+    return out
 
 
 def _arcs_of(ang: np.ndarray, max_gap: float) -> list[tuple[float, float]]:
@@ -107,9 +166,9 @@ def curved_walls(cover: np.ndarray, free: np.ndarray, resolution: float, thickne
                  segments: np.ndarray | None = None, *, min_len: float = 1.5,
                  min_radius: float = 1.0, max_radius: float = 10.0, max_rms: float = 0.75,
                  min_sagitta: float = 3.0, max_gap: float = 0.4, sag_tol: float = 0.25,
-                 min_turn: float = 2 * math.pi / 3) -> tuple[np.ndarray, np.ndarray]:
+                 min_turn: float = 2 * math.pi / 3) -> CurvedWalls:
     """Segments (continuous pixel coordinates, image frame) of the input's curved walls,
-    and which of the straight ``segments`` drawn so far lie along them.
+    their circles, and which of the straight ``segments`` drawn so far lie along them.
 
     Parameters
     ----------
@@ -145,10 +204,9 @@ def curved_walls(cover: np.ndarray, free: np.ndarray, resolution: float, thickne
 
     Returns
     -------
-    chords : (K, 4) float
-        The chords of every arc found, in order along each arc.
-    drop : (N,) bool
-        The ``segments`` an arc replaces.
+    CurvedWalls
+        The chords (what the raster draws), the ``segments`` they replace, and the arcs
+        (what the DXF holds).
     """
     res = float(resolution)
     t = float(thickness)
@@ -164,7 +222,7 @@ def curved_walls(cover: np.ndarray, free: np.ndarray, resolution: float, thickne
         if f is not None:
             fits.append((f, p))
     if not fits:
-        return np.zeros((0, 4)), drop
+        return _found([], [], drop)
     cand = []                                      # (centre, radius, a0, span, points)
     for p in _same_circles(fits):
         f = _fit(p, min_radius / res, max_radius / res, max_rms)
@@ -175,7 +233,7 @@ def curved_walls(cover: np.ndarray, free: np.ndarray, resolution: float, thickne
         cand += [((xc, yc), r, a0, span, p) for a0, span in _arcs_of(ang, max_gap / res / r)
                  if span * r >= n_min
                  and r * (1 - math.cos(min(span, math.pi) / 2)) >= min_sagitta]
-    out = []
+    out, circles = [], []
     depth = samples = seg_len = None
     for g in _round_rooms([(c, r) for c, r, *_ in cand]):
         if sum(cand[k][3] for k in g) < min_turn:
@@ -193,14 +251,23 @@ def curved_walls(cover: np.ndarray, free: np.ndarray, resolution: float, thickne
             rc = r + _face_shift(p, (xc, yc), r, ang, free, depth, t)
             ch = arc_chords((xc, yc), rc, a0, span, sag_tol)
             if not _straight_along(ch, segs[seg_len >= span * r / 2], t / 2 + 2):
-                kept.append((k, ch))        # else a straight wall drawn along it: drift
-        if sum(cand[k][3] for k, _ in kept) < min_turn:
+                kept.append((k, ch, rc))    # else a straight wall drawn along it: drift
+        if sum(cand[k][3] for k, *_ in kept) < min_turn:
             continue
-        for k, ch in kept:
+        for k, ch, rc in kept:
             (xc, yc), r, a0, span, _ = cand[k]
             out.append(ch)
+            circles.append((xc, yc, rc, a0, span))
             drop |= _along(samples, (xc, yc), r, a0, span, t / 2 + 2)
-    return (np.concatenate(out) if out else np.zeros((0, 4))), drop
+    return _found(out, circles, drop)
+
+
+def _found(chords: list, circles: list, drop: np.ndarray) -> CurvedWalls:
+    """The :class:`CurvedWalls` of each arc's chords and circle."""
+    if not chords:
+        return CurvedWalls(np.zeros((0, 4)), drop, np.zeros((0, 5)), np.zeros(0, int))
+    return CurvedWalls(np.concatenate(chords), drop, np.array(circles, float).reshape(-1, 5),
+                       np.repeat(np.arange(len(chords)), [len(c) for c in chords]))
 
 
 def _smooth_pieces(cover: np.ndarray, min_px: float) -> list[np.ndarray]:

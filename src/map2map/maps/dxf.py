@@ -636,13 +636,19 @@ def save_dxf(m: OccupancyMap, path: str | os.PathLike, *, layer: str = "WALLS") 
 
 
 def save_segments_dxf(segments: np.ndarray, path: str | os.PathLike, *, layer: str = "WALLS",
-                      width: float | None = None) -> None:
-    """Write wall segments (world metres: x0, y0, x1, y1) as DXF ``LINE`` entities (what
-    ``map2map autocorrect --dxf`` writes).
+                      width: float | None = None, arcs: np.ndarray | None = None,
+                      arc_of: np.ndarray | None = None) -> None:
+    """Write wall segments (world metres: x0, y0, x1, y1) as DXF ``LINE`` entities and
+    curved walls as ``ARC`` entities (what ``map2map autocorrect --dxf`` writes).
 
     The drawing is in metres (``$INSUNITS`` 6); ``width`` (metres, optional) is stored as
-    each line's constant width through a ``LWPOLYLINE`` instead, so CAD shows the wall
-    thickness.
+    each line's constant width through a ``LWPOLYLINE`` instead (an arc's through
+    bulges), so CAD shows the wall thickness.
+
+    ``arcs`` (M, 5): ``xc, yc, r, start, sweep`` (metres; degrees counter-clockwise,
+    :func:`map2map.maps.curves.arcs_to_world`; a sweep of 360 is a ``CIRCLE``);
+    ``arc_of`` (N,): per segment, the arc it is a chord of (not written: the arc is), or
+    -1.
 
     Examples
     --------
@@ -651,17 +657,29 @@ def save_segments_dxf(segments: np.ndarray, path: str | os.PathLike, *, layer: s
     >>> save_segments_dxf(np.array([[0.0, 0.0, 4.0, 0.0], [4.0, 0.0, 4.0, 3.0]]), p)
     >>> len(ezdxf.readfile(p).modelspace().query("LINE"))
     2
+    >>> save_segments_dxf(np.array([[4.0, 0.0, 4.0, 3.0], [2.0, 0.0, 0.0, 2.0]]), p,
+    ...                   arcs=np.array([[0.0, 0.0, 2.0, 0.0, 90.0]]), arc_of=[-1, 0])
+    >>> [e.dxftype() for e in ezdxf.readfile(p).modelspace()]
+    ['LINE', 'ARC']
     """
-    _write_drawing(path, layer, segments=np.asarray(segments, float).reshape(-1, 4),
-                   width=width)
+    segments = np.asarray(segments, float).reshape(-1, 4)
+    arcs = np.zeros((0, 5)) if arcs is None else np.asarray(arcs, float).reshape(-1, 5)
+    if arc_of is not None:
+        arc_of = np.asarray(arc_of, int).reshape(-1)
+        if len(arc_of) != len(segments):
+            raise ValueError(f"arc_of needs one entry per segment ({len(segments)}), "
+                             f"not {len(arc_of)}")
+        segments = segments[arc_of < 0]
+    _write_drawing(path, layer, segments=segments, width=width, arcs=arcs)
 
 
 def _write_drawing(path: str | os.PathLike, layer: str, *, frame: str | None = None,
                    loops: list[np.ndarray] = (), segments: np.ndarray | None = None,
-                   width: float | None = None) -> None:
+                   width: float | None = None, arcs: np.ndarray = ()) -> None:
     """The one DXF writer: a drawing in metres with ``layer``, the map frame stored when
-    given, closed ``loops`` as one solid hatch, ``segments`` as lines (polylines of
-    constant ``width`` when given); written atomically.
+    given, closed ``loops`` as one solid hatch, ``segments`` as lines and ``arcs`` (``xc,
+    yc, r, start, sweep``, degrees) as arcs or circles (polylines of constant ``width``
+    when given, the arcs' as bulges); written atomically.
 
     The same drawing gives the same bytes: ezdxf's creation and update dates, its
     "written by" stamps and the drawing's two GUIDs are written as ezdxf's fixed values
@@ -670,7 +688,7 @@ def _write_drawing(path: str | os.PathLike, layer: str, *, frame: str | None = N
     """
     with _fixed_dxf_metadata():
         _write_drawing_now(path, layer, frame=frame, loops=loops, segments=segments,
-                           width=width)
+                           width=width, arcs=arcs)
 
 
 @contextmanager
@@ -687,7 +705,7 @@ def _fixed_dxf_metadata():
         ezdxf.options.write_fixed_meta_data_for_testing = before
 
 
-def _write_drawing_now(path, layer, *, frame, loops, segments, width) -> None:
+def _write_drawing_now(path, layer, *, frame, loops, segments, width, arcs) -> None:
     import ezdxf
 
     from ..core._io import atomic_path
@@ -710,8 +728,34 @@ def _write_drawing_now(path, layer, *, frame, loops, segments, width) -> None:
                                                                  "const_width": width})
         else:
             msp.add_line((x0, y0), (x1, y1), dxfattribs={"layer": layer})
+    for xc, yc, r, start, sweep in arcs:
+        _add_arc(msp, (xc, yc), r, start, sweep, layer, width)
     with atomic_path(path) as tmp:
         doc.saveas(tmp)
+
+
+def _add_arc(msp, centre, r: float, start: float, sweep: float, layer: str,
+             width: float | None) -> None:
+    """An arc (degrees counter-clockwise from ``start``): ``ARC`` or ``CIRCLE``, or with
+    ``width`` a ``LWPOLYLINE`` of constant width whose pieces (at most 90 degrees each)
+    bulge along the circle."""
+    attribs = {"layer": layer}
+    closed = sweep >= 360.0 - 1e-9
+    if not width:
+        if closed:
+            msp.add_circle(centre, r, dxfattribs=attribs)
+        else:
+            msp.add_arc(centre, r, start, start + sweep, dxfattribs=attribs)
+        return
+    n = max(1, math.ceil(sweep / 90.0 - 1e-9))
+    a = np.radians(start + np.linspace(0.0, sweep, n + 1))
+    bulge = math.tan(math.radians(sweep / n) / 4)
+    pts = [(centre[0] + r * math.cos(t), centre[1] + r * math.sin(t), bulge)
+           for t in a[:-1 if closed else None]]
+    if not closed:
+        pts[-1] = (*pts[-1][:2], 0.0)
+    msp.add_lwpolyline(pts, format="xyb", close=closed,
+                       dxfattribs={**attribs, "const_width": width})
 
 
 def _stored_frame(doc) -> tuple[float, float, float, float] | None:

@@ -144,7 +144,7 @@ from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
 from ..core.parallel import process_map
 from ..core.runs import open_runs, pixels, run_through
 from .cover import bridge_gaps, keep_runs_inside
-from .curves import curved_walls
+from .curves import arcs_to_world, curved_walls
 from .directions import angle_families, orientation, sharp_angle
 from .directions import splat as _splat
 from .segments import _join
@@ -396,6 +396,12 @@ class PlanDrawing:
     thicknesses : (K,) float, optional
         Each segment's thickness (pixels): ``thickness``, or less for a wall seen from
         both sides (``DrawOptions.two_sided``).
+    arcs : (M, 5) float
+        The curved walls' centre lines, ``xc, yc, r, a0, span`` (pixels; radians in the
+        image frame, :class:`map2map.maps.curves.CurvedWalls`); their chords are among
+        ``segments``.
+    arc_of : (K,) int
+        Per segment, the arc it is a chord of, or -1 (a straight wall).
     """
 
     segments: np.ndarray
@@ -404,6 +410,12 @@ class PlanDrawing:
     thickness: float
     info: dict = field(default_factory=dict)
     thicknesses: np.ndarray | None = None
+    arcs: np.ndarray = field(default_factory=lambda: np.zeros((0, 5)))
+    arc_of: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.arc_of is None:
+            self.arc_of = np.full(len(self.segments), -1)
 
 
 def wall_points(mask: np.ndarray) -> np.ndarray:
@@ -856,22 +868,25 @@ def draw_plan(evidence: np.ndarray, occupancy: np.ndarray, resolution: float,
         segs, tk = _two_sided(segs, free, t, opt.grow_px, one=opt.one_interior)
     info.update(cut=int(len(segs) - n0), angles=[float(a) for a in angles],
                 two_sided=int((tk < t).sum()), bridged=0, curved=0)
+    arcs, arc_of = np.zeros((0, 5)), np.full(len(segs), -1)
     if cover is not None and opt.curve_min > 0:
-        arcs, drop = curved_walls(cover, free, res, t, segs, min_len=opt.curve_min)
-        if len(arcs):
-            segs = np.concatenate([segs[~drop], arcs])
-            tk = np.concatenate([tk[~drop], np.full(len(arcs), t)])
-            info["curved"] = int(len(arcs))
+        cw = curved_walls(cover, free, res, t, segs, min_len=opt.curve_min)
+        if len(cw.chords):
+            segs = np.concatenate([segs[~cw.drop], cw.chords])
+            tk = np.concatenate([tk[~cw.drop], np.full(len(cw.chords), t)])
+            arcs, arc_of = cw.arcs, np.concatenate([arc_of[~cw.drop], cw.arc_of])
+            info["curved"] = int(len(cw.chords))
     wall = wall_raster(segs, tk, occ.shape)
     if cover is not None and opt.bridge_run > 0 and len(segs):
         extra, tx = _bridges(segs, tk, wall > 0, cover, free, angles, res, opt, t)
         if len(extra):
             segs, tk = np.concatenate([segs, extra]), np.concatenate([tk, tx])
+            arc_of = np.concatenate([arc_of, np.full(len(extra), -1)])
             wall = wall_raster(segs, tk, occ.shape)
             info["bridged"] = int(len(extra))
     out = _render(wall, occ, res, opt.min_room, opt.enclosed,
                   max(1.5, opt.sliver * t / 2))
-    return PlanDrawing(segs, out, angle, t, info, tk)
+    return PlanDrawing(segs, out, angle, t, info, tk, arcs, arc_of)
 
 
 def _bridges(segs: np.ndarray, tk: np.ndarray, drawn: np.ndarray, cover: np.ndarray,
@@ -1753,6 +1768,8 @@ def draw_plan_map(m: OccupancyMap, evidence: np.ndarray | None = None,
                                "thickness_px": d.thickness, **d.info}
     if d.thicknesses is not None:
         out.meta["plan_drawer"]["thicknesses_px"] = d.thicknesses.tolist()
+    if len(d.arcs):                       # curved walls: rare, so only when there are
+        out.meta["plan_drawer"].update(arcs_px=d.arcs.tolist(), arc_of=d.arc_of.tolist())
     s = d.segments
     x0, y0 = m.pixel_to_world(s[:, 1] - 0.5, s[:, 0] - 0.5)
     x1, y1 = m.pixel_to_world(s[:, 3] - 0.5, s[:, 2] - 0.5)
@@ -1808,7 +1825,8 @@ def save_plan_dxf(drawing: PlanDrawing | np.ndarray, path, resolution: float,
                   origin: tuple[float, float, float] = (0.0, 0.0, 0.0),
                   height: int | None = None, *, width: bool = False) -> np.ndarray:
     """Write a drawing's segments as DXF lines in world metres (through
-    :func:`map2map.maps.dxf.save_segments_dxf`) and return them.
+    :func:`map2map.maps.dxf.save_segments_dxf`; a drawing's curved walls as arcs) and
+    return them.
 
     ``height`` is the map's number of rows (the ROS origin is its lower-left corner);
     ``width=True`` gives each line the drawing's wall thickness as its width. The origin's
@@ -1834,13 +1852,18 @@ def save_plan_dxf(drawing: PlanDrawing | np.ndarray, path, resolution: float,
             raise ValueError("height (the map's rows) is needed with bare segments")
         height = drawing.map.shape[0]
     ox, oy, yaw = (tuple(origin) + (0.0,))[:3]
+    c, s = math.cos(yaw), math.sin(yaw)
+
+    def to_world(px, py):
+        x, y = px * resolution, (height - py) * resolution
+        return ox + c * x - s * y, oy + s * x + c * y
+
     world = np.empty_like(segs)
     for k in (0, 2):
-        x = segs[:, k] * resolution
-        y = (height - segs[:, k + 1]) * resolution
-        c, s = math.cos(yaw), math.sin(yaw)
-        world[:, k] = ox + c * x - s * y
-        world[:, k + 1] = oy + s * x + c * y
-    wd = drawing.thickness * resolution if (width and isinstance(drawing, PlanDrawing)) else None
-    save_segments_dxf(world, path, width=wd)
+        world[:, k], world[:, k + 1] = to_world(segs[:, k], segs[:, k + 1])
+    drawn = isinstance(drawing, PlanDrawing)
+    wd = drawing.thickness * resolution if (width and drawn) else None
+    save_segments_dxf(world, path, width=wd,
+                      arcs=arcs_to_world(drawing.arcs, to_world) if drawn else None,
+                      arc_of=drawing.arc_of if drawn else None)
     return world

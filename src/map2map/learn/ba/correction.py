@@ -7,7 +7,7 @@ calling process need not import the cleaning (scipy, numba) before the pool star
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -18,11 +18,18 @@ __all__ = ["Correction"]
 
 @dataclass
 class Correction:
-    """An auto-corrected map and its wall segments (world metres: x0, y0, x1, y1)."""
+    """An auto-corrected map and its wall segments (world metres: x0, y0, x1, y1).
+
+    ``arcs`` are its curved walls, ``xc, yc, r, start, sweep`` (metres; degrees
+    counter-clockwise), and ``arc_of`` says, per segment, which arc it is a chord of (-1:
+    a straight wall); :meth:`save_dxf` writes both.
+    """
 
     map: OccupancyMap
     segments: np.ndarray
     warnings: list[str]
+    arcs: np.ndarray = field(default_factory=lambda: np.zeros((0, 5)))
+    arc_of: np.ndarray | None = None
 
     @classmethod
     def of(cls, out: OccupancyMap) -> Correction:
@@ -39,8 +46,33 @@ class Correction:
         [[1.025, 2.475, 2.025, 2.475]]
         """
         ac = out.meta.get("autocorrect", {})
-        return cls(out, _world_segments(out, np.asarray(ac.get("segments_px", []), float)),
-                   list(ac.get("warnings", [])))
+        segs = _world_segments(out, np.asarray(ac.get("segments_px", []), float))
+        arcs_px = np.asarray(ac.get("arcs_px", []), float).reshape(-1, 5)
+        if not len(arcs_px):
+            return cls(out, segs, list(ac.get("warnings", [])))
+        from ...maps.curves import arcs_to_world
+
+        arcs = arcs_to_world(arcs_px, lambda x, y: out.pixel_to_world(y - 0.5, x - 0.5))
+        return cls(out, segs, list(ac.get("warnings", [])), arcs,
+                   np.asarray(ac["arc_of"], int))
+
+    def save_dxf(self, path) -> None:
+        """Write the walls as a DXF drawing in metres: straight walls as ``LINE`` entities,
+        curved walls as ``ARC`` entities (:func:`map2map.maps.dxf.save_segments_dxf`).
+
+        Examples
+        --------
+        >>> import tempfile, pathlib, ezdxf
+        >>> m = OccupancyMap(np.full((20, 30), 255, np.uint8), 0.05)
+        >>> m.meta["autocorrect"] = {"segments_px": [[0.5, 10.5, 20.5, 10.5]]}
+        >>> p = pathlib.Path(tempfile.mkdtemp()) / "w.dxf"
+        >>> Correction.of(m).save_dxf(p)
+        >>> [e.dxftype() for e in ezdxf.readfile(p).modelspace()]
+        ['LINE']
+        """
+        from ...maps.dxf import save_segments_dxf
+
+        save_segments_dxf(self.segments, path, arcs=self.arcs, arc_of=self.arc_of)
 
 
 def _world_segments(m: OccupancyMap, seg_px: np.ndarray) -> np.ndarray:

@@ -195,8 +195,9 @@ class DrawnCorrector:
         for i, (drawn, _) in zip(todo, drawn_all, strict=True):
             info = drawn.meta.pop("plan_drawer")
             ac = dict(bases[i].meta.get("autocorrect", {}))
-            ac.update(segments_px=info["segments_px"], drawn={
-                k: v for k, v in info.items() if k != "segments_px"})
+            walls = ("segments_px", "arcs_px", "arc_of")
+            ac.update({k: info[k] for k in walls if k in info},
+                      drawn={k: v for k, v in info.items() if k not in walls})
             drawn.meta["autocorrect"] = ac
             out[i] = drawn
         return out

@@ -24,7 +24,6 @@ from map2map.experiments._data import shared_data
 from map2map.learn.ba.autocorrect import autocorrect_many
 from map2map.learn.ba.model import load_model
 from map2map.learn.training.figures import save_before_after
-from map2map.maps.dxf import save_segments_dxf
 from map2map.maps.formats import load_map, save_map
 
 SHARED = shared_data()
@@ -61,7 +60,7 @@ def main(argv=None) -> int:
     dt = time.perf_counter() - t0
     for (name, m), r in zip(maps.items(), results, strict=True):
         save_map(r.map, out / f"{name}_corrected.png")
-        save_segments_dxf(r.segments, out / f"{name}_walls.dxf")
+        r.save_dxf(out / f"{name}_walls.dxf")
         save_before_after(m, r.map, out / f"{name}_before_after.png",
                           r.map.meta["autocorrect"]["segments_px"], title=name)
         wm = wall_metrics(r.map.data, m.data)
