@@ -220,3 +220,45 @@ def test_drawing_is_deterministic():
     b = draw_plan(m == OCC, m, RES, 4, cover=m == OCC)
     assert np.array_equal(a.segments, b.segments) and np.array_equal(a.map, b.map)
     assert cv2.countNonZero((a.map == OCC).astype(np.uint8)) > 0
+
+
+def _bent_quarter(m, step=14.0, dent=3.0):
+    """``m`` (a :func:`rotunda`) with its south-east arc redrawn as chords of ``step``
+    degrees, every other one dented ``dent`` px inwards at its start: runs too short
+    and straight to fit a circle alone, cut at corners (a stretch SLAM bent)."""
+    c = m.shape[0] / 2
+    yy, xx = np.mgrid[0:m.shape[0], 0:m.shape[1]] + 0.5
+    ang = np.degrees(np.arctan2(yy - c, xx - c))
+    d = np.hypot(xx - c, yy - c)
+    q = (ang > 5) & (ang < 85) & (d > 60) & (d < 85)
+    m[q & (m == OCC)] = UNK
+    a = np.radians(np.arange(9, 82, step).tolist() + [81])
+    pts = np.stack([c + 70 * np.cos(a), c + 70 * np.sin(a)], 1)
+    for i in range(len(pts) - 1):
+        p0 = pts[i] - (dent if i % 2 else 0) * (pts[i] - c) / 70
+        cv2.line(m, tuple(np.round(p0 - 0.5).astype(int).tolist()),
+                 tuple(np.round(pts[i + 1] - 0.5).astype(int).tolist()), OCC, 2)
+    m[(d < 69) & q & (m == UNK)] = FREE
+    return m
+
+
+def test_a_round_rooms_bent_arc_is_completed_from_runs_too_short_alone():
+    """The fourth arc of a round room, in runs no circle fits alone (short, straight,
+    cut at dents' corners), is drawn along its own circle once the room is found; the
+    corridors' straight walls beside the room are not made arcs (four in all)."""
+    from map2map.maps import curves
+
+    m = _bent_quarter(rotunda())
+    cw = curved_walls(m == OCC, m == FREE, RES, 4)
+    assert len(cw.arcs) == 4
+    se = cw.arcs[np.argmin(np.abs(np.mod(cw.arcs[:, 3] + cw.arcs[:, 4] / 2, 2 * math.pi)
+                                  - math.pi / 4))]
+    assert np.degrees(se[4]) > 50                       # most of the quarter
+    assert abs(se[2] - 72) < 3                          # the room's radius, grown outwards
+    # without the completion the room has three arcs
+    orig = curves._completed
+    try:
+        curves._completed = lambda *a, **k: []
+        assert len(curved_walls(m == OCC, m == FREE, RES, 4).arcs) == 3
+    finally:
+        curves._completed = orig

@@ -15,7 +15,10 @@ the unknown. This step (:func:`curved_walls`):
    least ``min_sagitta``;
 3. keeps the arcs around one room that turn by ``min_turn`` together (a third of a
    circle: a rotunda, an apse) unless a long straight wall is drawn along one (a wall
-   that SLAM drift bent): a real map's walls wobble, and one wobble is no round room;
+   that SLAM drift bent): a real map's walls wobble, and one wobble is no round room.
+   Such a room's further arcs may be made of runs no circle fits alone (short, nearly
+   straight, cut at a dent's corners: a stretch SLAM bent out of round) where, chained
+   along the room's circle, they fit one as any arc must;
 4. draws each arc as a chain of chords within ``sag_tol`` of its circle, keeping the
    face the input saw (the thickness grows away from the free side, as for straight
    walls), and says which straight walls drawn along it go.
@@ -215,14 +218,17 @@ def curved_walls(cover: np.ndarray, free: np.ndarray, resolution: float, thickne
     segs = np.zeros((0, 4)) if segments is None else np.asarray(segments, float).reshape(-1, 4)
     drop = np.zeros(len(segs), bool)
     n_min = min_len / res
-    pieces = _smooth_pieces(cover, n_min / 2)
+    pieces, rest = _smooth_pieces(cover, n_min / 2)
     fits = []
     for p in pieces:                                # a few dozen runs
         f = _fit(p, min_radius / res, max_radius / res, max_rms)
         if f is not None:
             fits.append((f, p))
+        else:
+            rest.append(p)
     if not fits:
         return _found([], [], drop)
+    r_range = (min_radius / res, max_radius / res)
     cand = []                                      # (centre, radius, a0, span, points)
     for p in _same_circles(fits):
         f = _fit(p, min_radius / res, max_radius / res, max_rms)
@@ -254,12 +260,118 @@ def curved_walls(cover: np.ndarray, free: np.ndarray, resolution: float, thickne
                 kept.append((k, ch, rc))    # else a straight wall drawn along it: drift
         if sum(cand[k][3] for k, *_ in kept) < min_turn:
             continue
-        for k, ch, rc in kept:
-            (xc, yc), r, a0, span, _ = cand[k]
+        arcs = [cand[k][:4] for k, *_ in kept]
+        # the room's other arcs: runs too short or too straight alone to be an arc,
+        # which on the room's circle make one together (a stretch SLAM bent out of
+        # round, a dent cutting it at a corner)
+        for (xc, yc), r, a0, span, p in _completed(arcs, rest, cover, r_range, max_rms,
+                                                   n_min, min_sagitta, max_gap / res):
+            ang = np.arctan2(p[:, 1] - yc, p[:, 0] - xc)
+            rc = r + _face_shift(p, (xc, yc), r, ang, free, depth, t)
+            ch = arc_chords((xc, yc), rc, a0, span, sag_tol)
+            if not _straight_along(ch, segs[seg_len >= span * r / 2], t / 2 + 2):
+                kept.append((None, ch, rc))
+                arcs.append(((xc, yc), r, a0, span))
+        for (_, ch, rc), ((xc, yc), r, a0, span) in zip(kept, arcs, strict=True):
             out.append(ch)
             circles.append((xc, yc, rc, a0, span))
             drop |= _along(samples, (xc, yc), r, a0, span, t / 2 + 2)
     return _found(out, circles, drop)
+
+
+def _completed(arcs: list, rest: list[np.ndarray], cover: np.ndarray,
+               r_range: tuple[float, float], max_rms: float, n_min: float,
+               min_sagitta: float, max_gap: float) -> list:
+    """Further arcs of a round room (``arcs``: its ``(centre, r, a0, span)``), each
+    ``(centre, r, a0, span, points)``, made of the wall runs ``rest`` (runs no circle
+    fitted alone) that lie along the room's circle outside its arcs: runs within a
+    quarter of the radius of the room's circle, running along it, chained in angle
+    (:func:`_chains`), fitted one circle per chain as any arc is (and of the same room
+    by :func:`_round_rooms`'s rule)."""
+    w = np.array([span * r for _, r, _, span in arcs])
+    c = np.array([[x, y, r] for (x, y), r, _, _ in arcs])
+    xc, yc, R = (c * w[:, None]).sum(0) / w.sum()
+    taken = []                                      # the room's arcs, about its centre
+    for (x, y), r, a0, span in arcs:
+        a = a0 + np.linspace(0.0, span, 16)
+        taken.append(np.arctan2(y + r * np.sin(a) - yc, x + r * np.cos(a) - xc))
+    taken = np.concatenate(taken)
+    runs = []
+    for p in rest:
+        d = np.hypot(p[:, 0] - xc, p[:, 1] - yc)
+        a = np.arctan2(p[:, 1] - yc, p[:, 0] - xc)
+        along = R * _spread(a)
+        if (len(p) < 3 or np.mean(np.abs(d - R) <= R / 4) < 0.9
+                or np.ptp(d) > along / 2):          # off the circle, or across it
+            continue
+        if _within(a, taken, max_gap / R / 2).mean() > 0.1:
+            continue                                # on an arc already drawn
+        runs.append((float(np.arctan2(np.sin(a).mean(), np.cos(a).mean())), p))
+    if not runs:
+        return []
+    runs.sort(key=lambda q: q[0])
+    out = []
+    for grp in _chains([q[1] for q in runs], cover, max_gap):
+        p = np.concatenate(grp)
+        f = _fit(p, *r_range, max_rms)
+        if f is None or not (np.hypot(f[0] - xc, f[1] - yc) <= (f[2] + R) / 4
+                             and abs(f[2] - R) <= (f[2] + R) / 8):
+            continue                                # not this room's circle
+        a = np.arctan2(p[:, 1] - f[1], p[:, 0] - f[0])
+        for a0, span in _arcs_of(a, 3 * max_gap / f[2]):   # the chain's joins
+            if (span * f[2] >= n_min
+                    and f[2] * (1 - math.cos(min(span, math.pi) / 2)) >= min_sagitta):
+                out.append(((f[0], f[1]), f[2], a0, span, p))
+    return out
+
+
+def _spread(a: np.ndarray) -> float:
+    """The angle (radians) a set of directions ``a`` spans, around the circle."""
+    s = np.sort(np.mod(a, 2 * math.pi))
+    gaps = np.diff(np.concatenate([s, s[:1] + 2 * math.pi]))
+    return float(2 * math.pi - gaps.max())
+
+
+def _within(a: np.ndarray, ref: np.ndarray, tol: float) -> np.ndarray:
+    """Which angles ``a`` lie within ``tol`` of one of the sorted-or-not ``ref``."""
+    d = np.abs(np.mod(a[:, None] - ref[None, :] + math.pi, 2 * math.pi) - math.pi)
+    return d.min(axis=1) <= tol
+
+
+def _chains(pts: list[np.ndarray], cover: np.ndarray, max_gap: float
+            ) -> list[list[np.ndarray]]:
+    """Runs (sorted by angle about a room's centre) joined where neighbours' nearest
+    points lie at most ``max_gap`` pixels apart, or where the input's wall pixels
+    (``cover``, within a pixel) fill the gap between them (the runs of one wall cut at a
+    dent's corner)."""
+    groups = [[pts[0]]]
+    for k in range(1, len(pts)):
+        if _joins(groups[-1][-1], pts[k], cover, max_gap):
+            groups[-1].append(pts[k])
+        else:
+            groups.append([pts[k]])
+    if len(groups) > 1 and _joins(groups[-1][-1], groups[0][0], cover, max_gap):
+        groups[0] = groups.pop() + groups[0]        # around the circle: last to first
+    return groups
+
+
+def _joins(p: np.ndarray, q: np.ndarray, cover: np.ndarray, max_gap: float) -> bool:
+    """Whether runs ``p`` and ``q`` continue each other (:func:`_chains`)."""
+    d = np.hypot(p[:, None, 0] - q[None, :, 0], p[:, None, 1] - q[None, :, 1])
+    i, j = np.unravel_index(int(np.argmin(d)), d.shape)
+    if d[i, j] <= max_gap:
+        return True
+    if d[i, j] > 3 * max_gap:
+        return False
+    n = int(math.ceil(d[i, j])) + 1
+    x = np.linspace(p[i, 0], q[j, 0], n).astype(int)
+    y = np.linspace(p[i, 1], q[j, 1], n).astype(int)
+    H, W = cover.shape
+    near = np.zeros(n, bool)
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            near |= cover[np.clip(y + dy, 0, H - 1), np.clip(x + dx, 0, W - 1)]
+    return bool(near.all())
 
 
 def _found(chords: list, circles: list, drop: np.ndarray) -> CurvedWalls:
@@ -270,16 +382,18 @@ def _found(chords: list, circles: list, drop: np.ndarray) -> CurvedWalls:
                        np.repeat(np.arange(len(chords)), [len(c) for c in chords]))
 
 
-def _smooth_pieces(cover: np.ndarray, min_px: float) -> list[np.ndarray]:
+def _smooth_pieces(cover: np.ndarray, min_px: float
+                   ) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """Pixel centres (x, y) of the input's wall runs cut at corners and junctions: the
     skeleton of the wall pixels (dotted walls closed over a pixel) less every pixel
     within 2 of a Harris corner (:func:`cv2.cornerHarris`, 5 x 5, over 0.008: a drawn
     corner or T-junction answers about 0.06, the rounded corners of a real map's walls
-    0.011-0.029, an arc of radius 25 px 0.0066 and of 80 px 0.001)."""
+    0.011-0.029, an arc of radius 25 px 0.0066 and of 80 px 0.001). The runs of at
+    least ``min_px`` pixels that bend, and the rest (straight, or short) of at least 3."""
     from skimage.morphology import skeletonize
 
     if cover.sum() < min_px:
-        return []
+        return [], []
     joined = cv2.morphologyEx(cover.view(np.uint8), cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8))
     sk = skeletonize(joined > 0)
     corner = cv2.cornerHarris(sk.astype(np.float32), 5, 3, 0.04) > 0.008
@@ -295,10 +409,20 @@ def _smooth_pieces(cover: np.ndarray, min_px: float) -> list[np.ndarray]:
     cyy = np.bincount(k, ys * ys.astype(float), n) / m - my * my
     cxy = np.bincount(k, xs * ys.astype(float), n) / m - mx * my
     small = (cxx + cyy) / 2 - np.sqrt(((cxx - cyy) / 2) ** 2 + cxy ** 2)
-    keep = (st[:, cv2.CC_STAT_AREA] >= min_px) & (small > 0.25)
+    area = st[:, cv2.CC_STAT_AREA]
+    keep = (area >= min_px) & (small > 0.25)
     keep[0] = False
+    rest = (area >= 3) & ~keep
+    rest[0] = False
+    return _split(xs, ys, k, keep), _split(xs, ys, k, rest)
+
+
+def _split(xs: np.ndarray, ys: np.ndarray, k: np.ndarray, keep: np.ndarray
+           ) -> list[np.ndarray]:
+    """Pixel centres of the labels ``k`` that ``keep`` (by label) holds, one array per
+    label."""
     sel = keep[k]
-    ys, xs, k = ys[sel], xs[sel], k[sel]
+    xs, ys, k = xs[sel], ys[sel], k[sel]
     order = np.argsort(k, kind="stable")
     pts = np.column_stack([xs[order] + 0.5, ys[order] + 0.5])
     return np.split(pts, np.flatnonzero(np.diff(k[order])) + 1) if len(pts) else []

@@ -745,7 +745,7 @@ def _add_arc(msp, centre, r: float, start: float, sweep: float, layer: str,
         if closed:
             msp.add_circle(centre, r, dxfattribs=attribs)
         else:
-            msp.add_arc(centre, r, start, start + sweep, dxfattribs=attribs)
+            msp.add_arc(centre, r, start, math.fmod(start + sweep, 360.0), dxfattribs=attribs)
         return
     n = max(1, math.ceil(sweep / 90.0 - 1e-9))
     a = np.radians(start + np.linspace(0.0, sweep, n + 1))

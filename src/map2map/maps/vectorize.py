@@ -334,11 +334,12 @@ class DrawOptions:
         fits within 0.75 px RMS over at least this length, bending by at least 3 px,
         are drawn along their circle as chains of chords where the arcs around one room
         turn by a third of a circle together (:func:`map2map.maps.curves.curved_walls`):
-        a rotunda, an apse. The straight walls drawn along such an arc go. 0: off (as
-        before 2026-11-29). On the ACES map (``map2map slam aces-corrected.log.gz``) the
-        rotunda's three observed arcs are drawn; on 2,240 simulated maps (dev build and
-        three fresh builds), the 18 Halmstad maps, FHW and BreezySLAM exp2 nothing
-        changes.
+        a rotunda, an apse; such a room's further arcs may be made of runs too short or
+        straight to fit a circle alone. The straight walls drawn along such an arc go.
+        0: off (as before 2026-11-29). On the ACES map (``map2map slam
+        aces-corrected.log.gz``) the rotunda's four arcs are drawn; on 2,240 simulated
+        maps (dev build and three fresh builds), the 18 Halmstad maps, FHW and
+        BreezySLAM exp2 nothing changes.
     """
 
     tol: float = 0.12
