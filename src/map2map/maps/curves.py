@@ -333,7 +333,8 @@ def _spread(a: np.ndarray) -> float:
 
 
 def _within(a: np.ndarray, ref: np.ndarray, tol: float) -> np.ndarray:
-    """Which angles ``a`` lie within ``tol`` of one of the sorted-or-not ``ref``."""
+    """Which angles ``a`` lie within ``tol`` (radians, around the circle) of one of
+    ``ref``."""
     d = np.abs(np.mod(a[:, None] - ref[None, :] + math.pi, 2 * math.pi) - math.pi)
     return d.min(axis=1) <= tol
 
