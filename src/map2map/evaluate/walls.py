@@ -9,7 +9,9 @@ evaluate_maps`). This module turns that evaluation into walls:
    (:func:`map2map.maps.segments.straight_segments`: centre lines, axis snapping,
    merged collinear pieces; door openings of ``min_gap_m`` 0.4 m or more stay gaps;
    wall stubs shorter than that, beside a door or at a T, are cut at half that scale, so
-   they are judged too).
+   they are judged too), and a curved wall (an apse, a rotunda, a curved facade) is one
+   arc (:func:`map2map.maps.curves.circle_arcs`), not the short chords a line detector
+   cuts it into.
    Endpoints are given in plan metres (the map's ROS frame,
    :meth:`~map2map.core.grid.OccupancyMap.pixel_to_world`).
 2. **As-built evidence of each segment.** Every SLAM wall point counted in the wall
@@ -17,17 +19,20 @@ evaluate_maps`). This module turns that evaluation into walls:
    EXCLUDED_RULE`) has a correspondence ``X_corr`` on a plan wall surface (Algorithm 1,
    lines 1-13) and a local error ``|X_rigid - X_corr|`` (point to plane). It is given
    to the plan segment nearest its correspondence, within half the plan's wall
-   thickness plus 1.5 px.
+   thickness plus 1.5 px. On an arc the metric's axis-wise surfaces make a staircase
+   (every point there is a "corner" to it), so an arc takes the matched points whose
+   optimised position lies that close to its centre line, within its angles, and their
+   local error is measured to its circular face (point to curve, across the wall).
 3. **Deviation of a segment.** ``p95`` of its points' local errors decides: 95 % of
    the wall's observed evidence lies within it. The maximum would let a single stray
    lidar return fail a wall; the mean would let a wall built right over most of its
    length but off by a hand's width over its last metre pass. ``mean``, ``max`` and the
    signed ``offset`` (the median displacement across the wall, + toward +y for an
-   east-west wall and toward +x for a north-south one: where it was built) are given
-   beside it. **Its uncertainty** (:func:`deviation_interval`): the distribution-free
-   interval of the p95, one standard error either side, from the ranks of the wall's own
-   points (the spread of its evidence: few or scattered points give a wide one), widened
-   on both sides by half a
+   east-west wall and toward +x for a north-south one, + away from an arc's centre:
+   where it was built) are given beside it. **Its uncertainty**
+   (:func:`deviation_interval`): the distribution-free interval of the p95, one standard
+   error either side, from the ranks of the wall's own points (the spread of its
+   evidence: few or scattered points give a wide one), widened on both sides by half a
    plan pixel (the plan and the SLAM map each place a wall face only on their pixel grid).
 4. **Status.** ``pass`` when the whole interval is within the tolerance, ``fail`` when
    the whole interval is beyond it, ``uncertain`` when the tolerance lies inside it (the
@@ -75,6 +80,7 @@ from ..core._io import atomic_path
 from ..core.errors import InputError
 from ..core.geometry import point_segment_distances
 from ..core.grid import OCCUPIED, OccupancyMap
+from ..maps.curves import circle_arcs
 from ..maps.segments import straight_segments
 
 __all__ = ["STATUSES", "CSV_COLUMNS", "WallSegment", "WallInspection", "check_tolerance",
@@ -103,6 +109,10 @@ CSV_COLUMNS = [
     "coverage",
     "unmatched_nearby",
     "note",
+    "shape",
+    "centre_x_m",
+    "centre_y_m",
+    "radius_m",
 ]
 
 
@@ -118,6 +128,11 @@ class WallSegment:
     given beside it; all four are NaN for a wall not observed. ``coverage`` is the
     share of its length seen, ``points`` the SLAM wall points matched to it,
     ``unmatched_nearby`` SLAM points that match no plan wall within ``nearby_m``.
+
+    A curved wall is an arc (``shape`` ``"arc"``): ``x0_m .. y1_m`` are its ends,
+    ``length_m`` its length along the curve, ``arc_m`` its centre line's centre and
+    radius (metres) and ``arc_px`` its circle in plan pixels (``xc, yc, r, a0, span``,
+    radians in the image frame, as :func:`map2map.maps.curves.circle_arcs` gives it).
     """
 
     id: int
@@ -138,11 +153,30 @@ class WallSegment:
     unmatched_nearby: int
     note: str
     px: np.ndarray = field(repr=False)
+    arc_m: tuple[float, float, float] | None = None
+    arc_px: tuple[float, float, float, float, float] | None = field(default=None, repr=False)
+    mid_m: tuple[float, float] | None = None
+
+    @property
+    def shape(self) -> str:
+        """``"line"`` or ``"arc"``."""
+        return "line" if self.arc_px is None else "arc"
 
     @property
     def centre_m(self) -> tuple[float, float]:
-        """The segment's midpoint in plan metres."""
+        """The segment's midpoint in plan metres (an arc's: halfway along it)."""
+        if self.mid_m is not None:
+            return self.mid_m
         return (0.5 * (self.x0_m + self.x1_m), 0.5 * (self.y0_m + self.y1_m))
+
+    def polyline_px(self, n: int = 48) -> np.ndarray:
+        """(K, 2) points along the wall in plan pixels (a line's two ends; an arc's
+        ``n`` + 1 points)."""
+        if self.arc_px is None:
+            return np.asarray(self.px, float).reshape(2, 2)
+        xc, yc, r, a0, span = self.arc_px
+        a = a0 + np.linspace(0.0, span, n + 1)
+        return np.stack([xc + r * np.cos(a), yc + r * np.sin(a)], 1)
 
     def row(self) -> dict[str, Any]:
         """The CSV row: metres to 3 decimals, centimetres to 2, NaN as an empty cell."""
@@ -168,6 +202,10 @@ class WallSegment:
             "coverage": f(self.coverage, 2),
             "unmatched_nearby": self.unmatched_nearby,
             "note": self.note,
+            "shape": self.shape,
+            "centre_x_m": "" if self.arc_m is None else f(self.arc_m[0], 3),
+            "centre_y_m": "" if self.arc_m is None else f(self.arc_m[1], 3),
+            "radius_m": "" if self.arc_m is None else f(self.arc_m[2], 3),
         }
 
 
@@ -312,87 +350,152 @@ def inspect_walls(
     res = float(plan.resolution)
     ch = evaluation.errors[evaluation.chosen]
     segs = _plan_segments(plan, min_gap_m, min_length_m)
-    half = 0.5 * float(evaluation.registration.fields.wall_thickness) + 1.5
-    valid = ch.valid
+    arcs, drop = circle_arcs(plan.data == OCCUPIED, res, segs)
+    segs = segs[~drop]
+    thick = float(evaluation.registration.fields.wall_thickness)
+    half = 0.5 * thick + 1.5
+    unm = np.zeros(len(ch.distances), bool) if ch.unmatched is None else ch.unmatched
+    # an arc's evidence first (the metric's corners included: on a curve every point is
+    # one to its axis-wise surfaces), then the straight walls' from the rest
+    ka, ea, aa, oa = _on_arcs(ch.X_optimised, ch.X_rigid, ~unm, arcs, half, thick)
+    valid = ch.valid & (ka < 0)
     corr = ch.X_corr[valid]
     err_px = ch.distances[valid]
     disp = ch.X_rigid[valid] - corr
     k, dist, along = _to_segments(corr, segs)
     k[dist > half] = -1
-    unm = np.zeros(len(ch.distances), bool) if ch.unmatched is None else ch.unmatched
     ku, du, _ = _to_segments(ch.X_rigid[unm], segs)
     ku[du > nearby_m / res] = -1
+    kau = _on_arcs(ch.X_rigid[unm], ch.X_rigid[unm], np.ones(int(unm.sum()), bool), arcs,
+                   nearby_m / res, thick)[0]
+    judge = _Judge(tol, res, min_points, min_coverage, nearby_m)
 
+    walls = [("line", i, s) for i, s in enumerate(segs)]
+    walls += [("arc", j, a) for j, a in enumerate(arcs)]
     out: list[WallSegment] = []
-    for i, s in enumerate(segs):
-        sel = k == i
-        e = err_px[sel] * res * 100.0
-        length_px = float(np.hypot(s[2] - s[0], s[3] - s[1]))
-        bins = max(1, int(math.ceil(length_px / 2.0)))
-        hit = np.unique(np.clip((along[sel] / 2.0).astype(np.int64), 0, bins - 1))
-        coverage = len(hit) / bins
-        # world endpoints: continuous pixel x -> column index x - 0.5 (centres are integers)
-        wx, wy = plan.pixel_to_world(s[[1, 3]] - 0.5, s[[0, 2]] - 0.5)
-        u = np.array([wx[1] - wx[0], wy[1] - wy[0]])
-        u = u / max(np.hypot(*u), 1e-12)
-        normal = np.array([-u[1], u[0]])  # world normal; + toward +y (E-W) or +x (N-S)
-        if abs(normal[1]) >= abs(normal[0]):
-            normal = normal if normal[1] >= 0 else -normal
-        else:
-            normal = normal if normal[0] >= 0 else -normal
-        n_unm = int((ku == i).sum())
-        observed = e.size >= min_points and coverage >= min_coverage
-        if observed:
+    for kind, i, s in sorted(walls, key=lambda w: _order_key(w[0], w[2])):
+        if kind == "line":
+            sel = k == i
+            length_px = float(np.hypot(s[2] - s[0], s[3] - s[1]))
+            # world endpoints: continuous pixel x -> column index x - 0.5 (centres are
+            # integers)
+            wx, wy = plan.pixel_to_world(s[[1, 3]] - 0.5, s[[0, 2]] - 0.5)
+            u = np.array([wx[1] - wx[0], wy[1] - wy[0]])
+            u = u / max(np.hypot(*u), 1e-12)
+            normal = np.array([-u[1], u[0]])  # world normal; + toward +y (E-W) or +x (N-S)
+            if abs(normal[1]) >= abs(normal[0]):
+                normal = normal if normal[1] >= 0 else -normal
+            else:
+                normal = normal if normal[0] >= 0 else -normal
             # displacement in world axes: columns to the right are +x, rows down are -y
             dw = disp[sel] @ _pixel_to_world_linear(plan)
-            offset = float(np.median(dw @ normal)) * res * 100.0
+            offsets = dw @ normal
+            fields = judge(err_px[sel] * res * 100.0, along[sel], length_px,
+                           offsets * res * 100.0, int((ku == i).sum()))
+            extra = {}
+            px = s.copy()
+        else:
+            sel = ka == i
+            xc, yc, r, a0, span = s
+            length_px = float(span * r)
+            a = a0 + np.array([0.0, span / 2, span])
+            ex, ey = xc + r * np.cos(a), yc + r * np.sin(a)
+            wx, wy = plan.pixel_to_world(ey - 0.5, ex - 0.5)
+            cx, cy = plan.pixel_to_world(np.array([yc - 0.5]), np.array([xc - 0.5]))
+            # a curve on a pixel grid is a staircase, in the plan and in the map: each
+            # lies up to half a pixel across its circle (built right, the same raster
+            # measures 0.6 px at p95 against it), so an arc's grid term is a pixel
+            fields = judge(ea[sel] * res * 100.0, aa[sel], length_px, oa[sel] * res * 100.0,
+                           int((kau == i).sum()), grid_px=1.0)
+            extra = {"arc_m": (float(cx[0]), float(cy[0]), float(r * res)),
+                     "arc_px": tuple(float(v) for v in s),
+                     "mid_m": (float(wx[1]), float(wy[1]))}
+            wx, wy = wx[[0, 2]], wy[[0, 2]]
+            px = np.array([ex[0], ey[0], ex[2], ey[2]])
+        out.append(WallSegment(id=len(out) + 1, x0_m=float(wx[0]), y0_m=float(wy[0]),
+                               x1_m=float(wx[1]), y1_m=float(wy[1]),
+                               length_m=length_px * res, px=px, **fields, **extra))
+    insp = WallInspection(out, tol, res, min_points, min_coverage)
+    insp.warnings = _judgement_warnings(insp)
+    return insp
+
+
+class _Judge:
+    """A wall's status, figures and note from its evidence (``inspect_walls``'s steps
+    3-4): local errors and signed offsets in cm, positions along it in pixels."""
+
+    def __init__(self, tol: float, res: float, min_points: int, min_coverage: float,
+                 nearby_m: float):
+        self.tol, self.res, self.nearby_m = tol, res, nearby_m
+        self.min_points, self.min_coverage = min_points, min_coverage
+
+    def __call__(self, e: np.ndarray, along: np.ndarray, length_px: float,
+                 offsets: np.ndarray, n_unm: int, grid_px: float = 0.5) -> dict[str, Any]:
+        bins = max(1, int(math.ceil(length_px / 2.0)))
+        hit = np.unique(np.clip((along / 2.0).astype(np.int64), 0, bins - 1))
+        coverage = len(hit) / bins
+        if e.size >= self.min_points and coverage >= self.min_coverage:
             dev = float(np.percentile(e, 95))
-            lo, hi = deviation_interval(e, 0.5 * res * 100.0)
-            t = tol * 100.0
+            lo, hi = deviation_interval(e, grid_px * self.res * 100.0)
+            t = self.tol * 100.0
             status = "pass" if hi <= t + 1e-9 else "fail" if lo > t + 1e-9 else "uncertain"
-            stats = (dev, lo, hi, float(e.mean()), float(e.max()), offset)
-            note = ""
-            if coverage < 0.6:
-                note = f"only {coverage:.0%} of its length seen"
+            stats = (dev, lo, hi, float(e.mean()), float(e.max()), float(np.median(offsets)))
+            note = f"only {coverage:.0%} of its length seen" if coverage < 0.6 else ""
         else:
             status = "not observed"
             stats = (math.nan,) * 6
-            why = (
+            note = (
                 "no SLAM wall evidence"
                 if e.size == 0
                 else f"too little SLAM evidence ({e.size} points, {coverage:.0%} of its length)"
             )
-            if n_unm >= min_points:
-                why += (
-                    f"; {n_unm} SLAM points within {nearby_m:g} m match no plan wall: "
+            if n_unm >= self.min_points:
+                note += (
+                    f"; {n_unm} SLAM points within {self.nearby_m:g} m match no plan wall: "
                     "built more than 0.3 m off, or clutter in front of it? check on site"
                 )
-            note = why
-        out.append(
-            WallSegment(
-                id=i + 1,
-                x0_m=float(wx[0]),
-                y0_m=float(wy[0]),
-                x1_m=float(wx[1]),
-                y1_m=float(wy[1]),
-                length_m=length_px * res,
-                status=status,
-                deviation_cm=stats[0],
-                deviation_lo_cm=stats[1],
-                deviation_hi_cm=stats[2],
-                mean_cm=stats[3],
-                max_cm=stats[4],
-                offset_cm=stats[5],
-                points=int(e.size),
-                coverage=coverage,
-                unmatched_nearby=n_unm,
-                note=note,
-                px=s.copy(),
-            )
-        )
-    insp = WallInspection(out, tol, res, min_points, min_coverage)
-    insp.warnings = _judgement_warnings(insp)
-    return insp
+        keys = ("deviation_cm", "deviation_lo_cm", "deviation_hi_cm", "mean_cm", "max_cm",
+                "offset_cm")
+        return {"status": status, **dict(zip(keys, stats, strict=True)),
+                "points": int(e.size), "coverage": coverage, "unmatched_nearby": n_unm,
+                "note": note}
+
+
+def _order_key(kind: str, w: np.ndarray) -> float:
+    """Walls top to bottom, then left to right (ids follow): a line's upper end, an
+    arc's topmost point."""
+    if kind == "line":
+        return float(np.round(min(w[1], w[3])) * 1e6 + min(w[0], w[2]))
+    xc, yc, r, a0, span = w
+    a = a0 + np.linspace(0.0, span, 65)
+    x, y = xc + r * np.cos(a), yc + r * np.sin(a)
+    return float(np.round(y.min()) * 1e6 + x.min())
+
+
+def _on_arcs(X_opt: np.ndarray, X_rig: np.ndarray, ok: np.ndarray, arcs: np.ndarray,
+             reach: float, thick: float
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per point, the arc (index, or -1) whose centre line its optimised position lies
+    within ``reach`` pixels of (``ok`` points only, inside the arc's angles; the nearest
+    arc), its local error across the wall (pixels: the rigidly aligned point to the
+    arc's face on its side, the circle through the face's pixel centres, ``thick`` the
+    plan's wall thickness), its position along the arc and its signed offset (+ away
+    from the centre)."""
+    n = len(X_opt)
+    k = np.full(n, -1, np.int64)
+    err, along, off = np.zeros(n), np.zeros(n), np.zeros(n)
+    best = np.full(n, np.inf)
+    for j, (xc, yc, r, a0, span) in enumerate(np.asarray(arcs, float).reshape(-1, 5)):
+        d = np.hypot(X_opt[:, 0] - xc, X_opt[:, 1] - yc) - r
+        t = np.mod(np.arctan2(X_opt[:, 1] - yc, X_opt[:, 0] - xc) - a0, 2 * math.pi)
+        sel = ok & (np.abs(d) <= reach) & (t <= span) & (np.abs(d) < best)
+        # the face's pixel centres, as a straight wall's correspondences are (half a
+        # pixel inside the wall's edge)
+        face = r + np.where(d >= 0, 1.0, -1.0) * max(0.0, 0.5 * thick - 0.5)
+        o = np.hypot(X_rig[:, 0] - xc, X_rig[:, 1] - yc) - face
+        k[sel], best[sel] = j, np.abs(d[sel])
+        err[sel], along[sel], off[sel] = np.abs(o[sel]), t[sel] * r, o[sel]
+    return k, err, along, off
 
 
 def deviation_interval(errors_cm: np.ndarray, grid_cm: float, q: float = 0.95,

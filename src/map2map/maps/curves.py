@@ -50,6 +50,7 @@ True
 from __future__ import annotations
 
 import math
+import warnings
 from typing import NamedTuple
 
 import cv2
@@ -57,7 +58,7 @@ import numpy as np
 
 from ..core.geometry import point_segment_distances, segment_samples
 
-__all__ = ["curved_walls", "arc_chords", "CurvedWalls", "arcs_to_world"]
+__all__ = ["curved_walls", "arc_chords", "CurvedWalls", "arcs_to_world", "circle_arcs"]
 
 
 class CurvedWalls(NamedTuple):
@@ -277,6 +278,126 @@ def curved_walls(cover: np.ndarray, free: np.ndarray, resolution: float, thickne
             circles.append((xc, yc, rc, a0, span))
             drop |= _along(samples, (xc, yc), r, a0, span, t / 2 + 2)
     return _found(out, circles, drop)
+
+
+def circle_arcs(walls: np.ndarray, resolution: float, segments: np.ndarray | None = None,
+                *, min_len: float = 1.0, min_radius: float = 0.5, max_radius: float = 50.0,
+                max_rms: float = 0.75, min_sagitta: float = 3.0, max_gap: float = 0.4,
+                band: float = 2.5, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """The circular arcs of a drawn plan's walls: ``(arcs, drop)``.
+
+    A plan's walls are exact, so unlike :func:`curved_walls` (a SLAM map's wobbling
+    walls, judged around one room) any arc is taken, wherever it is: a curved facade,
+    an apse, a rotunda. Its wall may run on tangentially into a straight one (no corner
+    to cut at), so the arcs are found in each run of the walls' skeleton by RANSAC
+    (:func:`skimage.measure.ransac` with :class:`~skimage.measure.CircleModel`, seeded:
+    the same plan gives the same arcs): the circle of radius ``min_radius`` -
+    ``max_radius`` metres that most of its pixels lie on within ``max_rms``, refitted to
+    them; its stretches with no gap over ``max_gap`` metres, at least ``min_len`` long
+    and bending by at least ``min_sagitta`` pixels, are arcs; the rest of the run is
+    searched again.
+
+    ``segments`` (N, 4): the straight walls found in the same plan (continuous pixels).
+    Those lying along an arc (60 % of their length within ``band`` pixels of it, inside
+    its angles: the short chords a line detector cuts a curve into) are in ``drop``; the
+    arcs end where a remaining straight wall takes over (their pixels within a pixel of
+    one are not the arc's: a straight wall leaving an arc tangentially hugs it).
+
+    Returns
+    -------
+    arcs : (M, 5) float
+        ``xc, yc, r, a0, span``: the walls' centre lines (pixels, image frame; radians,
+        ``span`` >= 0 from ``a0``), as :class:`CurvedWalls` gives them.
+    drop : (N,) bool
+
+    Examples
+    --------
+    >>> m = np.zeros((140, 200), bool)
+    >>> yy, xx = np.mgrid[0:140, 0:200] + 0.5
+    >>> m[(np.abs(np.hypot(xx - 100, yy - 70) - 50) < 1) & (xx >= 100)] = True   # an apse
+    >>> m[19:21, 20:100] = True; m[119:121, 20:100] = True                        # its walls
+    >>> arcs, _ = circle_arcs(m, 0.05)        # the walls leave it tangentially: ...
+    >>> np.round(arcs[:, :3]).tolist(), round(float(np.degrees(arcs[0, 4])))
+    ([[100.0, 70.0, 50.0]], 200)
+    >>> straight = np.array([[20.0, 20.0, 100.0, 20.0], [20.0, 120.0, 100.0, 120.0]])
+    >>> arcs, drop = circle_arcs(m, 0.05, straight)     # ... the straight walls end it
+    >>> round(float(np.degrees(arcs[0, 4]))), drop.tolist()
+    (176, [False, False])
+    """
+    from skimage.measure import ransac
+
+    res = float(resolution)
+    walls = np.asarray(walls, bool)
+    segs = np.zeros((0, 4)) if segments is None else np.asarray(segments, float).reshape(-1, 4)
+    n_min = min_len / res
+    r_lo, r_hi = min_radius / res, max_radius / res
+    rng = np.random.default_rng(seed)
+
+    def ok(model, *data) -> bool:
+        return bool(r_lo <= float(model.radius) <= r_hi)
+
+    def stretches(p, f):
+        xc, yc, r = f
+        ang = np.arctan2(p[:, 1] - yc, p[:, 0] - xc)
+        return [(a0, span) for a0, span in _arcs_of(ang, max_gap / res / r)
+                if span * r >= n_min and r * (1 - math.cos(min(span, math.pi) / 2))
+                >= min_sagitta]
+
+    found = []                                      # (circle, points)
+    # the runs that bend (a straight run, within about a pixel of its line, holds no
+    # arc bending by min_sagitta > 2 max_rms): the arcs, and the walls they run on into
+    for p in _smooth_pieces(walls, 3)[0]:
+        while len(p) >= n_min:
+            with warnings.catch_warnings():         # "no inliers": a straight run
+                warnings.simplefilter("ignore", UserWarning)
+                model, inl = ransac(p, _CircleModel, 3, max_rms, is_model_valid=ok,
+                                    max_trials=300, rng=rng)
+            if model is None or inl is None or inl.sum() < n_min:
+                break
+            f = _fit(p[inl], r_lo, r_hi, max_rms)
+            if f is None or not stretches(p[inl], f):
+                break
+            found.append((f, p[inl]))
+            p = p[~inl]
+    drop = np.zeros(len(segs), bool)
+    if not found:
+        return np.zeros((0, 5)), drop
+    samples = segment_samples(segs)
+    for (xc, yc, r), p in found:
+        for a0, span in stretches(p, (xc, yc, r)):
+            drop |= _along(samples, (xc, yc), r, a0, span, band)
+    kept = segs[~drop]
+    arcs = []
+    for (xc, yc, r), p in found:
+        if len(kept):                               # where a straight wall takes over
+            d, _ = point_segment_distances(p, kept)
+            p = p[d.min(axis=1) > 1.0]
+        arcs += [(xc, yc, r, a0, span) for a0, span in stretches(p, (xc, yc, r))]
+    return np.array(arcs, float).reshape(-1, 5), drop
+
+
+class _CircleModel:
+    """:class:`skimage.measure.CircleModel` for :func:`skimage.measure.ransac`, through
+    :func:`_circle` (scikit-image's estimation API changed in 0.26)."""
+
+    def __init__(self):
+        self.centre, self.radius = (0.0, 0.0), 0.0
+
+    @classmethod
+    def from_estimate(cls, p: np.ndarray) -> _CircleModel | None:
+        m = cls()
+        return m if m.estimate(p) else None
+
+    def estimate(self, p: np.ndarray) -> bool:
+        f = _circle(p)
+        if f is None or not all(math.isfinite(v) for v in f):
+            return False
+        self.centre, self.radius = f[:2], f[2]
+        return True
+
+    def residuals(self, p: np.ndarray) -> np.ndarray:
+        return np.abs(np.hypot(p[:, 0] - self.centre[0], p[:, 1] - self.centre[1])
+                      - self.radius)
 
 
 def _completed(arcs: list, rest: list[np.ndarray], cover: np.ndarray,

@@ -96,14 +96,15 @@ def status_figure(plan: OccupancyMap, inspection: WallInspection):
              "not observed": ((0, (2, 1.5)), 1.6)}
     for s in inspection.segments:
         ls, lw = style[s.status]
-        x0, y0, x1, y1 = s.px
-        ax.plot([x0, x1], [y0, y1], color=STATUS_COLOURS[s.status], ls=ls, lw=lw,
+        xy = s.polyline_px()
+        ax.plot(xy[:, 0], xy[:, 1], color=STATUS_COLOURS[s.status], ls=ls, lw=lw,
                 solid_capstyle="butt")  # fmt: skip
     for s in inspection.segments:  # every failed wall, numbered
         if s.status == "fail":
-            x0, y0, x1, y1 = s.px
+            xy = s.polyline_px(2)
+            mid = xy[1] if len(xy) == 3 else xy.mean(axis=0)
             ax.annotate(
-                str(s.id), (0.5 * (x0 + x1), 0.5 * (y0 + y1)), fontsize=8, ha="center",
+                str(s.id), (float(mid[0]), float(mid[1])), fontsize=8, ha="center",
                 va="center", color="white", fontweight="bold",
                 bbox={"boxstyle": "round,pad=0.15", "fc": STATUS_COLOURS["fail"], "lw": 0},
             )  # fmt: skip
@@ -218,8 +219,12 @@ def inspection_report(
             "walls not observed": str(counts["not observed"]),
         }
     )
+    n_arcs = sum(w.shape == "arc" for w in insp.segments)
+    cut = (f"{len(insp.segments)} straight wall segments were" if not n_arcs else
+           f"{len(insp.segments)} wall segments ({n_arcs} of them arcs along curved walls, "
+           "their error measured to the curved face) were")
     s.text(
-        f"{len(insp.segments)} straight wall segments were cut from the plan and judged "
+        f"{cut} cut from the plan and judged "
         f"against a tolerance of {insp.tolerance_m * 100:g} cm. A segment's deviation is "
         "the 95th percentile of the local errors of the as-built wall evidence matched to "
         "it, given with its uncertainty: one standard error either side of that "
@@ -308,7 +313,8 @@ def inspection_report(
         s.note(
             "Location in plan metres (the plan's ROS frame). Offset: the median "
             "displacement of the built wall across the planned one, + toward +y for an "
-            "east-west wall, toward +x for a north-south wall."
+            "east-west wall, toward +x for a north-south wall"
+            + (", + away from an arc's centre." if n_arcs else ".")
         )
     else:
         s.note("No wall segment was observed: nothing to rank.")
@@ -317,7 +323,7 @@ def inspection_report(
     rows = [
         [w.id, _num(w.x0_m, 3), _num(w.y0_m, 3), _num(w.x1_m, 3), _num(w.y1_m, 3),
          _num(w.length_m, 2), w.status, _num(w.deviation_cm), w.points,
-         f"{w.coverage:.0%}", w.note]  # fmt: skip
+         f"{w.coverage:.0%}", _shape_note(w)]  # fmt: skip
         for w in insp.segments
     ]
     s.table(
@@ -328,6 +334,15 @@ def inspection_report(
     if len(rows) > max_table_rows:
         s.note(f"{len(rows) - max_table_rows} more segments in the CSV.")
     return r
+
+
+def _shape_note(w) -> str:
+    """A segment's note, an arc's centre and radius first."""
+    if w.arc_m is None:
+        return w.note
+    cx, cy, r = w.arc_m
+    arc = f"arc: centre ({cx:.2f}, {cy:.2f}) m, radius {r:.2f} m"
+    return f"{arc}; {w.note}" if w.note else arc
 
 
 def _report_paths(path: str | os.PathLike) -> tuple[Path, Path]:

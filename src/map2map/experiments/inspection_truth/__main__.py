@@ -32,7 +32,10 @@ def true_deviation(seg, field: DisplacementField, observed: np.ndarray, walls: n
                    to_plan) -> float:
     """The p95 across the wall (pixels) of where the field moved the wall's observed
     pixels, once the evaluation's mapping ``to_plan`` (map pixels -> plan pixels) maps
-    them back; NaN when none of its pixels was observed."""
+    them back; NaN when none of its pixels was observed (or for an arc: the generated
+    plans have none)."""
+    if seg.shape != "line":
+        return float("nan")
     x0, y0, x1, y1 = seg.px
     n = max(2, int(np.ceil(np.hypot(x1 - x0, y1 - y0))) + 1)
     t = np.linspace(0.0, 1.0, n)
