@@ -95,3 +95,31 @@ def test_an_apse_built_bulging_fails_by_its_bulge(plan):
     assert apse.offset_cm > 5.0                      # outwards: + away from the centre
     loose = _arc_walls(inspect_walls(ev, plan, tolerance=0.30))[0]
     assert loose.status == "pass"
+
+
+def test_a_dxf_plan_with_an_arc_is_inspected_from_the_command_line(tmp_path):
+    """The whole path a user takes: a CAD drawing with an ARC, converted, and
+    ``map2map evaluate --report``: the CSV holds the apse as one arc of its radius."""
+    import ezdxf
+
+    from map2map.cli.main import main
+    from map2map.maps.formats import load_map, save_map
+
+    doc = ezdxf.new(units=6)
+    msp = doc.modelspace()
+    for a, b in (((0, 0), (8, 0)), ((0, 0), (0, 6)), ((0, 6), (8, 6))):
+        msp.add_line(a, b)
+    msp.add_arc((8, 3), 3, -90, 90)                    # the apse, radius 3 m
+    doc.saveas(tmp_path / "hall.dxf")
+    assert main(["convert", str(tmp_path / "hall.dxf"), str(tmp_path / "plan.yaml"),
+                 "--resolution", "0.05"]) == 0
+    plan = load_map(tmp_path / "plan.yaml")
+    save_map(plan.copy(plan.data.copy()), tmp_path / "built.yaml")   # built as drawn
+    assert main(["evaluate", str(tmp_path / "built.yaml"), str(tmp_path / "plan.yaml"),
+                 "--out", str(tmp_path / "ev"), "--report", "insp.html"]) == 0
+    rows = list(csv.DictReader(open(tmp_path / "ev" / "insp.csv")))
+    arcs = [r for r in rows if r["shape"] == "arc"]
+    assert len(arcs) == 1 and arcs[0]["status"] != "not observed"
+    assert float(arcs[0]["radius_m"]) == pytest.approx(3.0, abs=0.05)
+    assert float(arcs[0]["centre_x_m"]) == pytest.approx(8.0, abs=0.05)
+    assert not any(r["status"] in ("fail", "not observed") for r in rows)
