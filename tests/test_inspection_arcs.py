@@ -123,3 +123,35 @@ def test_a_dxf_plan_with_an_arc_is_inspected_from_the_command_line(tmp_path):
     assert float(arcs[0]["radius_m"]) == pytest.approx(3.0, abs=0.05)
     assert float(arcs[0]["centre_x_m"]) == pytest.approx(8.0, abs=0.05)
     assert not any(r["status"] in ("fail", "not observed") for r in rows)
+
+
+def _chamfered(shift_px: float = 0.0) -> np.ndarray:
+    """A room (walls 2 px) whose north-east corner is cut by a wall at 45 degrees,
+    ``shift_px`` further out (perpendicular) as built."""
+    m = np.full((200, 260), UNKNOWN, np.uint8)
+    d = shift_px * np.sqrt(0.5)
+    p0 = (150 + d, 30 - d)          # the chamfer from the north wall ...
+    p1 = (230 + d, 110 - d)         # ... to the east wall (x y, continuous)
+    poly = np.array([(30, 30), p0, p1, (230, 170), (30, 170)])
+    cv2.fillPoly(m, [np.round(poly * 16).astype(np.int32)], FREE, shift=4)
+    cv2.polylines(m, [np.round(poly * 16).astype(np.int32)], True, OCCUPIED, 2, shift=4)
+    return m
+
+
+def test_a_wall_at_45_degrees_is_observed_and_judged_on_its_own_face():
+    """The metric calls every point of a diagonal wall a corner (its surfaces are
+    axis-wise): the wall was "not observed". It takes its evidence by geometry now."""
+    plan = OccupancyMap(_chamfered(), RES, ORIGIN)
+    right = inspect_walls(evaluate_maps(OccupancyMap(_chamfered(), RES, ORIGIN), plan,
+                                        resolution=RES), plan)
+    diag = [s for s in right.segments if abs(abs(s.x1_m - s.x0_m) - abs(s.y1_m - s.y0_m))
+            < 0.1 and s.length_m > 3]
+    assert len(diag) == 1
+    assert diag[0].status != "not observed" and diag[0].coverage > 0.9
+    assert diag[0].deviation_lo_cm <= 5.0                        # not failed
+    assert right.counts["not observed"] == 0 and right.counts["fail"] == 0
+    off = inspect_walls(evaluate_maps(OccupancyMap(_chamfered(3.0), RES, ORIGIN), plan,
+                                      resolution=RES), plan)
+    (moved,) = [s for s in off.segments if s.id == diag[0].id]
+    assert moved.status == "fail" and 10.0 < moved.deviation_cm < 25.0
+    assert abs(moved.offset_cm) > 8.0
