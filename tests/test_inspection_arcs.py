@@ -155,3 +155,24 @@ def test_a_wall_at_45_degrees_is_observed_and_judged_on_its_own_face():
     (moved,) = [s for s in off.segments if s.id == diag[0].id]
     assert moved.status == "fail" and 10.0 < moved.deviation_cm < 25.0
     assert abs(moved.offset_cm) > 8.0
+
+
+def test_a_solid_block_is_judged_by_its_faces_not_its_medial_axis():
+    """A plan whose space between rooms is drawn as solid wall (as HouseExpo plans are
+    converted): the segments run along the block's faces, where the map sees walls, not
+    diagonally through the block along its skeleton."""
+    m = np.full((200, 260), UNKNOWN, np.uint8)
+    m[30:170, 30:230] = FREE
+    cv2.rectangle(m, (29, 29), (230, 170), OCCUPIED, 2)
+    m[100:171, 150:231] = OCCUPIED                    # a 4 x 3.5 m solid block
+    plan = OccupancyMap(m, RES, ORIGIN)
+    ev = evaluate_maps(OccupancyMap(m.copy(), RES, ORIGIN), plan, resolution=RES)
+    insp = inspect_walls(ev, plan)
+    slanted = [s for s in insp.segments
+               if min(abs(s.x1_m - s.x0_m), abs(s.y1_m - s.y0_m)) > 0.1]
+    assert not slanted                                 # no medial-axis diagonals
+    x_face = ORIGIN[0] + 150 * RES                    # the block's west face
+    faces = [s for s in insp.segments if abs(s.x0_m - x_face) < 0.1
+             and abs(s.x1_m - x_face) < 0.1]
+    assert faces and all(s.status != "not observed" for s in faces)
+    assert insp.counts["fail"] == 0
