@@ -31,6 +31,7 @@ from scipy.spatial import cKDTree
 
 from ..core.geometry import apply, decompose_similarity, transform_normals
 from ..core.grid import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+from ..maps.solids import hollow_solids
 from .align import Alignment, AlignParams, align_maps, check_map
 from .anchors import Anchors
 from .confidence import evaluation_notes, evaluation_warnings
@@ -122,8 +123,12 @@ def register(
     params: EvaluateParams | None = None,
     names: tuple[str | None, str | None] = ("source", "target"),
 ) -> Registration:
-    """Align ``source`` to ``target`` and optimise the nonrigid chain (Fig. 1, c-d-f)."""
+    """Align ``source`` to ``target`` and optimise the nonrigid chain (Fig. 1, c-d-f).
+
+    The target's solid regions count by their faces: their inside is unknown
+    (:func:`~map2map.maps.solids.hollow_solids`; a map never sees inside a wall)."""
     p = params or EvaluateParams()
+    target = hollow_solids(target)
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
     al = align_maps(source.data, target.data, anchors=anchors, params=p.align, names=names)
@@ -212,6 +217,7 @@ def evaluate_maps(
     ``res_source / res_target`` (1 when both maps share a resolution).
     """
     p = params or EvaluateParams()
+    target = hollow_solids(target)      # as register() sees it (IoU, fields, metric)
     if rigid_scale is not None:
         p = EvaluateParams(**{**p.__dict__})
         p.align = AlignParams(

@@ -75,7 +75,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import cv2
 import numpy as np
 
 from ..core._io import atomic_path
@@ -84,6 +83,7 @@ from ..core.geometry import point_segment_distances
 from ..core.grid import OCCUPIED, OccupancyMap
 from ..maps.curves import circle_arcs
 from ..maps.segments import straight_segments
+from ..maps.solids import solid_cores
 
 __all__ = ["STATUSES", "CSV_COLUMNS", "WallSegment", "WallInspection", "check_tolerance",
            "inspect_walls", "deviation_interval", "write_segments_csv"]
@@ -257,37 +257,18 @@ def check_tolerance(tolerance: float, name: str = "tolerance") -> float:
     return t
 
 
-def _faces_of_solids(walls: np.ndarray, res: float, deep_m: float = 0.5,
-                     rim_m: float = 0.1) -> np.ndarray:
-    """The wall mask with its solid regions (wall pixels more than ``deep_m`` from any
-    other pixel, and the core they lie in: a HouseExpo plan's space between rooms drawn
-    as wall, a block of columns) reduced to a rim ``rim_m`` deep along their faces. A
-    line detector cuts a solid region along its medial axis, through the middle of the
-    block, where no laser ever looked; its faces are the walls a map shows.
-
-    >>> w = np.zeros((60, 60), bool); w[10:50, 10:50] = True        # a 2 m block
-    >>> f = _faces_of_solids(w, 0.05)
-    >>> bool(f[30, 30]), bool(f[10, 30]), int(f[30].sum())            # hollow, rim 2 px
-    (False, True, 4)
-    """
-    from scipy import ndimage as ndi
-
-    depth = ndi.distance_transform_edt(walls)
-    deep = depth > deep_m / res
-    if not deep.any():
-        return walls
-    core = depth > max(1.0, rim_m / res)
-    n, lab = cv2.connectedComponents(core.view(np.uint8), connectivity=8)
-    solid = np.zeros(n, bool)
-    solid[np.unique(lab[deep])] = True
-    solid[0] = False
-    return walls & ~solid[lab]
+def _cut_walls(plan: OccupancyMap) -> np.ndarray:
+    """The plan's wall pixels its walls are cut from: solid regions by a rim along
+    their faces (:func:`~map2map.maps.solids.solid_cores`)."""
+    walls = plan.data == OCCUPIED
+    return walls & ~solid_cores(walls, float(plan.resolution))
 
 
 def _plan_segments(plan: OccupancyMap, min_gap_m: float, min_length_m: float) -> np.ndarray:
     """Straight segments (K, 4) of the plan's walls in continuous pixels (centre +0.5);
-    solid regions by their faces (:func:`_faces_of_solids`)."""
-    walls = _faces_of_solids(plan.data == OCCUPIED, float(plan.resolution))
+    solid regions by their faces (:func:`~map2map.maps.solids.solid_cores`: a line
+    detector cuts a block along its medial axis, where no laser ever looked)."""
+    walls = _cut_walls(plan)
     if not walls.any():
         return np.zeros((0, 4))
     cell = max(2.0, min_gap_m / plan.resolution)
@@ -380,7 +361,7 @@ def inspect_walls(
     res = float(plan.resolution)
     ch = evaluation.errors[evaluation.chosen]
     segs = _plan_segments(plan, min_gap_m, min_length_m)
-    arcs, drop = circle_arcs(_faces_of_solids(plan.data == OCCUPIED, res), res, segs)
+    arcs, drop = circle_arcs(_cut_walls(plan), res, segs)
     segs = segs[~drop]
     fields_ = evaluation.registration.fields
     thick = float(fields_.wall_thickness)
