@@ -28,6 +28,14 @@ def test_a_block_keeps_its_rim_and_thin_walls_are_untouched():
     assert hollow_solids(thin) is thin           # nothing to hollow: the map itself
 
 
+def test_a_region_running_out_of_the_picture_is_not_hollowed():
+    """The outside read as wall (a plan's unknown under a low occupied threshold) runs to
+    the picture's edge: hollowing it would thin the building's outer walls."""
+    w = np.ones((100, 100), bool)
+    w[20:80, 20:80] = False                      # a room inside a sea of "wall"
+    assert not solid_cores(w, 0.05).any()
+
+
 def test_a_houseexpo_plan_mapped_at_the_true_poses_aligns_at_the_identity(shared_data,
                                                                           tmp_path):
     """Aligned to the plan with its solid blocks (the space between rooms a HouseExpo

@@ -5,7 +5,8 @@ inside its bounding box (as HouseExpo renders it, :mod:`map2map.maps.houseexpo`)
 block of columns, a core. A SLAM map shows only their faces: their inside is unknown
 to it, never occupied. :func:`solid_cores` finds the inside (wall pixels more than
 ``deep_m`` from any other pixel, and the core around them, all but a rim ``rim_m`` deep
-along the faces); :func:`hollow_solids` makes it unknown.
+along the faces; not a region that runs out of the picture, which is the outside read as
+wall or a plan cut off); :func:`hollow_solids` makes it unknown.
 
 The evaluation aligns a map to such a plan, and cuts its walls, with the cores unknown:
 on a HouseExpo plan mapped at the true poses, aligning to the solid plan chose a shift
@@ -39,7 +40,7 @@ def solid_cores(walls: np.ndarray, resolution: float, deep_m: float = 0.5,
                 rim_m: float = 0.1) -> np.ndarray:
     """The inside of the solid regions of a wall mask (bool, its shape): the connected
     parts of the wall pixels more than ``rim_m`` from any other pixel that hold one more
-    than ``deep_m`` from it."""
+    than ``deep_m`` from it, and do not reach the picture's edge."""
     from scipy import ndimage as ndi
 
     walls = np.asarray(walls, bool)
@@ -52,6 +53,10 @@ def solid_cores(walls: np.ndarray, resolution: float, deep_m: float = 0.5,
     n, lab = cv2.connectedComponents(core.view(np.uint8), connectivity=8)
     solid = np.zeros(n, bool)
     solid[np.unique(lab[deep])] = True
+    # a region running out of the picture is no block: the outside read as wall (a
+    # plan's unknown under a low --occupied-thresh), or a plan cut off at a wall; its
+    # faces on the building are only known as they are
+    solid[np.unique(np.concatenate([lab[0], lab[-1], lab[:, 0], lab[:, -1]]))] = False
     solid[0] = False
     return solid[lab]
 
