@@ -51,6 +51,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Callable
 from typing import NamedTuple
 
 import cv2
@@ -219,8 +220,8 @@ def curved_walls(cover: np.ndarray, free: np.ndarray, resolution: float, thickne
     segs = np.zeros((0, 4)) if segments is None else np.asarray(segments, float).reshape(-1, 4)
     drop = np.zeros(len(segs), bool)
     n_min = min_len / res
-    pieces, rest = _smooth_pieces(cover, n_min / 2)
-    fits = []
+    pieces, rest_of = _smooth_pieces(cover, n_min / 2)
+    fits, rest = [], []
     for p in pieces:                                # a few dozen runs
         f = _fit(p, min_radius / res, max_radius / res, max_rms)
         if f is not None:
@@ -248,6 +249,7 @@ def curved_walls(cover: np.ndarray, free: np.ndarray, resolution: float, thickne
         if depth is None:                           # a round room: rare
             from scipy import ndimage as ndi
 
+            rest += rest_of()
             depth = ndi.distance_transform_edt(~free)      # px to the free space
             samples = segment_samples(segs)
             seg_len = np.hypot(segs[:, 2] - segs[:, 0], segs[:, 3] - segs[:, 1])
@@ -505,17 +507,18 @@ def _found(chords: list, circles: list, drop: np.ndarray) -> CurvedWalls:
 
 
 def _smooth_pieces(cover: np.ndarray, min_px: float
-                   ) -> tuple[list[np.ndarray], list[np.ndarray]]:
+                   ) -> tuple[list[np.ndarray], Callable[[], list[np.ndarray]]]:
     """Pixel centres (x, y) of the input's wall runs cut at corners and junctions: the
     skeleton of the wall pixels (dotted walls closed over a pixel) less every pixel
     within 2 of a Harris corner (:func:`cv2.cornerHarris`, 5 x 5, over 0.008: a drawn
     corner or T-junction answers about 0.06, the rounded corners of a real map's walls
     0.011-0.029, an arc of radius 25 px 0.0066 and of 80 px 0.001). The runs of at
-    least ``min_px`` pixels that bend, and the rest (straight, or short) of at least 3."""
+    least ``min_px`` pixels that bend, and a function giving the rest (straight, or
+    short) of at least 3 (wanted only around a round room: rare)."""
     from skimage.morphology import skeletonize
 
     if cover.sum() < min_px:
-        return [], []
+        return [], list
     joined = cv2.morphologyEx(cover.view(np.uint8), cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8))
     sk = skeletonize(joined > 0)
     corner = cv2.cornerHarris(sk.astype(np.float32), 5, 3, 0.04) > 0.008
@@ -536,7 +539,7 @@ def _smooth_pieces(cover: np.ndarray, min_px: float
     keep[0] = False
     rest = (area >= 3) & ~keep
     rest[0] = False
-    return _split(xs, ys, k, keep), _split(xs, ys, k, rest)
+    return _split(xs, ys, k, keep), lambda: _split(xs, ys, k, rest)
 
 
 def _split(xs: np.ndarray, ys: np.ndarray, k: np.ndarray, keep: np.ndarray
