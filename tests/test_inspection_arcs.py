@@ -123,6 +123,9 @@ def test_a_dxf_plan_with_an_arc_is_inspected_from_the_command_line(tmp_path):
     assert float(arcs[0]["radius_m"]) == pytest.approx(3.0, abs=0.05)
     assert float(arcs[0]["centre_x_m"]) == pytest.approx(8.0, abs=0.05)
     assert not any(r["status"] in ("fail", "not observed") for r in rows)
+    # the report says the key numbers leave the curve's points out (the metric's corners)
+    page = (tmp_path / "ev" / "insp.md").read_text()
+    assert "curved or more than 10 degrees off the plan's axes: 1." in page
 
 
 def _chamfered(shift_px: float = 0.0) -> np.ndarray:
@@ -146,7 +149,8 @@ def test_a_wall_at_45_degrees_is_observed_and_judged_on_its_own_face():
                                         resolution=RES), plan)
     diag = [s for s in right.segments if abs(abs(s.x1_m - s.x0_m) - abs(s.y1_m - s.y0_m))
             < 0.1 and s.length_m > 3]
-    assert len(diag) == 1
+    assert len(diag) == 1 and diag[0].oblique
+    assert sum(s.oblique for s in right.segments) == 1
     assert diag[0].status != "not observed" and diag[0].coverage > 0.9
     assert diag[0].deviation_lo_cm <= 5.0                        # not failed
     assert right.counts["not observed"] == 0 and right.counts["fail"] == 0

@@ -158,6 +158,8 @@ class WallSegment:
     arc_m: tuple[float, float, float] | None = None
     arc_px: tuple[float, float, float, float, float] | None = field(default=None, repr=False)
     mid_m: tuple[float, float] | None = None
+    #: a straight wall more than 10 degrees off the plan's axes, judged by geometry
+    oblique: bool = False
 
     @property
     def shape(self) -> str:
@@ -403,7 +405,7 @@ def inspect_walls(
             fields = judge(el[sel] * res * 100.0, al[sel], length_px,
                            _signed_world(ol[sel], s, plan) * res * 100.0,
                            int((ku == i).sum()), grid_px=1.0)
-            extra = {}
+            extra = {"oblique": True}
             px = s.copy()
         elif kind == "line":
             sel = k == i

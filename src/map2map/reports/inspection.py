@@ -245,6 +245,14 @@ def inspection_report(
         f"than 0.3 m off) and {e['corner_points_excluded']} corner points are left out. "
         f"Plan resolution {res * 100:g} cm per pixel."
     )
+    n_own = sum(w.shape == "arc" or w.oblique for w in insp.segments)
+    if n_own:
+        s.note(
+            f"Walls curved or more than 10 degrees off the plan's axes: {n_own}. The "
+            "metric's plan surfaces run along the axes, so the points on them count as "
+            "corners in the figures above; the tables below judge those walls on their "
+            "own faces."
+        )
     for n in notes:  # facts that limit what the figures describe, not doubts
         s.note(f"Note: {n}.")
     if csv_name:
