@@ -127,8 +127,14 @@ def register(
 
     The target's solid regions count by their faces: their inside is unknown
     (:func:`~map2map.maps.solids.hollow_solids`; a map never sees inside a wall)."""
+    return _register(source, hollow_solids(target), anchors, params, names)
+
+
+def _register(source: OccupancyMap, target: OccupancyMap, anchors: Anchors | None,
+              params: EvaluateParams | None, names: tuple[str | None, str | None]
+              ) -> Registration:
+    """:func:`register` on a target already hollowed."""
     p = params or EvaluateParams()
-    target = hollow_solids(target)
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
     al = align_maps(source.data, target.data, anchors=anchors, params=p.align, names=names)
@@ -228,7 +234,7 @@ def evaluate_maps(
             }
         )
     t_all = time.perf_counter()
-    reg = register(source, target, anchors=anchors, params=p, names=names)
+    reg = _register(source, target, anchors, p, names)
     al = reg.alignment
     timings = dict(reg.timings)
     t0 = time.perf_counter()

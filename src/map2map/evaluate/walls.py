@@ -266,11 +266,13 @@ def _cut_walls(plan: OccupancyMap) -> np.ndarray:
     return walls & ~solid_cores(walls, float(plan.resolution))
 
 
-def _plan_segments(plan: OccupancyMap, min_gap_m: float, min_length_m: float) -> np.ndarray:
+def _plan_segments(plan: OccupancyMap, min_gap_m: float, min_length_m: float,
+                   walls: np.ndarray | None = None) -> np.ndarray:
     """Straight segments (K, 4) of the plan's walls in continuous pixels (centre +0.5);
     solid regions by their faces (:func:`~map2map.maps.solids.solid_cores`: a line
-    detector cuts a block along its medial axis, where no laser ever looked)."""
-    walls = _cut_walls(plan)
+    detector cuts a block along its medial axis, where no laser ever looked; ``walls``:
+    :func:`_cut_walls`'s, when already made)."""
+    walls = _cut_walls(plan) if walls is None else walls
     if not walls.any():
         return np.zeros((0, 4))
     cell = max(2.0, min_gap_m / plan.resolution)
@@ -362,8 +364,9 @@ def inspect_walls(
     tol = check_tolerance(tolerance)
     res = float(plan.resolution)
     ch = evaluation.errors[evaluation.chosen]
-    segs = _plan_segments(plan, min_gap_m, min_length_m)
-    arcs, drop = circle_arcs(_cut_walls(plan), res, segs)
+    walls = _cut_walls(plan)
+    segs = _plan_segments(plan, min_gap_m, min_length_m, walls)
+    arcs, drop = circle_arcs(walls, res, segs)
     segs = segs[~drop]
     fields_ = evaluation.registration.fields
     thick = float(fields_.wall_thickness)
@@ -397,18 +400,7 @@ def inspect_walls(
     walls += [("arc", j, a) for j, a in enumerate(arcs)]
     out: list[WallSegment] = []
     for kind, i, s in sorted(walls, key=lambda w: _order_key(w[0], w[2])):
-        if kind == "line" and oblique[i]:
-            sel = kl == i
-            length_px = float(np.hypot(s[2] - s[0], s[3] - s[1]))
-            wx, wy = plan.pixel_to_world(s[[1, 3]] - 0.5, s[[0, 2]] - 0.5)
-            # a staircase in both rasters, as an arc is (below)
-            fields = judge(el[sel] * res * 100.0, al[sel], length_px,
-                           _signed_world(ol[sel], s, plan) * res * 100.0,
-                           int((ku == i).sum()), grid_px=1.0)
-            extra = {"oblique": True}
-            px = s.copy()
-        elif kind == "line":
-            sel = k == i
+        if kind == "line":
             length_px = float(np.hypot(s[2] - s[0], s[3] - s[1]))
             # world endpoints: continuous pixel x -> column index x - 0.5 (centres are
             # integers)
@@ -420,12 +412,21 @@ def inspect_walls(
                 normal = normal if normal[1] >= 0 else -normal
             else:
                 normal = normal if normal[0] >= 0 else -normal
-            # displacement in world axes: columns to the right are +x, rows down are -y
-            dw = disp[sel] @ _pixel_to_world_linear(plan)
-            offsets = dw @ normal
-            fields = judge(err_px[sel] * res * 100.0, along[sel], length_px,
-                           offsets * res * 100.0, int((ku == i).sum()))
-            extra = {}
+            to_world = _pixel_to_world_linear(plan)
+            if oblique[i]:
+                # by geometry, and a staircase in both rasters, as an arc is (below)
+                sel = kl == i
+                left = np.array([s[3] - s[1], -(s[2] - s[0])]) / length_px  # pixels
+                offsets = ol[sel] * float(left @ to_world @ normal)
+                fields = judge(el[sel] * res * 100.0, al[sel], length_px,
+                               offsets * res * 100.0, int((ku == i).sum()), grid_px=1.0)
+            else:
+                sel = k == i
+                # displacement in world axes: columns to the right are +x, rows down -y
+                offsets = disp[sel] @ to_world @ normal
+                fields = judge(err_px[sel] * res * 100.0, along[sel], length_px,
+                               offsets * res * 100.0, int((ku == i).sum()))
+            extra = {"oblique": bool(oblique[i])}
             px = s.copy()
         else:
             sel = ka == i
@@ -531,32 +532,26 @@ def _on_lines(X_opt: np.ndarray, X_rig: np.ndarray, ok: np.ndarray, segs: np.nda
     k = np.full(n, -1, np.int64)
     err, along, off = np.zeros(n), np.zeros(n), np.zeros(n)
     best = np.full(n, np.inf)
-    face = max(0.0, 0.5 * thick - 0.5)
+    face = _face_px(thick)
     for j, (x0, y0, x1, y1) in enumerate(np.asarray(segs, float).reshape(-1, 4)):
         L = max(math.hypot(x1 - x0, y1 - y0), 1e-9)
         u = np.array([x1 - x0, y1 - y0]) / L
-        nrm = np.array([u[1], -u[0]])
+        nrm = np.array([u[1], -u[0]])                # the left, in pixels (y down)
         q = X_opt - (x0, y0)
         t, d = q @ u, q @ nrm
         sel = ok & (np.abs(d) <= reach) & (t >= 0) & (t <= L) & (np.abs(d) < best)
+        # across from the face on the point's side, + to the left on either side
         o = (X_rig - (x0, y0)) @ nrm - np.where(d >= 0, face, -face)
-        o = np.where(d >= 0, o, -o)                  # + away from the wall's centre
         k[sel], best[sel] = j, np.abs(d[sel])
-        err[sel], along[sel] = np.abs(o[sel]), t[sel]
-        off[sel] = np.where(d[sel] >= 0, o[sel], -o[sel])   # + to the left, either side
+        err[sel], along[sel], off[sel] = np.abs(o[sel]), t[sel], o[sel]
     return k, err, along, off
 
 
-def _signed_world(off_px: np.ndarray, seg: np.ndarray, plan: OccupancyMap) -> np.ndarray:
-    """Offsets across a segment (+ to its left in pixels, :func:`_on_lines`) signed as the
-    straight walls' are: + toward +y for a wall running more east-west, + toward +x for
-    one running more north-south (world axes)."""
-    x0, y0, x1, y1 = seg
-    left = np.array([y1 - y0, -(x1 - x0)], float)               # pixel frame, y down
-    left /= max(float(np.hypot(*left)), 1e-12)
-    w = left @ _pixel_to_world_linear(plan)                     # its world direction
-    sign = np.sign(w[1]) if abs(w[1]) >= abs(w[0]) else np.sign(w[0])
-    return off_px * (sign if sign != 0 else 1.0)
+def _face_px(thick: float) -> float:
+    """How far a wall's face pixel centres lie from its centre line (pixels; ``thick``
+    its thickness), where a straight wall's correspondences are: half a pixel inside
+    the wall's edge."""
+    return max(0.0, 0.5 * thick - 0.5)
 
 
 def _on_arcs(X_opt: np.ndarray, X_rig: np.ndarray, ok: np.ndarray, arcs: np.ndarray,
@@ -576,9 +571,7 @@ def _on_arcs(X_opt: np.ndarray, X_rig: np.ndarray, ok: np.ndarray, arcs: np.ndar
         d = np.hypot(X_opt[:, 0] - xc, X_opt[:, 1] - yc) - r
         t = np.mod(np.arctan2(X_opt[:, 1] - yc, X_opt[:, 0] - xc) - a0, 2 * math.pi)
         sel = ok & (np.abs(d) <= reach) & (t <= span) & (np.abs(d) < best)
-        # the face's pixel centres, as a straight wall's correspondences are (half a
-        # pixel inside the wall's edge)
-        face = r + np.where(d >= 0, 1.0, -1.0) * max(0.0, 0.5 * thick - 0.5)
+        face = r + np.where(d >= 0, 1.0, -1.0) * _face_px(thick)
         o = np.hypot(X_rig[:, 0] - xc, X_rig[:, 1] - yc) - face
         k[sel], best[sel] = j, np.abs(d[sel])
         err[sel], along[sel], off[sel] = np.abs(o[sel]), t[sel] * r, o[sel]
