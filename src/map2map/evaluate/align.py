@@ -3,12 +3,13 @@
 Section 3.2.1 (preliminary alignment) and 3.2.2 (anchoring) of the appendix paper,
 on a three-level pyramid so that a 1585 x 1585 pair aligns in about a second:
 
-1. *search level* (about 160 px): dominant orientations (:mod:`.orientation`), wall
-   lines by radiography (:mod:`.radiography`), faces and their OMBBs
-   (:mod:`.decomposition`), hypotheses from face pairs with non-similarities
-   rejected, plus dense FFT hypotheses (:mod:`.hypotheses`), all scored by the
-   fitness of eq. 8 (:mod:`.fitness`) times the share of the source's free space
-   that lands inside the plan;
+1. *search level* (about 160 px): dominant orientations and direction families (a
+   wing at 45 degrees; :mod:`.orientation`; the dense hypotheses try the rotations that
+   lay each family of one map onto each of the other's), wall lines by radiography
+   (:mod:`.radiography`), faces and their OMBBs (:mod:`.decomposition`), hypotheses
+   from face pairs with non-similarities rejected, plus dense FFT hypotheses
+   (:mod:`.hypotheses`), all scored by the fitness of eq. 8 (:mod:`.fitness`) times
+   the share of the source's free space that lands inside the plan;
 2. *refine level* (about 400 px): the best hypotheses are refined by robust
    Gaussian-weighted least squares on distance-transform correspondences
    (an annealed maximisation of eq. 8) and the best of both directions is kept,
@@ -79,7 +80,7 @@ from .features import (
 from .fitness import distance_map, fitness, lookup
 from .hypotheses import Hypothesis, dense_hypotheses, face_hypotheses, suppress_duplicates
 from .nonrigid import SideFields, to_plane
-from .orientation import dominant_orientation
+from .orientation import dominant_orientation, wall_families
 
 __all__ = [
     "AlignParams",
@@ -159,6 +160,7 @@ class Alignment:
     warnings: list[str] = field(default_factory=list)
     hypotheses: dict[str, Any] = field(default_factory=dict)
     orientation: dict[str, float] = field(default_factory=dict)
+    families: dict[str, list[float]] = field(default_factory=dict)
     faces: dict[str, Any] = field(default_factory=dict)
     fields: SideFields | None = None
     timings: dict[str, float] = field(default_factory=dict)
@@ -184,6 +186,7 @@ class Alignment:
             else {"source": self.anchors.source.tolist(), "target": self.anchors.target.tolist()},
             "hypotheses": self.hypotheses,
             "orientation_deg": {k: math.degrees(v) for k, v in self.orientation.items()},
+            "families_deg": {k: [math.degrees(a) for a in v] for k, v in self.families.items()},
             "warnings": list(self.warnings),
             "notes": list(self.notes),
             "timings_s": self.timings,
@@ -450,6 +453,7 @@ class _Search:
     refined: list[tuple[float, np.ndarray]] = field(default_factory=list)
     level2: tuple[_Level, _Level, np.ndarray] | None = None
     two_way: float = -1.0
+    families: tuple[list[float], list[float]] = ([], [])
 
 
 def _search(src: np.ndarray, tgt: np.ndarray, f1: int, f2: int, p: AlignParams) -> _Search:
@@ -460,6 +464,10 @@ def _search(src: np.ndarray, tgt: np.ndarray, f1: int, f2: int, p: AlignParams) 
     T1 = _Level(tgt, f1, max_points=3000, seed=p.seed)
     theta_s, str_s = dominant_orientation(S1.data)
     theta_t, str_t = dominant_orientation(T1.data)
+    # a building with a wing at 45 degrees has two wall families; the two maps' dominant
+    # angles may name different ones (resolution: the search level's at ~5 cm/px)
+    fam_s = wall_families(S1.data, theta_s, 0.05 * f1)
+    fam_t = wall_families(T1.data, theta_t, 0.05 * f1)
     timings["orientation"] = time.perf_counter() - t0
     t1 = time.perf_counter()
     gap = max(2, int(round(1.0 / 0.05 / f1)))  # doorways of ~1 m at ~5 cm/px
@@ -480,7 +488,7 @@ def _search(src: np.ndarray, tgt: np.ndarray, f1: int, f2: int, p: AlignParams) 
     Mf1 = T1.fitness_map(sigma1)
     for h in face_h:
         h.score = _score(T1, Mf1, S1.pts, S1.free_pts, h.T)
-    rotations = theta_t - theta_s + np.arange(4) * np.pi / 2
+    rotations = _rotations(fam_s, fam_t)
     if min(str_s, str_t) < 0.25:  # no clear rectilinear structure: search all rotations
         rotations = np.concatenate([rotations, np.radians(np.arange(0, 360, 15.0))])
     n_scales = int(math.ceil(math.log(hi / lo) / math.log(1.1))) + 1
@@ -531,8 +539,16 @@ def _search(src: np.ndarray, tgt: np.ndarray, f1: int, f2: int, p: AlignParams) 
     timings["refine"] = time.perf_counter() - t1
     return _Search(
         best, best_score, stats, (theta_s, theta_t), (faces_s, faces_t), (S1, T1), timings,
-        refined, (S2, T2, Mf2),
+        refined, (S2, T2, Mf2), families=(fam_s, fam_t),
     )  # fmt: skip
+
+
+def _rotations(fam_s: list[float], fam_t: list[float]) -> np.ndarray:
+    """Rotations that lay a wall family of the source onto one of the target: the
+    dominant angles' first (four, a quarter turn apart), then those of every other
+    pair of families."""
+    pairs = [(fam_t[0], fam_s[0])] + [(t, s) for t in fam_t for s in fam_s][1:]
+    return np.concatenate([t - s + np.arange(4) * np.pi / 2 for t, s in pairs])
 
 
 def _displacement(pts: np.ndarray, T: np.ndarray, U: np.ndarray) -> float:
@@ -794,9 +810,8 @@ def _full_resolution(srch: _Search, a, b, q: AlignParams, f1: int, f2: int, anch
 
     def fallback_rigid() -> np.ndarray:
         S1, T1 = srch.levels
-        th_a, th_b = srch.theta
         return _fallback_rigid(
-            S1, T1, A3, edt3, q, th_a, th_b, f1, lambda T: fitness(Mf3, apply(T, A3))
+            S1, T1, A3, edt3, q, srch.families, f1, lambda T: fitness(Mf3, apply(T, A3))
         )
 
     passed = best is not None
@@ -851,7 +866,7 @@ def _full_resolution(srch: _Search, a, b, q: AlignParams, f1: int, f2: int, anch
     return sim, aff, rig, passed, line_plan
 
 
-def _surfaces(source, target, src, a, b, sims, crop: _Crop, theta_t: float, passed: bool,
+def _surfaces(source, target, src, a, b, sims, crop: _Crop, fam_t: list[float], passed: bool,
               line_plan: bool, reverse: bool, p: AlignParams):
     """Final refinement on wall surfaces, in full-image coordinates.
 
@@ -860,7 +875,7 @@ def _surfaces(source, target, src, a, b, sims, crop: _Crop, theta_t: float, pass
     """
     sim, aff, rig = sims
     (r0s, _, c0s, _), (r0t, r1t, c0t, c1t) = crop.s, crop.t
-    fields = SideFields.from_map(target, theta_t, window=(r0t, r1t, c0t, c1t))
+    fields = SideFields.from_map(target, fam_t[0], window=(r0t, r1t, c0t, c1t), families=fam_t)
     X, N = edge_points(src)
     keep = subsample(np.arange(len(X))[:, None], p.max_points, p.seed)[:, 0]
     X, N = X[keep] + (c0s, r0s), N[keep]
@@ -991,7 +1006,7 @@ def align_maps(
     t1 = time.perf_counter()
     sims, fields = _surfaces(
         source, target, src, a, b, tuple(A @ T @ B for T in (sim, aff, rig)), crop,
-        fwd.theta[1], passed, line_plan, reverse, p,
+        fwd.families[1], passed, line_plan, reverse, p,
     )  # fmt: skip
     timings["surfaces"] = time.perf_counter() - t1
     S3f = subsample(surface_points(source), p.max_points, p.seed)
@@ -1031,6 +1046,7 @@ def align_maps(
         warnings=warnings,
         hypotheses=stats,
         orientation={"source": theta_s, "target": theta_t},
+        families={"source": fwd.families[0], "target": fwd.families[1]},
         fields=fields,
         faces={
             "source": fwd.faces[0],
@@ -1100,11 +1116,9 @@ def _quality(source, target, sim, p: AlignParams, box_s) -> dict[str, Any]:
     }
 
 
-def _fallback_rigid(S1, T1, S3, edt3, p: AlignParams, theta_s, theta_t, f1, fit3) -> np.ndarray:
+def _fallback_rigid(S1, T1, S3, edt3, p: AlignParams, families, f1, fit3) -> np.ndarray:
     """Best rigid transform (scale fixed) from dense hypotheses, refined at full resolution."""
-    rotations = np.concatenate(
-        [theta_t - theta_s + np.arange(4) * np.pi / 2, np.radians(np.arange(0, 360, 15.0))]
-    )
+    rotations = np.concatenate([_rotations(*families), np.radians(np.arange(0, 360, 15.0))])
     hyps = _dense(S1, T1, rotations, np.array([p.rigid_scale]), 1.5)
     if not hyps:
         return similarity_matrix(p.rigid_scale, 0.0, 0.0, 0.0)

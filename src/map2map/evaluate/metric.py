@@ -51,8 +51,9 @@ EXCLUDED_RULE = (
     "after the optimisation of eq. 7, no plan surface facing its way lies within "
     "match_px of it (3 sigma_f of the last stage, 0.3 m by default) over the plan's known "
     "space; corner points (normal within 10 deg of the diagonal between the plan's wall "
-    "axes, or matched within 1.5 px of a perpendicular plan surface: ambiguous "
-    "correspondence) are left out too; the *_all_px figures count every point"
+    "axes, of each direction family the plan has, or matched within 1.5 px of a plan "
+    "surface across the matched one: ambiguous correspondence) are left out too; the "
+    "*_all_px figures count every point"
 )
 
 
@@ -165,11 +166,13 @@ def local_errors(
 
     Corners, wall ends and junctions, where the correspondence is ambiguous, are
     flagged in ``corner``: points whose normal lies within ``corner_band`` of the
-    diagonal between the plan's wall axes (the side is a toss-up), and points
-    whose correspondence lies within ``corner_px`` of a plan surface perpendicular
-    to the one matched (they sit at a plan corner). The earlier rule (normal more
-    than 18 degrees off the axes) dropped 2,410 of 7,347 points of a real office
-    map, whose ragged walls have noisy normals.
+    diagonal between the plan's wall axes (the side is a toss-up; with a second
+    direction family, of the bisector between the two nearest directions the plan's
+    surfaces face, :meth:`.SideFields.corners`), and points whose correspondence
+    lies within ``corner_px`` of a plan surface across the one matched (30-150
+    degrees off it: perpendicular, with one family; they sit at a plan corner). The
+    earlier rule (normal more than 18 degrees off the axes) dropped 2,410 of 7,347
+    points of a real office map, whose ragged walls have noisy normals.
     """
     X_rigid = np.asarray(X_rigid, float)
     X_optimised = np.asarray(X_optimised, float)
@@ -205,21 +208,21 @@ def local_errors(
         unmatched = ~matched
     corner = None
     if normals is not None:
-        ang = np.mod(np.arctan2(n[:, 1], n[:, 0]) - fields.theta, np.pi / 2)
-        corner = has & (np.abs(ang - np.pi / 4) < corner_band)
+        corner = fields.corners(n, corner_band)
         if corner_px > 0:
-            # at a plan corner: a surface perpendicular to the matched one is right there
+            # at a plan corner: a surface across the matched one is right there (with
+            # one family, the two perpendicular sides)
             g = fields.side_groups(n)
             ox, oy = fields.offset
             h, w = fields.shape
             c = np.floor(X_corr[:, 0] - ox).astype(np.int64)
             r = np.floor(X_corr[:, 1] - oy).astype(np.int64)
-            ok = has & ~step & (g < 4) & (r >= 0) & (r < h) & (c >= 0) & (c < w)
-            for turn in (1, 3):
+            ok = has & ~step & (g < fields.n_sides) & (r >= 0) & (r < h) & (c >= 0) & (c < w)
+            meets = fields.across()
+            for k in range(fields.n_sides):
+                sel = ok & meets[np.minimum(g, fields.n_sides - 1), k]
                 d_perp = np.full(len(g), np.inf)
-                for k in range(4):
-                    sel = ok & ((g + turn) % 4 == k)
-                    d_perp[sel] = fields.sides[k][0][r[sel], c[sel]]
+                d_perp[sel] = fields.sides[k][0][r[sel], c[sel]]
                 corner |= d_perp <= corner_px
     return ChainErrors(X_rigid, X_optimised, X_corr, dist, corner, unmatched)
 

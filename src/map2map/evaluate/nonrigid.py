@@ -40,6 +40,7 @@ True
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import cv2
@@ -47,6 +48,7 @@ import numpy as np
 from scipy.spatial import Delaunay
 
 from ..core.grid import OCCUPIED, UNKNOWN
+from ..maps.directions import orientation
 from .features import side_masks
 from .fitness import distance_map
 
@@ -65,10 +67,16 @@ __all__ = [
 class SideFields:
     """Distance transforms (with nearest-wall indices) of the plan's wall surfaces.
 
-    ``sides[k]`` holds the surfaces facing ``theta + k pi/2``; ``walls`` all
-    occupied cells (for points whose side is unknown). The fields may cover only a
-    window of the plan (its known content): ``offset`` (x, y) is the window's
-    top-left corner in plan pixels and ``plan_shape`` the whole plan's shape.
+    ``sides[k]`` holds the surfaces facing ``angles[k]``: ``theta + k pi/2`` (k =
+    0..3) for a plan whose walls run along ``theta`` and ``theta + pi/2``; a plan
+    with further direction ``families`` (a wing at 45 degrees,
+    :func:`~map2map.evaluate.orientation.wall_families`) has four more sides per
+    family, and each wall cell belongs to the sides of its own family (the
+    structure tensor's orientation around it, :func:`map2map.maps.directions.orientation`).
+    ``walls`` holds all occupied cells (for points whose side is unknown). The
+    fields may cover only a window of the plan (its known content): ``offset`` (x,
+    y) is the window's top-left corner in plan pixels and ``plan_shape`` the whole
+    plan's shape.
     """
 
     theta: float
@@ -77,6 +85,7 @@ class SideFields:
     offset: tuple[int, int] = (0, 0)
     plan_shape: tuple[int, int] | None = None
     known: np.ndarray | None = None
+    families: tuple[float, ...] = ()
     _walls: tuple[np.ndarray, np.ndarray] | None = None
     _flat: np.ndarray | None = None
     _thickness: float | None = None
@@ -90,16 +99,36 @@ class SideFields:
 
     @classmethod
     def from_map(
-        cls, data: np.ndarray, theta: float, window: tuple[int, int, int, int] | None = None
+        cls, data: np.ndarray, theta: float, window: tuple[int, int, int, int] | None = None,
+        families: Sequence[float] = (),
     ) -> SideFields:
-        """Fields of a plan, optionally of its ``window = (row0, row1, col0, col1)`` only."""
+        """Fields of a plan, optionally of its ``window = (row0, row1, col0, col1)`` only.
+
+        ``families``: the plan's direction families beside ``theta`` (radians; a
+        list that starts with ``theta``, as
+        :func:`~map2map.evaluate.orientation.wall_families` returns it, is taken
+        as is)."""
         r0, r1, c0, c1 = window or (0, data.shape[0], 0, data.shape[1])
         sub = data[r0:r1, c0:c1]
-        sides = [distance_map(m, return_indices=True) for m in side_masks(sub, theta)]
+        extra = tuple(float(f) for f in families if _apart(f, theta) > 1e-9)
+        masks = side_masks(sub, theta) if not extra else _family_masks(sub, (theta, *extra))
+        sides = [distance_map(m, return_indices=True) for m in masks]
         walls = sub == OCCUPIED
         # the plan's known cells, grown by 3 px: walls seen at the edge of its known area
         known = cv2.dilate((sub != UNKNOWN).astype(np.uint8), np.ones((7, 7), np.uint8)) > 0
-        return cls(float(theta), sides, walls, (int(c0), int(r0)), tuple(data.shape), known)
+        return cls(float(theta), sides, walls, (int(c0), int(r0)), tuple(data.shape), known,
+                   extra)
+
+    @property
+    def angles(self) -> np.ndarray:
+        """The direction each side's surfaces face (radians): four per family."""
+        fams = (self.theta, *self.families)
+        return np.array([f + k * np.pi / 2 for f in fams for k in range(4)])
+
+    @property
+    def n_sides(self) -> int:
+        """Number of sides (4 per family); a point's unknown side is group ``n_sides``."""
+        return 4 * (1 + len(self.families))
 
     def is_known(self, pts: np.ndarray) -> np.ndarray:
         """Whether points fall on (or within 3 px of) known cells of the plan."""
@@ -119,7 +148,8 @@ class SideFields:
         return self.wall_mask.shape
 
     def _table(self) -> np.ndarray:
-        """(5, H * W) flat index of the nearest wall cell: four sides, then all walls."""
+        """(n_sides + 1, H * W) flat index of the nearest wall cell: the sides, then all
+        walls."""
         if getattr(self, "_flat", None) is None:
             h, w = self.shape
             rows = []
@@ -143,21 +173,48 @@ class SideFields:
         return self._thickness
 
     def side_groups(self, normals: np.ndarray) -> np.ndarray:
-        """Side index (0-3) whose surfaces each normal faces, 4 where the normal is unknown."""
+        """Side index (0 to ``n_sides - 1``) whose surfaces each normal faces (the
+        nearest side angle), ``n_sides`` where the normal is unknown."""
         n = np.asarray(normals, float).reshape(-1, 2)
-        group = np.full(len(n), 4)
+        group = np.full(len(n), self.n_sides)
         has = np.hypot(n[:, 0], n[:, 1]) > 0.5
-        ang = np.arctan2(n[:, 1], n[:, 0]) - self.theta
-        group[has] = np.mod(np.round(ang[has] / (np.pi / 2)), 4).astype(int)
+        if not self.families:
+            ang = np.arctan2(n[:, 1], n[:, 0]) - self.theta
+            group[has] = np.mod(np.round(ang[has] / (np.pi / 2)), 4).astype(int)
+            return group
+        ang = np.arctan2(n[has, 1], n[has, 0])
+        off = np.abs(_wrap_pi(ang[:, None] - self.angles[None, :]))
+        group[has] = np.argmin(off, axis=1)
         return group
 
     def side_normals(self, normals: np.ndarray) -> np.ndarray:
-        """Normal ``theta + k pi/2`` of the plan surfaces each point matches (0 if unknown)."""
+        """Normal ``angles[k]`` of the plan surfaces each point matches (0 if unknown)."""
         group = self.side_groups(normals)
-        a = self.theta + group * (np.pi / 2)
+        a = np.append(self.angles, 0.0)[group]
         out = np.column_stack([np.cos(a), np.sin(a)])
-        out[group == 4] = 0.0
+        out[group == self.n_sides] = 0.0
         return out
+
+    def corners(self, normals: np.ndarray, band: float) -> np.ndarray:
+        """Whether each normal lies within ``band`` (radians) of the bisector between
+        the two side angles nearest it: a corner, whose side is a toss-up (False where
+        the normal is unknown). With one family: within ``band`` of the diagonal
+        between the axes."""
+        n = np.asarray(normals, float).reshape(-1, 2)
+        has = np.hypot(n[:, 0], n[:, 1]) > 0.5
+        a = np.arctan2(n[:, 1], n[:, 0])
+        if not self.families:
+            ang = np.mod(a - self.theta, np.pi / 2)
+            return has & (np.abs(ang - np.pi / 4) < band)
+        off = np.sort(np.abs(_wrap_pi(a[:, None] - self.angles[None, :])), axis=1)
+        # the bisector lies where the two nearest sides are equally far
+        return has & (off[:, 1] - off[:, 0] < 2 * band)
+
+    def across(self) -> np.ndarray:
+        """(n_sides, n_sides) bool: sides that meet side ``g`` at a corner (their
+        angles 30-150 degrees apart): with one family, the two perpendicular sides."""
+        d = np.abs(_wrap_pi(self.angles[:, None] - self.angles[None, :]))
+        return (d > np.radians(30.0)) & (d < np.radians(150.0))
 
     def nearest(self, pts: np.ndarray, normals: np.ndarray | None = None):
         """Nearest plan wall cell centre (x, y) of each point, its distance, and inside flags.
@@ -172,8 +229,8 @@ class SideFields:
         c = np.floor(pts[:, 0] - ox).astype(np.int64)
         r = np.floor(pts[:, 1] - oy).astype(np.int64)
         inside = (r >= 0) & (r < h) & (c >= 0) & (c < w)
-        # 4 = all walls (side unknown)
-        group = np.full(len(pts), 4) if normals is None else self.side_groups(normals)
+        # n_sides = all walls (side unknown)
+        group = np.full(len(pts), self.n_sides) if normals is None else self.side_groups(normals)
         # one gather in the stacked flat index table of the five fields
         flat = self._table()[group[inside], r[inside] * w + c[inside]]
         near = pts.copy()
@@ -181,6 +238,37 @@ class SideFields:
         near[inside, 1] = flat // w + 0.5 + oy
         dist = np.hypot(*(near - pts).T)
         return near, dist, inside
+
+
+def _wrap_pi(a):
+    """Radians folded into [-pi, pi)."""
+    return np.mod(np.asarray(a) + np.pi, 2 * np.pi) - np.pi
+
+
+def _apart(a: float, b: float) -> float:
+    """How far two wall directions lie apart, modulo pi/2 (radians)."""
+    d = abs(float(a) - float(b)) % (np.pi / 2)
+    return min(d, np.pi / 2 - d)
+
+
+def _family_masks(data: np.ndarray, families: Sequence[float]) -> list[np.ndarray]:
+    """:func:`~map2map.evaluate.features.side_masks` of each family (four per family,
+    ``family + k pi/2``), each keeping the wall cells of its own family: those whose
+    local orientation (the structure tensor over 9 x 9 pixels) lies nearest it. A
+    wall at 45 degrees is a staircase of cells that face the axes too; without this a
+    point on it would match the staircase's axis-facing steps."""
+    occ = data == OCCUPIED
+    r, c = np.nonzero(occ)
+    ang, _ = orientation(occ.astype(np.float32), at=(r, c))
+    fam = np.degrees(np.asarray(families, float))
+    d = np.abs((ang[:, None] - fam[None, :] + 45.0) % 90.0 - 45.0)
+    label = np.argmin(d, axis=1)
+    out = []
+    for i, f in enumerate(families):
+        own = np.zeros_like(occ)
+        own[r[label == i], c[label == i]] = True
+        out += [m & own for m in side_masks(data, f)]
+    return out
 
 
 def to_plane(pts: np.ndarray, near: np.ndarray, normals: np.ndarray | None) -> np.ndarray:

@@ -15,6 +15,15 @@ Examples
 >>> theta, strength = dominant_orientation(img)
 >>> round(float(np.degrees(theta)))
 20
+
+A building with a wing at 45 degrees has two families (:func:`wall_families`):
+
+>>> img = np.full((300, 300), 255, np.uint8)
+>>> _ = cv2.rectangle(img, (20, 150), (180, 280), 0, 3)              # a hall on the axes
+>>> wing = cv2.boxPoints(((200, 90), (90, 160), 45.0)).astype(np.int32)
+>>> _ = cv2.polylines(img, [wing], True, 0, 3)                      # a wing at 45 degrees
+>>> sorted(round(float(np.degrees(a))) for a in wall_families(img, 0.0))
+[0, 45]
 """
 
 from __future__ import annotations
@@ -23,8 +32,10 @@ import cv2
 import numpy as np
 
 from ..core.grid import OCCUPIED
+from ..maps.directions import angle_families
 
-__all__ = ["dominant_orientation", "orientation_histogram", "projection_sharpness"]
+__all__ = ["dominant_orientation", "orientation_histogram", "projection_sharpness",
+           "wall_families"]
 
 
 def orientation_histogram(data: np.ndarray, bins: int = 180) -> np.ndarray:
@@ -87,3 +98,42 @@ def projection_sharpness(x: np.ndarray, y: np.ndarray, theta: float) -> float:
         h = np.bincount(np.floor(u - u.min()).astype(np.int64))
         total += float((h.astype(float) ** 2).sum())
     return total
+
+
+def wall_families(data: np.ndarray, theta: float, resolution: float = 0.05,
+                  min_dev_deg: float = 20.0) -> list[float]:
+    """Direction families of a map's walls: ``theta`` first, then any further one.
+
+    A building whose wing runs at 45 degrees to the rest has two families of
+    perpendicular walls; one dominant angle (:func:`dominant_orientation`) names only
+    one of them, and the other's walls would then read as corners (their normals on
+    the diagonal between the axes) and their rotation would be missing from the
+    alignment's hypotheses. The further families are those of
+    :func:`map2map.maps.directions.angle_families` on the occupied cells: at least
+    ``min_dev_deg`` off every other (a building's own second direction, not a wing
+    that SLAM drift turned by a few degrees), 15 % of the walls and 4 m of wall.
+
+    Parameters
+    ----------
+    data : (H, W) uint8
+        The map (occupied 0, free 255, unknown 127).
+    theta : float
+        The dominant wall angle (radians, as :func:`dominant_orientation` returns it).
+    resolution : float
+        Metres per pixel (the 4 m and the 1 m neighbourhood of ``angle_families``).
+    min_dev_deg : float
+
+    Returns
+    -------
+    list of float
+        Angles in [0, pi/2) (radians), ``theta`` first; one element for a building
+        whose walls all run along ``theta`` and ``theta + pi/2``.
+    """
+    r, c = np.nonzero(data == OCCUPIED)
+    if len(r) < 3:
+        return [float(theta)]
+    deg = (np.degrees(theta) + 45.0) % 90.0 - 45.0
+    pts = np.column_stack([c + 0.5, r + 0.5])
+    angles, _ = angle_families(pts, np.ones(len(pts)), data.shape, deg, resolution,
+                               min_dev=min_dev_deg, max_families=3)
+    return [float(theta)] + [float(np.mod(np.radians(a), np.pi / 2)) for a in angles[1:]]

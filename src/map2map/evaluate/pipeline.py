@@ -39,7 +39,7 @@ from .features import edge_points, subsample
 from .icp import icp
 from .metric import ChainErrors, choose_chain, iou, local_errors
 from .nonrigid import PiecewiseAffine, SideFields, control_points, optimise, warp_image
-from .orientation import dominant_orientation
+from .orientation import dominant_orientation, wall_families
 
 __all__ = ["EvaluateParams", "Registration", "Evaluation", "register", "evaluate_maps"]
 
@@ -142,7 +142,10 @@ def _register(source: OccupancyMap, target: OccupancyMap, anchors: Anchors | Non
     t0 = time.perf_counter()
     fields = al.fields  # the plan's side-aware distance fields, computed by the alignment
     if fields is None:
-        fields = SideFields.from_map(target.data, dominant_orientation(target.data)[0])
+        theta = dominant_orientation(target.data)[0]
+        fields = SideFields.from_map(
+            target.data, theta, families=wall_families(target.data, theta, target.resolution)
+        )
     X, normals = edge_points(source.data)
     if len(X) > p.max_edge_points:
         keep = subsample(np.arange(len(X))[:, None], p.max_edge_points, p.seed)[:, 0]
@@ -157,7 +160,8 @@ def _register(source: OccupancyMap, target: OccupancyMap, anchors: Anchors | Non
         # the target is the partial map: its walls, optimised onto the source, say
         # where the source must bend (in source pixels)
         box = check_map(source.data, names[0])
-        fields_s = SideFields.from_map(source.data, al.orientation["source"], window=box)
+        fields_s = SideFields.from_map(source.data, al.orientation["source"], window=box,
+                                       families=al.families.get("source", ()))
         Y, ny = edge_points(target.data)
         keep = subsample(np.arange(len(Y))[:, None], p.max_edge_points, p.seed)[:, 0]
         Ai = np.linalg.inv(al.affine)

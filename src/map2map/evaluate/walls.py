@@ -376,7 +376,7 @@ def inspect_walls(
     # oblique wall they make a staircase, and it calls every point there a corner. Those
     # walls take their evidence by geometry (the metric's corners included) and measure
     # it to their own face; the axis-wise walls take the metric's points from the rest
-    oblique = _oblique(segs, float(fields_.theta), 0.5 / res)
+    oblique = _oblique(segs, (float(fields_.theta), *fields_.families), 0.5 / res)
     ka, ea, aa, oa = _on_arcs(ch.X_optimised, ch.X_rigid, ~unm, arcs, half, thick)
     kl, el, al, ol = _on_lines(ch.X_optimised, ch.X_rigid, ~unm & (ka < 0), segs[oblique],
                                half, thick)
@@ -506,16 +506,18 @@ def _order_key(kind: str, w: np.ndarray) -> float:
     return float(np.round(y.min()) * 1e6 + x.min())
 
 
-def _oblique(segs: np.ndarray, theta: float, min_len: float, min_deg: float = 10.0
-             ) -> np.ndarray:
-    """Which segments lie more than ``min_deg`` off the plan's axes (``theta``, radians,
-    and a right angle to it) over at least ``min_len`` pixels: walls the metric's
-    axis-wise surfaces make a staircase of. (Shorter slanted segments are the line
-    detector's, across a wall stub's end: 0.21-0.25 m in 4 of 24 generated plans.)"""
+def _oblique(segs: np.ndarray, families: tuple[float, ...], min_len: float,
+             min_deg: float = 10.0) -> np.ndarray:
+    """Which segments lie more than ``min_deg`` off every direction family of the plan
+    (``families``, radians: each angle and a right angle to it) over at least
+    ``min_len`` pixels: walls the metric's surfaces make a staircase of. (Shorter
+    slanted segments are the line detector's, across a wall stub's end: 0.21-0.25 m in
+    4 of 24 generated plans.)"""
     if not len(segs):
         return np.zeros(0, bool)
-    a = np.arctan2(segs[:, 3] - segs[:, 1], segs[:, 2] - segs[:, 0]) - theta
-    off = np.abs(np.mod(a + math.pi / 4, math.pi / 2) - math.pi / 4)
+    a = np.arctan2(segs[:, 3] - segs[:, 1], segs[:, 2] - segs[:, 0])
+    a = a[:, None] - np.asarray(families, float)[None, :]
+    off = np.abs(np.mod(a + math.pi / 4, math.pi / 2) - math.pi / 4).min(axis=1)
     length = np.hypot(segs[:, 2] - segs[:, 0], segs[:, 3] - segs[:, 1])
     return (off > math.radians(min_deg)) & (length >= min_len)
 
