@@ -47,7 +47,7 @@ import cv2
 import numpy as np
 from scipy.spatial import Delaunay
 
-from ..core.grid import OCCUPIED, UNKNOWN
+from ..core.grid import FREE, OCCUPIED, UNKNOWN
 from ..maps.directions import orientation
 from .features import side_masks
 from .fitness import distance_map
@@ -196,19 +196,25 @@ class SideFields:
         return out
 
     def corners(self, normals: np.ndarray, band: float) -> np.ndarray:
-        """Whether each normal lies within ``band`` (radians) of the bisector between
-        the two side angles nearest it: a corner, whose side is a toss-up (False where
-        the normal is unknown). With one family: within ``band`` of the diagonal
-        between the axes."""
+        """Whether each normal lies near the bisector between the two side angles
+        flanking it: a corner, whose side is a toss-up (False where the normal is
+        unknown). With one family: within ``band`` (radians) of the diagonal between
+        the axes, 45 degrees from each; with more, the band shrinks with the angle
+        between the two sides (a wing at 45 degrees: the sides 45 degrees apart, within
+        ``band / 2`` of the bisector), so that a wall's normals, noisy by a few
+        degrees, stay on their side's side as they do on the axes."""
         n = np.asarray(normals, float).reshape(-1, 2)
         has = np.hypot(n[:, 0], n[:, 1]) > 0.5
         a = np.arctan2(n[:, 1], n[:, 0])
         if not self.families:
             ang = np.mod(a - self.theta, np.pi / 2)
             return has & (np.abs(ang - np.pi / 4) < band)
-        off = np.sort(np.abs(_wrap_pi(a[:, None] - self.angles[None, :])), axis=1)
-        # the bisector lies where the two nearest sides are equally far
-        return has & (off[:, 1] - off[:, 0] < 2 * band)
+        d = _wrap_pi(a[:, None] - self.angles[None, :])
+        # the sides flanking each normal: the nearest one either way round
+        ahead = np.where(d >= 0, d, np.inf).min(axis=1)
+        behind = np.where(d < 0, -d, np.inf).min(axis=1)
+        gap = ahead + behind
+        return has & (np.abs(ahead - behind) < 2 * band * gap / (np.pi / 2))
 
     def across(self) -> np.ndarray:
         """(n_sides, n_sides) bool: sides that meet side ``g`` at a corner (their
@@ -252,22 +258,51 @@ def _apart(a: float, b: float) -> float:
 
 
 def _family_masks(data: np.ndarray, families: Sequence[float]) -> list[np.ndarray]:
-    """:func:`~map2map.evaluate.features.side_masks` of each family (four per family,
-    ``family + k pi/2``), each keeping the wall cells of its own family: those whose
-    local orientation (the structure tensor over 9 x 9 pixels) lies nearest it. A
-    wall at 45 degrees is a staircase of cells that face the axes too; without this a
-    point on it would match the staircase's axis-facing steps."""
+    """The wall surfaces facing each side ``family + k pi/2`` of each family (four per
+    family), for a plan with more than one direction family.
+
+    A surface cell is an occupied cell beside free space. It belongs to its own
+    family's sides only: the family nearest its local orientation (the structure
+    tensor over 9 x 9 pixels, :func:`map2map.maps.directions.orientation`); a wall at
+    45 or 30 degrees is a staircase of cells that face the axes too, and would
+    otherwise be matched by its steps. Which of the four sides it faces is the
+    direction of the free space around it (the gradient of the free cells blurred over
+    a pixel) within 45 degrees; a cell with free space on both sides (a wall one pixel
+    thick) faces each side within 45 degrees of one of its free neighbours.
+    (:func:`~map2map.evaluate.features.side_masks`'s one-neighbour rule serves a
+    plan of one family: rounded to the eight neighbours, a side at 60 degrees would
+    look below, as the side at 90 does.)"""
     occ = data == OCCUPIED
-    r, c = np.nonzero(occ)
+    free = data == FREE
+    near = cv2.dilate(free.astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
+    r, c = np.nonzero(occ & near)
+    out = [np.zeros_like(occ) for _ in range(4 * len(families))]
+    if not len(r):
+        return out
     ang, _ = orientation(occ.astype(np.float32), at=(r, c))
     fam = np.degrees(np.asarray(families, float))
-    d = np.abs((ang[:, None] - fam[None, :] + 45.0) % 90.0 - 45.0)
-    label = np.argmin(d, axis=1)
-    out = []
+    label = np.argmin(np.abs((ang[:, None] - fam[None, :] + 45.0) % 90.0 - 45.0), axis=1)
+    blur = cv2.GaussianBlur(free.astype(np.float32), (0, 0), 1.0)
+    gx = cv2.Sobel(blur, cv2.CV_32F, 1, 0, ksize=3)[r, c]
+    gy = cv2.Sobel(blur, cv2.CV_32F, 0, 1, ksize=3)[r, c]
+    one = np.hypot(gx, gy) > 0.5                     # free space on one side
+    towards = np.arctan2(gy, gx)
+    H, W = data.shape
+    steps = [(dx, dy) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if dx or dy]
     for i, f in enumerate(families):
-        own = np.zeros_like(occ)
-        own[r[label == i], c[label == i]] = True
-        out += [m & own for m in side_masks(data, f)]
+        own = label == i
+        for k in range(4):
+            a = f + k * np.pi / 2
+            m = own & one & (np.abs(_wrap_pi(towards - a)) < np.pi / 4)
+            for dx, dy in steps:                     # eight neighbours, not pixels
+                if abs(_wrap_pi(np.arctan2(dy, dx) - a)) >= np.pi / 4:
+                    continue
+                rr, cc = r + dy, c + dx
+                ok = (rr >= 0) & (rr < H) & (cc >= 0) & (cc < W)
+                hit = np.zeros(len(r), bool)
+                hit[ok] = free[rr[ok], cc[ok]]
+                m |= own & ~one & hit
+            out[4 * i + k][r[m], c[m]] = True
     return out
 
 
