@@ -162,6 +162,52 @@ def test_double_line_walls_have_no_free_cavity(tmp_path):
     assert components(m.free) == 1
 
 
+def test_walls_drawn_as_two_lines_keep_their_faces(tmp_path):
+    """A 10 x 6 m room inside 0.2 m walls drawn as their two faces: widened both ways
+    like centre lines (before 2026-11-29) each face moved half the thickness into its
+    room, and the room read 9.9 x 5.9 m."""
+    doc = ezdxf.new(units=6)
+    msp = doc.modelspace()
+    room(msp, 0, 0, 10, 6)
+    room(msp, -0.2, -0.2, 10.2, 6.2)
+    m = load_dxf(save(doc, tmp_path), resolution=RES, wall_thickness=0.1)
+    assert m.meta["face_lines"] == 8
+    assert at(m, 0.025, 3) == 255 and at(m, -0.025, 3) == 0 and at(m, -0.175, 3) == 0
+    assert at(m, -0.225, 3) == 127 and at(m, 9.975, 3) == 255 and at(m, 10.025, 3) == 0
+    assert at(m, 5, 5.975) == 255 and at(m, 5, 6.025) == 0
+    assert int(m.free.sum()) == round(10 * 6 / RES**2)
+    # a centre line alone is widened both ways, as before
+    one = ezdxf.new(units=6)
+    room(one.modelspace(), 0, 0, 10, 6)
+    c = load_dxf(save(one, tmp_path, "one.dxf"), resolution=RES, wall_thickness=0.2)
+    assert c.meta["face_lines"] == 0 and at(c, 0.075, 3) == 0 and at(c, 0.125, 3) == 255
+
+
+def test_a_door_between_jambs_of_a_two_line_wall_is_sealed_and_kept_open(tmp_path):
+    """Jambs (short lines closing the cavity at a door) touch the faces, so no loose
+    end sealed the door: the outside flooded the flat, which read no free cell at all
+    (before 2026-11-29). The jambs are widened into the wall only."""
+    doc = ezdxf.new(units=6)
+    line = doc.modelspace().add_line
+    for a, b in [((0, 6), (10, 6)), ((-0.2, 6.2), (10.2, 6.2)), ((0, 0), (0, 6)),
+                 ((-0.2, -0.2), (-0.2, 6.2)), ((10, 0), (10, 6)), ((10.2, -0.2), (10.2, 6.2)),
+                 ((0, 0), (7, 0)), ((7.9, 0), (10, 0)), ((-0.2, -0.2), (7, -0.2)),
+                 ((7.9, -0.2), (10.2, -0.2)), ((7, 0), (7, -0.2)), ((7.9, 0), (7.9, -0.2)),
+                 # a 0.1 m partition with a door at y 2.0-2.9
+                 ((5, 0), (5, 2)), ((5.1, 0), (5.1, 2)), ((5, 2), (5.1, 2)),
+                 ((5, 2.9), (5, 6)), ((5.1, 2.9), (5.1, 6)), ((5, 2.9), (5.1, 2.9))]:
+        line(a, b)
+    m = load_dxf(save(doc, tmp_path), resolution=RES, wall_thickness=0.1)
+    assert components(m.free) == 1
+    # 10 x 6 less the partition, plus the entrance's doorway through the outer wall
+    assert abs(float(m.free.sum()) * RES**2 - (60 - 0.1 * 5.1 + 0.9 * 0.2)) < 0.1
+    assert at(m, 4.975, 1) == 255 and at(m, 5.025, 1) == 0 and at(m, 5.125, 1) == 255
+    # the doorways are as wide as drawn: no jamb widened into them
+    assert at(m, 7.025, -0.1) == 255 and at(m, 6.975, -0.1) == 0 and at(m, 7.875, -0.1) == 255
+    assert at(m, 5.05, 2.025) == 255 and at(m, 5.05, 1.975) == 0 and at(m, 5.05, 2.875) == 255
+    assert at(m, 7.45, -0.3) == 127                 # outside the door: still outside
+
+
 def test_thin_slanted_wall_still_separates_rooms(tmp_path):
     doc = ezdxf.new(units=6)
     msp = doc.modelspace()

@@ -14,13 +14,21 @@ solid wall. Block references (INSERT) are expanded, nested ones too; an entity o
 layer ``0`` inside a block takes the layer of its INSERT, as in CAD programs. Text,
 dimensions and other annotation are ignored.
 
+Most CAD plans draw a wall as its two faces. A straight piece with another running
+parallel to it on one side, nearer than ``min_free_width`` along at least half of
+it, is such a face: it is widened towards its wall only, the cavity between the faces
+is filled exactly, and a short line closing the cavity at a door (a jamb) is widened
+into the wall, not into the doorway; the faces stay where they are drawn. A line
+drawn alone is a wall's centre line, widened both ways.
+
 What is free
 ------------
 Space enclosed by walls is free, the outside is unknown. The outside is found by a
 flood fill from the border of the raster; for the fill, openings narrower than
 ``close_gaps`` metres (doors, windows: default 1.0 m) are sealed by joining every
-loose end of a line to the nearest other line within that distance, so that an
-open entrance door does not let the outside flood the flat. The seals only decide
+loose end of a line to the nearest other line within that distance, and the ends of
+different lines within it to each other (a door between two jambs), so that an open
+entrance door does not let the outside flood the flat. The seals only decide
 inside from outside: the door openings themselves stay free. Enclosed pockets
 narrower than ``min_free_width`` (the inside of a wall drawn as two lines, a column
 drawn as a circle) are wall.
@@ -62,6 +70,7 @@ from typing import Any
 import cv2
 import numpy as np
 import shapely
+from scipy.spatial import cKDTree
 from shapely.geometry import LineString, Point, Polygon
 
 from ..core.errors import InputError
@@ -146,6 +155,36 @@ def _gap_seals(strokes: list[np.ndarray], gap: float) -> list[np.ndarray]:
     best[use_own] = d_own[use_own]
     keep = np.isfinite(best) & (best > 0)
     return [np.array([ends_arr[k], target[k]]) for k in np.flatnonzero(keep)]
+
+
+def _end_seals(strokes: list[np.ndarray], gap: float) -> list[np.ndarray]:
+    """Segments joining the ends of different open strokes closer than ``gap``.
+
+    A door in a wall drawn as two lines lies between the two short lines (jambs) that
+    close the wall's cavity on either side; their ends touch the faces, so
+    :func:`_gap_seals` finds no loose end there, and the outside would flood the
+    building through the door. Joining end to end seals it (and, harmlessly, the ends
+    that meet inside walls). The seals only tell inside from outside.
+
+    >>> jambs = [np.array([[7.0, 0.0], [7.0, 4.0]]), np.array([[25.0, 0.0], [25.0, 4.0]])]
+    >>> [s.tolist() for s in _end_seals(jambs, 18.2)]
+    [[[7.0, 0.0], [25.0, 0.0]], [[7.0, 4.0], [25.0, 4.0]]]
+    """
+    if gap <= 0 or len(strokes) < 2:
+        return []
+    ends, owner = [], []
+    for i, s_ in enumerate(strokes):
+        if len(s_) > 1 and (s_[0] != s_[-1]).any():
+            ends.extend([s_[0], s_[-1]])
+            owner.extend([i, i])
+    if len(ends) < 2:
+        return []
+    e = np.asarray(ends, float)
+    pairs = cKDTree(e).query_pairs(gap, output_type="ndarray")
+    o = np.asarray(owner)
+    d = np.linalg.norm(e[pairs[:, 0]] - e[pairs[:, 1]], axis=1) if len(pairs) else []
+    keep = [k for k in range(len(pairs)) if o[pairs[k, 0]] != o[pairs[k, 1]] and d[k] > 0]
+    return [np.array([e[pairs[k, 0]], e[pairs[k, 1]]]) for k in keep]
 
 
 def _read(path: Path):
@@ -329,7 +368,10 @@ def load_dxf(
 
     px_strokes = [to_px(s_) for s_ in drawing.strokes]
     px_fills = [[to_px(f) for f in loops] for loops in drawing.fills]
-    wall, outlines = _walls((h, w), px_strokes, drawing.widths, px_fills, resolution)
+    sides = _face_sides(px_strokes, drawing.widths, wall_thickness, min_free_width,
+                        resolution)
+    wall, outlines = _walls((h, w), px_strokes, drawing.widths, px_fills, resolution, sides,
+                            min_free_width / resolution)
     wall, free = _inside(wall, outlines, close_gaps, min_free_width, resolution)
     data = np.full((h, w), UNKNOWN, np.uint8)
     data[free] = FREE
@@ -340,6 +382,7 @@ def load_dxf(
             "entities": dict(drawing.counts),
             "skipped_entities": dict(drawing.skipped),
             "wall_thickness": float(wall_thickness),
+            "face_lines": int(sum(np.count_nonzero(x) for x in sides)),
             "metres_per_unit": float(scale),
         }
     )
@@ -479,13 +522,133 @@ def _grid_frame(d: _Drawing, scale, resolution, margin, wall_thickness, frame, p
     return ox, oy, w, h
 
 
-def _walls(shape, px_strokes, widths, px_fills, resolution):
+def _face_sides(px_strokes, widths, wall_thickness: float, min_free_width: float,
+                resolution: float) -> list[np.ndarray]:
+    """Per stroke, per straight piece (between consecutive vertices), the side its
+    wall lies on when the piece is one face of a wall drawn as two lines: +1 left, -1
+    right (of its direction, in pixel coordinates ``(u, v)``: left is ``(-dv, du)``), 0
+    a line drawn alone (a wall's centre line, widened both ways).
+
+    Most CAD plans draw a wall as its two faces. Widened both ways like a centre line,
+    each face moved half ``wall_thickness`` into its room (a room 10 m wide between
+    0.2 m walls drawn as two lines each read 9.9 m at 0.1 m, every face a pixel off at
+    5 cm). A piece is a face when another piece runs parallel to it (within 5 degrees)
+    on one side only, nearer than ``min_free_width`` (the pockets that narrow are wall,
+    :func:`_inside`) and along at least half of it. A piece shorter than that whose
+    two ends are ends of faces (a jamb closing the cavity at a door) is widened into
+    the cavity only: not into the doorway. A stroke whose drawn width exceeds
+    ``wall_thickness`` (a polyline with a constant width) keeps it.
+
+    Examples
+    --------
+    >>> outer = np.array([[2.0, 2], [38, 2], [38, 28], [2, 28], [2, 2]])
+    >>> inner = np.array([[6.0, 6], [34, 6], [34, 24], [6, 24], [6, 6]])
+    >>> [s.tolist() for s in _face_sides([outer, inner], [0.1, 0.1], 0.1, 0.3, 0.05)]
+    [[1, 1, 1, 1], [-1, -1, -1, -1]]
+    """
+    out = [np.zeros(max(len(st) - 1, 0), np.int64) for st in px_strokes]
+    owner, a, b = [], [], []
+    for i, st in enumerate(px_strokes):
+        if len(st) < 2 or widths[i] > wall_thickness + 1e-9:
+            continue
+        for j in range(len(st) - 1):
+            if np.hypot(*(st[j + 1] - st[j])) > 1e-6:
+                owner.append((i, j))
+                a.append(st[j])
+                b.append(st[j + 1])
+    if len(owner) < 2:
+        return out
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    d = b - a
+    L = np.hypot(d[:, 0], d[:, 1])
+    u = d / L[:, None]
+    reach = min_free_width / resolution
+    tree = shapely.STRtree(shapely.linestrings(np.stack([a, b], 1)))
+    qi, qj = tree.query(shapely.linestrings(np.stack([a, b], 1)), predicate="dwithin",
+                        distance=reach)
+    keep = qi != qj
+    qi, qj = qi[keep], qj[keep]
+    par = np.abs(u[qi, 0] * u[qj, 1] - u[qi, 1] * u[qj, 0]) < math.sin(math.radians(5.0))
+
+    def across(p):  # signed offset of points p[k] from piece qi[k]'s line, + on its left
+        q = p - a[qi]
+        return u[qi, 0] * q[:, 1] - u[qi, 1] * q[:, 0]
+
+    s0, s1 = across(a[qj]), across(b[qj])
+    near = (np.sign(s0) == np.sign(s1)) & (np.minimum(np.abs(s0), np.abs(s1)) > 0.5) & (
+        np.maximum(np.abs(s0), np.abs(s1)) < reach)
+    t0 = ((a[qj] - a[qi]) * u[qi]).sum(1)
+    t1 = ((b[qj] - a[qi]) * u[qi]).sum(1)
+    lap = np.clip(np.maximum(t0, t1), 0, L[qi]) - np.clip(np.minimum(t0, t1), 0, L[qi])
+    ok = par & near & (lap >= 0.5 * L[qi])
+    side = np.zeros(len(owner), np.int64)
+    left = np.zeros(len(owner), bool)
+    right = np.zeros(len(owner), bool)
+    left[qi[ok & (s0 > 0)]] = True
+    right[qi[ok & (s0 < 0)]] = True
+    side[left & ~right] = 1
+    side[right & ~left] = -1
+    # a cap: a short piece that closes a cavity between two faces (a door's jamb): both
+    # its ends on ends of faces; widened into the cavity only, not into the doorway
+    face = side != 0
+    if face.any():
+        fe = np.concatenate([a[face], b[face]])          # face ends, and the other end
+        far = np.concatenate([b[face], a[face]])
+        tree_e = shapely.STRtree(shapely.points(fe))
+        for k in np.flatnonzero(~face & (L <= reach)):   # a few short pieces
+            hits = [tree_e.query(shapely.Point(*q), predicate="dwithin", distance=0.5)
+                    for q in (a[k], b[k])]
+            if not (len(hits[0]) and len(hits[1])):
+                continue
+            q = far[np.concatenate(hits)] - a[k]
+            off = u[k, 0] * q[:, 1] - u[k, 1] * q[:, 0]
+            if (off > 0.5).all():
+                side[k] = 1
+            elif (off < -0.5).all():
+                side[k] = -1
+    for k, (i, j) in enumerate(owner):
+        out[i][j] = side[k]
+    return out
+
+
+def _cavities(shape, px_strokes, width_px: float) -> np.ndarray:
+    """The cavities of walls drawn as two lines, filled exactly: the regions the
+    strokes enclose (noded and polygonised) that are narrower than ``width_px``
+    everywhere (an inward buffer of half of it leaves nothing), at pixel centres.
+
+    The faces' one-sided bodies end flat at each corner; the corner square of a wall
+    between two such faces is the cavity's, and 8-connected through a corner pixel to
+    the room it would otherwise stay free.
+
+    >>> outer = np.array([[2.0, 2], [38, 2], [38, 28], [2, 28], [2, 2]])
+    >>> inner = np.array([[6.0, 6], [34, 6], [34, 24], [6, 24], [6, 6]])
+    >>> m = _cavities((30, 40), [outer, inner], 6.0)
+    >>> int(m.sum()), bool(m[3, 3]), bool(m[15, 20])
+    (432, True, False)
+    """
+    lines = [LineString(st) for st in px_strokes if len(st) > 1]
+    if len(lines) < 2:
+        return np.zeros(shape, bool)
+    noded = shapely.node(shapely.multilinestrings(lines))
+    polys = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
+    narrow = [q for q in polys if shapely.buffer(q, -0.5 * width_px).is_empty]
+    if not narrow:
+        return np.zeros(shape, bool)
+    rings = [np.asarray(r.coords) for r in _polygon_rings(narrow)]
+    return fill_exact(shape, rings, rule="evenodd")
+
+
+def _walls(shape, px_strokes, widths, px_fills, resolution, sides=None, cavity_px=None):
     """(wall mask, outlines for gap sealing) of the strokes and fills, in pixels.
 
     Every stroke is widened to its thickness (square caps close corners), exact at pixel
     centres (nonzero rule: the union of the widened strokes), plus the stroke itself
     traced through every pixel it crosses so that no wall has a hole whatever its
-    width; fills (hatches, solids) by the even-odd rule, outlines traced.
+    width; fills (hatches, solids) by the even-odd rule, outlines traced. A stroke with
+    a ``sides`` entry of +1 or -1 (one face of a wall drawn as two lines,
+    :func:`_face_sides`, per piece) is widened to that side only (left or right of its
+    direction), so that the face stays where it is drawn, and the cavities narrower
+    than ``cavity_px`` that such faces enclose are filled (:func:`_cavities`).
 
     Examples
     --------
@@ -499,11 +662,42 @@ def _walls(shape, px_strokes, widths, px_fills, resolution):
     if px_strokes:
         lines = [LineString(s_) if len(s_) > 1 else Point(s_[0]) for s_ in px_strokes]
         half = 0.5 * np.asarray(widths) / resolution
-        bodies = shapely.orient_polygons(
-            shapely.buffer(lines, half, cap_style="square", join_style="mitre", mitre_limit=2.0)
-        )
+        bodies = shapely.buffer(lines, half, cap_style="square", join_style="mitre",
+                                mitre_limit=2.0)
+        faced = [] if sides is None else [i for i, x in enumerate(sides) if np.any(x)]
+        for i in faced:                           # strokes with faces of two-line walls
+            # piece by piece (GEOS fills a closed ring's whole inside when buffered to one
+            # side): a face widened to its wall's side only, other pieces both ways; the
+            # corners between two faces are the cavity's, filled as a pocket
+            st = px_strokes[i]
+            parts = []
+            for j in range(len(st) - 1):
+                if np.hypot(*(st[j + 1] - st[j])) <= 1e-9:
+                    continue
+                piece = LineString(st[j:j + 2])
+                if sides[i][j]:
+                    parts.append(shapely.buffer(piece, 2.0 * half[i] * float(sides[i][j]),
+                                                single_sided=True))
+                else:
+                    parts.append(shapely.buffer(piece, half[i], cap_style="square"))
+            bodies[i] = shapely.union_all(parts)
+        bodies = shapely.orient_polygons(bodies)
         rings = [np.asarray(r.coords) for r in _polygon_rings(bodies)]
-        wall = fill_exact(shape, rings, rule="nonzero") | trace(shape, px_strokes)
+        # the trace (no holes in a thin wall) takes a face of a two-line wall a quarter
+        # pixel into its wall: on a pixel boundary it would take its room's pixel
+        traced = [st for i, st in enumerate(px_strokes) if i not in faced]
+        for i in faced:
+            st = px_strokes[i]
+            for j in range(len(st) - 1):
+                d = st[j + 1] - st[j]
+                n = np.hypot(*d)
+                if n <= 1e-9:
+                    continue
+                left = np.array([-d[1], d[0]]) / n
+                traced.append(st[j:j + 2] + 0.25 * float(sides[i][j]) * left)
+        wall = fill_exact(shape, rings, rule="nonzero") | trace(shape, traced)
+        if faced and cavity_px:
+            wall |= _cavities(shape, px_strokes, cavity_px)
     if px_fills:
         # each entity even-odd (holes), all of them together as a union; only parts
         # thinner than two pixels are traced, so solid walls keep their true width
@@ -522,8 +716,10 @@ def _inside(wall, outlines, close_gaps: float, min_free_width: float, resolution
     """(wall, free) masks: the space the walls enclose, narrow pockets made wall.
 
     The outside is flooded from the border with openings narrower than ``close_gaps``
-    sealed; free components that vanish under erosion by a disk of diameter
-    ``min_free_width`` (cavities of double-line walls, small columns) become wall.
+    sealed (from loose line ends, :func:`_gap_seals`, and between the ends of
+    different lines, :func:`_end_seals`); free components that vanish under erosion by
+    a disk of diameter ``min_free_width`` (cavities of double-line walls, small
+    columns) become wall.
 
     Examples
     --------
@@ -535,6 +731,7 @@ def _inside(wall, outlines, close_gaps: float, min_free_width: float, resolution
     """
     shape = wall.shape
     barrier = wall | trace(shape, _gap_seals(outlines, close_gaps / resolution))
+    barrier |= trace(shape, _end_seals(outlines, close_gaps / resolution))
     n, labels = cv2.connectedComponents((~barrier).astype(np.uint8), connectivity=4)
     rim = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
     outside = np.isin(labels, rim[rim > 0])
