@@ -208,6 +208,34 @@ def test_a_door_between_jambs_of_a_two_line_wall_is_sealed_and_kept_open(tmp_pat
     assert at(m, 7.45, -0.3) == 127                 # outside the door: still outside
 
 
+def test_door_swings_are_left_out_and_the_doorway_stays_open(tmp_path):
+    """A door block (a leaf drawn as a thin outline, open at 90 degrees, and its swing
+    arc) in a partition's doorway: drawn as walls, the arc closed the doorway and cut a
+    quarter disc out of the room (before 2026-11-29)."""
+    doc = ezdxf.new(units=6)
+    msp = doc.modelspace()
+    room(msp, 0, 0, 10, 6)
+    msp.add_line((5, 0), (5, 2))
+    msp.add_line((5, 2.9), (5, 6))
+    blk = doc.blocks.new("DOOR90")
+    blk.add_lwpolyline([(0, 0), (0.9, 0), (0.9, 0.04), (0, 0.04)], close=True)
+    blk.add_arc((0, 0), 0.9, 0, 90)
+    msp.add_blockref("DOOR90", (5, 2.0))             # hinge on the jamb, opening east
+    m = load_dxf(save(doc, tmp_path), resolution=RES, wall_thickness=0.1)
+    assert m.meta["door_entities"] == {"ARC": 1, "LWPOLYLINE": 1}
+    assert components(m.free) == 1
+    assert at(m, 5.0, 2.45) == 255 and at(m, 5.45, 2.05) == 255 and at(m, 5.6, 2.6) == 255
+    kept = load_dxf(save(doc, tmp_path, "kept.dxf"), resolution=RES, wall_thickness=0.1,
+                    door_swings=False)
+    assert "ARC" in kept.meta["entities"] and components(kept.free) == 2   # rooms apart
+    # an arc that is no door (a curved wall of radius 3 m) stays a wall
+    curved = ezdxf.new(units=6)
+    room(curved.modelspace(), 0, 0, 10, 6)
+    curved.modelspace().add_arc((5, 0), 3.0, 0, 90)
+    c = load_dxf(save(curved, tmp_path, "curved.dxf"), resolution=RES, wall_thickness=0.1)
+    assert c.meta["door_entities"] == {} and at(c, 5 + 3 * 0.7071, 3 * 0.7071) == 0
+
+
 def test_thin_slanted_wall_still_separates_rooms(tmp_path):
     doc = ezdxf.new(units=6)
     msp = doc.modelspace()

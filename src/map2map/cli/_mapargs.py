@@ -134,9 +134,11 @@ def say_how_read(path, m) -> None:
         drawn = ", ".join(f"{n} {k}" for k, n in sorted(m.meta["entities"].items()))
         left = ", ".join(f"{n} {k}" for k, n in sorted(m.meta.get("skipped_entities", {}).items()))
         layers = m.meta.get("layers", [])
+        doors = sum(m.meta.get("door_entities", {}).values())
         print(
             f"read {path}: {drawn} on layer{'s' if len(layers) > 1 else ''} "
             f"{', '.join(layers)}" + (f"; ignored {left}" if left else "")
+            + (f"; left out {doors} entities drawing door swings and leaves" if doors else "")
         )
     if m.meta.get("units_assumed"):
         print(

@@ -14,6 +14,10 @@ solid wall. Block references (INSERT) are expanded, nested ones too; an entity o
 layer ``0`` inside a block takes the layer of its INSERT, as in CAD programs. Text,
 dimensions and other annotation are ignored.
 
+A door drawn as CAD draws it, a swing arc of 80-100 degrees and radius 0.5-1.3 m with
+its leaf from the hinge, is left out (counted in ``meta["door_entities"]``): drawn as
+walls they would close the doorway.
+
 Most CAD plans draw a wall as its two faces. A straight piece with another running
 parallel to it on one side, nearer than ``min_free_width`` along at least half of
 it, is such a face: it is widened towards its wall only, the cavity between the faces
@@ -297,6 +301,7 @@ def load_dxf(
     margin: float = 0.5,
     close_gaps: float = 1.0,
     min_free_width: float = 0.3,
+    door_swings: bool = True,
 ) -> OccupancyMap:
     """Rasterise a DXF floor plan (method in the module docstring).
 
@@ -320,6 +325,10 @@ def load_dxf(
         outside; 0 disables.
     min_free_width : float
         Enclosed pockets narrower than this (metres) are wall.
+    door_swings : bool
+        Leave out the doors' swing arcs (80-100 degrees, radius 0.5-1.3 m) and their
+        leaves, which CAD draws in the doorway (:func:`_door_swings`); False draws every
+        arc as a wall.
 
     Returns
     -------
@@ -327,7 +336,8 @@ def load_dxf(
         Walls occupied, the space they enclose free, the outside unknown; origin at the
         lower-left corner of the margin, in drawing metres. ``meta`` holds ``source``,
         ``units`` (``units_assumed`` when ``$INSUNITS`` was unset), the ``layers`` drawn,
-        ``entities`` / ``skipped_entities`` counts per DXF type, ``wall_thickness`` and
+        ``entities`` / ``skipped_entities`` / ``door_entities`` (door swings and leaves
+        left out) counts per DXF type, ``face_lines``, ``wall_thickness`` and
         ``metres_per_unit``.
 
     Raises
@@ -356,7 +366,7 @@ def load_dxf(
     scale, meta = _drawing_units(doc, units, p)
     meta = {"source": str(p), **meta}
     wanted = _wanted_layers(doc, layers, p)
-    drawing = _collect(doc, wanted, resolution / scale, scale, wall_thickness, p)
+    drawing = _collect(doc, wanted, resolution / scale, scale, wall_thickness, p, door_swings)
     ox, oy, w, h = _grid_frame(drawing, scale, resolution, margin, wall_thickness, frame, p)
 
     def to_px(pts: np.ndarray) -> np.ndarray:
@@ -381,6 +391,7 @@ def load_dxf(
             "layers": sorted(drawing.used_layers),
             "entities": dict(drawing.counts),
             "skipped_entities": dict(drawing.skipped),
+            "door_entities": dict(drawing.doors),
             "wall_thickness": float(wall_thickness),
             "face_lines": int(sum(np.count_nonzero(x) for x in sides)),
             "metres_per_unit": float(scale),
@@ -456,12 +467,66 @@ class _Drawing:
     fills: list[list[np.ndarray]] = field(default_factory=list)  # loops of each filled entity
     counts: Counter = field(default_factory=Counter)
     skipped: Counter = field(default_factory=Counter)
+    doors: Counter = field(default_factory=Counter)  # door swings and leaves left out
     used_layers: set[str] = field(default_factory=set)
 
 
-def _collect(doc, wanted, res_units: float, scale: float, wall_thickness: float, p) -> _Drawing:
-    """Every drawable entity of the chosen layers as polylines (INSERTs expanded)."""
+#: A door's swing as CAD draws it: an arc of 80-100 degrees (the leaf's path), radius
+#: 0.5-1.3 m (a door leaf), centred on the hinge.
+DOOR_SWEEP_DEG = (80.0, 100.0)
+DOOR_RADIUS_M = (0.5, 1.3)
+
+
+def _door_swings(items: list[tuple], scale: float) -> set[int]:
+    """Indices of ``items`` (``(kind, entity, pieces, filled)``, drawing units) that
+    draw a door: each swing arc (:data:`DOOR_SWEEP_DEG`, :data:`DOOR_RADIUS_M`) and
+    its leaf, a line or a thin outline from the hinge (within a tenth of the radius of
+    the arc's centre) to one end of the arc, inside the swing's circle. Drawn as walls
+    they would close the doorway and cut a quarter disc out of the room.
+
+    >>> import ezdxf
+    >>> doc = ezdxf.new(units=6); msp = doc.modelspace()
+    >>> arc = msp.add_arc((1.0, 0.0), 0.9, 0, 90)                  # swing, hinge at (1, 0)
+    >>> leaf = msp.add_line((1.0, 0.0), (1.0, 0.9))                # the open leaf
+    >>> wall = msp.add_line((1.0, 0.0), (5.0, 0.0))                # the wall beyond the hinge
+    >>> items = [(e.dxftype(), e, _polylines(e, 0.01)[0], False) for e in (arc, leaf, wall)]
+    >>> sorted(_door_swings(items, 1.0))
+    [0, 1]
+    """
+    lo, hi = DOOR_SWEEP_DEG
+    rlo, rhi = DOOR_RADIUS_M
+    out: set[int] = set()
+    for i, (kind, e, _pieces, filled) in enumerate(items):    # entities, not pixels
+        if kind != "ARC" or filled:
+            continue
+        r = float(e.dxf.radius)
+        sweep = (float(e.dxf.end_angle) - float(e.dxf.start_angle)) % 360.0
+        if not (lo <= sweep <= hi and rlo <= r * scale <= rhi):
+            continue
+        c = np.array(e.dxf.center)[:2]
+        a0, a1 = np.radians([float(e.dxf.start_angle), float(e.dxf.end_angle)])
+        ends = c + r * np.array([[np.cos(a0), np.sin(a0)], [np.cos(a1), np.sin(a1)]])
+        out.add(i)
+        for j, (kind_j, _, pieces_j, filled_j) in enumerate(items):
+            if j == i or filled_j or kind_j not in ("LINE", "LWPOLYLINE", "POLYLINE"):
+                continue
+            pts = np.concatenate(pieces_j)
+            d = np.hypot(*(pts - c).T)
+            if d.min() > 0.1 * r or d.max() > 1.05 * r or d.max() < 0.8 * r:
+                continue
+            near_end = np.hypot(pts[:, None, 0] - ends[None, :, 0],
+                                pts[:, None, 1] - ends[None, :, 1]).min()
+            if near_end <= 0.15 * r:
+                out.add(j)
+    return out
+
+
+def _collect(doc, wanted, res_units: float, scale: float, wall_thickness: float, p,
+             doors: bool = True) -> _Drawing:
+    """Every drawable entity of the chosen layers as polylines (INSERTs expanded); with
+    ``doors``, door swings and their leaves left out (:func:`_door_swings`)."""
     out = _Drawing()
+    items = []
     for e, layer in _walk(doc.modelspace()):
         kind = e.dxftype()
         if wanted is not None and layer.lower() not in wanted:
@@ -476,6 +541,12 @@ def _collect(doc, wanted, res_units: float, scale: float, wall_thickness: float,
             continue
         if not pieces:
             out.skipped[kind] += 1
+            continue
+        items.append((kind, e, pieces, filled, layer))
+    swings = _door_swings([it[:4] for it in items], scale) if doors else set()
+    for k, (kind, e, pieces, filled, layer) in enumerate(items):
+        if k in swings:
+            out.doors[kind] += 1
             continue
         out.counts[kind] += 1
         out.used_layers.add(layer)
