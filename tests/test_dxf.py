@@ -236,6 +236,31 @@ def test_door_swings_are_left_out_and_the_doorway_stays_open(tmp_path):
     assert c.meta["door_entities"] == {} and at(c, 5 + 3 * 0.7071, 3 * 0.7071) == 0
 
 
+def test_a_tiled_floor_hatch_is_no_wall(tmp_path):
+    """A pattern hatch over a room's floor (tiles) was filled as wall: the room became
+    a block of wall. A hatched wall and a solid fill stay walls."""
+    doc = ezdxf.new(units=6)
+    msp = doc.modelspace()
+    room(msp, 0, 0, 10, 6)
+    msp.add_line((5, 0), (5, 2))
+    msp.add_line((5, 2.9), (5, 6))
+    tiles = msp.add_hatch()
+    tiles.set_pattern_fill("ANSI37", scale=0.5)
+    tiles.paths.add_polyline_path([(5, 0), (10, 0), (10, 6), (5, 6)], is_closed=True)
+    wall = msp.add_hatch()                          # a hatched wall, 0.3 m, in the west room
+    wall.set_pattern_fill("ANSI31", scale=0.2)
+    wall.paths.add_polyline_path([(1, 3), (4, 3), (4, 3.3), (1, 3.3)], is_closed=True)
+    m = load_dxf(save(doc, tmp_path), resolution=RES, wall_thickness=0.1)
+    assert m.meta["floor_hatches"] == 1 and m.meta["entities"]["HATCH"] == 1
+    assert at(m, 7.5, 3) == 255 and at(m, 2.5, 3.15) == 0
+    solid = ezdxf.new(units=6)
+    room(solid.modelspace(), 0, 0, 10, 6)
+    core = solid.modelspace().add_hatch()           # a solid fill: a wall, however wide
+    core.paths.add_polyline_path([(6, 1), (9, 1), (9, 5), (6, 5)], is_closed=True)
+    c = load_dxf(save(solid, tmp_path, "solid.dxf"), resolution=RES, wall_thickness=0.1)
+    assert c.meta["floor_hatches"] == 0 and at(c, 7.5, 3) == 0
+
+
 def test_thin_slanted_wall_still_separates_rooms(tmp_path):
     doc = ezdxf.new(units=6)
     msp = doc.modelspace()

@@ -139,6 +139,8 @@ def say_how_read(path, m) -> None:
             f"read {path}: {drawn} on layer{'s' if len(layers) > 1 else ''} "
             f"{', '.join(layers)}" + (f"; ignored {left}" if left else "")
             + (f"; left out {doors} entities drawing door swings and leaves" if doors else "")
+            + (f"; left out {m.meta['floor_hatches']} pattern hatches as wide as a room "
+               "(floors)" if m.meta.get("floor_hatches") else "")
         )
     if m.meta.get("units_assumed"):
         print(

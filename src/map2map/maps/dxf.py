@@ -10,7 +10,8 @@ LINE, LWPOLYLINE, POLYLINE, ARC, CIRCLE, ELLIPSE, SPLINE and MLINE entities on t
 chosen layers become walls ``wall_thickness`` metres thick (polylines drawn with a
 larger constant width keep that width) (curves are flattened to within
 a quarter pixel, polyline bulges included); HATCH and SOLID entities are filled as
-solid wall. Block references (INSERT) are expanded, nested ones too; an entity on
+solid wall, except a pattern hatch with room for a 1 m disc (a tiled floor,
+``meta["floor_hatches"]``). Block references (INSERT) are expanded, nested ones too; an entity on
 layer ``0`` inside a block takes the layer of its INSERT, as in CAD programs. Text,
 dimensions and other annotation are ignored.
 
@@ -392,6 +393,7 @@ def load_dxf(
             "entities": dict(drawing.counts),
             "skipped_entities": dict(drawing.skipped),
             "door_entities": dict(drawing.doors),
+            "floor_hatches": int(drawing.floors),
             "wall_thickness": float(wall_thickness),
             "face_lines": int(sum(np.count_nonzero(x) for x in sides)),
             "metres_per_unit": float(scale),
@@ -468,6 +470,7 @@ class _Drawing:
     counts: Counter = field(default_factory=Counter)
     skipped: Counter = field(default_factory=Counter)
     doors: Counter = field(default_factory=Counter)  # door swings and leaves left out
+    floors: int = 0  # pattern hatches as wide as a room (floor tiles), left out
     used_layers: set[str] = field(default_factory=set)
 
 
@@ -521,6 +524,33 @@ def _door_swings(items: list[tuple], scale: float) -> set[int]:
     return out
 
 
+#: A pattern hatch (not a solid fill) with room for a disc this wide (metres) anywhere
+#: draws a floor (tiles, parquet), not a wall: walls and columns are thinner.
+FLOOR_HATCH_M = 1.0
+
+
+def _floor_pattern(e, loops: list[np.ndarray], scale: float) -> bool:
+    """Whether a HATCH draws a floor: a pattern fill whose region (even-odd) holds a
+    disc :data:`FLOOR_HATCH_M` wide. Filled as wall it turned a tiled room into a block
+    of wall; a solid fill (the poche of a wall or a column) is always a wall.
+
+    >>> import ezdxf
+    >>> msp = ezdxf.new(units=6).modelspace()
+    >>> h = msp.add_hatch(); h.set_pattern_fill("ANSI37", scale=0.5)
+    >>> _ = h.paths.add_polyline_path([(0, 0), (5, 0), (5, 6), (0, 6)], is_closed=True)
+    >>> _floor_pattern(h, _polylines(h, 0.01)[0], 1.0)
+    True
+    >>> w = msp.add_hatch(); w.set_pattern_fill("ANSI31", scale=0.5)
+    >>> _ = w.paths.add_polyline_path([(0, 0), (5, 0), (5, 0.3), (0, 0.3)], is_closed=True)
+    >>> _floor_pattern(w, _polylines(w, 0.01)[0], 1.0)        # a hatched wall, 0.3 m
+    False
+    """
+    if int(e.dxf.get("solid_fill", 1) or 0):
+        return False
+    region = _even_odd_region(loops)
+    return not shapely.buffer(region, -0.5 * FLOOR_HATCH_M / scale).is_empty
+
+
 def _collect(doc, wanted, res_units: float, scale: float, wall_thickness: float, p,
              doors: bool = True) -> _Drawing:
     """Every drawable entity of the chosen layers as polylines (INSERTs expanded); with
@@ -547,6 +577,9 @@ def _collect(doc, wanted, res_units: float, scale: float, wall_thickness: float,
     for k, (kind, e, pieces, filled, layer) in enumerate(items):
         if k in swings:
             out.doors[kind] += 1
+            continue
+        if kind == "HATCH" and _floor_pattern(e, pieces, scale):
+            out.floors += 1
             continue
         out.counts[kind] += 1
         out.used_layers.add(layer)
