@@ -5,7 +5,7 @@ Floor Plans", section 3.2, Fig. 1), one concept per module, in the order of the
 data flow:
 
 =====================  ===================================================================
-:mod:`.orientation`    dominant wall orientations (gradient histogram + Radon sharpness)
+:mod:`.orientation`    dominant wall orientations (gradient histogram, Radon), direction families
 :mod:`.radiography`    wall lines by Radon-type projections along those orientations
 :mod:`.decomposition`  faces (rooms) cut by the wall lines, oriented minimum bounding boxes
 :mod:`.hypotheses`     similarity hypotheses from face pairs (+ dense FFT ones), rejection
