@@ -499,6 +499,9 @@ def _door_swings(items: list[tuple], scale: float) -> set[int]:
     lo, hi = DOOR_SWEEP_DEG
     rlo, rhi = DOOR_RADIUS_M
     out: set[int] = set()
+    leaves = [j for j, it in enumerate(items)
+              if not it[3] and it[0] in ("LINE", "LWPOLYLINE", "POLYLINE")]
+    tree = None
     for i, (kind, e, _pieces, filled) in enumerate(items):    # entities, not pixels
         if kind != "ARC" or filled:
             continue
@@ -510,10 +513,16 @@ def _door_swings(items: list[tuple], scale: float) -> set[int]:
         a0, a1 = np.radians([float(e.dxf.start_angle), float(e.dxf.end_angle)])
         ends = c + r * np.array([[np.cos(a0), np.sin(a0)], [np.cos(a1), np.sin(a1)]])
         out.add(i)
-        for j, (kind_j, _, pieces_j, filled_j) in enumerate(items):
-            if j == i or filled_j or kind_j not in ("LINE", "LWPOLYLINE", "POLYLINE"):
-                continue
-            pts = np.concatenate(pieces_j)
+        if tree is None:       # the lines' extents, indexed once (a plan has thousands)
+            boxes = [np.concatenate(items[j][2]) for j in leaves]
+            tree = shapely.STRtree(shapely.box(*np.array(
+                [[*b.min(0), *b.max(0)] for b in boxes]).T)) if leaves else None
+        if tree is None:
+            continue
+        # a leaf lies inside the swing's circle: candidates whose extent meets its box
+        near = tree.query(shapely.box(*(c - 1.05 * r), *(c + 1.05 * r)))
+        for j in (leaves[k] for k in near):
+            pts = np.concatenate(items[j][2])
             d = np.hypot(*(pts - c).T)
             if d.min() > 0.1 * r or d.max() > 1.05 * r or d.max() < 0.8 * r:
                 continue
