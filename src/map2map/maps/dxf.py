@@ -185,11 +185,17 @@ def _end_seals(strokes: list[np.ndarray], gap: float) -> list[np.ndarray]:
     if len(ends) < 2:
         return []
     e = np.asarray(ends, float)
-    pairs = cKDTree(e).query_pairs(gap, output_type="ndarray")
     o = np.asarray(owner)
-    d = np.linalg.norm(e[pairs[:, 0]] - e[pairs[:, 1]], axis=1) if len(pairs) else []
-    keep = [k for k in range(len(pairs)) if o[pairs[k, 0]] != o[pairs[k, 1]] and d[k] > 0]
-    return [np.array([e[pairs[k, 0]], e[pairs[k, 1]]]) for k in keep]
+    # each end to its nearest few within the gap (not every pair: a drawing of many
+    # short lines, exploded text or hatching, would give millions)
+    k = min(9, len(e))
+    d, j = cKDTree(e).query(e, k=k, distance_upper_bound=gap)
+    i = np.repeat(np.arange(len(e)), k)
+    d, j = d.ravel(), j.ravel()
+    ok = np.isfinite(d) & (d > 0)
+    i, j = i[ok], j[ok]
+    ok = (o[i] != o[j]) & (i < j)
+    return [np.array([e[a], e[b]]) for a, b in zip(i[ok], j[ok], strict=True)]
 
 
 def _read(path: Path):
