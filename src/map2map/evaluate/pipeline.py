@@ -125,9 +125,13 @@ def register(
 ) -> Registration:
     """Align ``source`` to ``target`` and optimise the nonrigid chain (Fig. 1, c-d-f).
 
-    The target's solid regions count by their faces: their inside is unknown
-    (:func:`~map2map.maps.solids.hollow_solids`; a map never sees inside a wall)."""
-    return _register(source, hollow_solids(target), anchors, params, names)
+    Both maps' solid regions count by their faces: their inside is unknown
+    (:func:`~map2map.maps.solids.hollow_solids`; a map never sees inside a wall). Only
+    the target hollowed, a plan aligned to another drawing of itself (two versions of
+    a plan, the alignment sweep's copies) lost its rotation: a solid block against its
+    own faces (``align_sweep``: 6 of 12 cases of one irregular plan flagged, 9 % off in
+    scale)."""
+    return _register(hollow_solids(source), hollow_solids(target), anchors, params, names)
 
 
 def _register(source: OccupancyMap, target: OccupancyMap, anchors: Anchors | None,
@@ -227,7 +231,8 @@ def evaluate_maps(
     ``res_source / res_target`` (1 when both maps share a resolution).
     """
     p = params or EvaluateParams()
-    target = hollow_solids(target)      # as register() sees it (IoU, fields, metric)
+    # as register() sees them (the alignment, IoU, fields, metric)
+    source, target = hollow_solids(source), hollow_solids(target)
     if rigid_scale is not None:
         p = EvaluateParams(**{**p.__dict__})
         p.align = AlignParams(
