@@ -82,7 +82,7 @@ from ..core.errors import InputError
 from ..core.geometry import point_segment_distances
 from ..core.grid import OCCUPIED, OccupancyMap
 from ..maps.curves import circle_arcs
-from ..maps.segments import straight_segments
+from ..maps.segments import merge_slanted, straight_segments
 from ..maps.solids import solid_cores
 
 __all__ = ["STATUSES", "CSV_COLUMNS", "WallSegment", "WallInspection", "check_tolerance",
@@ -287,6 +287,9 @@ def _plan_segments(plan: OccupancyMap, min_gap_m: float, min_length_m: float,
         _, dist, _ = _to_segments(mid, segs)
         fine = fine[dist > 2.0]
     segs = np.concatenate([segs, fine]) if len(fine) else segs
+    # a wall off the grid's axes (a wing at 30 or 45 degrees) is a staircase the line
+    # detector cuts into overlapping pieces: one segment per wall line
+    segs = _long_enough(merge_slanted(segs, 1.5, cell), min_len)
     # a stable, readable order: top to bottom, then left to right (ids follow it)
     key = np.round(np.minimum(segs[:, 1], segs[:, 3])) * 1e6 + np.minimum(segs[:, 0], segs[:, 2])
     return segs[np.argsort(key, kind="stable")]

@@ -23,7 +23,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["AXIS_TOLERANCE_DEG", "straight_segments", "join_supported"]
+__all__ = ["AXIS_TOLERANCE_DEG", "straight_segments", "join_supported", "merge_slanted"]
 
 #: Segments within this angle (degrees) of horizontal or vertical are made exactly so.
 AXIS_TOLERANCE_DEG = 10.0
@@ -97,6 +97,73 @@ def straight_segments(walls: np.ndarray, cell: float) -> np.ndarray:
     other = [row for row in s[~horiz & ~vert]]
     hs, vs = _join(hs, vs, cell)
     return np.concatenate([hs, vs, np.array(other).reshape(-1, 4)])
+
+
+def merge_slanted(segs: np.ndarray, tol: float, gap: float, angle_deg: float = 3.0
+                  ) -> np.ndarray:
+    """Segments off the grid's axes that lie on one line merged into one: within
+    ``angle_deg`` of each other's direction and ``tol`` pixels of the longest one's line,
+    overlapping or leaving less than ``gap`` pixels between them along it.
+    :func:`straight_segments` merges the axis-aligned ones; a wall at 30 or 45 degrees
+    is a staircase of pixels that the Hough transform cuts into several overlapping
+    pieces. Axis-aligned segments (within :data:`AXIS_TOLERANCE_DEG`) are returned as
+    they are. Each merged line is the length-weighted mean of its pieces' offsets, from
+    the first to the last of their ends along it.
+
+    Examples
+    --------
+    >>> s = np.array([[0.0, 0, 20, 20], [18, 18.5, 40, 40.5], [60, 60, 80, 80],
+    ...               [0, 50, 30, 50]])
+    >>> merge_slanted(s, 1.5, 4.0).round(1).tolist()
+    [[0.0, 50.0, 30.0, 50.0], [-0.1, 0.1, 40.1, 40.4], [60.0, 60.0, 80.0, 80.0]]
+    """
+    segs = np.asarray(segs, float).reshape(-1, 4)
+    if len(segs) < 2:
+        return segs
+    d = segs[:, 2:] - segs[:, :2]
+    L = np.hypot(d[:, 0], d[:, 1])
+    ang = np.degrees(np.arctan2(d[:, 1], d[:, 0])) % 180.0
+    axis = (ang < AXIS_TOLERANCE_DEG) | (ang > 180 - AXIS_TOLERANCE_DEG) | (
+        np.abs(ang - 90) < AXIS_TOLERANCE_DEG)
+    idx = np.flatnonzero(~axis & (L > 0))
+    if len(idx) < 2:
+        return segs
+    out = [segs[axis | (L == 0)]]
+    left = set(idx.tolist())
+    for i in idx[np.argsort(-L[idx], kind="stable")]:     # lines, longest first: a few
+        if i not in left:
+            continue
+        u = d[i] / L[i]
+        n = np.array([-u[1], u[0]])
+        cand = np.array(sorted(left))
+        da = np.abs((ang[cand] - ang[i] + 90.0) % 180.0 - 90.0)
+        mid = 0.5 * (segs[cand, :2] + segs[cand, 2:])
+        off = (mid - segs[i, :2]) @ n
+        mem = cand[(da <= angle_deg) & (np.abs(off) <= tol)]
+        t0 = (segs[mem, :2] - segs[i, :2]) @ u
+        t1 = (segs[mem, 2:] - segs[i, :2]) @ u
+        lo, hi = np.minimum(t0, t1), np.maximum(t0, t1)
+        order = np.argsort(lo, kind="stable")
+        groups, cur = [], [order[0]]
+        end = hi[order[0]]
+        for k in order[1:]:                                # the line's pieces: a few
+            if lo[k] <= end + gap:
+                cur.append(k)
+                end = max(end, hi[k])
+            else:
+                groups.append(cur)
+                cur, end = [k], hi[k]
+        groups.append(cur)
+        for g in groups:
+            g = np.asarray(g)
+            w = L[mem[g]]
+            c = float((((0.5 * (segs[mem[g], :2] + segs[mem[g], 2:])) - segs[i, :2]) @ n
+                       * w).sum() / w.sum())
+            a, b = lo[g].min(), hi[g].max()
+            base = segs[i, :2] + c * n
+            out.append(np.array([[*(base + a * u), *(base + b * u)]]))
+        left -= set(mem.tolist())
+    return np.concatenate(out)
 
 
 def _join(h: np.ndarray, v: np.ndarray, reach: float) -> tuple[np.ndarray, np.ndarray]:
