@@ -208,6 +208,22 @@ def test_a_door_between_jambs_of_a_two_line_wall_is_sealed_and_kept_open(tmp_pat
     assert at(m, 7.45, -0.3) == 127                 # outside the door: still outside
 
 
+def test_a_centre_line_ends_where_it_is_drawn_and_corners_stay_closed(tmp_path):
+    """A partition drawn as its centre line with a 0.9 m door gap: square caps on the
+    free ends narrowed the doorway by the wall's thickness (0.8 m at 0.1 m, before
+    2026-11-29). Where two lines meet, the cap still closes the corner."""
+    doc = ezdxf.new(units=6)
+    line = doc.modelspace().add_line
+    for a, b in [((0, 0), (10, 0)), ((10, 0), (10, 6)), ((10, 6), (0, 6)), ((0, 6), (0, 0)),
+                 ((5, 0), (5, 2)), ((5, 2.9), (5, 6))]:
+        line(a, b)
+    m = load_dxf(save(doc, tmp_path), resolution=RES, wall_thickness=0.1)
+    assert at(m, 5, 2.025) == 255 and at(m, 5, 2.875) == 255       # the gap as drawn
+    assert at(m, 5, 1.975) == 0 and at(m, 5, 2.925) == 0
+    for x, y in ((-0.025, -0.025), (10.025, 6.025), (-0.025, 6.025), (10.025, -0.025)):
+        assert at(m, x, y) == 0                                      # corners closed
+
+
 def test_door_swings_are_left_out_and_the_doorway_stays_open(tmp_path):
     """A door block (a leaf drawn as a thin outline, open at 90 degrees, and its swing
     arc) in a partition's doorway: drawn as walls, the arc closed the doorway and cut a

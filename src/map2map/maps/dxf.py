@@ -757,11 +757,48 @@ def _cavities(shape, px_strokes, width_px: float) -> np.ndarray:
     return fill_exact(shape, rings, rule="evenodd")
 
 
+def _free_ends(px_strokes, lines, skip: set[int], half: np.ndarray,
+               tol: float = 0.5) -> list[tuple[int, np.ndarray]]:
+    """``(index, stroke)`` of every open stroke (not in ``skip``) with an end that meets
+    no other stroke within ``tol`` pixels (a door's jamb, a stub wall), each end that
+    does meet one pushed out by the stroke's ``half`` width along it: widened with flat
+    caps, the stroke then has a square cap where it meets another line (closing the
+    corner) and none at its free end.
+
+    >>> a = np.array([[0.0, 0.0], [10.0, 0.0]]); b = np.array([[10.0, 0.0], [10.0, 8.0]])
+    >>> lines = [LineString(a), LineString(b)]
+    >>> [(i, s.tolist()) for i, s in _free_ends([a, b], lines, set(), np.array([1.0, 1.0]))]
+    [(0, [[0.0, 0.0], [11.0, 0.0]]), (1, [[10.0, -1.0], [10.0, 8.0]])]
+    """
+    if len(px_strokes) < 2:
+        return [(i, st) for i, st in enumerate(px_strokes)
+                if len(st) > 1 and (st[0] != st[-1]).any() and i not in skip]
+    out: list[tuple[int, np.ndarray]] = []
+    tree = shapely.STRtree(lines)
+    for i, st in enumerate(px_strokes):                  # strokes, not pixels
+        if i in skip or len(st) < 2 or not (st[0] != st[-1]).any():
+            continue
+        ends = [0, len(st) - 1]
+        hits = tree.query(shapely.points(st[ends]), predicate="dwithin", distance=tol)
+        joined = [bool(np.any(hits[1][hits[0] == k] != i)) for k in range(2)]
+        if all(joined):
+            continue
+        ext = st.astype(float).copy()
+        for k, (e, nb) in enumerate(((0, 1), (len(st) - 1, len(st) - 2))):
+            d = st[e] - st[nb]
+            n = float(np.hypot(*d))
+            if joined[k] and n > 1e-9:
+                ext[e] = st[e] + half[i] * d / n
+        out.append((i, ext))
+    return out
+
+
 def _walls(shape, px_strokes, widths, px_fills, resolution, sides=None, cavity_px=None):
     """(wall mask, outlines for gap sealing) of the strokes and fills, in pixels.
 
-    Every stroke is widened to its thickness (square caps close corners), exact at pixel
-    centres (nonzero rule: the union of the widened strokes), plus the stroke itself
+    Every stroke is widened to its thickness (square caps where it meets another line
+    close the corners; a free end, at a door or of a stub, is not extended), exact at
+    pixel centres (nonzero rule: the union of the widened strokes), plus the stroke itself
     traced through every pixel it crosses so that no wall has a hole whatever its
     width; fills (hatches, solids) by the even-odd rule, outlines traced. A stroke with
     a ``sides`` entry of +1 or -1 (one face of a wall drawn as two lines,
@@ -771,10 +808,10 @@ def _walls(shape, px_strokes, widths, px_fills, resolution, sides=None, cavity_p
 
     Examples
     --------
-    >>> stroke = np.array([[2.0, 5.0], [18.0, 5.0]])
+    >>> stroke = np.array([[2.0, 5.0], [18.0, 5.0]])       # 16 px long, 2 px wide
     >>> wall, outlines = _walls((10, 20), [stroke], [0.1], [], 0.05)
     >>> int(wall.sum()), len(outlines)
-    (36, 1)
+    (32, 1)
     """
     wall = np.zeros(shape, bool)
     outlines = list(px_strokes)
@@ -784,6 +821,11 @@ def _walls(shape, px_strokes, widths, px_fills, resolution, sides=None, cavity_p
         bodies = shapely.buffer(lines, half, cap_style="square", join_style="mitre",
                                 mitre_limit=2.0)
         faced = [] if sides is None else [i for i, x in enumerate(sides) if np.any(x)]
+        for i, st in _free_ends(px_strokes, lines, set(faced), half):  # jambs, stubs
+            # a square cap where the line meets another (it closes the corner), none at
+            # a free end: the wall ends where its line does, a doorway keeps its width
+            bodies[i] = shapely.buffer(LineString(st), half[i], cap_style="flat",
+                                       join_style="mitre", mitre_limit=2.0)
         for i in faced:                           # strokes with faces of two-line walls
             # piece by piece (GEOS fills a closed ring's whole inside when buffered to one
             # side): a face widened to its wall's side only, other pieces both ways; the
