@@ -774,20 +774,25 @@ def _free_ends(px_strokes, lines, skip: set[int], half: np.ndarray,
         return [(i, st) for i, st in enumerate(px_strokes)
                 if len(st) > 1 and (st[0] != st[-1]).any() and i not in skip]
     out: list[tuple[int, np.ndarray]] = []
-    tree = shapely.STRtree(lines)
-    for i, st in enumerate(px_strokes):                  # strokes, not pixels
-        if i in skip or len(st) < 2 or not (st[0] != st[-1]).any():
-            continue
-        ends = [0, len(st) - 1]
-        hits = tree.query(shapely.points(st[ends]), predicate="dwithin", distance=tol)
-        joined = [bool(np.any(hits[1][hits[0] == k] != i)) for k in range(2)]
-        if all(joined):
+    cand = [i for i, st in enumerate(px_strokes)
+            if i not in skip and len(st) > 1 and (st[0] != st[-1]).any()]
+    if not cand:
+        return out
+    ends = np.array([[px_strokes[i][0], px_strokes[i][-1]] for i in cand]).reshape(-1, 2)
+    q, g = shapely.STRtree(lines).query(shapely.points(ends), predicate="dwithin",
+                                        distance=tol)
+    owner = np.repeat(cand, 2)
+    joined = np.zeros(len(ends), bool)
+    joined[q[g != owner[q]]] = True                   # an end on another stroke
+    for c, i in enumerate(cand):                      # strokes, not pixels
+        st = px_strokes[i]
+        if joined[2 * c] and joined[2 * c + 1]:
             continue
         ext = st.astype(float).copy()
         for k, (e, nb) in enumerate(((0, 1), (len(st) - 1, len(st) - 2))):
             d = st[e] - st[nb]
             n = float(np.hypot(*d))
-            if joined[k] and n > 1e-9:
+            if joined[2 * c + k] and n > 1e-9:
                 ext[e] = st[e] + half[i] * d / n
         out.append((i, ext))
     return out
