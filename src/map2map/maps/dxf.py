@@ -11,9 +11,9 @@ chosen layers become walls ``wall_thickness`` metres thick (polylines drawn with
 larger constant width keep that width) (curves are flattened to within
 a quarter pixel, polyline bulges included); HATCH and SOLID entities are filled as
 solid wall, except a pattern hatch with room for a 1 m disc (a tiled floor,
-``meta["floor_hatches"]``). Block references (INSERT) are expanded, nested ones too; an entity on
-layer ``0`` inside a block takes the layer of its INSERT, as in CAD programs. Text,
-dimensions and other annotation are ignored.
+``meta["floor_hatches"]``). Block references (INSERT) are expanded, nested ones too;
+an entity on layer ``0`` inside a block takes the layer of its INSERT, as in CAD
+programs. Text, dimensions and other annotation are ignored.
 
 A door drawn as CAD draws it, a swing arc of 80-100 degrees and radius 0.5-1.3 m with
 its leaf from the hinge, is left out (counted in ``meta["door_entities"]``): drawn as
@@ -117,6 +117,16 @@ def _polygon_rings(geoms) -> list:
     return out
 
 
+def _open_ends(strokes: list[np.ndarray], skip: set[int] = frozenset()
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """The two ends ``(N, 2)`` of every open stroke (not closed, at least two points,
+    not in ``skip``), first then last, and the stroke each belongs to ``(N,)``."""
+    own = [i for i, s_ in enumerate(strokes)
+           if i not in skip and len(s_) > 1 and (s_[0] != s_[-1]).any()]
+    ends = np.array([[strokes[i][0], strokes[i][-1]] for i in own], float).reshape(-1, 2)
+    return ends, np.repeat(np.asarray(own, np.int64), 2)
+
+
 def _gap_seals(strokes: list[np.ndarray], gap: float) -> list[np.ndarray]:
     """Segments closing openings narrower than ``gap`` (door and window openings).
 
@@ -127,15 +137,9 @@ def _gap_seals(strokes: list[np.ndarray], gap: float) -> list[np.ndarray]:
     if gap <= 0 or not strokes:
         return []
     geoms = [LineString(s_) if len(s_) > 1 else Point(s_[0]) for s_ in strokes]
-    ends, owner = [], []
-    for i, s_ in enumerate(strokes):
-        if len(s_) > 1 and (s_[0] != s_[-1]).any():
-            ends.extend([s_[0], s_[-1]])
-            owner.extend([i, i])
-    if not ends:
+    ends_arr, owner_arr = _open_ends(strokes)
+    if not len(ends_arr):
         return []
-    ends_arr = np.asarray(ends)
-    owner_arr = np.asarray(owner)
     points = shapely.points(ends_arr)
     tree = shapely.STRtree(geoms)
     pi, gi = tree.query(points, predicate="dwithin", distance=gap)
@@ -177,15 +181,9 @@ def _end_seals(strokes: list[np.ndarray], gap: float) -> list[np.ndarray]:
     """
     if gap <= 0 or len(strokes) < 2:
         return []
-    ends, owner = [], []
-    for i, s_ in enumerate(strokes):
-        if len(s_) > 1 and (s_[0] != s_[-1]).any():
-            ends.extend([s_[0], s_[-1]])
-            owner.extend([i, i])
-    if len(ends) < 2:
+    e, o = _open_ends(strokes)
+    if len(e) < 2:
         return []
-    e = np.asarray(ends, float)
-    o = np.asarray(owner)
     # each end to its nearest few within the gap (not every pair: a drawing of many
     # short lines, exploded text or hatching, would give millions)
     k = min(9, len(e))
@@ -770,18 +768,15 @@ def _free_ends(px_strokes, lines, skip: set[int], half: np.ndarray,
     >>> [(i, s.tolist()) for i, s in _free_ends([a, b], lines, set(), np.array([1.0, 1.0]))]
     [(0, [[0.0, 0.0], [11.0, 0.0]]), (1, [[10.0, -1.0], [10.0, 8.0]])]
     """
+    ends, owner = _open_ends(px_strokes, skip)
+    cand = owner[::2].tolist()
     if len(px_strokes) < 2:
-        return [(i, st) for i, st in enumerate(px_strokes)
-                if len(st) > 1 and (st[0] != st[-1]).any() and i not in skip]
+        return [(i, px_strokes[i]) for i in cand]
     out: list[tuple[int, np.ndarray]] = []
-    cand = [i for i, st in enumerate(px_strokes)
-            if i not in skip and len(st) > 1 and (st[0] != st[-1]).any()]
-    if not cand:
+    if not len(cand):
         return out
-    ends = np.array([[px_strokes[i][0], px_strokes[i][-1]] for i in cand]).reshape(-1, 2)
     q, g = shapely.STRtree(lines).query(shapely.points(ends), predicate="dwithin",
                                         distance=tol)
-    owner = np.repeat(cand, 2)
     joined = np.zeros(len(ends), bool)
     joined[q[g != owner[q]]] = True                   # an end on another stroke
     for c, i in enumerate(cand):                      # strokes, not pixels
