@@ -178,6 +178,14 @@ def _end_seals(strokes: list[np.ndarray], gap: float) -> list[np.ndarray]:
     >>> jambs = [np.array([[7.0, 0.0], [7.0, 4.0]]), np.array([[25.0, 0.0], [25.0, 4.0]])]
     >>> [s.tolist() for s in _end_seals(jambs, 18.2)]
     [[[7.0, 0.0], [25.0, 0.0]], [[7.0, 4.0], [25.0, 4.0]]]
+
+    Whichever order the strokes come in: an end beside a crowd of nine others is
+    sealed to them (it finds them among its nearest; each of them finds only the crowd).
+
+    >>> crowd = [np.array([[0.1 * k, 0.0], [0.1 * k, -100.0 - 30 * k]]) for k in range(1, 10)]
+    >>> lone = np.array([[0.0, 5.0], [0.0, 200.0]])
+    >>> len(_end_seals([lone] + crowd, 10.0)) == len(_end_seals(crowd + [lone], 10.0))
+    True
     """
     if gap <= 0 or len(strokes) < 2:
         return []
@@ -192,8 +200,11 @@ def _end_seals(strokes: list[np.ndarray], gap: float) -> list[np.ndarray]:
     d, j = d.ravel(), j.ravel()
     ok = np.isfinite(d) & (d > 0)
     i, j = i[ok], j[ok]
-    ok = (o[i] != o[j]) & (i < j)
-    return [np.array([e[a], e[b]]) for a, b in zip(i[ok], j[ok], strict=True)]
+    ok = o[i] != o[j]
+    # a pair either end finds among its nearest (one end in a crowd of ends may find
+    # the other while the other finds only the crowd), each once
+    pairs = np.unique(np.sort(np.stack([i[ok], j[ok]], 1), axis=1), axis=0)
+    return [np.array([e[a], e[b]]) for a, b in pairs]
 
 
 def _read(path: Path):
