@@ -241,6 +241,13 @@ def test_door_swings_are_left_out_and_the_doorway_stays_open(tmp_path):
     assert m.meta["door_entities"] == {"ARC": 1, "LWPOLYLINE": 1}
     assert components(m.free) == 1
     assert at(m, 5.0, 2.45) == 255 and at(m, 5.45, 2.05) == 255 and at(m, 5.6, 2.6) == 255
+    # the same door inserted mirrored (xscale -1: its arc's centre and angles come in a
+    # flipped coordinate system), opening west: its leaf is found too
+    msp.add_blockref("DOOR90", (5, 2.0), dxfattribs={"xscale": -1})
+    both = load_dxf(save(doc, tmp_path, "both.dxf"), resolution=RES, wall_thickness=0.1)
+    assert both.meta["door_entities"] == {"ARC": 2, "LWPOLYLINE": 2}
+    assert at(both, 4.55, 2.05) == 255 and components(both.free) == 1
+    msp.delete_entity(msp.query("INSERT")[-1])
     kept = load_dxf(save(doc, tmp_path, "kept.dxf"), resolution=RES, wall_thickness=0.1,
                     door_swings=False)
     assert "ARC" in kept.meta["entities"] and components(kept.free) == 2   # rooms apart

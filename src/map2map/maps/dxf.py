@@ -517,16 +517,19 @@ def _door_swings(items: list[tuple], scale: float) -> set[int]:
     leaves = [j for j, it in enumerate(items)
               if not it[3] and it[0] in ("LINE", "LWPOLYLINE", "POLYLINE")]
     tree = None
-    for i, (kind, e, _pieces, filled) in enumerate(items):    # entities, not pixels
+    from ezdxf.math import OCS
+
+    for i, (kind, e, pieces, filled) in enumerate(items):     # entities, not pixels
         if kind != "ARC" or filled:
             continue
         r = float(e.dxf.radius)
         sweep = (float(e.dxf.end_angle) - float(e.dxf.start_angle)) % 360.0
         if not (lo <= sweep <= hi and rlo <= r * scale <= rhi):
             continue
-        c = np.array(e.dxf.center)[:2]
-        a0, a1 = np.radians([float(e.dxf.start_angle), float(e.dxf.end_angle)])
-        ends = c + r * np.array([[np.cos(a0), np.sin(a0)], [np.cos(a1), np.sin(a1)]])
+        # in the drawing's frame: a door block inserted mirrored gives an arc whose
+        # centre and angles are in its own (flipped) coordinate system
+        c = np.array(OCS(e.dxf.extrusion).to_wcs(e.dxf.center))[:2]
+        ends = np.array([pieces[0][0], pieces[-1][-1]], float)
         out.add(i)
         if tree is None:       # the lines' extents, indexed once (a plan has thousands)
             boxes = [np.concatenate(items[j][2]) for j in leaves]
