@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from ..jobs.synthesize import SynthesizeSpec
+from ..learn.ab.scans import POSE_ERRORS
 from ._mapargs import add_input_options, read_options_from_args, say_how_read
 
 
@@ -44,11 +45,16 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="scans: the map the robot explores on: rbpf, the particle filter's "
                    "(as a simulated run's robot; the default); grid, GMapping's grid at the "
                    "true poses (faster); oracle, the simulator's perfect map")
-    p.add_argument("--pose-error", choices=("drawn", "filter"), default=d.pose_error,
+    p.add_argument("--pose-error", choices=POSE_ERRORS, default=d.pose_error,
                    help="scans: the poses the scans are mapped at: the exploring particle "
                    "filter's own (each hypothesis is then a simulated rbpf run's map; the "
-                   "default with --explore-map rbpf) or drawn (room drift, turn and jitter; "
-                   "the default with the other exploration maps)")
+                   "default with --explore-map rbpf), learned (drawn step by step by the "
+                   "pose-error model learned from rbpf runs, 'train pose-error') or drawn "
+                   "(room drift, turn and jitter; the default with the other exploration "
+                   "maps)")
+    p.add_argument("--pose-model", default=d.pose_model, metavar="FILE",
+                   help="scans, --pose-error learned: a model of 'map2map train pose-error' "
+                   "(default: the shipped one)")
     p.add_argument("--format", choices=("ros", "png"), default=d.format,
                    help="ros: .yaml + .pgm; png: pictures (default %(default)s)")
     p.add_argument("--render", choices=("slam", "plain"), default=d.render,
@@ -100,7 +106,8 @@ def run(args: argparse.Namespace) -> int:
         drift_method=args.drift_method, drift_scale=args.drift_scale, coverage=args.coverage,
         drift_route=args.drift_route, traces=args.traces,
         start=None if args.start is None else tuple(args.start),
-        explore_map=args.explore_map, pose_error=args.pose_error, device=args.device,
+        explore_map=args.explore_map, pose_error=args.pose_error,
+        pose_model=args.pose_model, device=args.device,
         figure=not args.no_figure, read_options=read_options_from_args(args)))
     say_how_read(args.input, run.plan)
     src, res = Path(args.input), run.result

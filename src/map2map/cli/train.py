@@ -27,6 +27,44 @@ def register(sub: argparse._SubParsersAction) -> None:
     tsub.required = True
     register_ba(tsub)
     register_ab(tsub)
+    register_pose_error(tsub)
+
+
+def register_pose_error(tsub) -> None:
+    """``map2map train pose-error``: the learned SLAM pose error of ``synthesize``'s scans."""
+    b = tsub.add_parser(
+        "pose-error",
+        help="the learned pose error of 'synthesize --pose-error learned' (a particle "
+        "filter's error, learned from simulated runs)",
+        description="Explore RUNS generated plans (as 'dataset build --plans generated "
+        "--seed SEED' draws them) with the simulator's robot on its rbpf particle filter's "
+        "map, and fit the learned pose-error model to the filter's errors "
+        "(map2map.learn.ab.pose_error). Writes OUT (.safetensors, the settings in its "
+        "header), its .json and OUT-losses.png.",
+    )
+    b.add_argument("--out", required=True, help="the model file (.safetensors)")
+    b.add_argument("--runs", type=int, default=400, help="plans explored (default 400)")
+    b.add_argument("--seed", type=int, default=20270101,
+                   help="the generated plans' seed (default 20270101, the shipped model's)")
+    b.add_argument("--epochs", type=int, default=30, help="training epochs (default 30)")
+    b.add_argument("--duration", type=float, default=420.0,
+                   help="simulated seconds of each exploration (default 420, the datasets')")
+    b.add_argument("--workers", type=int, help="exploring processes (default one per core)")
+    b.add_argument("--quiet", action="store_true", help="no progress bars")
+    b.set_defaults(func=run_pose_error)
+
+
+def run_pose_error(args: argparse.Namespace) -> int:
+    from ..jobs.train import train_pose_error_job
+
+    cfg = train_pose_error_job(args.out, runs=args.runs, seed=args.seed, epochs=args.epochs,
+                               duration=args.duration, workers=args.workers,
+                               command="map2map " + " ".join(sys.argv[1:]),
+                               progress=not args.quiet)
+    print(f"pose error: {cfg['runs']} runs ({cfg['train_steps'] + cfg['val_steps']} steps), "
+          f"held-out log-likelihood {cfg['val_loglik']:.3f} per step; wrote {args.out}",
+          file=sys.stderr)
+    return 0
 
 
 def _data_options(b: argparse.ArgumentParser, epochs_help: str) -> None:

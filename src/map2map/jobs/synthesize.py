@@ -47,10 +47,13 @@ class SynthesizeSpec:
     explore_map : {"rbpf", "grid", "oracle"} or None
         With ``model="scans"``: the map its robot explores on
         (:class:`~map2map.learn.ab.scans.ScanMapParams`; None: its default).
-    pose_error : {"drawn", "filter"} or None
-        With ``model="scans"``: the poses its scans are mapped at, drawn or the exploring
-        particle filter's (:class:`~map2map.learn.ab.scans.ScanMapParams`; None: the
-        filter's when exploring on ``rbpf``, else drawn).
+    pose_error : {"filter", "drawn", "learned"} or None
+        With ``model="scans"``: the poses its scans are mapped at, the exploring particle
+        filter's, drawn, or drawn by the learned pose-error model
+        (:class:`~map2map.learn.ab.scans.ScanMapParams`; None: the filter's when exploring
+        on ``rbpf``, else drawn).
+    pose_model : path-like or None
+        With ``pose_error="learned"``: the model file (None: the shipped one).
     format : {"ros", "png"}
         The hypotheses' file format.
     figure : bool
@@ -75,6 +78,7 @@ class SynthesizeSpec:
     start: tuple[float, float, float] | None = None
     explore_map: str | None = None
     pose_error: str | None = None
+    pose_model: str | os.PathLike | None = None
     device: str = "cpu"
     figure: bool = True
     read_options: Any = None
@@ -113,7 +117,14 @@ def synthesize(spec: SynthesizeSpec) -> SynthesizeRun:
         check_output_path(path)
     scans = None
     chosen = {k: v for k, v in (("explore_map", spec.explore_map),
-                                ("pose_error", spec.pose_error)) if v is not None}
+                                ("pose_error", spec.pose_error),
+                                ("pose_model", spec.pose_model)) if v is not None}
+    if "pose_model" in chosen:
+        if spec.pose_error != "learned":
+            raise InputError("pose_model", "applies to --pose-error learned only")
+        if not Path(chosen["pose_model"]).is_file():
+            raise InputError(chosen["pose_model"], "no pose-error model there")
+        chosen["pose_model"] = str(chosen["pose_model"])
     if chosen:
         if str(spec.model) != SCANS:
             raise InputError(next(iter(chosen)), f"applies to model '{SCANS}' only")

@@ -29,7 +29,7 @@ from typing import Any
 
 from ..core.errors import InputError
 
-__all__ = ["TrainSpec", "TrainRun", "train", "MODELS", "rate_text"]
+__all__ = ["TrainSpec", "TrainRun", "train", "MODELS", "rate_text", "train_pose_error_job"]
 
 #: The trainable models: name -> what it learns.
 MODELS = {"ba": "Model_BA: SLAM map -> CAD plan", "ab": "Model_AB: CAD plan -> SLAM map"}
@@ -158,3 +158,71 @@ def train(spec: TrainSpec) -> TrainRun:
               epochs=epochs if spec.resume else None, progress=spec.progress)
     main = int(os.environ.get("RANK", "0")) == 0  # torchrun: one report, from rank 0
     return TrainRun(Path(spec.out), res, spec.model, main)
+
+
+def train_pose_error_job(out: str | os.PathLike, *, runs: int = 400, seed: int = 20270101,
+                         epochs: int = 30, duration: float = 420.0,
+                         workers: int | None = None, command: str = "",
+                         progress: bool = True) -> dict:
+    """``map2map train pose-error``: explore ``runs`` generated plans of ``seed`` on the
+    ``rbpf`` particle filter's map, fit the learned pose-error model
+    (:mod:`map2map.learn.ab.pose_error`) to the filter's errors, and write ``out``
+    (safetensors, the configuration in its header), ``out``'s ``.json`` and
+    ``-losses.png`` beside it. Returns the configuration written."""
+    import platform
+
+    out = Path(out)
+    if out.suffix != ".safetensors":
+        raise InputError(str(out), "the pose-error model is one .safetensors file")
+    if runs < 2 or epochs < 1:
+        raise InputError("runs" if runs < 2 else "epochs",
+                         f"must be at least {2 if runs < 2 else 1}")
+    try:
+        import torch  # noqa: F401
+
+        from ..learn.ab.pose_error import collect_runs, train_pose_error
+    except ImportError as exc:
+        raise InputError("train", f"needs PyTorch: pip install 'map2map[learn]' ({exc})"
+                         ) from None
+    import time
+
+    t0 = time.perf_counter()
+    recorded = collect_runs(runs, seed, duration=duration, workers=workers,
+                            progress=progress)
+    t1 = time.perf_counter()
+    model, hist = train_pose_error(recorded, epochs=epochs, seed=0, progress=progress)
+    model.config.update({
+        "command": command, "plans": {"source": "generated", "seed": int(seed),
+                                      "count": int(runs), "duration_s": float(duration),
+                                      "mapper": "rbpf"},
+        "machine": f"{platform.machine()} {platform.processor() or ''}".strip()
+                   + f", {os.cpu_count()} cores",
+        "explore_s": round(t1 - t0, 1), "train_s": round(time.perf_counter() - t1, 1),
+        "history": {k: [round(v, 4) for v in vs] for k, vs in hist.items()},
+    })
+    out.parent.mkdir(parents=True, exist_ok=True)
+    model.save(out)
+    _loss_figure(hist, out.with_name(out.stem + "-losses.png"))
+    return model.config
+
+
+def _loss_figure(hist: dict, path: Path) -> None:
+    """The training and held-out log-likelihood per epoch."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from ..core._io import atomic_path
+
+    fig, ax = plt.subplots(figsize=(5, 3.2))
+    for k, v in hist.items():
+        ax.plot(range(1, len(v) + 1), v, label=k)
+    ax.set_xlabel("epoch")
+    ax.set_ylabel("log-likelihood per step")
+    ax.set_title("learned pose error")
+    ax.legend()
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=90)
+    plt.close(fig)

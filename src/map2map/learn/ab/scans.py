@@ -78,6 +78,9 @@ __all__ = ["ScanMapParams", "ScanHypothesis", "GridOracle", "Exploration", "expl
 #: Stream of :func:`scan_rng` (apart from the exploration's, the drift's and the traces').
 _STREAM = 0x5CA75
 
+#: Where a hypothesis's pose error comes from (:class:`ScanMapParams` ``pose_error``).
+POSE_ERRORS = ("filter", "drawn", "learned")
+
 
 def _rooms_default() -> RoomDriftParams:
     return RoomDriftParams(rot_deg=1.0, parametric=False)
@@ -159,6 +162,7 @@ class ScanMapParams:
     explore_map: str = "rbpf"
     jitter_s: float = 1.0
     pose_error: str | None = None
+    pose_model: str | None = None
 
     def __post_init__(self):
         for name in ("duration", "fov", "jitter_m", "jitter_deg", "global_deg",
@@ -176,9 +180,13 @@ class ScanMapParams:
         if self.pose_error is None:                 # frozen: set the resolved default
             object.__setattr__(self, "pose_error",
                                "filter" if self.explore_map == "rbpf" else "drawn")
-        if self.pose_error not in ("drawn", "filter"):
-            raise InputError("pose_error",
-                             f"must be 'drawn' or 'filter', got {self.pose_error!r}")
+        if self.pose_error not in POSE_ERRORS:
+            raise InputError("pose_error", f"must be one of {', '.join(POSE_ERRORS)}, "
+                             f"got {self.pose_error!r}")
+        if self.pose_error == "learned" and self.explore_map == "oracle":
+            raise InputError("pose_error", "'learned' draws the error at the scans the "
+                             "exploring mapper processed: it needs explore_map 'rbpf' or "
+                             "'grid', not 'oracle'")
         if self.pose_error == "filter" and self.explore_map != "rbpf":
             raise InputError("pose_error", "'filter' takes the exploring particle filter's "
                              f"poses: it needs explore_map 'rbpf', not {self.explore_map!r}")
@@ -541,6 +549,29 @@ def scan_map(plan: OccupancyMap, seed: int, k: int,
     return drawn_hypothesis(plan, explore(plan, seed, k, sp, start), seed, k, sp)
 
 
+_POSE_MODELS: dict = {}
+
+
+def learned_errors(ex: Exploration, model: str | None,
+                   rng: np.random.Generator) -> np.ndarray:
+    """Pose errors ``(len(ex.keep), 3)`` drawn by the learned model
+    (:mod:`map2map.learn.ab.pose_error`; ``model`` a weights file, None the shipped one)
+    along the exploration's true poses at the scans its mapper processed."""
+    from ...slam.rbpf import prepare_scan
+    from .pose_error import load_pose_error, scan_geometry
+
+    key = None if model is None else str(model)
+    if key not in _POSE_MODELS:
+        _POSE_MODELS[key] = load_pose_error(model)
+    keep = np.asarray(ex.keep, int)
+    if len(keep) == 0:
+        return np.zeros((0, 3))
+    ra = [prepare_scan(ex.scans[i]) for i in keep]
+    geo = scan_geometry(np.stack([r for r, _ in ra]), np.stack([a for _, a in ra]))
+    return _POSE_MODELS[key].sample(ex.poses[keep], np.asarray(ex.times, float)[keep], geo,
+                                    rng)
+
+
 def drawn_hypothesis(plan: OccupancyMap, ex: Exploration, seed: int, k: int,
                      params: ScanMapParams | None = None) -> ScanHypothesis:
     """Steps 2 and 3 of the module doc for a recorded exploration ``ex`` (of
@@ -571,6 +602,14 @@ def drawn_hypothesis(plan: OccupancyMap, ex: Exploration, seed: int, k: int,
         poses = np.array(ex.poses, float, copy=True)
         poses[ex.keep] = ex.filter_poses
         used = np.asarray(ex.keep, int)
+    elif sp.pose_error == "learned":
+        if ex.keep is None:
+            raise InputError("pose_error", "'learned' needs the scans the exploring mapper "
+                             "processed (explore_map 'rbpf' or 'grid')")
+        drift = None
+        used = np.asarray(ex.keep, int)
+        poses = np.array(ex.poses, float, copy=True)
+        poses[used] += learned_errors(ex, sp.pose_model, scan_rng(seed, k))
     else:
         rng = scan_rng(seed, k)
         path = plan.world_to_pixel_float(ex.poses[:, 0], ex.poses[:, 1]) \
