@@ -160,6 +160,7 @@ def test_cli_trains_a_pose_error_model_and_synthesize_uses_it(tmp_path):
     cfg = json.loads(out.with_suffix(".json").read_text())
     assert cfg["plans"]["count"] == 4 and "train pose-error" in cfg["command"]
     assert (tmp_path / "pe-losses.png").is_file() and len(cfg["history"]["val"]) == 2
+    assert (tmp_path / "pe-samples.png").is_file()
     r = subprocess.run([sys.executable, "-m", "map2map", "train", "pose-error", "--out",
                         str(tmp_path / "pe.bin")], capture_output=True, text=True)
     assert r.returncode == 2 and "pe.bin" in r.stderr and "Traceback" not in r.stderr

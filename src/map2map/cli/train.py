@@ -40,7 +40,8 @@ def register_pose_error(tsub) -> None:
         "--seed SEED' draws them) with the simulator's robot on its rbpf particle filter's "
         "map, and fit the learned pose-error model to the filter's errors "
         "(map2map.learn.ab.pose_error). Writes OUT (.safetensors, the settings in its "
-        "header), its .json and OUT-losses.png.",
+        "header), its .json, OUT-losses.png and OUT-samples.png (recorded errors beside "
+        "drawn ones).",
     )
     b.add_argument("--out", required=True, help="the model file (.safetensors)")
     b.add_argument("--runs", type=int, default=400, help="plans explored (default 400)")

@@ -167,10 +167,9 @@ def train_pose_error_job(out: str | os.PathLike, *, runs: int = 400, seed: int =
     """``map2map train pose-error``: explore ``runs`` generated plans of ``seed`` on the
     ``rbpf`` particle filter's map, fit the learned pose-error model
     (:mod:`map2map.learn.ab.pose_error`) to the filter's errors, and write ``out``
-    (safetensors, the configuration in its header), ``out``'s ``.json`` and
-    ``-losses.png`` beside it. Returns the configuration written."""
-    import platform
-
+    (safetensors, the configuration in its header), ``out``'s ``.json``, ``-losses.png``
+    (log-likelihood per epoch) and ``-samples.png`` (recorded errors beside drawn ones)
+    beside it. Returns the configuration written."""
     out = Path(out)
     if out.suffix != ".safetensors":
         raise InputError(str(out), "the pose-error model is one .safetensors file")
@@ -195,15 +194,60 @@ def train_pose_error_job(out: str | os.PathLike, *, runs: int = 400, seed: int =
         "command": command, "plans": {"source": "generated", "seed": int(seed),
                                       "count": int(runs), "duration_s": float(duration),
                                       "mapper": "rbpf"},
-        "machine": f"{platform.machine()} {platform.processor() or ''}".strip()
-                   + f", {os.cpu_count()} cores",
+        "machine": _machine(),
         "explore_s": round(t1 - t0, 1), "train_s": round(time.perf_counter() - t1, 1),
         "history": {k: [round(v, 4) for v in vs] for k, vs in hist.items()},
     })
     out.parent.mkdir(parents=True, exist_ok=True)
     model.save(out)
     _loss_figure(hist, out.with_name(out.stem + "-losses.png"))
+    _sample_figure(model, recorded, out.with_name(out.stem + "-samples.png"))
     return model.config
+
+
+def _sample_figure(model, recorded: list, path: Path, n: int = 3) -> None:
+    """The filter's error along ``n`` recorded runs beside errors the model draws along
+    the same runs (the error's x, y and heading over time)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from ..core._io import atomic_path
+
+    fig, axes = plt.subplots(n, 2, figsize=(10, 2.4 * n), squeeze=False, sharey="row")
+    rng = np.random.default_rng(0)
+    for r, (P, E, t, geo) in enumerate(recorded[-n:]):
+        for c, (what, err) in enumerate((("the rbpf filter", E),
+                                         ("drawn by the model", model.sample(P, t, geo, rng)))):
+            ax = axes[r, c]
+            ax.plot(t, err[:, 0], label="x [m]")
+            ax.plot(t, err[:, 1], label="y [m]")
+            ax.plot(t, np.degrees(err[:, 2]) / 10, label="heading [10 deg]")
+            ax.set_title(f"run {len(recorded) - n + r}: {what}", fontsize=9)
+            if r == n - 1:
+                ax.set_xlabel("seconds")
+    axes[0, 0].legend(fontsize=7)
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=80)
+    plt.close(fig)
+
+
+def _machine() -> str:
+    """The CPU's model name (Linux: ``/proc/cpuinfo``), its architecture and cores."""
+    import platform
+
+    name = platform.processor() or ""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                name = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return f"{name or platform.machine()} ({platform.machine()}), {os.cpu_count()} cores"
 
 
 def _loss_figure(hist: dict, path: Path) -> None:

@@ -364,7 +364,6 @@ class PoseErrorModel:
         # never beyond what training saw (a model asked outside its runs: no runaway)
         step_max = np.asarray(self.config.get("step_max", [np.inf] * 3), float)
         error_max = np.asarray(self.config.get("error_max", [np.inf] * 3), float)
-        temperature = float(self.config.get("temperature", 1.0))
         mem = ErrorMemory(n)
         mem.add(P[0], t[0], E[0])
         avg = _Averages()
@@ -373,16 +372,17 @@ class PoseErrorModel:
         z = rng.standard_normal((n, 3))
         for i in range(1, n):
             dt = float(t[i] - t[i - 1])
-            x = step_features(P[i - 1], P[i], dt, E[i - 1], d1, d2,
-                              mem.both(P[i], t[i]), geo[i], avg.v)
+            x = step_features(P[i - 1], P[i], dt, E[i - 1], d1, d2, mem.both(P[i], t[i]),
+                              geo[i], avg.v)
             logw, mu, L = self.mixture(x)
             k = min(int(np.searchsorted(np.cumsum(np.exp(logw)), u[i])), COMPONENTS - 1)
-            s = np.clip(mu[k] + temperature * (L[k] @ z[i]), -step_max, step_max)
+            s = np.clip(mu[k] + L[k] @ z[i], -step_max, step_max)
             th = float(P[i, 2])
             c, sn = math.cos(th), math.sin(th)
             d = np.array([(c * s[0] - sn * s[1]) / _CM, (sn * s[0] + c * s[1]) / _CM,
                           s[2] / _DEG])
             E[i] = np.clip(E[i - 1] + d, -error_max, error_max)
+            d = E[i] - E[i - 1]
             d2, d1 = d1, d
             mem.add(P[i], t[i], E[i])
             avg.update(E[i], dt)
