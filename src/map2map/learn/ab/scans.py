@@ -24,7 +24,9 @@ default until then) its pose error is drawn, not estimated (step 2):
    its maps. ``"oracle"`` (the default until session 25) explores on the simulator's
    perfect map out to the full range and leaves walls seen only from 3 to 3.5 m away
    unmapped, free space ending in range arcs in front of them (docs/synthesize.md);
-2. **pose error**: the particle filter's best trajectory (``"filter"``), or drawn
+2. **pose error**: the particle filter's best trajectory (``"filter"``), drawn step by
+   step by the pose-error model learned from that filter's runs (``"learned"``,
+   :mod:`map2map.learn.ab.pose_error`), or drawn
    (``"drawn"``, :func:`drifted_poses`): every scan's pose is moved by the room-wise
    rigid drift of :mod:`map2map.learn.ab.room_drift` (the transform of the room the robot
    is in, chained along its route: the start room is where the map is anchored, each
@@ -123,18 +125,24 @@ class ScanMapParams:
         half the particle filter's CPU time); or the simulator's log-odds oracle out to
         the full range (``"oracle"``; one scan every ``temporal_update`` seconds is
         mapped).
-    pose_error : {"filter", "drawn"} or None
+    pose_error : {"filter", "drawn", "learned"} or None
         Where the poses the scans are mapped at come from: the exploring particle filter's
         own estimate (``"filter"``, needs ``explore_map="rbpf"``: the best particle's
         trajectory, so the hypothesis is the map of a simulated ``rbpf`` run of the plan,
-        as the datasets' pairs are; the drift settings are not used) or drawn (step 2 of
-        the module doc: room drift, whole-run turn, jitter). None (the default):
+        as the datasets' pairs are; the drift settings are not used), drawn (step 2 of
+        the module doc: room drift, whole-run turn, jitter) or drawn by the pose-error
+        model learned from the filter (``"learned"``, :func:`learned_errors`,
+        :mod:`map2map.learn.ab.pose_error`; needs the scans a mapper processed:
+        ``explore_map`` ``"rbpf"`` or ``"grid"``). None (the default):
         ``"filter"`` when exploring on ``"rbpf"``, else ``"drawn"``. ``"filter"`` is the
         default since session 31: on the 640 plans of the eighth frozen test (seed
         20261209) a classifier tells its maps from simulated runs with AUC 0.511 (two
         runs: 0.508), the drawn pose error's with 0.727; on the ninth (seed 20261216,
         runs from their own starts) 0.501 (0.493), 12 of 12 rank targets met
         (docs/synthesize.md).
+    pose_model : str or None
+        With ``pose_error="learned"``: the model file (``map2map train pose-error``);
+        None: the shipped one.
 
     The defaults were chosen on 160 plans of the seed-20261127 dev set among eight
     settings by the per-plan ranks and the classifier AUC; ``room_order="visits"`` on
@@ -557,11 +565,14 @@ def learned_errors(ex: Exploration, model: str | None,
     """Pose errors ``(len(ex.keep), 3)`` drawn by the learned model
     (:mod:`map2map.learn.ab.pose_error`; ``model`` a weights file, None the shipped one)
     along the exploration's true poses at the scans its mapper processed."""
+    import os
+
     from ...slam.rbpf import prepare_scan
     from .pose_error import load_pose_error, scan_geometry
 
-    key = None if model is None else str(model)
-    if key not in _POSE_MODELS:
+    key = None if model is None else (str(model), os.stat(model).st_mtime_ns) \
+        if os.path.isfile(model) else str(model)
+    if key not in _POSE_MODELS:                # one load a process (a file's version)
         _POSE_MODELS[key] = load_pose_error(model)
     keep = np.asarray(ex.keep, int)
     if len(keep) == 0:
