@@ -95,7 +95,7 @@ def test_training_learns_a_step_size_and_the_file_round_trips(tmp_path):
 
 
 def train_pose_error_quiet(runs):
-    from map2map.learn.ab.pose_error import train_pose_error
+    from map2map.learn.ab.pose_error_train import train_pose_error
 
     return train_pose_error(runs, epochs=8, hidden=16, batch=256, seed=0, progress=False)
 
@@ -116,7 +116,7 @@ def test_synthesize_scans_with_the_learned_pose_error(tmp_path):
     pytest.importorskip("torch")
     from dataclasses import replace
 
-    from map2map.learn.ab.pose_error import recorded_run
+    from map2map.learn.ab.pose_error_train import recorded_run
     from map2map.learn.ab.scans import ScanMapParams, drawn_hypothesis, explore
     from map2map.maps.floorplan import generate_floorplan
 
@@ -142,7 +142,7 @@ def test_synthesize_scans_with_the_learned_pose_error(tmp_path):
     others = np.setdiff1d(np.arange(len(ex.poses)), keep)
     assert np.array_equal(a.poses[others], ex.poses[others])  # scans not mapped: untouched
     assert a.info["pose_error"] == "learned" and a.drift is None
-    with pytest.raises(InputError, match="oracle"):
+    with pytest.raises(InputError, match="rbpf. or .grid"):
         ScanMapParams(pose_error="learned", explore_map="oracle")
 
 

@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from ..jobs.synthesize import SynthesizeSpec
-from ..learn.ab.scans import POSE_ERRORS
+from ..learn.ab.config import POSE_ERRORS
 from ._mapargs import add_input_options, read_options_from_args, say_how_read
 
 

@@ -176,14 +176,12 @@ def train_pose_error_job(out: str | os.PathLike, *, runs: int = 400, seed: int =
     if runs < 2 or epochs < 1:
         raise InputError("runs" if runs < 2 else "epochs",
                          f"must be at least {2 if runs < 2 else 1}")
-    try:
-        import torch  # noqa: F401
-
-        from ..learn.ab.pose_error import collect_runs, train_pose_error
-    except ImportError as exc:
-        raise InputError("train", f"needs PyTorch: pip install 'map2map[learn]' ({exc})"
-                         ) from None
+    import importlib.util
     import time
+
+    if importlib.util.find_spec("torch") is None:
+        raise InputError("train", "needs PyTorch: pip install 'map2map[learn]'")
+    from ..learn.ab.pose_error_train import collect_runs, train_pose_error
 
     t0 = time.perf_counter()
     recorded = collect_runs(runs, seed, duration=duration, workers=workers,

@@ -17,11 +17,17 @@ from dataclasses import dataclass
 
 from ..training.config import TrainConfig, batch_size
 
-__all__ = ["ABConfig", "TABLE_5_2", "GROWTHS", "parse_schedule", "stage_of", "fade_steps"]
+__all__ = ["ABConfig", "TABLE_5_2", "GROWTHS", "POSE_ERRORS", "parse_schedule", "stage_of",
+           "fade_steps"]
 
 #: Generator growths: the thesis's reading (everything at the stage's resolution) and
 #: anime2clothing's (full-size input, the decoder exits early).
 GROWTHS = ("full", "decoder")
+
+#: Where ``synthesize --model scans``' pose error comes from
+#: (:class:`~map2map.learn.ab.scans.ScanMapParams` ``pose_error``): the exploring particle
+#: filter's own estimate, drawn by hand, or drawn by the learned model.
+POSE_ERRORS = ("filter", "drawn", "learned")
 
 
 #: Table 5.2: (current resolution, epochs at it).

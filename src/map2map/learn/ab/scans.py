@@ -24,9 +24,8 @@ default until then) its pose error is drawn, not estimated (step 2):
    its maps. ``"oracle"`` (the default until session 25) explores on the simulator's
    perfect map out to the full range and leaves walls seen only from 3 to 3.5 m away
    unmapped, free space ending in range arcs in front of them (docs/synthesize.md);
-2. **pose error**: the particle filter's best trajectory (``"filter"``), drawn step by
-   step by the pose-error model learned from that filter's runs (``"learned"``,
-   :mod:`map2map.learn.ab.pose_error`), or drawn
+2. **pose error**: the particle filter's best trajectory (``"filter"``), drawn by a model
+   learned from it (``"learned"``, :mod:`map2map.learn.ab.pose_error`), or drawn
    (``"drawn"``, :func:`drifted_poses`): every scan's pose is moved by the room-wise
    rigid drift of :mod:`map2map.learn.ab.room_drift` (the transform of the room the robot
    is in, chained along its route: the start room is where the map is anchored, each
@@ -72,6 +71,7 @@ from ...core.errors import InputError
 from ...core.geometry import compose_pose, relative_pose
 from ...core.grid import OccupancyMap
 from ...sim.mapping import OracleMapper
+from .config import POSE_ERRORS
 from .room_drift import RoomDrift, RoomDriftParams, room_drift_field
 
 __all__ = ["ScanMapParams", "ScanHypothesis", "GridOracle", "Exploration", "explore",
@@ -80,8 +80,6 @@ __all__ = ["ScanMapParams", "ScanHypothesis", "GridOracle", "Exploration", "expl
 #: Stream of :func:`scan_rng` (apart from the exploration's, the drift's and the traces').
 _STREAM = 0x5CA75
 
-#: Where a hypothesis's pose error comes from (:class:`ScanMapParams` ``pose_error``).
-POSE_ERRORS = ("filter", "drawn", "learned")
 
 
 def _rooms_default() -> RoomDriftParams:
@@ -131,18 +129,13 @@ class ScanMapParams:
         trajectory, so the hypothesis is the map of a simulated ``rbpf`` run of the plan,
         as the datasets' pairs are; the drift settings are not used), drawn (step 2 of
         the module doc: room drift, whole-run turn, jitter) or drawn by the pose-error
-        model learned from the filter (``"learned"``, :func:`learned_errors`,
-        :mod:`map2map.learn.ab.pose_error`; needs the scans a mapper processed:
+        model learned from the filter (``"learned"``,
+        :func:`~map2map.learn.ab.pose_error.errors_along`; needs the scans a mapper processed:
         ``explore_map`` ``"rbpf"`` or ``"grid"``). None (the default):
-        ``"filter"`` when exploring on ``"rbpf"``, else ``"drawn"``. ``"filter"`` is the
-        default since session 31: on the 640 plans of the eighth frozen test (seed
-        20261209) a classifier tells its maps from simulated runs with AUC 0.511 (two
-        runs: 0.508), the drawn pose error's with 0.727; on the ninth (seed 20261216,
-        runs from their own starts) 0.501 (0.493), 12 of 12 rank targets met
-        (docs/synthesize.md).
+        ``"filter"`` when exploring on ``"rbpf"``, else ``"drawn"``. How each passes for
+        a simulated run: docs/synthesize.md.
     pose_model : str or None
-        With ``pose_error="learned"``: the model file (``map2map train pose-error``);
-        None: the shipped one.
+        With ``pose_error="learned"``: the model file (None: the shipped one).
 
     The defaults were chosen on 160 plans of the seed-20261127 dev set among eight
     settings by the per-plan ranks and the classifier AUC; ``room_order="visits"`` on
@@ -192,9 +185,7 @@ class ScanMapParams:
             raise InputError("pose_error", f"must be one of {', '.join(POSE_ERRORS)}, "
                              f"got {self.pose_error!r}")
         if self.pose_error == "learned" and self.explore_map == "oracle":
-            raise InputError("pose_error", "'learned' draws the error at the scans the "
-                             "exploring mapper processed: it needs explore_map 'rbpf' or "
-                             "'grid', not 'oracle'")
+            raise InputError("pose_error", "'learned' needs explore_map 'rbpf' or 'grid'")
         if self.pose_error == "filter" and self.explore_map != "rbpf":
             raise InputError("pose_error", "'filter' takes the exploring particle filter's "
                              f"poses: it needs explore_map 'rbpf', not {self.explore_map!r}")
@@ -557,32 +548,6 @@ def scan_map(plan: OccupancyMap, seed: int, k: int,
     return drawn_hypothesis(plan, explore(plan, seed, k, sp, start), seed, k, sp)
 
 
-_POSE_MODELS: dict = {}
-
-
-def learned_errors(ex: Exploration, model: str | None,
-                   rng: np.random.Generator) -> np.ndarray:
-    """Pose errors ``(len(ex.keep), 3)`` drawn by the learned model
-    (:mod:`map2map.learn.ab.pose_error`; ``model`` a weights file, None the shipped one)
-    along the exploration's true poses at the scans its mapper processed."""
-    import os
-
-    from ...slam.rbpf import prepare_scan
-    from .pose_error import load_pose_error, scan_geometry
-
-    key = None if model is None else (str(model), os.stat(model).st_mtime_ns) \
-        if os.path.isfile(model) else str(model)
-    if key not in _POSE_MODELS:                # one load a process (a file's version)
-        _POSE_MODELS[key] = load_pose_error(model)
-    keep = np.asarray(ex.keep, int)
-    if len(keep) == 0:
-        return np.zeros((0, 3))
-    ra = [prepare_scan(ex.scans[i]) for i in keep]
-    geo = scan_geometry(np.stack([r for r, _ in ra]), np.stack([a for _, a in ra]))
-    return _POSE_MODELS[key].sample(ex.poses[keep], np.asarray(ex.times, float)[keep], geo,
-                                    rng)
-
-
 def drawn_hypothesis(plan: OccupancyMap, ex: Exploration, seed: int, k: int,
                      params: ScanMapParams | None = None) -> ScanHypothesis:
     """Steps 2 and 3 of the module doc for a recorded exploration ``ex`` (of
@@ -605,22 +570,17 @@ def drawn_hypothesis(plan: OccupancyMap, ex: Exploration, seed: int, k: int,
     True
     """
     sp = params or ScanMapParams()
-    if sp.pose_error == "filter":
-        if ex.filter_poses is None or ex.keep is None:
-            raise InputError("pose_error", "'filter' needs an exploration on the particle "
-                             "filter's map (explore_map 'rbpf')")
-        drift = None
+    if sp.pose_error in ("filter", "learned"):
+        if ex.keep is None or (sp.pose_error == "filter" and ex.filter_poses is None):
+            raise InputError("pose_error", f"{sp.pose_error!r} needs the scans the exploring "
+                             "mapper processed (explore_map 'rbpf'"
+                             f"{'' if sp.pose_error == 'filter' else ' or grid'})")
+        from .pose_error import errors_along
+
+        drift, used = None, np.asarray(ex.keep, int)
         poses = np.array(ex.poses, float, copy=True)
-        poses[ex.keep] = ex.filter_poses
-        used = np.asarray(ex.keep, int)
-    elif sp.pose_error == "learned":
-        if ex.keep is None:
-            raise InputError("pose_error", "'learned' needs the scans the exploring mapper "
-                             "processed (explore_map 'rbpf' or 'grid')")
-        drift = None
-        used = np.asarray(ex.keep, int)
-        poses = np.array(ex.poses, float, copy=True)
-        poses[used] += learned_errors(ex, sp.pose_model, scan_rng(seed, k))
+        poses[used] = ex.filter_poses if sp.pose_error == "filter" else \
+            poses[used] + errors_along(ex, sp.pose_model, scan_rng(seed, k))
     else:
         rng = scan_rng(seed, k)
         path = plan.world_to_pixel_float(ex.poses[:, 0], ex.poses[:, 1]) \
