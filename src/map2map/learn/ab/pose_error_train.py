@@ -2,6 +2,19 @@
 filter's errors recorded on explorations of generated plans (:func:`collect_runs`) and the
 maximum-likelihood fit of the model to them (:func:`train_pose_error`);
 ``map2map train pose-error`` runs both (:func:`map2map.jobs.train.train_pose_error_job`).
+
+Examples
+--------
+>>> rng = np.random.default_rng(0)
+>>> P = np.column_stack([np.linspace(0.0, 10.0, 100), np.zeros(100), np.zeros(100)])
+>>> runs = []
+>>> for _ in range(3):
+...     E = np.cumsum(rng.normal(0.0, [0.01, 0.01, 0.003], (100, 3)), axis=0)
+...     runs.append((P, E - E[0], np.arange(100) * 0.5, np.zeros((100, 4))))
+>>> model, hist = train_pose_error(runs, epochs=2, hidden=8, progress=False)
+>>> len(hist["val"]), model.config["runs"], model.sample(P, np.arange(100) * 0.5,
+...     np.zeros((100, 4)), np.random.default_rng(1)).shape
+(2, 3, (100, 3))
 """
 
 from __future__ import annotations
