@@ -17,17 +17,17 @@ minus its true pose, plan frame; the map is anchored at the start, so ``e_0 = 0`
 ``d_i = e_i - e_{i-1}``, and ``d_i`` in the robot's frame is drawn from a mixture of
 ``COMPONENTS`` Gaussians whose weights, means and covariances (a Cholesky factor: a
 heading step and a sideways step come together, as a scan matcher turns and shifts a pose
-at once) an MLP computes from
-(:func:`step_features`):
+at once) an MLP computes from (:func:`step_features`):
 
 - the robot's motion since the previous node (forward, sideways, turn) and the seconds;
-- the error so far (in the robot's frame) and what a heading error does to the motion
-  (a step ``u`` taken with heading error ``e_theta`` moves the estimate by about
-  ``e_theta x u``);
+- the error so far (in the robot's frame), its distance from its own moving averages over
+  ``EMA_S`` seconds, and what a heading error does to the motion (a step ``u`` taken with
+  heading error ``e_theta`` moves the estimate by about ``e_theta x u``);
 - the previous two steps of the error (the jitter's memory);
 - the map's own error where the robot looks (:class:`ErrorMemory`: the errors of the
   nodes more than ``MEMORY_S`` seconds old whose view centre lies near this one's, by
-  weight), and how much of the map is there;
+  weight), the same of the recent map (``RECENT_S`` to ``MEMORY_S`` seconds old), and how
+  much of each is there;
 - what the scan constrains (:func:`scan_geometry`: the scan's surface normals' second
   moment in the robot frame: a corridor constrains only across it).
 
