@@ -60,6 +60,7 @@ from pathlib import Path
 import numpy as np
 
 from ...core.errors import InputError
+from ...core.geometry import wrap_angle
 
 __all__ = ["FEATURES", "GEOMETRY", "COMPONENTS", "MEMORY_S", "MEMORY_M", "scan_geometry",
            "ErrorMemory", "step_features", "training_pairs", "PoseErrorModel",
@@ -263,8 +264,9 @@ def _step_target(d, th: float) -> np.ndarray:
 
 
 def _wrap(e: np.ndarray) -> np.ndarray:
+    """Errors ``(.., 3)`` with their heading wrapped (:func:`~map2map.core.geometry.wrap_angle`)."""
     e = np.array(e, float, copy=True)
-    e[..., 2] = (e[..., 2] + math.pi) % math.tau - math.pi
+    e[..., 2] = wrap_angle(e[..., 2])
     return e
 
 
@@ -319,8 +321,8 @@ def _mixture(o, xp):
 class PoseErrorModel:
     """The trained model: an MLP (``weights``: ``w0, b0, w1, b1, w2, b2``, numpy) from
     :func:`step_features` (standardised by ``mean``/``std``) to a step's mixture
-    (``COMPONENTS`` weights, means and log-scales of three coordinates), and ``config``
-    (how it was trained)."""
+    (``COMPONENTS`` weights, means and lower-triangular Cholesky factors of three
+    coordinates), and ``config`` (how it was trained)."""
 
     weights: dict
     mean: np.ndarray
